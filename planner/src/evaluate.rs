@@ -1,0 +1,283 @@
+//! Exact-geometry evaluation of any trajectory, independent of the optimiser (SPEC.md §4 item 3):
+//! true speed, true heading, true sensing centre, true energy, the paper's and the general
+//! resolutions, and the largest violation of every constraint of problem (p2).
+
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::{
+    azimuth_resolution_paper_m, bistatic_angle_rad, range_resolution_general_m,
+    range_resolution_paper_m, sensing_centre_m, v2, ResolutionCell,
+};
+use crate::power::PowerModel;
+use crate::{Mission, Trajectory};
+
+/// Default tolerance for calling a trajectory feasible: metres for distances, m/s for speeds.
+pub const FEASIBILITY_TOL: f64 = 1e-4;
+
+/// One slot of an evaluated trajectory.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SlotEval {
+    /// Slot index t (1-based).
+    pub t: usize,
+    /// End time of the slot, tδ, s.
+    pub t_s: f64,
+    /// Position q_t, m.
+    pub pos_m: [f64; 2],
+    /// True velocity (q_t − q_{t−1})/δ, m/s.
+    pub velocity_mps: [f64; 2],
+    /// True speed, m/s.
+    pub speed_mps: f64,
+    /// True heading α_t, rad (kept from the previous slot in hover).
+    pub heading_rad: f64,
+    /// True sensing centre q_c^t, m.
+    pub centre_m: [f64; 2],
+    /// The landmark of this slot, if any.
+    pub landmark_m: Option<[f64; 2]>,
+    /// Distance from the true centre to the landmark, m.
+    pub centre_error_m: Option<f64>,
+    /// Landmark within the sensing radius of the true centre (true when the slot has no landmark).
+    pub in_view: bool,
+    /// True propulsion power P(V_t), W.
+    pub power_w: f64,
+    /// Energy of this slot, P(V_t) δ, J.
+    pub slot_energy_j: f64,
+    /// Cumulative energy up to the end of this slot, J.
+    pub energy_j: f64,
+    /// The paper's δ_r at the true centre, m.
+    pub range_resolution_paper_m: f64,
+    /// The paper's δ_a at the true speed, m.
+    pub azimuth_resolution_paper_m: f64,
+    /// The general bistatic δ_r (SPEC.md §4 item 11) at the sensed point, m.
+    pub range_resolution_general_m: f64,
+    /// Bistatic angle β at the sensed point, rad.
+    pub bistatic_angle_rad: f64,
+    /// |g|, norm of the bistatic range gradient at the sensed point.
+    pub grad_norm: f64,
+    /// Angle ψ between g and the track direction, rad.
+    pub psi_rad: f64,
+    /// Along-track width of the resolution cell, m.
+    pub along_track_width_m: f64,
+    /// Cross-track width of the resolution cell, m.
+    pub cross_track_width_m: f64,
+    /// Worst width of the resolution cell, m (SPEC.md §4 item 12).
+    pub worst_width_m: f64,
+}
+
+/// The largest violation of each constraint over the slots it applies to (0 = satisfied).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Violations {
+    /// max over landmark slots of (‖q_g − q_c‖ − r_s)⁺, m.
+    pub sensing_m: f64,
+    /// max over landmark slots of (V_min − V_t)⁺ (azimuth requirement on the true speed), m/s.
+    pub min_speed_mps: f64,
+    /// max over all slots of (V_t − V_m)⁺, m/s.
+    pub max_speed_mps: f64,
+    /// max over landmark slots of (δ_r − d_min)⁺ with the paper's δ_r at the true centre, m.
+    pub range_paper_m: f64,
+    /// max over landmark slots of (worst cell width − d_min)⁺ (general cell, SPEC §4 item 12), m.
+    pub worst_width_m: f64,
+}
+
+impl Violations {
+    /// True when the constraints of (p2) (sensing, azimuth, max speed, paper range) hold within `tol`.
+    pub fn p2_ok(&self, tol: f64) -> bool {
+        self.sensing_m <= tol
+            && self.min_speed_mps <= tol
+            && self.max_speed_mps <= tol
+            && self.range_paper_m <= tol
+    }
+}
+
+/// A trajectory evaluated on the exact geometry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Evaluation {
+    /// Per-slot values.
+    pub slots: Vec<SlotEval>,
+    /// True propulsion energy Σ P(V_t) δ, J.
+    pub energy_j: f64,
+    /// Largest violations.
+    pub violations: Violations,
+    /// Least true speed over all slots, m/s.
+    pub min_speed_mps: f64,
+    /// Largest true speed over all slots, m/s.
+    pub max_speed_mps: f64,
+    /// Path length, m.
+    pub length_m: f64,
+    /// Slots with a landmark out of view.
+    pub slots_out_of_view: usize,
+    /// Landmark slots whose worst cell width exceeds d_min.
+    pub slots_unresolved: usize,
+}
+
+impl Evaluation {
+    /// True when every constraint of (p2) holds on the exact geometry within [`FEASIBILITY_TOL`].
+    pub fn is_feasible(&self) -> bool {
+        self.violations.p2_ok(FEASIBILITY_TOL)
+    }
+}
+
+/// Evaluates `traj` against `mission` on the exact geometry.
+pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
+    let p = mission.params();
+    let model = PowerModel::new(p);
+    let offset = p.centre_offset_m();
+    let v_min = p.min_speed_mps();
+    let headings = traj.headings_rad();
+    let mut slots = Vec::with_capacity(traj.slots());
+    let mut viol = Violations::default();
+    let mut energy = 0.0;
+    let mut min_speed = f64::INFINITY;
+    let mut max_speed: f64 = 0.0;
+    let mut out_of_view = 0;
+    let mut unresolved = 0;
+    for t in 1..=traj.slots() {
+        let pos = traj.q(t);
+        let vel = traj.velocity_mps(t);
+        let speed = v2::norm(vel);
+        let heading = headings[t - 1];
+        let centre = sensing_centre_m(pos, heading, offset);
+        let landmark = mission.target_m(t);
+        let power = model.power_w(speed);
+        let slot_energy = power * p.slot_s;
+        energy += slot_energy;
+        min_speed = min_speed.min(speed);
+        max_speed = max_speed.max(speed);
+        viol.max_speed_mps = viol.max_speed_mps.max(speed - p.max_speed_mps);
+        let sensed = landmark.unwrap_or(centre);
+        // Velocity for the Doppler geometry: the true one, or the heading at unit speed in hover
+        // (the cell's shape; its along-track width is then infinite through δ_a anyway).
+        let cell_vel = if speed > 0.0 {
+            vel
+        } else {
+            [heading.cos() * 1e-12, heading.sin() * 1e-12]
+        };
+        let cell = ResolutionCell::new(p, pos, cell_vel, sensed);
+        let range_paper = range_resolution_paper_m(p, centre);
+        let az_paper = azimuth_resolution_paper_m(p, speed);
+        let centre_error = landmark.map(|g| v2::dist(g, centre));
+        let in_view = centre_error.is_none_or(|e| e <= p.sensing_radius_m);
+        if let Some(e) = centre_error {
+            viol.sensing_m = viol.sensing_m.max(e - p.sensing_radius_m);
+            viol.min_speed_mps = viol.min_speed_mps.max(v_min - speed);
+            viol.range_paper_m = viol.range_paper_m.max(range_paper - p.d_min_m);
+            viol.worst_width_m = viol.worst_width_m.max(cell.worst_width_m - p.d_min_m);
+            if !in_view {
+                out_of_view += 1;
+            }
+            if !(cell.worst_width_m <= p.d_min_m) {
+                unresolved += 1;
+            }
+        }
+        slots.push(SlotEval {
+            t,
+            t_s: t as f64 * p.slot_s,
+            pos_m: pos,
+            velocity_mps: vel,
+            speed_mps: speed,
+            heading_rad: heading,
+            centre_m: centre,
+            landmark_m: landmark,
+            centre_error_m: centre_error,
+            in_view,
+            power_w: power,
+            slot_energy_j: slot_energy,
+            energy_j: energy,
+            range_resolution_paper_m: range_paper,
+            azimuth_resolution_paper_m: az_paper,
+            range_resolution_general_m: range_resolution_general_m(p, pos, sensed),
+            bistatic_angle_rad: bistatic_angle_rad(p, pos, sensed),
+            grad_norm: cell.grad_norm,
+            psi_rad: cell.psi_rad,
+            along_track_width_m: cell.along_track_width_m,
+            cross_track_width_m: cell.cross_track_width_m,
+            worst_width_m: cell.worst_width_m,
+        });
+    }
+    // clamp negatives (the max started at 0 so they are ≥ 0 already, except NaN)
+    for v in [
+        &mut viol.sensing_m,
+        &mut viol.min_speed_mps,
+        &mut viol.max_speed_mps,
+        &mut viol.range_paper_m,
+        &mut viol.worst_width_m,
+    ] {
+        if v.is_nan() {
+            *v = f64::INFINITY;
+        }
+    }
+    Evaluation {
+        length_m: traj.length_m(),
+        slots,
+        energy_j: energy,
+        violations: viol,
+        min_speed_mps: if min_speed.is_finite() { min_speed } else { 0.0 },
+        max_speed_mps: max_speed,
+        slots_out_of_view: out_of_view,
+        slots_unresolved: unresolved,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::landmarks::{LandmarkWindow, LandmarksSpec};
+    use crate::Params;
+
+    /// A straight track north at 20 m/s with the landmark exactly at the broadside centre.
+    #[test]
+    fn straight_track_closed_form() {
+        let mut p = Params::default();
+        p.horizon_s = 10.0;
+        p.start_m = [-1000.0, 0.0];
+        let spec = LandmarksSpec {
+            points: Some(vec![LandmarkWindow {
+                x_m: 0.0,
+                y_m: 100.0,
+                from_s: 0.0,
+                to_s: 10.0,
+            }]),
+            ..Default::default()
+        };
+        let m = Mission::new("t", p.clone(), &spec).unwrap();
+        let traj = Trajectory {
+            slot_s: 0.5,
+            start_m: p.start_m,
+            pos_m: (1..=20).map(|t| [-1000.0, 10.0 * t as f64]).collect(),
+        };
+        let e = evaluate(&m, &traj);
+        let model = PowerModel::new(&p);
+        assert!((e.energy_j - 10.0 * model.power_w(20.0)).abs() < 1e-9);
+        assert!(e.is_feasible());
+        // centre x = 0, y = q_y; farthest from (0,100) at t=20 (y=200): 100 m
+        assert!((e.slots[19].centre_error_m.unwrap() - 100.0).abs() < 1e-9);
+        assert_eq!(e.violations.sensing_m, 0.0);
+        assert!((e.slots[0].centre_m[0]).abs() < 1e-9);
+    }
+
+    #[test]
+    fn violations_are_reported() {
+        let mut p = Params::default();
+        p.horizon_s = 1.0;
+        let spec = LandmarksSpec {
+            points: Some(vec![LandmarkWindow {
+                x_m: 5000.0,
+                y_m: 0.0,
+                from_s: 0.0,
+                to_s: 1.0,
+            }]),
+            ..Default::default()
+        };
+        let m = Mission::new("t", p.clone(), &spec).unwrap();
+        let traj = Trajectory {
+            slot_s: 0.5,
+            start_m: p.start_m,
+            pos_m: vec![p.start_m, [p.start_m[0] + 40.0, p.start_m[1]]],
+        };
+        let e = evaluate(&m, &traj);
+        assert!(!e.is_feasible());
+        assert!(e.violations.sensing_m > 4000.0);
+        assert!((e.violations.min_speed_mps - p.min_speed_mps()).abs() < 1e-9); // slot 1 hovers
+        assert!((e.violations.max_speed_mps - 30.0).abs() < 1e-9); // 80 m/s in slot 2
+        assert_eq!(e.slots_out_of_view, 2);
+    }
+}

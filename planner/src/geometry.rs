@@ -1,0 +1,326 @@
+//! Bistatic SAR geometry on the ground plane z = 0: heading, sensing centre, the paper's range and
+//! azimuth resolutions, their general bistatic forms (SPEC.md §4 item 11) and the 2-D resolution
+//! cell (SPEC.md §4 item 12).
+//!
+//! Frames: a world frame with x east, y north, z up, metres. The UAV flies at z = H, the BS antenna
+//! is at z = H_b. Headings α are measured from the x axis, counter-clockwise.
+
+use crate::params::{Params, SPEED_OF_LIGHT_MPS};
+
+/// 2-D vector helpers on `[f64; 2]`.
+pub mod v2 {
+    /// a + b.
+    pub fn add(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+        [a[0] + b[0], a[1] + b[1]]
+    }
+    /// a − b.
+    pub fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+        [a[0] - b[0], a[1] - b[1]]
+    }
+    /// k a.
+    pub fn scale(a: [f64; 2], k: f64) -> [f64; 2] {
+        [a[0] * k, a[1] * k]
+    }
+    /// a · b.
+    pub fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+        a[0] * b[0] + a[1] * b[1]
+    }
+    /// The z component of a × b.
+    pub fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+        a[0] * b[1] - a[1] * b[0]
+    }
+    /// ‖a‖.
+    pub fn norm(a: [f64; 2]) -> f64 {
+        a[0].hypot(a[1])
+    }
+    /// ‖a − b‖.
+    pub fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+        norm(sub(a, b))
+    }
+    /// a / ‖a‖, or `None` for a zero vector.
+    pub fn unit(a: [f64; 2]) -> Option<[f64; 2]> {
+        let n = norm(a);
+        (n > 0.0 && n.is_finite()).then(|| scale(a, 1.0 / n))
+    }
+    /// The right-hand normal of a direction (rotated by −90°): (a_y, −a_x).
+    pub fn right(a: [f64; 2]) -> [f64; 2] {
+        [a[1], -a[0]]
+    }
+}
+
+/// Heading α of the displacement `to − from`, rad in [0, 2π), or `None` if the UAV did not move.
+pub fn heading_rad(from_m: [f64; 2], to_m: [f64; 2]) -> Option<f64> {
+    let d = v2::sub(to_m, from_m);
+    if v2::norm(d) <= 1e-12 {
+        return None;
+    }
+    Some(d[1].atan2(d[0]).rem_euclid(std::f64::consts::TAU))
+}
+
+/// Unit vector of a heading, (cos α, sin α).
+pub fn heading_unit(heading_rad: f64) -> [f64; 2] {
+    [heading_rad.cos(), heading_rad.sin()]
+}
+
+/// The sensing centre q_c = q + H tan η (sin α, −cos α): right of the track, `offset_m` away.
+pub fn sensing_centre_m(pos_m: [f64; 2], heading_rad: f64, offset_m: f64) -> [f64; 2] {
+    [
+        pos_m[0] + offset_m * heading_rad.sin(),
+        pos_m[1] - offset_m * heading_rad.cos(),
+    ]
+}
+
+/// sin θ_t of the BS illumination at ground point `p`: ‖p − q_b‖ / sqrt(‖p − q_b‖² + H_b²).
+pub fn sin_incidence_bs(params: &Params, point_m: [f64; 2]) -> f64 {
+    let d = v2::dist(point_m, params.bs_m);
+    let h = params.bs_height_m;
+    if d == 0.0 && h == 0.0 {
+        return 0.0;
+    }
+    d / d.hypot(h)
+}
+
+/// The paper's range resolution δ_r = c / (B (sin η + sin θ_t)) at ground point `p`, m.
+pub fn range_resolution_paper_m(params: &Params, point_m: [f64; 2]) -> f64 {
+    SPEED_OF_LIGHT_MPS
+        / (params.bandwidth_hz
+            * (params.observation_angle_rad.sin() + sin_incidence_bs(params, point_m)))
+}
+
+/// The paper's azimuth resolution δ_a = λ_c H / (T_d V cos η) at speed `V`, m (∞ at V = 0).
+pub fn azimuth_resolution_paper_m(params: &Params, speed_mps: f64) -> f64 {
+    params.wavelength_m * params.altitude_m
+        / (params.integration_time_s * speed_mps * params.observation_angle_rad.cos())
+}
+
+/// Gradient of the bistatic range |BS→p| + |p→UAV| with respect to the ground position of `p`
+/// (dimensionless): sin θ_t ĝ_t + sin θ_r ĝ_r, with ĝ_t, ĝ_r the unit ground directions from
+/// the BS and from the UAV to the point.
+pub fn bistatic_range_gradient(params: &Params, uav_m: [f64; 2], point_m: [f64; 2]) -> [f64; 2] {
+    let dt = v2::sub(point_m, params.bs_m);
+    let rt = (v2::dot(dt, dt) + params.bs_height_m.powi(2)).sqrt();
+    let dr = v2::sub(point_m, uav_m);
+    let rr = (v2::dot(dr, dr) + params.altitude_m.powi(2)).sqrt();
+    let gt = if rt > 0.0 { v2::scale(dt, 1.0 / rt) } else { [0.0, 0.0] };
+    let gr = if rr > 0.0 { v2::scale(dr, 1.0 / rr) } else { [0.0, 0.0] };
+    v2::add(gt, gr)
+}
+
+/// The general bistatic ground-range resolution c / (B ‖sin θ_t ĝ_t + sin θ_r ĝ_r‖), m
+/// (SPEC.md §4 item 11). ∞ when the gradient vanishes.
+pub fn range_resolution_general_m(params: &Params, uav_m: [f64; 2], point_m: [f64; 2]) -> f64 {
+    let g = v2::norm(bistatic_range_gradient(params, uav_m, point_m));
+    SPEED_OF_LIGHT_MPS / (params.bandwidth_hz * g)
+}
+
+/// Gradient of the Doppler frequency −(1/λ) dR_r/dt with respect to the ground position of the
+/// point, 1/(m s): (v − (v·û) û)_ground / (λ R_r), with û the unit vector UAV → point.
+pub fn doppler_gradient(
+    params: &Params,
+    uav_m: [f64; 2],
+    velocity_mps: [f64; 2],
+    point_m: [f64; 2],
+) -> [f64; 2] {
+    let d = v2::sub(point_m, uav_m);
+    let h = params.altitude_m;
+    let r = (v2::dot(d, d) + h * h).sqrt();
+    // û = (d, −H)/r ; v = (v, 0) ; v·û = v·d / r
+    let vu = v2::dot(velocity_mps, d) / r;
+    let g = v2::sub(velocity_mps, v2::scale(d, vu / r));
+    v2::scale(g, 1.0 / (params.wavelength_m * r))
+}
+
+/// The general azimuth (Doppler) resolution 1 / (T_d ‖∇f_D‖), m. At broadside it equals
+/// λ_c R_r / (T_d V), R_r = H / cos η — the paper's δ_a.
+pub fn azimuth_resolution_general_m(
+    params: &Params,
+    uav_m: [f64; 2],
+    velocity_mps: [f64; 2],
+    point_m: [f64; 2],
+) -> f64 {
+    let g = v2::norm(doppler_gradient(params, uav_m, velocity_mps, point_m));
+    1.0 / (params.integration_time_s * g)
+}
+
+/// The angle β between the ground directions BS → point and UAV → point, rad in [0, π].
+pub fn bistatic_angle_rad(params: &Params, uav_m: [f64; 2], point_m: [f64; 2]) -> f64 {
+    let a = v2::sub(point_m, params.bs_m);
+    let b = v2::sub(point_m, uav_m);
+    v2::cross(a, b).abs().atan2(v2::dot(a, b))
+}
+
+/// The 2-D resolution cell at a ground point (SPEC.md §4 item 12): a parallelogram whose sides
+/// are the iso-range lines (⊥ range gradient g) and the iso-Doppler lines (⊥ Doppler gradient,
+/// i.e. ⊥ the track at broadside).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResolutionCell {
+    /// ‖g‖, the norm of the bistatic range gradient (between |sin θ_t − sin θ_r| and their sum).
+    pub grad_norm: f64,
+    /// Angle ψ between g and the Doppler-gradient direction (the track at broadside), rad in [0, π/2].
+    pub psi_rad: f64,
+    /// Width along g: c / (B ‖g‖), m (the general δ_r).
+    pub range_width_m: f64,
+    /// Width along the Doppler gradient (along track): the general δ_a, m.
+    pub along_track_width_m: f64,
+    /// Width across the track (along an iso-Doppler line): c / (B ‖g‖ |sin ψ|), m.
+    pub cross_track_width_m: f64,
+    /// Width along an iso-range line: δ_a / |sin ψ|, m.
+    pub iso_range_width_m: f64,
+    /// The worse of the two principal chords, max(cross-track, iso-range), m. Two objects this
+    /// far apart along the worst direction still fall in one cell. ∞ in blind geometry (ψ = 0).
+    pub worst_width_m: f64,
+}
+
+impl ResolutionCell {
+    /// The cell at `point_m` seen from a UAV at `uav_m` moving with `velocity_mps`.
+    pub fn new(
+        params: &Params,
+        uav_m: [f64; 2],
+        velocity_mps: [f64; 2],
+        point_m: [f64; 2],
+    ) -> Self {
+        let g = bistatic_range_gradient(params, uav_m, point_m);
+        let d = doppler_gradient(params, uav_m, velocity_mps, point_m);
+        let gn = v2::norm(g);
+        let dn = v2::norm(d);
+        let range_width_m = SPEED_OF_LIGHT_MPS / (params.bandwidth_hz * gn);
+        let along_track_width_m = 1.0 / (params.integration_time_s * dn);
+        let sin_psi = if gn > 0.0 && dn > 0.0 {
+            (v2::cross(g, d) / (gn * dn)).abs().min(1.0)
+        } else {
+            0.0
+        };
+        let psi_rad = sin_psi.asin();
+        let cross_track_width_m = range_width_m / sin_psi;
+        let iso_range_width_m = along_track_width_m / sin_psi;
+        Self {
+            grad_norm: gn,
+            psi_rad,
+            range_width_m,
+            along_track_width_m,
+            cross_track_width_m,
+            iso_range_width_m,
+            worst_width_m: cross_track_width_m.max(iso_range_width_m),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn centre_is_right_of_track() {
+        // heading north (α = π/2): right is east.
+        let c = sensing_centre_m([0.0, 0.0], std::f64::consts::FRAC_PI_2, 1000.0);
+        assert!((c[0] - 1000.0).abs() < 1e-9 && c[1].abs() < 1e-9);
+        // heading east (α = 0): right is south.
+        let c = sensing_centre_m([0.0, 0.0], 0.0, 1000.0);
+        assert!(c[0].abs() < 1e-9 && (c[1] + 1000.0).abs() < 1e-9);
+    }
+
+    /// Table III: δ_r at θ_t = π/3 for B = 50, 100, 150, 200 MHz.
+    #[test]
+    fn table_iii() {
+        let mut p = Params::default();
+        // put the point where sin θ_t = sin(π/3): d / sqrt(d² + H_b²) = √3/2 → d = √3 H_b
+        let d = 3f64.sqrt() * p.bs_height_m;
+        let point = [p.bs_m[0] + d, p.bs_m[1]];
+        for (b, want) in [(50e6, 3.81), (100e6, 1.91), (150e6, 1.27), (200e6, 0.95)] {
+            p.bandwidth_hz = b;
+            let got = range_resolution_paper_m(&p, point);
+            assert!((got - want).abs() < 0.006, "B={b}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn azimuth_at_min_speed_equals_d_min() {
+        let p = Params::default();
+        let v = p.min_speed_mps();
+        assert!((azimuth_resolution_paper_m(&p, v) - p.d_min_m).abs() < 1e-9);
+    }
+
+    #[test]
+    fn general_reduces_to_paper_when_directions_coincide() {
+        let p = Params::default();
+        // BS, point and UAV collinear on the ground with the point between them (β = 0):
+        // ĝ_t and ĝ_r both point along +x.
+        let point = [p.bs_m[0] + 500.0, p.bs_m[1]];
+        let uav = [point[0] - p.centre_offset_m(), point[1]];
+        let general = range_resolution_general_m(&p, uav, point);
+        let paper = range_resolution_paper_m(&p, point);
+        assert!((general - paper).abs() < 1e-9 * paper, "{general} vs {paper}");
+        assert!(bistatic_angle_rad(&p, uav, point).abs() < 1e-12);
+    }
+
+    #[test]
+    fn broadside_azimuth_general_equals_paper() {
+        let p = Params::default();
+        let uav = [0.0, 0.0];
+        let heading = std::f64::consts::FRAC_PI_2; // north
+        let v = 18.0;
+        let vel = v2::scale(heading_unit(heading), v);
+        let c = sensing_centre_m(uav, heading, p.centre_offset_m());
+        let general = azimuth_resolution_general_m(&p, uav, vel, c);
+        let paper = azimuth_resolution_paper_m(&p, v);
+        assert!((general - paper).abs() < 1e-9 * paper);
+    }
+
+    #[test]
+    fn blind_geometry_has_infinite_cross_track_width() {
+        let p = Params::default();
+        // Track along +x; point is south (right) of the UAV at the broadside centre.
+        let uav = [0.0, 0.0];
+        let vel = [18.0, 0.0];
+        let point = sensing_centre_m(uav, 0.0, p.centre_offset_m());
+        // Put the BS so that g is parallel to the track: g = sinθ_t ĝ_t + sinθ_r ĝ_r with
+        // ĝ_r = (0,-1) (UAV north of the point). Choose ĝ_t with its y part cancelling.
+        let s_r = p.observation_angle_rad.sin();
+        // BS far away (sin θ_t ≈ 1): ĝ_t = (cos φ, sin φ) with sin φ = s_r / sin θ_t
+        let dist: f64 = 1e5;
+        let s_t = dist / dist.hypot(p.bs_height_m);
+        let phi = (s_r / s_t).asin();
+        let bs = [point[0] - dist * phi.cos(), point[1] - dist * phi.sin()];
+        let mut q = p.clone();
+        q.bs_m = bs;
+        let cell = ResolutionCell::new(&q, uav, vel, point);
+        assert!(cell.psi_rad < 1e-6, "psi = {}", cell.psi_rad);
+        assert!(cell.cross_track_width_m > 1e5);
+        // β is 135° there
+        let beta = bistatic_angle_rad(&q, uav, point).to_degrees();
+        assert!((beta - 135.0).abs() < 0.01, "beta = {beta}");
+    }
+
+    proptest! {
+        /// The general range resolution lies between c/(B(sin θ_t + sin θ_r)) and c/(B|sin θ_t − sin θ_r|).
+        #[test]
+        fn general_range_resolution_bounds(
+            px in -3000.0f64..3000.0, py in -3000.0f64..3000.0,
+            ux in -3000.0f64..3000.0, uy in -3000.0f64..3000.0,
+        ) {
+            let p = Params::default();
+            let point = [px, py];
+            let uav = [ux, uy];
+            let st = sin_incidence_bs(&p, point);
+            let dr = v2::dist(point, uav);
+            let sr = dr / dr.hypot(p.altitude_m);
+            let c_b = SPEED_OF_LIGHT_MPS / p.bandwidth_hz;
+            let r = range_resolution_general_m(&p, uav, point);
+            prop_assert!(r >= c_b / (st + sr) * (1.0 - 1e-9));
+            if (st - sr).abs() > 1e-6 {
+                prop_assert!(r <= c_b / (st - sr).abs() * (1.0 + 1e-9));
+            }
+        }
+
+        /// Heading/centre round trip: the centre lies exactly `offset` to the right.
+        #[test]
+        fn centre_distance_and_side(x in -1e4f64..1e4, y in -1e4f64..1e4, a in 0.0f64..6.28, off in 1.0f64..3000.0) {
+            let c = sensing_centre_m([x, y], a, off);
+            let d = v2::sub(c, [x, y]);
+            prop_assert!((v2::norm(d) - off).abs() < 1e-6 * off);
+            // right side: cross(heading, d) < 0
+            prop_assert!(v2::cross(heading_unit(a), d) < 0.0);
+        }
+    }
+}

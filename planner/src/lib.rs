@@ -1,0 +1,26 @@
+//! # cellsar planner
+//!
+//! Least-energy trajectory planning for a cellular-connected rotary-wing UAV that forms a
+//! bistatic SAR with its serving base station (Hu, Yuan, Ni, Wang, IEEE Trans. Commun.),
+//! with the corrections of `SPEC.md` §4.
+//!
+//! Layers, bottom up:
+//! - models: [`params`], [`landmarks`], [`mission`], [`power`], [`geometry`], [`dmin`];
+//! - exact-geometry evaluation of any trajectory: [`evaluate`];
+//! - trajectories and their files: [`trajectory`].
+
+pub mod dmin;
+pub mod evaluate;
+pub mod geometry;
+pub mod landmarks;
+pub mod mission;
+pub mod params;
+pub mod power;
+pub mod trajectory;
+
+pub use evaluate::{evaluate, Evaluation, SlotEval, Violations};
+pub use landmarks::{LandmarkWindow, LandmarksSpec, Preset, Schedule};
+pub use mission::{Mission, MissionError, MissionFile};
+pub use params::{ParamError, Params, ParamsOverride};
+pub use power::PowerModel;
+pub use trajectory::{Trajectory, TrajectoryError};

@@ -1,0 +1,291 @@
+//! Missions: validated parameters plus a resolved landmark schedule, read from TOML or JSON.
+//!
+//! ```toml
+//! name = "paper default, 30 m"      # optional
+//! [params]                           # any subset of `Params`, SPEC defaults otherwise
+//! bandwidth_hz = 150e6
+//! [landmarks]
+//! preset = "default"                 # or: points = [{ x_m = 0, y_m = 0, from_s = 0, to_s = 10 }]
+//! spacing_m = 30
+//! ```
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::landmarks::{LandmarksSpec, Preset, Schedule, ScheduleError};
+use crate::params::{ParamError, Params, ParamsOverride};
+
+/// A mission that cannot be read or built. Every variant names the file, field or slot.
+#[derive(Debug, thiserror::Error)]
+pub enum MissionError {
+    /// The file could not be read.
+    #[error("cannot read mission file {path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML/JSON or has unknown or mistyped fields.
+    #[error("mission file {path}: {message}")]
+    Parse {
+        /// The file.
+        path: String,
+        /// The parser's message (it names the line and field).
+        message: String,
+    },
+    /// A parameter is out of range.
+    #[error("{0}")]
+    Param(#[from] ParamError),
+    /// The landmark table is invalid.
+    #[error("{0}")]
+    Schedule(#[from] ScheduleError),
+}
+
+/// The on-disk structure of a mission file (TOML or JSON).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MissionFile {
+    /// Free-form name used in reports.
+    pub name: Option<String>,
+    /// Overrides of the SPEC defaults.
+    #[serde(default)]
+    pub params: ParamsOverride,
+    /// The landmark schedule.
+    pub landmarks: LandmarksSpec,
+}
+
+impl MissionFile {
+    /// Parses TOML text.
+    pub fn from_toml_str(text: &str) -> Result<Self, String> {
+        toml::from_str(text).map_err(|e| e.to_string())
+    }
+
+    /// Parses JSON text.
+    pub fn from_json_str(text: &str) -> Result<Self, String> {
+        serde_json::from_str(text).map_err(|e| e.to_string())
+    }
+
+    /// Serialises to TOML.
+    pub fn to_toml_string(&self) -> Result<String, String> {
+        toml::to_string_pretty(self).map_err(|e| e.to_string())
+    }
+}
+
+/// A validated mission: parameters that passed [`Params::validate`] and a schedule with one
+/// optional landmark per slot. The planner only accepts this type.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Mission {
+    name: String,
+    params: Params,
+    schedule: Schedule,
+}
+
+impl Mission {
+    /// Validates `params` and resolves `landmarks` into a schedule.
+    pub fn new(
+        name: impl Into<String>,
+        params: Params,
+        landmarks: &LandmarksSpec,
+    ) -> Result<Self, MissionError> {
+        params.validate()?;
+        let schedule = Schedule::from_spec(landmarks, params.slots(), params.slot_s)?;
+        Ok(Self {
+            name: name.into(),
+            params,
+            schedule,
+        })
+    }
+
+    /// Builds a mission from its file structure. A `staircase` or `square` preset without an
+    /// explicit `horizon_s` gets the paper's 600 s.
+    pub fn from_file_struct(file: &MissionFile) -> Result<Self, MissionError> {
+        let mut params = Params::default();
+        if let (Some(preset), None) = (file.landmarks.preset, file.params.horizon_s) {
+            params.horizon_s = preset.natural_horizon_s();
+        }
+        params.apply(&file.params);
+        let name = file.name.clone().unwrap_or_else(|| match file.landmarks.preset {
+            Some(p) => format!(
+                "{} ({} m)",
+                p.name(),
+                file.landmarks.spacing_m.unwrap_or(p.default_spacing_m())
+            ),
+            None => "explicit landmarks".to_string(),
+        });
+        Self::new(name, params, &file.landmarks)
+    }
+
+    /// Reads a mission file: `.json` as JSON, anything else as TOML.
+    pub fn from_path(path: &Path) -> Result<Self, MissionError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| MissionError::Io {
+            path: shown.clone(),
+            source,
+        })?;
+        let is_json = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        let file = if is_json {
+            MissionFile::from_json_str(&text)
+        } else {
+            MissionFile::from_toml_str(&text)
+        }
+        .map_err(|message| MissionError::Parse {
+            path: shown,
+            message,
+        })?;
+        Self::from_file_struct(&file)
+    }
+
+    /// The paper's preset mission with the given spacing (and SPEC defaults otherwise).
+    pub fn preset(preset: Preset, spacing_m: f64) -> Result<Self, MissionError> {
+        Self::from_file_struct(&MissionFile {
+            name: None,
+            params: ParamsOverride::default(),
+            landmarks: LandmarksSpec {
+                preset: Some(preset),
+                spacing_m: Some(spacing_m),
+                ..Default::default()
+            },
+        })
+    }
+
+    /// The same mission with changed parameters (re-validated, schedule rebuilt from its windows).
+    pub fn with_params(&self, params: Params) -> Result<Self, MissionError> {
+        params.validate()?;
+        let schedule = Schedule::from_windows(
+            self.schedule.landmarks.clone(),
+            params.slots(),
+            params.slot_s,
+        )?;
+        Ok(Self {
+            name: self.name.clone(),
+            params,
+            schedule,
+        })
+    }
+
+    /// The mission's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The validated parameters.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// The landmark schedule.
+    pub fn schedule(&self) -> &Schedule {
+        &self.schedule
+    }
+
+    /// Number of slots T_w.
+    pub fn slots(&self) -> usize {
+        self.schedule.slot_landmark.len()
+    }
+
+    /// The landmark sensed in slot `t` (1-based), if any.
+    pub fn target_m(&self, t: usize) -> Option<[f64; 2]> {
+        self.schedule.target_m(t)
+    }
+
+    /// This mission as a file structure with explicit windows (round-trips through TOML/JSON).
+    pub fn to_file_struct(&self) -> MissionFile {
+        let p = &self.params;
+        let d = Params::default();
+        let mut o = ParamsOverride::default();
+        macro_rules! diff {
+            ($($f:ident),*) => { $( if p.$f != d.$f { o.$f = Some(p.$f); } )* };
+        }
+        diff!(
+            bandwidth_hz,
+            wavelength_m,
+            integration_time_s,
+            observation_angle_rad,
+            d_min_m,
+            altitude_m,
+            max_speed_mps,
+            slot_s,
+            horizon_s,
+            start_m,
+            bs_m,
+            bs_height_m,
+            sensing_radius_m,
+            blade_power_w,
+            tip_speed_mps,
+            induced_power_w,
+            induced_velocity_mps,
+            rotor_solidity,
+            rotor_disc_area_m2,
+            air_density_kgpm3,
+            fuselage_drag_ratio,
+            uav_mass_kg
+        );
+        MissionFile {
+            name: Some(self.name.clone()),
+            params: o,
+            landmarks: LandmarksSpec {
+                points: Some(self.schedule.landmarks.clone()),
+                ..Default::default()
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn toml_preset_mission() {
+        let f = MissionFile::from_toml_str(
+            "[params]\nbandwidth_hz = 50e6\n[landmarks]\npreset = \"default\"\nspacing_m = 200\n",
+        )
+        .unwrap();
+        let m = Mission::from_file_struct(&f).unwrap();
+        assert_eq!(m.params().bandwidth_hz, 50e6);
+        assert_eq!(m.slots(), 600);
+        assert_eq!(m.target_m(21), Some([0.0, 200.0]));
+    }
+
+    #[test]
+    fn staircase_gets_600_s() {
+        let m = Mission::preset(Preset::Staircase, 30.0).unwrap();
+        assert_eq!(m.slots(), 1200);
+        assert_eq!(m.target_m(1200), Some([30.0 * 30.0, 29.0 * 30.0]));
+    }
+
+    #[test]
+    fn unknown_field_is_rejected_with_its_name() {
+        let e = MissionFile::from_toml_str("[params]\nbandwith_hz = 1\n[landmarks]\npreset=\"default\"")
+            .unwrap_err();
+        assert!(e.contains("bandwith_hz"), "{e}");
+    }
+
+    #[test]
+    fn bad_param_names_field() {
+        let f = MissionFile::from_toml_str(
+            "[params]\nmax_speed_mps = -3\n[landmarks]\npreset = \"default\"\n",
+        )
+        .unwrap();
+        let e = Mission::from_file_struct(&f).unwrap_err().to_string();
+        assert!(e.contains("max_speed_mps"), "{e}");
+    }
+
+    #[test]
+    fn json_and_toml_round_trip() {
+        let m = Mission::preset(Preset::Square, 100.0).unwrap();
+        let f = m.to_file_struct();
+        let t = f.to_toml_string().unwrap();
+        let back = Mission::from_file_struct(&MissionFile::from_toml_str(&t).unwrap()).unwrap();
+        assert_eq!(back.schedule(), m.schedule());
+        assert_eq!(back.params(), m.params());
+        let j = serde_json::to_string(&f).unwrap();
+        let back = Mission::from_file_struct(&MissionFile::from_json_str(&j).unwrap()).unwrap();
+        assert_eq!(back.params(), m.params());
+    }
+}

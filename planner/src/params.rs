@@ -1,0 +1,386 @@
+//! Validated mission parameters (SPEC.md §3: the paper's Table II plus what it leaves open).
+//!
+//! [`Params`] holds every physical constant of the model under a name that carries its unit.
+//! [`ParamsOverride`] is the `[params]` table of a mission file: every field optional, unknown
+//! fields rejected. [`Params::validate`] checks every value and names the first bad field.
+
+use serde::{Deserialize, Serialize};
+
+/// Speed of light in vacuum, m/s.
+pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
+
+/// A parameter that failed validation.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParamError {
+    /// A value is NaN, infinite, or outside its allowed range.
+    #[error("parameter `{field}` = {value}: {reason}")]
+    Invalid {
+        /// The parameter's name as it appears in a mission file's `[params]` table.
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What the value must satisfy.
+        reason: String,
+    },
+}
+
+/// All parameters of the model, in SI units (names carry the unit).
+///
+/// Build one with [`Params::default`] (SPEC defaults) and [`Params::apply`], then call
+/// [`Params::validate`]; a [`crate::Mission`] only ever holds validated parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// Transmit (OFDM) bandwidth B of the base station, Hz.
+    pub bandwidth_hz: f64,
+    /// Carrier wavelength λ_c, m.
+    pub wavelength_m: f64,
+    /// Coherent SAR integration time T_d, s.
+    pub integration_time_s: f64,
+    /// Observation (look) angle η of the side-looking receiver from nadir, rad, in (0, π/2).
+    pub observation_angle_rad: f64,
+    /// Required resolution d_min (the expected least object spacing), m.
+    pub d_min_m: f64,
+    /// UAV altitude H above ground, m.
+    pub altitude_m: f64,
+    /// Maximum UAV speed V_m, m/s.
+    pub max_speed_mps: f64,
+    /// Slot length δ, s.
+    pub slot_s: f64,
+    /// Mission horizon T, s (a whole number of slots).
+    pub horizon_s: f64,
+    /// Start position q_0 (x, y), m.
+    pub start_m: [f64; 2],
+    /// Base-station ground position q_b (x, y), m.
+    pub bs_m: [f64; 2],
+    /// Base-station antenna height H_b, m.
+    pub bs_height_m: f64,
+    /// Radius r_s of the (circular) sensing area around the sensing centre, m.
+    pub sensing_radius_m: f64,
+    /// Blade-profile power in hover P_0, W.
+    pub blade_power_w: f64,
+    /// Rotor blade tip speed U_tip, m/s.
+    pub tip_speed_mps: f64,
+    /// Induced power in hover P_1, W.
+    pub induced_power_w: f64,
+    /// Mean rotor induced velocity in hover v_0, m/s.
+    pub induced_velocity_mps: f64,
+    /// Rotor solidity s (dimensionless).
+    pub rotor_solidity: f64,
+    /// Rotor disc area A, m².
+    pub rotor_disc_area_m2: f64,
+    /// Air density ρ, kg/m³.
+    pub air_density_kgpm3: f64,
+    /// Fuselage drag ratio d_f (dimensionless).
+    pub fuselage_drag_ratio: f64,
+    /// UAV mass, kg (Table II; informational, the power model already folds it in).
+    pub uav_mass_kg: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            bandwidth_hz: 150e6,
+            wavelength_m: 0.1,
+            integration_time_s: 1.0,
+            observation_angle_rad: std::f64::consts::FRAC_PI_4,
+            d_min_m: 20.0,
+            altitude_m: 1000.0,
+            max_speed_mps: 50.0,
+            slot_s: 0.5,
+            horizon_s: 300.0,
+            start_m: [-1000.0, -500.0],
+            bs_m: [1000.0, -1000.0],
+            bs_height_m: 50.0,
+            sensing_radius_m: 200.0,
+            blade_power_w: 3.4,
+            tip_speed_mps: 60.0,
+            induced_power_w: 118.0,
+            induced_velocity_mps: 5.4,
+            rotor_solidity: 0.02,
+            rotor_disc_area_m2: 0.5,
+            air_density_kgpm3: 1.225,
+            fuselage_drag_ratio: 0.3,
+            uav_mass_kg: 2.0,
+        }
+    }
+}
+
+/// The `[params]` table of a mission file: any subset of [`Params`], unknown names rejected.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)] // one field per `Params` field, same name and meaning
+pub struct ParamsOverride {
+    pub bandwidth_hz: Option<f64>,
+    pub wavelength_m: Option<f64>,
+    pub integration_time_s: Option<f64>,
+    pub observation_angle_rad: Option<f64>,
+    pub d_min_m: Option<f64>,
+    pub altitude_m: Option<f64>,
+    pub max_speed_mps: Option<f64>,
+    pub slot_s: Option<f64>,
+    pub horizon_s: Option<f64>,
+    pub start_m: Option<[f64; 2]>,
+    pub bs_m: Option<[f64; 2]>,
+    pub bs_height_m: Option<f64>,
+    pub sensing_radius_m: Option<f64>,
+    pub blade_power_w: Option<f64>,
+    pub tip_speed_mps: Option<f64>,
+    pub induced_power_w: Option<f64>,
+    pub induced_velocity_mps: Option<f64>,
+    pub rotor_solidity: Option<f64>,
+    pub rotor_disc_area_m2: Option<f64>,
+    pub air_density_kgpm3: Option<f64>,
+    pub fuselage_drag_ratio: Option<f64>,
+    pub uav_mass_kg: Option<f64>,
+}
+
+/// Which values a scalar parameter may take.
+#[derive(Debug, Clone, Copy)]
+enum Range {
+    /// Strictly positive.
+    Positive,
+    /// Zero or more.
+    NonNegative,
+    /// Open interval (lo, hi).
+    Open(f64, f64),
+}
+
+/// One entry of the parameter table: name, accessor.
+type Field = (&'static str, fn(&Params) -> f64, fn(&mut Params, f64), Range);
+
+macro_rules! scalar_fields {
+    ($( $name:ident : $range:expr ),* $(,)?) => {
+        /// Every scalar parameter with its name, getter, setter and allowed range.
+        const SCALAR_FIELDS: &[Field] = &[
+            $( (stringify!($name), |p: &Params| p.$name, |p: &mut Params, v: f64| p.$name = v, $range) ),*
+        ];
+        impl Params {
+            /// Overwrites every field that `o` sets.
+            pub fn apply(&mut self, o: &ParamsOverride) {
+                $( if let Some(v) = o.$name { self.$name = v; } )*
+                if let Some(v) = o.start_m { self.start_m = v; }
+                if let Some(v) = o.bs_m { self.bs_m = v; }
+            }
+        }
+    };
+}
+
+scalar_fields! {
+    bandwidth_hz: Range::Positive,
+    wavelength_m: Range::Positive,
+    integration_time_s: Range::Positive,
+    observation_angle_rad: Range::Open(0.0, std::f64::consts::FRAC_PI_2),
+    d_min_m: Range::Positive,
+    altitude_m: Range::Positive,
+    max_speed_mps: Range::Positive,
+    slot_s: Range::Positive,
+    horizon_s: Range::Positive,
+    bs_height_m: Range::NonNegative,
+    sensing_radius_m: Range::Positive,
+    blade_power_w: Range::NonNegative,
+    tip_speed_mps: Range::Positive,
+    induced_power_w: Range::NonNegative,
+    induced_velocity_mps: Range::Positive,
+    rotor_solidity: Range::NonNegative,
+    rotor_disc_area_m2: Range::NonNegative,
+    air_density_kgpm3: Range::NonNegative,
+    fuselage_drag_ratio: Range::NonNegative,
+    uav_mass_kg: Range::Positive,
+}
+
+/// Largest number of slots a mission may have (keeps memory and solve time bounded).
+pub const MAX_SLOTS: usize = 200_000;
+
+impl Params {
+    /// Sets a scalar parameter by its mission-file name; `Err` names an unknown field.
+    pub fn set_by_name(&mut self, name: &str, value: f64) -> Result<(), ParamError> {
+        for (field, _, set, _) in SCALAR_FIELDS {
+            if *field == name {
+                set(self, value);
+                return Ok(());
+            }
+        }
+        Err(ParamError::Invalid {
+            field: "params",
+            value,
+            reason: format!("unknown scalar parameter `{name}`"),
+        })
+    }
+
+    /// Reads a scalar parameter by its mission-file name.
+    pub fn get_by_name(&self, name: &str) -> Option<f64> {
+        SCALAR_FIELDS
+            .iter()
+            .find(|(field, ..)| *field == name)
+            .map(|(_, get, ..)| get(self))
+    }
+
+    /// Names of all scalar parameters, in table order.
+    pub fn scalar_names() -> impl Iterator<Item = &'static str> {
+        SCALAR_FIELDS.iter().map(|(name, ..)| *name)
+    }
+
+    /// Checks every value; the error names the first bad field.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        for (field, get, _, range) in SCALAR_FIELDS {
+            let value = get(self);
+            let bad = |reason: &str| ParamError::Invalid {
+                field,
+                value,
+                reason: reason.to_string(),
+            };
+            if !value.is_finite() {
+                return Err(bad("must be a finite number"));
+            }
+            match *range {
+                Range::Positive if value <= 0.0 => return Err(bad("must be > 0")),
+                Range::NonNegative if value < 0.0 => return Err(bad("must be >= 0")),
+                Range::Open(lo, hi) if !(value > lo && value < hi) => {
+                    return Err(bad(&format!("must lie in the open interval ({lo}, {hi})")))
+                }
+                _ => {}
+            }
+        }
+        for (field, v) in [("start_m", self.start_m), ("bs_m", self.bs_m)] {
+            for value in v {
+                if !value.is_finite() {
+                    return Err(ParamError::Invalid {
+                        field,
+                        value,
+                        reason: "coordinates must be finite numbers".into(),
+                    });
+                }
+            }
+        }
+        let ratio = self.horizon_s / self.slot_s;
+        let slots = ratio.round();
+        if (ratio - slots).abs() > 1e-6 * ratio.max(1.0) || slots < 1.0 {
+            return Err(ParamError::Invalid {
+                field: "horizon_s",
+                value: self.horizon_s,
+                reason: format!(
+                    "must be a whole, non-zero number of slots of slot_s = {} s (ratio {ratio})",
+                    self.slot_s
+                ),
+            });
+        }
+        if slots > MAX_SLOTS as f64 {
+            return Err(ParamError::Invalid {
+                field: "horizon_s",
+                value: self.horizon_s,
+                reason: format!("gives {slots} slots, more than the supported {MAX_SLOTS}"),
+            });
+        }
+        Ok(())
+    }
+
+    /// Number of slots T_w = T / δ.
+    pub fn slots(&self) -> usize {
+        (self.horizon_s / self.slot_s).round().max(0.0) as usize
+    }
+
+    /// Ground distance from the UAV to its sensing centre, H tan η, m.
+    pub fn centre_offset_m(&self) -> f64 {
+        self.altitude_m * self.observation_angle_rad.tan()
+    }
+
+    /// Slant range from the UAV to its sensing centre, R_r = H / cos η, m.
+    pub fn slant_range_m(&self) -> f64 {
+        self.altitude_m / self.observation_angle_rad.cos()
+    }
+
+    /// Least speed that meets the azimuth requirement δ_a ≤ d_min (paper eq. p2.2):
+    /// V_min = λ_c H / (T_d d_min cos η), m/s.
+    pub fn min_speed_mps(&self) -> f64 {
+        self.wavelength_m * self.altitude_m
+            / (self.integration_time_s * self.d_min_m * self.observation_angle_rad.cos())
+    }
+
+    /// Right-hand side of the squared range constraint, sin θ_t ≥ c/(B d_min) − sin η.
+    /// When this is ≤ 0 the range requirement holds everywhere (SPEC.md §4 item 2).
+    pub fn range_sin_threshold(&self) -> f64 {
+        SPEED_OF_LIGHT_MPS / (self.bandwidth_hz * self.d_min_m) - self.observation_angle_rad.sin()
+    }
+
+    /// The least ground distance between the sensing centre and the BS that meets the paper's
+    /// range requirement, `sqrt(C_r)` of eq. (explicit), or `None` when the requirement is vacuous
+    /// (threshold ≤ 0). Returns `Some(f64::INFINITY)` when it can never be met (threshold ≥ 1).
+    pub fn range_keepout_m(&self) -> Option<f64> {
+        let k = self.range_sin_threshold();
+        if k <= 0.0 {
+            None
+        } else if k >= 1.0 {
+            Some(f64::INFINITY)
+        } else {
+            // sin θ ≥ k  <=>  d / sqrt(d² + H_b²) ≥ k  <=>  d² ≥ k² H_b² / (1 − k²)
+            Some(self.bs_height_m * k / (1.0 - k * k).sqrt())
+        }
+    }
+
+    /// The sensing radius that SPEC.md §3 derives from the antenna height W_a:
+    /// r_s = λ_c H / (2 W_a cos² η).
+    pub fn sensing_radius_from_antenna_m(&self, antenna_height_m: f64) -> f64 {
+        let c = self.observation_angle_rad.cos();
+        self.wavelength_m * self.altitude_m / (2.0 * antenna_height_m * c * c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_match_spec() {
+        let p = Params::default();
+        p.validate().unwrap();
+        assert_eq!(p.slots(), 600);
+        assert!((p.min_speed_mps() - 7.0711).abs() < 1e-3);
+        assert!((p.centre_offset_m() - 1000.0).abs() < 1e-9);
+        // r_s from W_a = 0.5 m is the 200 m default.
+        assert!((p.sensing_radius_from_antenna_m(0.5) - 200.0).abs() < 1e-9);
+        // c/(B d_min) − sin η < 0 with the defaults: the range constraint is vacuous.
+        assert!(p.range_sin_threshold() < 0.0);
+        assert_eq!(p.range_keepout_m(), None);
+    }
+
+    #[test]
+    fn every_bad_value_names_its_field() {
+        for name in Params::scalar_names() {
+            for bad in [f64::NAN, f64::INFINITY, -1.0] {
+                let mut p = Params::default();
+                p.set_by_name(name, bad).unwrap();
+                let err = p.validate().unwrap_err();
+                let msg = err.to_string();
+                assert!(
+                    msg.contains(name) || (name == "slot_s" && msg.contains("horizon_s")),
+                    "{name}={bad}: {msg}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn observation_angle_must_be_inside_open_interval() {
+        let mut p = Params::default();
+        p.observation_angle_rad = std::f64::consts::FRAC_PI_2;
+        assert!(p.validate().unwrap_err().to_string().contains("observation_angle_rad"));
+    }
+
+    #[test]
+    fn horizon_must_be_whole_number_of_slots() {
+        let mut p = Params::default();
+        p.horizon_s = 300.2;
+        assert!(p.validate().unwrap_err().to_string().contains("horizon_s"));
+    }
+
+    #[test]
+    fn keepout_when_threshold_positive() {
+        let mut p = Params::default();
+        p.bandwidth_hz = 10e6; // c/(B d) = 1.5 > 1 + sin(eta)? 1.5 - 0.707 = 0.79
+        let k = p.range_sin_threshold();
+        assert!(k > 0.0 && k < 1.0);
+        let d = p.range_keepout_m().unwrap();
+        let sin_theta = d / (d * d + p.bs_height_m.powi(2)).sqrt();
+        assert!((sin_theta - k).abs() < 1e-12);
+    }
+}

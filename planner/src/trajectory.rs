@@ -1,0 +1,281 @@
+//! Trajectories: the start q_0 and one waypoint q_t per slot; straight, constant-speed flight
+//! within each slot (the model of the paper: the heading of slot t is that of q_t − q_{t−1}).
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::{heading_rad, v2};
+
+/// A trajectory that cannot be read or does not fit its mission.
+#[derive(Debug, thiserror::Error)]
+pub enum TrajectoryError {
+    /// The file could not be read.
+    #[error("cannot read trajectory {path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A malformed CSV file; names the line and column.
+    #[error("trajectory {path}, {location}: {reason}")]
+    Format {
+        /// The file.
+        path: String,
+        /// e.g. `line 4, column y_m`.
+        location: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// A planned or given trajectory.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Trajectory {
+    /// Slot length δ, s.
+    pub slot_s: f64,
+    /// Start position q_0, m.
+    pub start_m: [f64; 2],
+    /// Waypoints q_1..q_{T_w}, m (`pos_m[t-1]` is q_t).
+    pub pos_m: Vec<[f64; 2]>,
+}
+
+impl Trajectory {
+    /// Number of slots T_w.
+    pub fn slots(&self) -> usize {
+        self.pos_m.len()
+    }
+
+    /// Duration T = T_w δ, s.
+    pub fn duration_s(&self) -> f64 {
+        self.slots() as f64 * self.slot_s
+    }
+
+    /// q_t for t = 0..=T_w (q_0 is the start). Clamped to the ends.
+    pub fn q(&self, t: usize) -> [f64; 2] {
+        if t == 0 {
+            self.start_m
+        } else {
+            self.pos_m
+                .get(t - 1)
+                .or(self.pos_m.last())
+                .copied()
+                .unwrap_or(self.start_m)
+        }
+    }
+
+    /// Displacement q_t − q_{t−1} of slot t (1-based), m.
+    pub fn step_m(&self, t: usize) -> [f64; 2] {
+        v2::sub(self.q(t), self.q(t.saturating_sub(1)))
+    }
+
+    /// True velocity of slot t, (q_t − q_{t−1}) / δ, m/s.
+    pub fn velocity_mps(&self, t: usize) -> [f64; 2] {
+        v2::scale(self.step_m(t), 1.0 / self.slot_s)
+    }
+
+    /// True speed of slot t, m/s.
+    pub fn speed_mps(&self, t: usize) -> f64 {
+        v2::norm(self.velocity_mps(t))
+    }
+
+    /// True headings of slots 1..=T_w, rad. A slot without motion keeps the previous heading
+    /// (the antenna is fixed to the airframe, which keeps its yaw in hover); before the first
+    /// motion the first defined heading is used, and 0 if the UAV never moves.
+    pub fn headings_rad(&self) -> Vec<f64> {
+        let raw: Vec<Option<f64>> = (1..=self.slots())
+            .map(|t| heading_rad(self.q(t - 1), self.q(t)))
+            .collect();
+        let first = raw.iter().flatten().next().copied().unwrap_or(0.0);
+        let mut last = first;
+        raw.into_iter()
+            .map(|h| {
+                if let Some(h) = h {
+                    last = h;
+                }
+                last
+            })
+            .collect()
+    }
+
+    /// Position at time `time_s` (linear within a slot; clamped to [0, T]).
+    pub fn position_at(&self, time_s: f64) -> [f64; 2] {
+        let n = self.slots();
+        if n == 0 || !time_s.is_finite() || time_s <= 0.0 {
+            return self.start_m;
+        }
+        let x = time_s / self.slot_s;
+        if x >= n as f64 {
+            return self.q(n);
+        }
+        let t = x.floor() as usize; // slot t+1 runs from q_t to q_{t+1}
+        let f = x - t as f64;
+        let a = self.q(t);
+        let b = self.q(t + 1);
+        [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
+    }
+
+    /// Velocity at time `time_s`: that of the slot containing it (m/s).
+    pub fn velocity_at(&self, time_s: f64) -> [f64; 2] {
+        let n = self.slots();
+        if n == 0 {
+            return [0.0, 0.0];
+        }
+        let t = ((time_s / self.slot_s).ceil() as usize).clamp(1, n);
+        self.velocity_mps(t)
+    }
+
+    /// Total path length Σ ‖q_t − q_{t−1}‖, m.
+    pub fn length_m(&self) -> f64 {
+        (1..=self.slots()).map(|t| v2::norm(self.step_m(t))).sum()
+    }
+
+    /// Reads a CSV file with at least the columns `t_s,x_m,y_m`, one row per slot, optionally with
+    /// the start as a row at t = 0. `start_m` is used when no t = 0 row is present.
+    pub fn from_csv_path(
+        path: &Path,
+        slot_s: f64,
+        slots: usize,
+        start_m: [f64; 2],
+    ) -> Result<Self, TrajectoryError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| TrajectoryError::Io {
+            path: shown.clone(),
+            source,
+        })?;
+        Self::from_csv_str(&text, &shown, slot_s, slots, start_m)
+    }
+
+    /// Parses CSV text (see [`Trajectory::from_csv_path`]); `name` is used in error messages.
+    pub fn from_csv_str(
+        text: &str,
+        name: &str,
+        slot_s: f64,
+        slots: usize,
+        start_m: [f64; 2],
+    ) -> Result<Self, TrajectoryError> {
+        let err = |location: String, reason: String| TrajectoryError::Format {
+            path: name.to_string(),
+            location,
+            reason,
+        };
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+        let (_, header) = lines
+            .next()
+            .ok_or_else(|| err("line 1".into(), "empty file".into()))?;
+        let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+        let col = |name: &str| {
+            cols.iter()
+                .position(|c| *c == name)
+                .ok_or_else(|| err("header".into(), format!("missing column `{name}`")))
+        };
+        let (ct, cx, cy) = (col("t_s")?, col("x_m")?, col("y_m")?);
+        let mut start = start_m;
+        let mut pos = Vec::with_capacity(slots);
+        for (i, line) in lines {
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            let get = |c: usize, n: &str| -> Result<f64, TrajectoryError> {
+                let s = fields.get(c).ok_or_else(|| {
+                    err(format!("line {}, column {n}", i + 1), "missing value".into())
+                })?;
+                let v: f64 = s.parse().map_err(|_| {
+                    err(
+                        format!("line {}, column {n}", i + 1),
+                        format!("`{s}` is not a number"),
+                    )
+                })?;
+                if !v.is_finite() {
+                    return Err(err(
+                        format!("line {}, column {n}", i + 1),
+                        format!("{v} is not finite"),
+                    ));
+                }
+                Ok(v)
+            };
+            let (t, x, y) = (get(ct, "t_s")?, get(cx, "x_m")?, get(cy, "y_m")?);
+            if t.abs() < 1e-9 && pos.is_empty() {
+                start = [x, y];
+                continue;
+            }
+            let expected = (pos.len() + 1) as f64 * slot_s;
+            if (t - expected).abs() > 1e-6 * expected.max(1.0) {
+                return Err(err(
+                    format!("line {}, column t_s", i + 1),
+                    format!("expected t_s = {expected} (slot {}), found {t}", pos.len() + 1),
+                ));
+            }
+            pos.push([x, y]);
+        }
+        if pos.len() != slots {
+            return Err(err(
+                "rows".into(),
+                format!(
+                    "{} slot rows, but the mission has {slots} slots of {slot_s} s",
+                    pos.len()
+                ),
+            ));
+        }
+        Ok(Self {
+            slot_s,
+            start_m: start,
+            pos_m: pos,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line() -> Trajectory {
+        Trajectory {
+            slot_s: 0.5,
+            start_m: [0.0, 0.0],
+            pos_m: (1..=4).map(|t| [t as f64 * 5.0, 0.0]).collect(),
+        }
+    }
+
+    #[test]
+    fn speeds_and_interpolation() {
+        let tr = line();
+        assert_eq!(tr.speed_mps(1), 10.0);
+        assert_eq!(tr.position_at(0.25), [2.5, 0.0]);
+        assert_eq!(tr.position_at(2.0), [20.0, 0.0]);
+        assert_eq!(tr.position_at(99.0), [20.0, 0.0]);
+        assert_eq!(tr.length_m(), 20.0);
+    }
+
+    #[test]
+    fn hover_keeps_heading() {
+        let tr = Trajectory {
+            slot_s: 1.0,
+            start_m: [0.0, 0.0],
+            pos_m: vec![[0.0, 0.0], [0.0, 1.0], [0.0, 1.0], [1.0, 1.0]],
+        };
+        let h = tr.headings_rad();
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        assert_eq!(h, vec![half_pi, half_pi, half_pi, 0.0]);
+    }
+
+    #[test]
+    fn csv_round_trip_and_errors() {
+        let text = "t_s,x_m,y_m\n0,1,2\n0.5,3,4\n1.0,5,6\n";
+        let tr = Trajectory::from_csv_str(text, "x.csv", 0.5, 2, [0.0, 0.0]).unwrap();
+        assert_eq!(tr.start_m, [1.0, 2.0]);
+        assert_eq!(tr.pos_m, vec![[3.0, 4.0], [5.0, 6.0]]);
+        let e = Trajectory::from_csv_str(text, "x.csv", 0.5, 3, [0.0, 0.0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("3 slots"), "{e}");
+        let bad = "t_s,x_m,y_m\n0.5,3,oops\n";
+        let e = Trajectory::from_csv_str(bad, "x.csv", 0.5, 1, [0.0, 0.0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 2, column y_m"), "{e}");
+    }
+}
