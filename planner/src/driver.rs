@@ -75,7 +75,8 @@ pub struct PlanOptions {
     pub min_kappa_scale: f64,
     /// For the exact-geometry schemes without a given start: first solve the mission on slots
     /// about 2 s long and start from that solution (fewer, larger steps make the SCA converge
-    /// in far fewer iterations; the fine solve then only polishes).
+    /// in far fewer iterations; the fine solve then only polishes). When false, the coarse grid
+    /// only provides a feasible start.
     pub coarse: bool,
 }
 
@@ -224,14 +225,17 @@ pub fn plan_with_observer(
             }
             tr.clone()
         }
+        // The built-in start: the guidance law on a coarse grid made feasible there (phase I);
+        // for the exact-geometry schemes also optimised there. The paper's schemes get the plain
+        // feasible path, as Algorithm 1's step 1 asks ("a feasible initial flight path").
         None => match options.scheme {
-            Scheme::Exact if options.coarse => {
-                coarse_start(mission, ExactObjective::Energy, options)
+            Scheme::Exact => coarse_start(mission, ExactObjective::Energy, options.coarse, options),
+            Scheme::BaselineExact => {
+                coarse_start(mission, ExactObjective::Distance, options.coarse, options)
             }
-            Scheme::BaselineExact if options.coarse => {
-                coarse_start(mission, ExactObjective::Distance, options)
+            Scheme::Paper | Scheme::Baseline => {
+                coarse_start(mission, ExactObjective::Energy, false, options)
             }
-            _ => None,
         }
         .unwrap_or_else(|| guidance_start(mission)),
     };
@@ -312,6 +316,7 @@ const COARSE_SLOT_S: f64 = 2.0;
 fn coarse_start(
     mission: &Mission,
     objective: ExactObjective,
+    optimise: bool,
     options: &PlanOptions,
 ) -> Option<Trajectory> {
     let n = mission.slots();
@@ -335,30 +340,33 @@ fn coarse_start(
         &mut NoObserver,
     )
     .ok()?;
-    let sub_options = PlanOptions {
-        init: None,
-        coarse: false,
-        tolerance: options.tolerance,
-        ..options.clone()
+    let tr = if optimise {
+        let sub_options = PlanOptions {
+            init: None,
+            coarse: false,
+            ..options.clone()
+        };
+        let mut solver = SocpSolver::new(options.socp);
+        let solved = run_exact(
+            &coarse,
+            start,
+            objective,
+            &tuning,
+            &sub_options,
+            &mut solver,
+            &mut NoObserver,
+        )
+        .ok()?;
+        tracing::debug!(
+            factor,
+            iterations = solved.iterations,
+            energy_j = solved.evaluation.energy_j,
+            "coarse solve"
+        );
+        solved.trajectory
+    } else {
+        start
     };
-    let mut solver = SocpSolver::new(options.socp);
-    let solved = run_exact(
-        &coarse,
-        start,
-        objective,
-        &tuning,
-        &sub_options,
-        &mut solver,
-        &mut NoObserver,
-    )
-    .ok()?;
-    let tr = &solved.trajectory;
-    tracing::debug!(
-        factor,
-        iterations = solved.iterations,
-        energy_j = solved.evaluation.energy_j,
-        "coarse solve"
-    );
     Some(Trajectory {
         slot_s: delta,
         start_m: tr.start_m,
@@ -407,8 +415,8 @@ fn make_feasible(
         ExactObjective::Energy => ev.energy_j,
     };
     let mut weight = match objective {
-        ExactObjective::Energy => 100.0,
-        ExactObjective::Distance => 10.0,
+        ExactObjective::Energy => 1000.0,
+        ExactObjective::Distance => 100.0,
     };
     let mut tuning = ExactTuning {
         elastic_weight: Some(weight),
@@ -450,11 +458,13 @@ fn make_feasible(
             stalls = 0;
         } else {
             stalls += 1;
-            // the penalty is not exact yet: charge violations more
-            weight *= 10.0;
-            merit = value(&ev) + weight * total_violation(mission, &ev);
-            if stalls >= 6 {
+            if stalls >= 8 {
                 break;
+            }
+            if stalls % 3 == 0 && weight < 1e5 {
+                // the penalty may not be exact yet: charge violations more
+                weight *= 10.0;
+                merit = value(&ev) + weight * total_violation(mission, &ev);
             }
         }
     }

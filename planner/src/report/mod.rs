@@ -2,6 +2,7 @@
 //! `energy.svg`, `convergence.svg`; and reading a plan directory back.
 
 pub mod plot;
+pub mod reproduce;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
