@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 //! Times the parts of one exact-scheme iteration on the default mission.
 use planner::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use planner::socp::{SocpSettings, SocpSolver};

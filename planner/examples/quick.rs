@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 //! Plans the paper's default mission with a chosen scheme and prints the headline numbers.
 use planner::{plan, Mission, PlanOptions, Preset, Scheme};
 

@@ -324,7 +324,7 @@ fn coarse_start(
     let target = (COARSE_SLOT_S / delta).round() as usize;
     let factor = (2..=target.max(2))
         .rev()
-        .find(|&k| k <= target && n % k == 0 && n / k >= 8)?;
+        .find(|&k| k <= target && n.is_multiple_of(k) && n / k >= 8)?;
     let coarse = mission.coarsened(factor)?;
     let tuning = ExactTuning {
         whole_slot_sensing: true,
@@ -508,6 +508,7 @@ fn record(
     }
 }
 
+#[allow(clippy::too_many_arguments)] // a private constructor of PlanResult
 fn finish(
     mission: &Mission,
     trajectory: Trajectory,

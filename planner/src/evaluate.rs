@@ -164,7 +164,7 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
             if !in_view {
                 out_of_view += 1;
             }
-            if !(cell.worst_width_m <= p.d_min_m) {
+            if cell.worst_width_m > p.d_min_m || cell.worst_width_m.is_nan() {
                 unresolved += 1;
             }
         }

@@ -326,7 +326,7 @@ mod tests {
 
         /// Heading/centre round trip: the centre lies exactly `offset` to the right.
         #[test]
-        fn centre_distance_and_side(x in -1e4f64..1e4, y in -1e4f64..1e4, a in 0.0f64..6.28, off in 1.0f64..3000.0) {
+        fn centre_distance_and_side(x in -1e4f64..1e4, y in -1e4f64..1e4, a in 0.0f64..std::f64::consts::TAU, off in 1.0f64..3000.0) {
             let c = sensing_centre_m([x, y], a, off);
             let d = v2::sub(c, [x, y]);
             prop_assert!((v2::norm(d) - off).abs() < 1e-6 * off);

@@ -209,8 +209,8 @@ impl ExactSubproblem {
                 let u = l.step_m;
                 let lexpr = Lin::var(a, 2.0 * l.aux)
                     .plus_const(-l.aux * l.aux - k * v2::dot(u, u))
-                    .add(&vx.clone().scaled(2.0 * k * u[0]))
-                    .add(&vy.clone().scaled(2.0 * k * u[1]));
+                    .plus_lin(&vx.clone().scaled(2.0 * k * u[0]))
+                    .plus_lin(&vy.clone().scaled(2.0 * k * u[1]));
                 // s a ≥ 1 ; s² ≤ L
                 b.rotated_soc(
                     Lin::var(s, 1.0),
@@ -236,7 +236,7 @@ impl ExactSubproblem {
             // part may be violated (slack σ_t); the bound's part stays hard.
             let u_norm = v2::norm(l.step_m);
             let h = l.dir;
-            let along = vx.clone().scaled(h[0]).add(&vy.clone().scaled(h[1]));
+            let along = vx.clone().scaled(h[0]).plus_lin(&vy.clone().scaled(h[1]));
             let keep = tuning.speed_keep_fraction * u_norm;
             let s_min = match sv.sigma {
                 None => (delta * v_min).max(keep),
@@ -257,18 +257,18 @@ impl ExactSubproblem {
             let pvx = vx
                 .clone()
                 .scaled(pm[0][0])
-                .add(&vy.clone().scaled(pm[0][1]));
+                .plus_lin(&vy.clone().scaled(pm[0][1]));
             let pvy = vx
                 .clone()
                 .scaled(pm[1][0])
-                .add(&vy.clone().scaled(pm[1][1]));
+                .plus_lin(&vy.clone().scaled(pm[1][1]));
             let jh = v2::right(h);
             let cx = Lin::var(sv.x, 1.0)
                 .plus_const(offset * jh[0])
-                .add(&pvy.clone().scaled(scale));
+                .plus_lin(&pvy.clone().scaled(scale));
             let cy = Lin::var(sv.y, 1.0)
                 .plus_const(offset * jh[1])
-                .add(&pvx.clone().scaled(-scale));
+                .plus_lin(&pvx.clone().scaled(-scale));
             let mut head = Lin::var(e, -1.0).plus_const(radius);
             if let Some(sig) = sv.sigma {
                 head = head.plus(sig, 1.0);
@@ -278,8 +278,8 @@ impl ExactSubproblem {
                 b.soc(
                     head.clone(),
                     &[
-                        cx.clone().sub(&vx).plus_const(-g[0]),
-                        cy.clone().sub(&vy).plus_const(-g[1]),
+                        cx.clone().minus_lin(&vx).plus_const(-g[0]),
+                        cy.clone().minus_lin(&vy).plus_const(-g[1]),
                     ],
                 );
             }
@@ -305,7 +305,7 @@ impl ExactSubproblem {
                 let nrm = v2::unit(v2::sub(l.centre_m, p.bs_m)).unwrap_or([1.0, 0.0]);
                 let mut expr = cx
                     .scaled(nrm[0])
-                    .add(&cy.scaled(nrm[1]))
+                    .plus_lin(&cy.scaled(nrm[1]))
                     .plus_const(-v2::dot(nrm, p.bs_m) - rk - SENSING_MARGIN_M)
                     .plus(e, -1.0);
                 if let Some(sig) = sv.sigma {
