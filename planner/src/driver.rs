@@ -78,6 +78,9 @@ pub struct PlanOptions {
     /// in far fewer iterations; the fine solve then only polishes). When false, the coarse grid
     /// only provides a feasible start.
     pub coarse: bool,
+    /// Try longer steps along each accepted SCA step of the exact scheme (2× and 4×, kept when
+    /// still feasible and better). Off gives the plain SCA sequence.
+    pub over_relaxation: bool,
 }
 
 impl Default for PlanOptions {
@@ -90,6 +93,7 @@ impl Default for PlanOptions {
             socp: SocpSettings::default(),
             min_kappa_scale: 1.0 / 16.0,
             coarse: true,
+            over_relaxation: true,
         }
     }
 }
@@ -602,7 +606,7 @@ fn run_exact(
         let mut cand_value = true_value(&cand_ev);
         // over-relaxation: SCA steps limited by the conservative centre bound tend to repeat in
         // the same direction; try longer steps along it and keep the best that stays feasible.
-        if cand_ev.is_feasible() && cand_value < value {
+        if options.over_relaxation && cand_ev.is_feasible() && cand_value < value {
             for alpha in [2.0, 4.0] {
                 let trial = extrapolate(&current, &cand, alpha);
                 let ev = evaluate(mission, &trial);

@@ -55,6 +55,10 @@ enum Command {
         /// Skip the coarse first solve of the exact-geometry schemes.
         #[arg(long)]
         no_coarse: bool,
+        /// Plain SCA for the exact scheme: always the proven centre-error bound, no
+        /// over-relaxation (for comparisons with other implementations of the same scheme).
+        #[arg(long)]
+        plain_sca: bool,
     },
     /// Evaluate a trajectory of a mission on the exact geometry (true energy, violations).
     Evaluate {
@@ -157,6 +161,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             max_iterations,
             tolerance,
             no_coarse,
+            plain_sca,
         } => {
             let m = Mission::from_path(&mission).map_err(bad)?;
             if !(tolerance.is_finite() && tolerance > 0.0) {
@@ -178,6 +183,12 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 tolerance,
                 init,
                 coarse: !no_coarse,
+                over_relaxation: !plain_sca,
+                min_kappa_scale: if plain_sca {
+                    1.0
+                } else {
+                    PlanOptions::default().min_kappa_scale
+                },
                 ..PlanOptions::default()
             };
             let pb = spinner();
