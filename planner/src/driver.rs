@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::evaluate::{evaluate, Evaluation};
+use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
 use crate::init::{guidance_start, precheck, Infeasibility};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::schemes::paper::{PaperObjective, PaperState};
@@ -81,6 +81,9 @@ pub struct PlanOptions {
     /// Try longer steps along each accepted SCA step of the exact scheme (2× and 4×, kept when
     /// still feasible and better). Off gives the plain SCA sequence.
     pub over_relaxation: bool,
+    /// Resolution requirement of the exact-geometry schemes (the paper's schemes always use the
+    /// paper's, as printed).
+    pub resolution: ResolutionMode,
 }
 
 impl Default for PlanOptions {
@@ -94,6 +97,7 @@ impl Default for PlanOptions {
             min_kappa_scale: 1.0 / 16.0,
             coarse: true,
             over_relaxation: true,
+            resolution: ResolutionMode::Paper,
         }
     }
 }
@@ -177,6 +181,8 @@ pub struct PlanResult {
     pub repair_iterations: usize,
     /// Cone programs solved.
     pub cone_programs: usize,
+    /// The resolution requirement the plan was made for.
+    pub resolution: ResolutionMode,
 }
 
 /// Why planning failed.
@@ -244,6 +250,10 @@ pub fn plan_with_observer(
         .unwrap_or_else(|| guidance_start(mission)),
     };
     let start_energy_j = evaluate(mission, &start).energy_j;
+    let resolution = match options.scheme {
+        Scheme::Exact | Scheme::BaselineExact => options.resolution,
+        Scheme::Paper | Scheme::Baseline => ResolutionMode::Paper,
+    };
     let mut solver = SocpSolver::new(options.socp);
     let mut repair_solver = SocpSolver::new(options.socp);
     // Every scheme needs a start that is feasible on the exact geometry, except the paper's
@@ -261,19 +271,26 @@ pub fn plan_with_observer(
             mission,
             start,
             objective,
-            &ExactTuning::default(),
+            &ExactTuning {
+                resolution,
+                ..ExactTuning::default()
+            },
             &mut repair_solver,
             observer,
         )?,
         None => (start, 0),
     };
     observer.on_phase("solve");
+    let base = ExactTuning {
+        resolution,
+        ..ExactTuning::default()
+    };
     let mut out = match options.scheme {
         Scheme::Exact => run_exact(
             mission,
             start,
             ExactObjective::Energy,
-            &ExactTuning::default(),
+            &base,
             options,
             &mut solver,
             observer,
@@ -282,7 +299,7 @@ pub fn plan_with_observer(
             mission,
             start,
             ExactObjective::Distance,
-            &ExactTuning::default(),
+            &base,
             options,
             &mut solver,
             observer,
@@ -305,6 +322,7 @@ pub fn plan_with_observer(
         )?,
     };
     out.scheme = options.scheme;
+    out.resolution = resolution;
     out.start_energy_j = start_energy_j;
     out.repair_iterations = repair_iterations;
     out.cone_programs += repair_solver.builds.max(repair_iterations);
@@ -332,6 +350,7 @@ fn coarse_start(
     let coarse = mission.coarsened(factor)?;
     let tuning = ExactTuning {
         whole_slot_sensing: true,
+        resolution: options.resolution,
         ..ExactTuning::default()
     };
     let mut solver = SocpSolver::new(options.socp);
@@ -381,7 +400,7 @@ fn coarse_start(
 /// Per-slot violation used by the elastic phase: the largest of the sensing excess (m), the
 /// azimuth speed shortfall (m/s) and the range keep-out shortfall (m) of each landmark slot,
 /// summed over slots (the same quantities that the subproblem's slack σ_t bounds).
-fn total_violation(mission: &Mission, ev: &Evaluation) -> f64 {
+fn total_violation(mission: &Mission, ev: &Evaluation, mode: ResolutionMode) -> f64 {
     let p = mission.params();
     let v_min = p.min_speed_mps();
     let keepout = p.range_keepout_m();
@@ -392,7 +411,15 @@ fn total_violation(mission: &Mission, ev: &Evaluation) -> f64 {
             let sens = s.centre_error_m.unwrap_or(0.0) - p.sensing_radius_m;
             let speed = v_min - s.speed_mps;
             let range = keepout.map_or(0.0, |k| k - crate::geometry::v2::dist(s.centre_m, p.bs_m));
-            sens.max(speed).max(range).max(0.0)
+            let width = match mode {
+                ResolutionMode::General => s.worst_width_m - p.d_min_m,
+                ResolutionMode::Paper => 0.0,
+            };
+            // a blind slot has an infinite width: count it as a large, finite violation
+            sens.max(speed)
+                .max(range)
+                .max(width.min(10.0 * p.d_min_m))
+                .max(0.0)
         })
         .sum()
 }
@@ -408,9 +435,10 @@ fn make_feasible(
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
 ) -> Result<(Trajectory, usize), PlanError> {
+    let mode = base.resolution;
     let mut current = start;
     let mut ev = evaluate(mission, &current);
-    if ev.is_feasible() {
+    if ev.is_feasible_for(mode) {
         return Ok((current, 0));
     }
     observer.on_phase("repair");
@@ -426,8 +454,8 @@ fn make_feasible(
         elastic_weight: Some(weight),
         ..*base
     };
-    let mut merit = value(&ev) + weight * total_violation(mission, &ev);
-    let mut best_violation = total_violation(mission, &ev);
+    let mut merit = value(&ev) + weight * total_violation(mission, &ev, mode);
+    let mut best_violation = total_violation(mission, &ev, mode);
     let mut stalls = 0;
     for it in 1..=100 {
         tuning.elastic_weight = Some(weight);
@@ -440,7 +468,7 @@ fn make_feasible(
             })?;
         let cand = sub.trajectory(&sol.x, &current);
         let cand_ev = evaluate(mission, &cand);
-        let violation = total_violation(mission, &cand_ev);
+        let violation = total_violation(mission, &cand_ev, mode);
         let cand_merit = value(&cand_ev) + weight * violation;
         tracing::debug!(
             iteration = it,
@@ -453,7 +481,7 @@ fn make_feasible(
             current = cand;
             ev = cand_ev;
             merit = cand_merit;
-            if ev.is_feasible() {
+            if ev.is_feasible_for(mode) {
                 return Ok((current, it));
             }
         }
@@ -468,26 +496,33 @@ fn make_feasible(
             if stalls % 3 == 0 && weight < 1e5 {
                 // the penalty may not be exact yet: charge violations more
                 weight *= 10.0;
-                merit = value(&ev) + weight * total_violation(mission, &ev);
+                merit = value(&ev) + weight * total_violation(mission, &ev, mode);
             }
         }
     }
+    let p = mission.params();
     let first = ev
         .slots
         .iter()
         .find(|s| {
             !s.in_view
-                || (s.landmark_m.is_some() && s.speed_mps < mission.params().min_speed_mps() - 1e-4)
+                || (s.landmark_m.is_some()
+                    && (s.speed_mps < p.min_speed_mps() - 1e-4
+                        || (mode == ResolutionMode::General && s.worst_width_m > p.d_min_m + 1e-4)))
         })
         .map(|s| s.t)
         .unwrap_or(1);
     Err(PlanError::Infeasible(Infeasibility {
         slot: first,
-        t_s: first as f64 * mission.params().slot_s,
+        t_s: first as f64 * p.slot_s,
         reason: format!(
             "no trajectory found that keeps every landmark in view at the required resolution \
-             (phase I stalled with a sensing violation of {:.2} m and a speed shortfall of {:.3} m/s)",
-            ev.violations.sensing_m, ev.violations.min_speed_mps
+             ({} resolution; phase I stalled with a sensing violation of {:.2} m, a speed \
+             shortfall of {:.3} m/s and a worst cell width of d_min + {:.2} m)",
+            mode.name(),
+            ev.violations.sensing_m,
+            ev.violations.min_speed_mps,
+            ev.violations.worst_width_m
         ),
     }))
 }
@@ -539,6 +574,7 @@ fn finish(
         start_energy_j: 0.0,
         repair_iterations: 0,
         cone_programs,
+        resolution: ResolutionMode::Paper,
     }
 }
 
@@ -606,12 +642,13 @@ fn run_exact(
         let mut cand_value = true_value(&cand_ev);
         // over-relaxation: SCA steps limited by the conservative centre bound tend to repeat in
         // the same direction; try longer steps along it and keep the best that stays feasible.
-        if options.over_relaxation && cand_ev.is_feasible() && cand_value < value {
+        let mode = base.resolution;
+        if options.over_relaxation && cand_ev.is_feasible_for(mode) && cand_value < value {
             for alpha in [2.0, 4.0] {
                 let trial = extrapolate(&current, &cand, alpha);
                 let ev = evaluate(mission, &trial);
                 let v = true_value(&ev);
-                if ev.is_feasible() && v < cand_value {
+                if ev.is_feasible_for(mode) && v < cand_value {
                     cand = trial;
                     cand_ev = ev;
                     cand_value = v;
@@ -621,7 +658,7 @@ fn run_exact(
             }
         }
         let own = sub.physical_objective(sol.objective);
-        let ok = cand_ev.is_feasible() && cand_value <= value * (1.0 + 1e-9) + 1e-9;
+        let ok = cand_ev.is_feasible_for(mode) && cand_value <= value * (1.0 + 1e-9) + 1e-9;
         let rec = record(
             it,
             own,
@@ -641,7 +678,7 @@ fn run_exact(
             rejects += 1;
             tracing::debug!(
                 iteration = it,
-                feasible = cand_ev.is_feasible(),
+                feasible = cand_ev.is_feasible_for(mode),
                 value = cand_value,
                 previous = value,
                 "step rejected"

@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use planner::dmin::{expected_dmin_m, expected_dmin_monte_carlo_m, CdfForm};
+use planner::evaluate::ResolutionMode;
 use planner::report::{self, reproduce, Summary};
 use planner::{
     evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanError, PlanOptions,
@@ -59,6 +60,10 @@ enum Command {
         /// over-relaxation (for comparisons with other implementations of the same scheme).
         #[arg(long)]
         plain_sca: bool,
+        /// Resolution requirement of the exact-geometry schemes: general (the worst width of the
+        /// 2-D resolution cell ≤ d_min, away from blind geometry) or paper (δ_r, δ_a ≤ d_min).
+        #[arg(long, default_value = "paper", value_parser = parse_resolution)]
+        resolution: ResolutionMode,
     },
     /// Evaluate a trajectory of a mission on the exact geometry (true energy, violations).
     Evaluate {
@@ -95,6 +100,16 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+}
+
+fn parse_resolution(s: &str) -> Result<ResolutionMode, String> {
+    match s {
+        "general" => Ok(ResolutionMode::General),
+        "paper" => Ok(ResolutionMode::Paper),
+        _ => Err(format!(
+            "unknown resolution `{s}`; expected general or paper"
+        )),
+    }
 }
 
 fn parse_scheme(s: &str) -> Result<Scheme, String> {
@@ -162,6 +177,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             tolerance,
             no_coarse,
             plain_sca,
+            resolution,
         } => {
             let m = Mission::from_path(&mission).map_err(bad)?;
             if !(tolerance.is_finite() && tolerance > 0.0) {
@@ -184,6 +200,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 init,
                 coarse: !no_coarse,
                 over_relaxation: !plain_sca,
+                resolution,
                 min_kappa_scale: if plain_sca {
                     1.0
                 } else {
@@ -249,6 +266,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 "length_m": ev.length_m,
                 "slots_out_of_view": ev.slots_out_of_view,
                 "slots_unresolved_general": ev.slots_unresolved,
+                "slots_blind": ev.slots_blind,
             });
             println!(
                 "{}",
