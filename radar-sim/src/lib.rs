@@ -1,0 +1,20 @@
+//! # cellsar radar simulator and processor
+//!
+//! Turns a planned UAV trajectory into what the UAV's receiver would record from a cellular
+//! base station's OFDM downlink (direct path + bistatic echoes of ground objects + thermal
+//! noise), and turns that recording into SAR images and detections.
+//!
+//! Layers (pure, no I/O): [`config`], [`waveform`], [`antenna`], [`scene`], [`track`],
+//! [`synth`], [`cancel`], [`compress`], [`backproject`], [`cfar`], [`scoring`], [`resolution`],
+//! [`pipeline`] (streaming API: one frame of pulses / one aperture at a time). File formats
+//! (NPY, CSV, JSON, PNG) live in [`io`].
+
+pub mod antenna;
+pub mod config;
+pub mod error;
+pub mod scene;
+pub mod synth;
+pub mod track;
+pub mod waveform;
+
+pub use error::{RadarError, Result};
