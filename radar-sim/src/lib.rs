@@ -10,6 +10,10 @@
 //! (NPY, CSV, JSON, PNG) live in [`io`].
 
 pub mod antenna;
+pub mod backproject;
+pub mod cancel;
+pub mod compress;
+pub mod linalg;
 pub mod config;
 pub mod error;
 pub mod scene;
