@@ -136,7 +136,11 @@ impl BpGeometry {
 }
 
 /// Profile window placement for a set of pulses: per-pulse `j0` and a common length `M`.
-pub fn profile_windows(geom: &BpGeometry, grid: &Grid, pulses: &[([f64; 3], i64)]) -> (Vec<i64>, usize) {
+pub fn profile_windows(
+    geom: &BpGeometry,
+    grid: &Grid,
+    pulses: &[([f64; 3], i64)],
+) -> (Vec<i64>, usize) {
     let u = geom.upsample as f64;
     let mut j0s = Vec::with_capacity(pulses.len());
     let mut m = 2usize;
@@ -284,7 +288,8 @@ fn tile_kernel_avx2(sh: &Shared<'_>, job: &TileJob, out: &mut [Complex32]) {
 fn run_tile(sh: &Shared<'_>, job: &TileJob, out: &mut [Complex32]) {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
             // SAFETY: the CPU supports AVX2 and FMA (checked just above).
             unsafe { tile_kernel_avx2(sh, job, out) };
             return;
@@ -376,7 +381,8 @@ pub fn backproject_reference(
             for (n, pl) in pulses.iter().enumerate() {
                 let prof = &profiles[n * m..(n + 1) * m];
                 let r = geom.bistatic_range_m(*p, pl.pos_m);
-                let x = ((r * geom.fs_hz / C_MPS - pl.window_delay_samples as f64) * u - pl.j0 as f64)
+                let x = ((r * geom.fs_hz / C_MPS - pl.window_delay_samples as f64) * u
+                    - pl.j0 as f64)
                     .clamp(0.0, (m - 2) as f64);
                 let k = x.floor() as usize;
                 let f = x - k as f64;
@@ -384,11 +390,10 @@ pub fn backproject_reference(
                 let b = Complex64::new(prof[k + 1].re as f64, prof[k + 1].im as f64);
                 let v = a + (b - a) * f;
                 let cyc = r / geom.wavelength_m;
-                acc += v
-                    * Complex64::from_polar(
-                        pl.weight as f64,
-                        std::f64::consts::TAU * (cyc - cyc.floor()),
-                    );
+                acc += v * Complex64::from_polar(
+                    pl.weight as f64,
+                    std::f64::consts::TAU * (cyc - cyc.floor()),
+                );
             }
             acc
         })
@@ -425,9 +430,18 @@ mod tests {
 
     #[test]
     fn delay_bounds_contain_every_pixel() {
-        let geom = BpGeometry { bs_m: [1000.0, -1000.0, 50.0], fs_hz: 245.76e6, upsample: 8, wavelength_m: 0.1 };
+        let geom = BpGeometry {
+            bs_m: [1000.0, -1000.0, 50.0],
+            fs_hz: 245.76e6,
+            upsample: 8,
+            wavelength_m: 0.1,
+        };
         let grid = Grid::square([0.0, 0.0], 60.0, 1.5);
-        for uav in [[-1000.0, 0.0, 1000.0], [0.0, 1000.0, 1000.0], [30.0, -40.0, 1000.0]] {
+        for uav in [
+            [-1000.0, 0.0, 1000.0],
+            [0.0, 1000.0, 1000.0],
+            [30.0, -40.0, 1000.0],
+        ] {
             let (lo, hi) = geom.delay_bounds(&grid, uav, 100);
             for iy in 0..grid.ny {
                 for ix in 0..grid.nx {
@@ -441,12 +455,21 @@ mod tests {
     /// Random profiles, realistic geometry: the f32 tiled image matches the f64 reference.
     #[test]
     fn image_ser_against_f64_reference() {
-        let geom = BpGeometry { bs_m: [1000.0, -1000.0, 50.0], fs_hz: 245.76e6, upsample: 8, wavelength_m: 0.1 };
+        let geom = BpGeometry {
+            bs_m: [1000.0, -1000.0, 50.0],
+            fs_hz: 245.76e6,
+            upsample: 8,
+            wavelength_m: 0.1,
+        };
         let grid = Grid::square([0.0, 0.0], 20.0, 0.4);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let raw: Vec<([f64; 3], i64)> = (0..40)
             .map(|n| {
-                let pos = [-1000.0 + rng.gen_range(-1.0..1.0), -10.0 + 0.2 * n as f64, 1000.0];
+                let pos = [
+                    -1000.0 + rng.gen_range(-1.0..1.0),
+                    -10.0 + 0.2 * n as f64,
+                    1000.0,
+                ];
                 let d = (dist3(pos, geom.bs_m) * geom.fs_hz / C_MPS).floor() as i64;
                 (pos, d)
             })
@@ -455,7 +478,12 @@ mod tests {
         let pulses: Vec<BpPulse> = raw
             .iter()
             .zip(&j0s)
-            .map(|(&(pos, d), &j0)| BpPulse { pos_m: pos, window_delay_samples: d, j0, weight: 1.0 })
+            .map(|(&(pos, d), &j0)| BpPulse {
+                pos_m: pos,
+                window_delay_samples: d,
+                j0,
+                weight: 1.0,
+            })
             .collect();
         // smooth random profiles (band-limited like real ones): sum of a few complex tones
         let profiles: Vec<Complex32> = (0..pulses.len() * m)

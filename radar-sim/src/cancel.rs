@@ -220,7 +220,12 @@ impl Canceller {
         self.u_of(&w.data).iter().map(|v| v.norm_sqr()).sum::<f64>() / n
     }
 
-    fn loaded_solve(&self, g: &mut [Complex64], c: &[Complex64], stage: &str) -> Result<Vec<Complex64>> {
+    fn loaded_solve(
+        &self,
+        g: &mut [Complex64],
+        c: &[Complex64],
+        stage: &str,
+    ) -> Result<Vec<Complex64>> {
         let k = c.len();
         let mean_diag = (0..k).map(|i| g[i * k + i].re).sum::<f64>() / k as f64;
         for i in 0..k {
@@ -251,7 +256,8 @@ impl Canceller {
         let mut ph = vec![Complex64::new(0.0, 0.0); k * nsc];
         for (a, &t) in self.taps.iter().enumerate() {
             let step = Complex64::from_polar(1.0, tw * t as f64);
-            let mut p = Complex64::from_polar(1.0, tw * ((k0 * t).rem_euclid(num.fft_size as i64)) as f64);
+            let mut p =
+                Complex64::from_polar(1.0, tw * ((k0 * t).rem_euclid(num.fft_size as i64)) as f64);
             for i in 0..nsc {
                 ph[a * nsc + i] = p;
                 p *= step;
@@ -269,7 +275,10 @@ impl Canceller {
                 // δ = j − (k−1) = t_a − t_b: e^{j2πkδ/N} = ph[t_a]·conj(ph[t_b]) with t_b = tmin
                 let d = j as i64 - (k as i64 - 1);
                 let step = Complex64::from_polar(1.0, tw * d as f64);
-                let mut p = Complex64::from_polar(1.0, tw * ((k0 * d).rem_euclid(num.fft_size as i64)) as f64);
+                let mut p = Complex64::from_polar(
+                    1.0,
+                    tw * ((k0 * d).rem_euclid(num.fft_size as i64)) as f64,
+                );
                 let mut s = Complex64::new(0.0, 0.0);
                 for pi in &p2 {
                     s += p * *pi;
@@ -371,7 +380,8 @@ impl Canceller {
             let mut b = vec![Complex64::new(0.0, 0.0); cdim * nn];
             for (l, &nu) in self.dopplers_hz.iter().enumerate() {
                 for (a, &t) in self.taps.iter().enumerate() {
-                    let col = &mut b[(l * self.taps.len() + a) * nn..(l * self.taps.len() + a + 1) * nn];
+                    let col =
+                        &mut b[(l * self.taps.len() + a) * nn..(l * self.taps.len() + a + 1) * nn];
                     let ph0 = std::f64::consts::TAU * nu * (w.t_s - tc);
                     for (k, v) in col.iter_mut().enumerate() {
                         let src = (k as i64 - t).rem_euclid(nn as i64) as usize;
@@ -382,7 +392,11 @@ impl Canceller {
             }
             for p in 0..cdim {
                 let bp = &b[p * nn..(p + 1) * nn];
-                c[p] += bp.iter().zip(&r).map(|(x, y)| x.conj() * y).sum::<Complex64>();
+                c[p] += bp
+                    .iter()
+                    .zip(&r)
+                    .map(|(x, y)| x.conj() * y)
+                    .sum::<Complex64>();
                 for q in p..cdim {
                     let bq = &b[q * nn..(q + 1) * nn];
                     let s: Complex64 = bp.iter().zip(bq).map(|(x, y)| x.conj() * y).sum();
@@ -396,7 +410,8 @@ impl Canceller {
                 let k0 = num.subcarrier_index(0) as f64;
                 for i in 0..num.subcarriers {
                     let k = k0 + i as f64;
-                    s_t[num.bin(i)] *= Complex64::from_polar(1.0, -std::f64::consts::TAU * (k * dt / n).fract());
+                    s_t[num.bin(i)] *=
+                        Complex64::from_polar(1.0, -std::f64::consts::TAU * (k * dt / n).fract());
                 }
                 ifft.process(&mut s_t);
                 for v in s_t.iter_mut() {
@@ -404,7 +419,11 @@ impl Canceller {
                 }
                 for p in 0..cdim {
                     let bp = &b[p * nn..(p + 1) * nn];
-                    ct[p] += bp.iter().zip(&s_t).map(|(x, y)| x.conj() * y).sum::<Complex64>();
+                    ct[p] += bp
+                        .iter()
+                        .zip(&s_t)
+                        .map(|(x, y)| x.conj() * y)
+                        .sum::<Complex64>();
                 }
                 et += s_t.iter().map(|v| v.norm_sqr()).sum::<f64>();
             }

@@ -35,7 +35,12 @@ impl std::fmt::Debug for RangeCompressor {
 
 impl RangeCompressor {
     /// A compressor with `filter`, spectral `weighting` and upsampling factor `upsample`.
-    pub fn new(num: &Numerology, filter: RangeFilter, weighting: Weighting, upsample: usize) -> Self {
+    pub fn new(
+        num: &Numerology,
+        filter: RangeFilter,
+        weighting: Weighting,
+        upsample: usize,
+    ) -> Self {
         let ifft_up = FftPlanner::new().plan_fft_inverse(num.fft_size * upsample.max(1));
         Self {
             num: num.clone(),
@@ -62,8 +67,8 @@ impl RangeCompressor {
         let num = &self.num;
         let nsc = num.subcarriers;
         let wsum: f64 = self.weights.iter().sum();
-        let scale = (nsc as f64).sqrt()
-            / (num.fft_size as f64 * windows.len().max(1) as f64 * wsum);
+        let scale =
+            (nsc as f64).sqrt() / (num.fft_size as f64 * windows.len().max(1) as f64 * wsum);
         let mut z = vec![Complex64::new(0.0, 0.0); nsc];
         for w in windows {
             for i in 0..nsc {
@@ -136,15 +141,26 @@ mod tests {
                 / (num.subcarriers as f64).sqrt()
                 * Complex64::from_polar(1.0, -std::f64::consts::TAU * k * delay / n);
         }
-        let w = SymbolWindow { spectrum: spec, data, t_s: 0.0, dp_delay_samples: 0.0 };
+        let w = SymbolWindow {
+            spectrum: spec,
+            data,
+            t_s: 0.0,
+            dp_delay_samples: 0.0,
+        };
         for filter in [RangeFilter::Matched, RangeFilter::Reciprocal] {
             let c = RangeCompressor::new(&num, filter, Weighting::None, 8);
             let z = c.spectrum(std::slice::from_ref(&w));
             assert!((c.evaluate(&z, delay) - a).norm() < 1e-6);
             let prof = c.profile_window(&z, 980, 20); // delays 122.5 .. 125
-            let peak = prof.iter().enumerate().max_by(|x, y| x.1.norm().total_cmp(&y.1.norm())).unwrap();
+            let peak = prof
+                .iter()
+                .enumerate()
+                .max_by(|x, y| x.1.norm().total_cmp(&y.1.norm()))
+                .unwrap();
             assert_eq!(peak.0, 7); // 987 / 8 = 123.375
-            assert!((peak.1.re as f64 - a.re).abs() < 1e-5 && (peak.1.im as f64 - a.im).abs() < 1e-5);
+            assert!(
+                (peak.1.re as f64 - a.re).abs() < 1e-5 && (peak.1.im as f64 - a.im).abs() < 1e-5
+            );
         }
     }
 }

@@ -222,6 +222,16 @@ pub enum Weighting {
 }
 
 impl Weighting {
+    /// Coherence factor ∫W⁴ / (∫W²)² (W normalised to unit length): the intensity
+    /// correlation length of the response in units of 1/bandwidth (1 for none).
+    pub fn coherence_factor(self) -> f64 {
+        let n = 4096;
+        let w = self.weights(n);
+        let s2: f64 = w.iter().map(|x| x * x).sum::<f64>() / n as f64;
+        let s4: f64 = w.iter().map(|x| x.powi(4)).sum::<f64>() / n as f64;
+        s4 / (s2 * s2)
+    }
+
     /// −3 dB main-lobe width in units of 1/bandwidth (0.886 for none).
     pub fn mainlobe_factor(self) -> f64 {
         match self {
@@ -286,9 +296,11 @@ pub struct ProcessingConfig {
     pub look_s: Option<f64>,
     /// Design false-alarm probability per pixel of the CA-CFAR. Default 1e-6.
     pub pfa: f64,
-    /// CFAR guard half-width, pixels. Default 8.
-    pub cfar_guard_px: usize,
-    /// CFAR training band width, pixels. Default 8.
+    /// CFAR guard half-width, pixels. Default: automatic, the bounding box of twice the
+    /// predicted resolution cell (a parallelogram) so that no training pixel correlates with
+    /// the cell under test.
+    pub cfar_guard_px: Option<usize>,
+    /// CFAR training band width, pixels. Default 16.
     pub cfar_train_px: usize,
     /// Detections closer than this are merged into one cluster, m. Default: half the mission's d_min.
     pub cluster_radius_m: Option<f64>,
@@ -316,8 +328,8 @@ impl Default for ProcessingConfig {
             pixel_m: 0.4,
             look_s: None,
             pfa: 1e-6,
-            cfar_guard_px: 8,
-            cfar_train_px: 8,
+            cfar_guard_px: None,
+            cfar_train_px: 16,
             cluster_radius_m: None,
             match_radius_m: None,
             save_complex: false,
@@ -341,7 +353,10 @@ fn finite(field: &str, v: f64) -> Result<()> {
     if v.is_finite() {
         Ok(())
     } else {
-        Err(RadarError::config(field, format!("{v} is not a finite number")))
+        Err(RadarError::config(
+            field,
+            format!("{v} is not a finite number"),
+        ))
     }
 }
 
@@ -415,7 +430,10 @@ impl RadarConfig {
         if self.cp_samples >= self.fft_size {
             return Err(RadarError::config(
                 "radar.cp_samples",
-                format!("{} must be below fft_size = {}", self.cp_samples, self.fft_size),
+                format!(
+                    "{} must be below fft_size = {}",
+                    self.cp_samples, self.fft_size
+                ),
             ));
         }
         if let Some(b) = self.bandwidth_hz {
@@ -475,11 +493,17 @@ impl ProcessingConfig {
             positive("processing.doppler_spacing_hz", d)?;
         }
         if self.batch_pulses == 0 {
-            return Err(RadarError::config("processing.batch_pulses", "must be >= 1"));
+            return Err(RadarError::config(
+                "processing.batch_pulses",
+                "must be >= 1",
+            ));
         }
         non_negative("processing.diagonal_loading", self.diagonal_loading)?;
         if !(1..=64).contains(&self.upsample) {
-            return Err(RadarError::config("processing.upsample", "must lie in 1..=64"));
+            return Err(RadarError::config(
+                "processing.upsample",
+                "must lie in 1..=64",
+            ));
         }
         positive("processing.grid_half_m", self.grid_half_m)?;
         positive("processing.pixel_m", self.pixel_m)?;
@@ -498,7 +522,10 @@ impl ProcessingConfig {
             return Err(RadarError::config("processing.pfa", "must lie in (0, 0.5)"));
         }
         if self.cfar_train_px == 0 {
-            return Err(RadarError::config("processing.cfar_train_px", "must be >= 1"));
+            return Err(RadarError::config(
+                "processing.cfar_train_px",
+                "must be >= 1",
+            ));
         }
         if let Some(r) = self.cluster_radius_m {
             non_negative("processing.cluster_radius_m", r)?;
@@ -555,10 +582,12 @@ mod tests {
         let e = SceneFile::from_toml_str("[radar]\nprf_hz = -1\n", "s.toml").unwrap_err();
         assert!(e.to_string().contains("radar.prf_hz"), "{e}");
         let e = SceneFile::from_toml_str("[radar]\nprfhz = 1\n", "s.toml").unwrap_err();
-        assert!(e.to_string().contains("s.toml") && e.to_string().contains("prfhz"), "{e}");
-        let e =
-            SceneFile::from_toml_str("[objects]\ncount = 3\nintensity_per_km2 = 2\n", "s.toml")
-                .unwrap_err();
+        assert!(
+            e.to_string().contains("s.toml") && e.to_string().contains("prfhz"),
+            "{e}"
+        );
+        let e = SceneFile::from_toml_str("[objects]\ncount = 3\nintensity_per_km2 = 2\n", "s.toml")
+            .unwrap_err();
         assert!(e.to_string().contains("objects.count"), "{e}");
         let e = SceneFile::from_toml_str("[radar]\ncp_samples = 5000\n", "s.toml").unwrap_err();
         assert!(e.to_string().contains("radar.cp_samples"), "{e}");
@@ -567,6 +596,8 @@ mod tests {
     #[test]
     fn weighting_factors() {
         assert!((Weighting::None.mainlobe_factor() - 0.886).abs() < 1e-3);
+        assert!((Weighting::None.coherence_factor() - 1.0).abs() < 1e-12);
+        assert!((Weighting::Hann.coherence_factor() - 35.0 / 18.0).abs() < 1e-3);
         let w = Weighting::Hann.weights(8);
         assert!((w[0] - w[7]).abs() < 1e-12 && w[3] > 0.9);
     }

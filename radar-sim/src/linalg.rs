@@ -56,9 +56,21 @@ mod tests {
     #[test]
     fn solves_hermitian_system() {
         let c = |r: f64, i: f64| Complex64::new(r, i);
-        let a = vec![c(4.0, 0.0), c(1.0, 1.0), c(0.0, -0.5), c(1.0, -1.0), c(3.0, 0.0), c(0.2, 0.0), c(0.0, 0.5), c(0.2, 0.0), c(2.0, 0.0)];
+        let a = vec![
+            c(4.0, 0.0),
+            c(1.0, 1.0),
+            c(0.0, -0.5),
+            c(1.0, -1.0),
+            c(3.0, 0.0),
+            c(0.2, 0.0),
+            c(0.0, 0.5),
+            c(0.2, 0.0),
+            c(2.0, 0.0),
+        ];
         let x = vec![c(1.0, 2.0), c(-1.0, 0.5), c(0.3, -0.7)];
-        let b: Vec<Complex64> = (0..3).map(|i| (0..3).map(|j| a[i * 3 + j] * x[j]).sum()).collect();
+        let b: Vec<Complex64> = (0..3)
+            .map(|i| (0..3).map(|j| a[i * 3 + j] * x[j]).sum())
+            .collect();
         let got = cholesky_solve(&a, &b).unwrap();
         for (g, w) in got.iter().zip(&x) {
             assert!((g - w).norm() < 1e-12);

@@ -54,7 +54,11 @@ impl RadarSetup {
             .map_err(|e| RadarError::config("params", e.to_string()))?;
         scene.validate()?;
         let num = Numerology::new(&scene.radar, params.bandwidth_hz, params.wavelength_m)?;
-        let antenna = Antenna::new(&scene.radar, params.wavelength_m, params.observation_angle_rad);
+        let antenna = Antenna::new(
+            &scene.radar,
+            params.wavelength_m,
+            params.observation_angle_rad,
+        );
         Ok(Self {
             params: params.clone(),
             scene: scene.clone(),
@@ -187,6 +191,58 @@ pub struct ApertureResult {
     pub gate_m: f64,
     /// Per-look noise variance of the complex image, W.
     pub noise_var: f64,
+    /// Pixels per coherence area (independent cell) used by the CFAR.
+    pub pixels_per_cell: f64,
+}
+
+impl ApertureResult {
+    /// Expected number of false-alarm pixels by design (P_fa × clear pixels).
+    pub fn design_false_alarm_pixels(&self, pfa: f64) -> f64 {
+        pfa * self.clear_pixels as f64
+    }
+
+    /// Expected number of false-alarm clusters by design (one per exceeding independent cell).
+    pub fn design_false_alarm_clusters(&self, pfa: f64) -> f64 {
+        pfa * self.grid.pixels() as f64 / self.pixels_per_cell
+    }
+}
+
+/// CFAR guard half-widths (x, y) in pixels and pixels per coherence area for the response at
+/// a point with bistatic range gradient `g` and Doppler gradient `d` (ground vectors).
+///
+/// The response is separable in the range coordinate g·x and the Doppler coordinate d·x. Its
+/// intensity-correlation area is `c_r c_a δ_r δ_a / sin ψ` (c: the weighting's
+/// [`crate::config::Weighting::coherence_factor`], δ_r = c/(B|g|), δ_a = 1/(T|d|)); the guard is
+/// the bounding box of the parallelogram |g·x| ≤ c_r c/B, |d·x| ≤ c_a/T (the main lobe out to
+/// its first nulls), capped at 200 pixels.
+pub fn cfar_geometry(
+    g: [f64; 2],
+    d: [f64; 2],
+    bandwidth_hz: f64,
+    look_s: f64,
+    pc: &crate::config::ProcessingConfig,
+    pixel_m: f64,
+) -> (usize, usize, f64) {
+    let cr = pc.range_weighting.coherence_factor();
+    let ca = pc.azimuth_weighting.coherence_factor();
+    let (gn, dn) = (v2::norm(g), v2::norm(d));
+    let dr = C_MPS / (bandwidth_hz * gn.max(1e-9));
+    let da = 1.0 / (look_s * dn.max(1e-12));
+    let s = if gn > 0.0 && dn > 0.0 {
+        (v2::cross(g, d) / (gn * dn)).abs().max(0.05)
+    } else {
+        0.05
+    };
+    let area = cr * ca * dr * da / s;
+    // e1 ⟂ g (iso-range), e2 ⟂ d (iso-Doppler)
+    let e1 = [-g[1] / gn.max(1e-12), g[0] / gn.max(1e-12)];
+    let e2 = [-d[1] / dn.max(1e-12), d[0] / dn.max(1e-12)];
+    let ea = ca * da / s;
+    let eb = cr * dr / s;
+    let x = ea * e1[0].abs() + eb * e2[0].abs();
+    let y = ea * e1[1].abs() + eb * e2[1].abs();
+    let px = |v: f64| ((v / pixel_m).ceil() as usize).clamp(1, 200);
+    (px(x), px(y), (area / (pixel_m * pixel_m)).max(1.0))
 }
 
 /// The processor of one setup.
@@ -356,7 +412,8 @@ impl Processor {
                     }
                 }
                 let mid = &pulses[(r.start + r.end) / 2];
-                let td = target_m.map(|t| geom.delay_samples(t, mid.pos_m, mid.window_delay_samples));
+                let td =
+                    target_m.map(|t| geom.delay_samples(t, mid.pos_m, mid.window_delay_samples));
                 let stats = self.canceller.cancel_batch(
                     &mut windows,
                     td,
@@ -483,7 +540,10 @@ impl Processor {
         ];
         let dt = last.t_s - first.t_s;
         let vel = v2::scale(
-            [last.pos_m[0] - first.pos_m[0], last.pos_m[1] - first.pos_m[1]],
+            [
+                last.pos_m[0] - first.pos_m[0],
+                last.pos_m[1] - first.pos_m[1],
+            ],
             1.0 / dt,
         );
         let g = pg::bistatic_range_gradient(params, uc, target_m);
@@ -574,18 +634,27 @@ impl Processor {
             [b.pos_m[0] - a.pos_m[0], b.pos_m[1] - a.pos_m[1]],
             1.0 / (b.t_s - a.t_s).max(1e-9),
         );
-        let vel = if v2::norm(vel) > 1e-9 { vel } else { [mid.heading[0] * 1e-9, mid.heading[1] * 1e-9] };
+        let vel = if v2::norm(vel) > 1e-9 {
+            vel
+        } else {
+            [mid.heading[0] * 1e-9, mid.heading[1] * 1e-9]
+        };
         let mut params = self.setup.params.clone();
         params.integration_time_s = self.setup.look_s;
         let cell = pg::ResolutionCell::new(&params, [mid.pos_m[0], mid.pos_m[1]], vel, ap.centre_m);
-        let fr = pc.range_weighting.mainlobe_factor();
-        let fa = pc.azimuth_weighting.mainlobe_factor();
-        let area = (cell.range_width_m * fr) * (cell.along_track_width_m * fa)
-            / cell.psi_rad.sin().max(1e-3);
-        let ppc = (area / (grid.spacing_m * grid.spacing_m)).clamp(1.0, 1e6);
+        let uc = [mid.pos_m[0], mid.pos_m[1]];
+        let (gx, gy, ppc) = cfar_geometry(
+            pg::bistatic_range_gradient(&params, uc, ap.centre_m),
+            pg::doppler_gradient(&params, uc, vel, ap.centre_m),
+            self.setup.num.bandwidth_hz(),
+            self.setup.look_s,
+            pc,
+            grid.spacing_m,
+        );
         let cfar = CfarParams {
             pfa: pc.pfa,
-            guard_px: pc.cfar_guard_px,
+            guard_x_px: pc.cfar_guard_px.unwrap_or(gx),
+            guard_y_px: pc.cfar_guard_px.unwrap_or(gy),
             train_px: pc.cfar_train_px,
             looks: ap.looks,
             pixels_per_cell: ppc,
@@ -614,7 +683,9 @@ impl Processor {
             .map(|o| {
                 // mean over looks of the expected per-look SNR (linear)
                 let lin: f64 = (0..ap.looks)
-                    .map(|l| 10f64.powf(self.expected_snr_db(o, &pulses[l * ppl..(l + 1) * ppl]) / 10.0))
+                    .map(|l| {
+                        10f64.powf(self.expected_snr_db(o, &pulses[l * ppl..(l + 1) * ppl]) / 10.0)
+                    })
                     .sum::<f64>()
                     / ap.looks as f64;
                 let _ = look0;
@@ -627,15 +698,21 @@ impl Processor {
             })
             .collect();
         let sc = score(&truth, &dets, gate);
-        // pixel-level false alarms away from the truth
+        // pixel-level false alarms away from the truth: outside every object's gate and main
+        // lobe (the CFAR guard box)
+        let (bx, by) = (
+            cfar.guard_x_px as f64 * grid.spacing_m,
+            cfar.guard_y_px as f64 * grid.spacing_m,
+        );
         let mut fa_px = 0;
         let mut clear = 0;
         for iy in 0..grid.ny {
             for ix in 0..grid.nx {
                 let (x, y) = (grid.x(ix), grid.y(iy));
-                let near = objects
-                    .iter()
-                    .any(|o| (o.x_m - x).hypot(o.y_m - y) <= gate);
+                let near = objects.iter().any(|o| {
+                    (o.x_m - x).hypot(o.y_m - y) <= gate
+                        || ((o.x_m - x).abs() <= bx && (o.y_m - y).abs() <= by)
+                });
                 if !near {
                     clear += 1;
                     if map.hits[iy * grid.nx + ix] {
@@ -657,6 +734,7 @@ impl Processor {
             cell,
             gate_m: gate,
             noise_var,
+            pixels_per_cell: ppc,
         })
     }
 }

@@ -13,10 +13,7 @@ use serde::{Deserialize, Serialize};
 /// −3 dB (half-power) width of a sampled magnitude cut around its peak, in the cut's units;
 /// `None` if the cut does not fall 3 dB on both sides.
 pub fn half_power_width(s: &[f64], power: &[f64]) -> Option<f64> {
-    let (ip, &pk) = power
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))?;
+    let (ip, &pk) = power.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let half = pk / 2.0;
     let mut left = None;
     for i in (0..ip).rev() {
@@ -90,10 +87,7 @@ mod tests {
     #[test]
     fn sinc_squared_width_is_0886() {
         let s: Vec<f64> = (-400..=400).map(|i| i as f64 * 0.005).collect();
-        let p: Vec<f64> = s
-            .iter()
-            .map(|x| crate::antenna::sinc(*x).powi(2))
-            .collect();
+        let p: Vec<f64> = s.iter().map(|x| crate::antenna::sinc(*x).powi(2)).collect();
         let w = half_power_width(&s, &p).unwrap();
         assert!((w - 0.8859).abs() < 1e-3, "{w}");
         assert!(half_power_width(&s[..300], &p[..300]).is_none());

@@ -86,9 +86,8 @@ pub fn generate(
                     format!("gives {mean:.0} objects on average (at most 1e6)"),
                 ));
             } else {
-                let p = Poisson::new(mean).map_err(|e| {
-                    RadarError::config("objects.intensity_per_km2", e.to_string())
-                })?;
+                let p = Poisson::new(mean)
+                    .map_err(|e| RadarError::config("objects.intensity_per_km2", e.to_string()))?;
                 p.sample(&mut rng) as usize
             }
         }

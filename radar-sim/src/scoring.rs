@@ -41,7 +41,10 @@ pub struct Score {
 impl Score {
     /// Objects detected.
     pub fn detected(&self) -> usize {
-        self.outcomes.iter().filter(|o| o.detection.is_some()).count()
+        self.outcomes
+            .iter()
+            .filter(|o| o.detection.is_some())
+            .count()
     }
 
     /// Objects missed.
@@ -99,12 +102,23 @@ mod tests {
     use super::*;
 
     fn det(x: f64, y: f64) -> Detection {
-        Detection { aperture: 0, x_m: x, y_m: y, snr_db: 20.0, pixels: 3 }
+        Detection {
+            aperture: 0,
+            x_m: x,
+            y_m: y,
+            snr_db: 20.0,
+            pixels: 3,
+        }
     }
 
     #[test]
     fn greedy_matching() {
-        let t = |id, x, y| TruthInImage { id, pos_m: [x, y], expected_snr_db: 20.0, landmark: None };
+        let t = |id, x, y| TruthInImage {
+            id,
+            pos_m: [x, y],
+            expected_snr_db: 20.0,
+            landmark: None,
+        };
         let truth = [t(0, 0.0, 0.0), t(1, 10.0, 0.0), t(2, 50.0, 50.0)];
         let dets = [det(0.5, 0.0), det(9.0, 0.0), det(-30.0, 0.0), det(0.2, 0.1)];
         let s = score(&truth, &dets, 3.0);

@@ -127,7 +127,8 @@ impl Synthesizer {
             antenna,
             bs_m,
             objects,
-            eirp_w: radar.tx_power_w * 10f64.powf((radar.tx_gain_dbi - radar.system_loss_db) / 10.0),
+            eirp_w: radar.tx_power_w
+                * 10f64.powf((radar.tx_gain_dbi - radar.system_loss_db) / 10.0),
             noise_w: radar.noise_power_w(),
             thermal_noise: radar.thermal_noise,
             direct_path: radar.direct_path,
@@ -512,7 +513,10 @@ mod tests {
                     for (i, d) in data.iter().enumerate() {
                         let kk = num.subcarrier_index(i) as f64;
                         u += Complex64::new(d.re as f64, d.im as f64)
-                            * Complex64::from_polar(1.0, std::f64::consts::TAU * kk * xl / n as f64);
+                            * Complex64::from_polar(
+                                1.0,
+                                std::f64::consts::TAU * kk * xl / n as f64,
+                            );
                     }
                     u /= (num.subcarriers as f64).sqrt();
                     let dop = Complex64::from_polar(
@@ -530,25 +534,58 @@ mod tests {
     fn exact_for_in_cp_and_split_paths() {
         for motion in [MotionModel::StopAndHop, MotionModel::IntraPulse] {
             let s = synth(motion);
-            let dop = if motion == MotionModel::IntraPulse { 1.0 } else { 0.0 };
+            let dop = if motion == MotionModel::IntraPulse {
+                1.0
+            } else {
+                0.0
+            };
             let paths = vec![
-                Path { amp: Complex64::new(1.0, 0.5), delay_samples: 0.37, doppler_hz: 3e3 * dop },
-                Path { amp: Complex64::new(-0.2, 0.1), delay_samples: 7.9, doppler_hz: -8e3 * dop },
-                Path { amp: Complex64::new(0.3, 0.0), delay_samples: 16.0, doppler_hz: 0.0 },
+                Path {
+                    amp: Complex64::new(1.0, 0.5),
+                    delay_samples: 0.37,
+                    doppler_hz: 3e3 * dop,
+                },
+                Path {
+                    amp: Complex64::new(-0.2, 0.1),
+                    delay_samples: 7.9,
+                    doppler_hz: -8e3 * dop,
+                },
+                Path {
+                    amp: Complex64::new(0.3, 0.0),
+                    delay_samples: 16.0,
+                    doppler_hz: 0.0,
+                },
                 // beyond the CP: split between symbols m−1 and m
-                Path { amp: Complex64::new(0.1, -0.4), delay_samples: 23.6, doppler_hz: 5e3 * dop },
+                Path {
+                    amp: Complex64::new(0.1, -0.4),
+                    delay_samples: 23.6,
+                    doppler_hz: 5e3 * dop,
+                },
                 // more than a symbol late: symbols m−2 and m−1
-                Path { amp: Complex64::new(0.05, 0.05), delay_samples: 101.2, doppler_hz: 0.0 },
+                Path {
+                    amp: Complex64::new(0.05, 0.05),
+                    delay_samples: 101.2,
+                    doppler_hz: 0.0,
+                },
                 // early: symbols m and m+1
-                Path { amp: Complex64::new(0.2, 0.2), delay_samples: -3.3, doppler_hz: 0.0 },
+                Path {
+                    amp: Complex64::new(0.2, 0.2),
+                    delay_samples: -3.3,
+                    doppler_hz: 0.0,
+                },
             ];
-            let mut data = |m: i64| (m >= 0).then(|| Arc::new(s.numerology().symbol_data(m as u64)));
+            let mut data =
+                |m: i64| (m >= 0).then(|| Arc::new(s.numerology().symbol_data(m as u64)));
             let mut out = vec![Complex64::new(0.0, 0.0); 64];
             s.synthesize_window(5, &paths, &mut data, &mut out);
             let want = brute(&s, 5, &paths);
             let err: f64 = out.iter().zip(&want).map(|(a, b)| (a - b).norm_sqr()).sum();
             let pow: f64 = want.iter().map(|a| a.norm_sqr()).sum();
-            assert!(err / pow < 1e-20, "{motion:?}: relative error {}", err / pow);
+            assert!(
+                err / pow < 1e-20,
+                "{motion:?}: relative error {}",
+                err / pow
+            );
         }
     }
 
@@ -569,11 +606,19 @@ mod tests {
             heading: [0.0, 1.0],
             window_delay_samples: 2000,
         };
-        let comps = Components { direct: false, echoes: false, noise: true };
+        let comps = Components {
+            direct: false,
+            echoes: false,
+            noise: true,
+        };
         let mut out = vec![Complex32::new(0.0, 0.0); 4096];
         s.synthesize_pulse(&pulse, comps, &mut out).unwrap();
         let p: f64 = out.iter().map(|x| x.norm_sqr() as f64).sum::<f64>() / 4096.0;
-        assert!((p / s.noise_power_w() - 1.0).abs() < 0.08, "{}", p / s.noise_power_w());
+        assert!(
+            (p / s.noise_power_w() - 1.0).abs() < 0.08,
+            "{}",
+            p / s.noise_power_w()
+        );
     }
 
     #[test]
@@ -581,7 +626,14 @@ mod tests {
         let r = RadarConfig::default();
         let num = Numerology::new(&r, 150e6, 0.1).unwrap();
         let ant = Antenna::new(&r, 0.1, std::f64::consts::FRAC_PI_4);
-        let obj = SceneObject { id: 0, x_m: 1000.0, y_m: 0.0, rcs_m2: 10.0, phase_rad: 0.0, landmark: None };
+        let obj = SceneObject {
+            id: 0,
+            x_m: 1000.0,
+            y_m: 0.0,
+            rcs_m2: 10.0,
+            phase_rad: 0.0,
+            landmark: None,
+        };
         let s = Synthesizer::new(num, &r, ant, [1000.0, -1000.0, 50.0], vec![obj]).unwrap();
         let pos = [0.0, 0.0, 1000.0];
         let heading = [0.0, 1.0];

@@ -234,7 +234,10 @@ mod tests {
 
     #[test]
     fn apertures_are_whole_looks_centred_in_windows() {
-        let w = [([0.0, 0.0], Some(0), 0.0, 10.0), ([0.0, 30.0], Some(1), 10.0, 20.5)];
+        let w = [
+            ([0.0, 0.0], Some(0), 0.0, 10.0),
+            ([0.0, 30.0], Some(1), 10.0, 20.5),
+        ];
         let a = plan_apertures(&w, 1.0, 100.0).unwrap();
         assert_eq!(a[0].looks, 10);
         assert_eq!(a[1].looks, 10);

@@ -41,7 +41,10 @@ impl Numerology {
     pub fn new(radar: &RadarConfig, bandwidth_hz: f64, wavelength_m: f64) -> Result<Self> {
         let b = radar.bandwidth_hz.unwrap_or(bandwidth_hz);
         if !(b.is_finite() && b > 0.0) {
-            return Err(RadarError::config("radar.bandwidth_hz", format!("{b} must be > 0")));
+            return Err(RadarError::config(
+                "radar.bandwidth_hz",
+                format!("{b} must be > 0"),
+            ));
         }
         let sc = (b / radar.subcarrier_spacing_hz).round() as usize;
         if sc < 2 || sc > radar.fft_size - 2 {
@@ -211,7 +214,12 @@ mod tests {
 
     #[test]
     fn data_is_reproducible_random_access_and_unit_power() {
-        for m in [Modulation::Qpsk, Modulation::Qam16, Modulation::Qam64, Modulation::Qam256] {
+        for m in [
+            Modulation::Qpsk,
+            Modulation::Qam16,
+            Modulation::Qam64,
+            Modulation::Qam256,
+        ] {
             let n = num(m);
             let a = n.symbol_data(17);
             assert_eq!(a, n.symbol_data(17));

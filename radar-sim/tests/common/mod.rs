@@ -30,15 +30,26 @@ pub fn track_through(
 }
 
 pub fn object(id: usize, p: [f64; 2], rcs: f64) -> SceneObject {
-    SceneObject { id, x_m: p[0], y_m: p[1], rcs_m2: rcs, phase_rad: 0.3 * id as f64, landmark: None }
+    SceneObject {
+        id,
+        x_m: p[0],
+        y_m: p[1],
+        rcs_m2: rcs,
+        phase_rad: 0.3 * id as f64,
+        landmark: None,
+    }
 }
 
 /// One aperture of `looks` looks centred on `centre` starting at t0.
 pub fn aperture(setup: &RadarSetup, centre: [f64; 2], t0: f64, looks: usize) -> Aperture {
     let t1 = t0 + looks as f64 * setup.look_s;
-    plan_apertures(&[(centre, Some(0), t0, t1)], setup.look_s, setup.scene.radar.prf_hz)
-        .unwrap()
-        .remove(0)
+    plan_apertures(
+        &[(centre, Some(0), t0, t1)],
+        setup.look_s,
+        setup.scene.radar.prf_hz,
+    )
+    .unwrap()
+    .remove(0)
 }
 
 pub fn pulses(setup: &RadarSetup, track: &LinearTrack, ap: &Aperture) -> Vec<PulseMeta> {
