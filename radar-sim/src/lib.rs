@@ -16,6 +16,7 @@ pub mod cfar;
 pub mod compress;
 pub mod config;
 pub mod error;
+pub mod io;
 pub mod linalg;
 pub mod pipeline;
 pub mod resolution;
