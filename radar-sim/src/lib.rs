@@ -20,6 +20,7 @@ pub mod io;
 pub mod linalg;
 pub mod pipeline;
 pub mod resolution;
+pub mod run;
 pub mod scene;
 pub mod scoring;
 pub mod synth;
