@@ -168,7 +168,7 @@ fn sincos_2pi(f: f32) -> (f32, f32) {
         + x2 * (-0.5
             + x2 * (4.166_666_8e-2
                 + x2 * (-1.388_888_9e-3
-                    + x2 * (2.480_158_7e-5 + x2 * (-2.755_731_9e-7 + x2 * 2.087_675_7e-9)))));
+                    + x2 * (2.480_158_7e-5 + x2 * (-2.755_732e-7 + x2 * 2.087_675_6e-9)))));
     (2.0 * s * c, c * c - s * s)
 }
 
@@ -238,8 +238,8 @@ fn tile_kernel(sh: &Shared<'_>, job: &TileJob, out: &mut [Complex32]) {
         }
         let (d2f, dnf) = (d2 as f32, dn as f32);
         let (kf, lf, wt) = (k_idx as f32, inv_lam as f32, p.weight);
-        for j in 0..h {
-            let b = (2.0 * d[1] * ey[j] + ey[j] * ey[j]) as f32;
+        for (j, eyj) in ey.iter().enumerate() {
+            let b = (2.0 * d[1] * eyj + eyj * eyj) as f32;
             let row = j * w;
             let dt = &dtx[row..row + w];
             // 1: geometry (vectorisable)

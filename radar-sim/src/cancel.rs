@@ -74,9 +74,13 @@ impl CancelStats {
         10.0 * (self.input_power / self.output_power).log10()
     }
 
-    /// Drop of the matched-filter output at the direct-path delay, dB.
+    /// Direct-path reduction, dB: the direct-path power before cancellation (the matched-filter
+    /// output at its delay, |p(Δ_d)|², normalised so that it equals the path's power) over the
+    /// total residual power after it (noise and echoes included, so this is a lower bound on the
+    /// suppression of the direct path itself). The matched-filter output at Δ_d after the
+    /// projection is ~0 by construction and so is no measure.
     pub fn dp_reduction_db(&self) -> f64 {
-        10.0 * (self.dp_mf_before / self.dp_mf_after).log10()
+        10.0 * (self.dp_mf_before / self.output_power).log10()
     }
 
     /// Power loss of a target through the projection, dB (≥ 0).

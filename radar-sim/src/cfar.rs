@@ -35,9 +35,9 @@ pub fn ca_pfa(alpha: f64, n: f64, looks: usize) -> f64 {
 
 /// The CA-CFAR factor α for a design `pfa` (bisection on [`ca_pfa`]).
 pub fn ca_alpha(pfa: f64, n: f64, looks: usize) -> f64 {
-    let (mut lo, mut hi) = (1e-6, 1e6);
+    let (mut lo, mut hi): (f64, f64) = (1e-6, 1e6);
     for _ in 0..200 {
-        let mid = (lo * hi as f64).sqrt();
+        let mid = (lo * hi).sqrt();
         if ca_pfa(mid, n, looks) > pfa {
             lo = mid;
         } else {

@@ -71,7 +71,7 @@ impl RangeCompressor {
             (nsc as f64).sqrt() / (num.fft_size as f64 * windows.len().max(1) as f64 * wsum);
         let mut z = vec![Complex64::new(0.0, 0.0); nsc];
         for w in windows {
-            for i in 0..nsc {
+            for (i, zi) in z.iter_mut().enumerate() {
                 let x = w.data[i];
                 let x = Complex64::new(x.re as f64, x.im as f64);
                 let f = match self.filter {
@@ -85,7 +85,7 @@ impl RangeCompressor {
                         }
                     }
                 };
-                z[i] += w.spectrum[num.bin(i)] * f * (self.weights[i] * scale);
+                *zi += w.spectrum[num.bin(i)] * f * (self.weights[i] * scale);
             }
         }
         z

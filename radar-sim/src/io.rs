@@ -42,7 +42,11 @@ fn npy_header(t: NpyType, shape: &[usize]) -> Vec<u8> {
         1 => format!("({},)", shape[0]),
         _ => format!(
             "({})",
-            shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")
+            shape
+                .iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
     };
     let mut dict = format!(
@@ -88,13 +92,20 @@ impl NpyWriter {
 
     fn check(&mut self, t: NpyType, n: usize) -> Result<()> {
         if t != self.t {
-            return Err(RadarError::format(&self.path, "descr", "element type mismatch"));
+            return Err(RadarError::format(
+                &self.path,
+                "descr",
+                "element type mismatch",
+            ));
         }
         if self.written + n > self.expected {
             return Err(RadarError::format(
                 &self.path,
                 "data",
-                format!("more than the {} elements of the declared shape", self.expected),
+                format!(
+                    "more than the {} elements of the declared shape",
+                    self.expected
+                ),
             ));
         }
         self.written += n;
@@ -166,29 +177,35 @@ impl NpyReader {
         let f = File::open(path).map_err(|e| RadarError::io(path, e))?;
         let mut file = BufReader::new(f);
         let mut pre = [0u8; 8];
-        file.read_exact(&mut pre).map_err(|e| RadarError::io(path, e))?;
+        file.read_exact(&mut pre)
+            .map_err(|e| RadarError::io(path, e))?;
         if &pre[..6] != b"\x93NUMPY" {
             return Err(bad("magic", "not an NPY file".into()));
         }
         let hlen = match pre[6] {
             1 => {
                 let mut b = [0u8; 2];
-                file.read_exact(&mut b).map_err(|e| RadarError::io(path, e))?;
+                file.read_exact(&mut b)
+                    .map_err(|e| RadarError::io(path, e))?;
                 u16::from_le_bytes(b) as usize
             }
             2 | 3 => {
                 let mut b = [0u8; 4];
-                file.read_exact(&mut b).map_err(|e| RadarError::io(path, e))?;
+                file.read_exact(&mut b)
+                    .map_err(|e| RadarError::io(path, e))?;
                 u32::from_le_bytes(b) as usize
             }
             v => return Err(bad("version", format!("unsupported NPY version {v}"))),
         };
         let mut h = vec![0u8; hlen];
-        file.read_exact(&mut h).map_err(|e| RadarError::io(path, e))?;
+        file.read_exact(&mut h)
+            .map_err(|e| RadarError::io(path, e))?;
         let h = String::from_utf8_lossy(&h).to_string();
         let field = |key: &str| -> Result<String> {
             let k = format!("'{key}':");
-            let i = h.find(&k).ok_or_else(|| bad("header", format!("no `{key}`")))?;
+            let i = h
+                .find(&k)
+                .ok_or_else(|| bad("header", format!("no `{key}`")))?;
             Ok(h[i + k.len()..].trim_start().to_string())
         };
         let descr = field("descr")?;
@@ -199,22 +216,34 @@ impl NpyReader {
         } else if descr.starts_with("'<f8'") {
             NpyType::F8
         } else {
-            return Err(bad("descr", format!("unsupported dtype {}", &descr[..descr.len().min(8)])));
+            return Err(bad(
+                "descr",
+                format!("unsupported dtype {}", &descr[..descr.len().min(8)]),
+            ));
         };
         if !field("fortran_order")?.starts_with("False") {
             return Err(bad("fortran_order", "only C order is supported".into()));
         }
         let sh = field("shape")?;
-        let end = sh.find(')').ok_or_else(|| bad("shape", "unterminated tuple".into()))?;
+        let end = sh
+            .find(')')
+            .ok_or_else(|| bad("shape", "unterminated tuple".into()))?;
         let shape = sh[1..end]
             .split(',')
             .map(str::trim)
             .filter(|s| !s.is_empty())
-            .map(|s| s.parse::<usize>().map_err(|_| bad("shape", format!("`{s}` is not a size"))))
+            .map(|s| {
+                s.parse::<usize>()
+                    .map_err(|_| bad("shape", format!("`{s}` is not a size")))
+            })
             .collect::<Result<Vec<_>>>()?;
-        let data_offset = file.stream_position().map_err(|e| RadarError::io(path, e))?;
+        let data_offset = file
+            .stream_position()
+            .map_err(|e| RadarError::io(path, e))?;
         let n: usize = shape.iter().product();
-        let len = std::fs::metadata(path).map_err(|e| RadarError::io(path, e))?.len();
+        let len = std::fs::metadata(path)
+            .map_err(|e| RadarError::io(path, e))?
+            .len();
         if len < data_offset + (n * t.size()) as u64 {
             return Err(bad("data", format!("file too short for shape {shape:?}")));
         }
@@ -229,7 +258,11 @@ impl NpyReader {
 
     fn read_bytes(&mut self, first: usize, count: usize, t: NpyType) -> Result<Vec<u8>> {
         if t != self.t {
-            return Err(RadarError::format(&self.path, "descr", format!("expected {}", t.descr())));
+            return Err(RadarError::format(
+                &self.path,
+                "descr",
+                format!("expected {}", t.descr()),
+            ));
         }
         let n: usize = self.shape.iter().product();
         if first + count > n {
@@ -245,7 +278,9 @@ impl NpyReader {
             source: e,
         };
         self.file
-            .seek(SeekFrom::Start(self.data_offset + (first * t.size()) as u64))
+            .seek(SeekFrom::Start(
+                self.data_offset + (first * t.size()) as u64,
+            ))
             .map_err(io)?;
         let mut b = vec![0u8; count * t.size()];
         self.file.read_exact(&mut b).map_err(io)?;
@@ -317,17 +352,31 @@ pub fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>)> {
 }
 
 /// Column accessor for [`read_csv`] output with errors naming file, line and column.
-pub fn csv_f64(path: &Path, header: &[String], row: &[String], line: usize, col: &str) -> Result<f64> {
+pub fn csv_f64(
+    path: &Path,
+    header: &[String],
+    row: &[String],
+    line: usize,
+    col: &str,
+) -> Result<f64> {
     let shown = path.display().to_string();
     let i = header
         .iter()
         .position(|h| h == col)
         .ok_or_else(|| RadarError::format(&shown, "header", format!("missing column `{col}`")))?;
     let s = row.get(i).ok_or_else(|| {
-        RadarError::format(&shown, format!("line {line}, column {col}"), "missing value")
+        RadarError::format(
+            &shown,
+            format!("line {line}, column {col}"),
+            "missing value",
+        )
     })?;
     s.parse::<f64>().map_err(|_| {
-        RadarError::format(&shown, format!("line {line}, column {col}"), format!("`{s}` is not a number"))
+        RadarError::format(
+            &shown,
+            format!("line {line}, column {col}"),
+            format!("`{s}` is not a number"),
+        )
     })
 }
 
@@ -344,7 +393,11 @@ pub fn viridis(t: f64) -> [u8; 3] {
         [170.0, 220.0, 50.0],
         [253.0, 231.0, 37.0],
     ];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let x = t * 8.0;
     let i = (x.floor() as usize).min(7);
     let f = x - i as f64;
@@ -414,7 +467,9 @@ mod tests {
     fn npy_round_trip_all_types() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("a.npy");
-        let v: Vec<Complex32> = (0..12).map(|i| Complex32::new(i as f32, -(i as f32) / 2.0)).collect();
+        let v: Vec<Complex32> = (0..12)
+            .map(|i| Complex32::new(i as f32, -(i as f32) / 2.0))
+            .collect();
         let mut w = NpyWriter::create(&p, NpyType::C8, &[3, 4]).unwrap();
         w.write_c8(&v[..5]).unwrap();
         w.write_c8(&v[5..]).unwrap();
@@ -430,12 +485,18 @@ mod tests {
         let mut w = NpyWriter::create(&p2, NpyType::F4, &[3]).unwrap();
         w.write_f4(&[1.0, 2.0, 3.5]).unwrap();
         w.finish().unwrap();
-        assert_eq!(NpyReader::open(&p2).unwrap().read_f4(0, 3).unwrap(), vec![1.0, 2.0, 3.5]);
+        assert_eq!(
+            NpyReader::open(&p2).unwrap().read_f4(0, 3).unwrap(),
+            vec![1.0, 2.0, 3.5]
+        );
         let p3 = dir.path().join("c.npy");
         let mut w = NpyWriter::create(&p3, NpyType::F8, &[2, 1]).unwrap();
         w.write_f8(&[1.0, -2.0]).unwrap();
         w.finish().unwrap();
-        assert_eq!(NpyReader::open(&p3).unwrap().read_f8(0, 2).unwrap(), vec![1.0, -2.0]);
+        assert_eq!(
+            NpyReader::open(&p3).unwrap().read_f8(0, 2).unwrap(),
+            vec![1.0, -2.0]
+        );
     }
 
     #[test]

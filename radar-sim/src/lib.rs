@@ -9,6 +9,8 @@
 //! [`pipeline`] (streaming API: one frame of pulses / one aperture at a time). File formats
 //! (NPY, CSV, JSON, PNG) live in [`io`].
 
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
+
 pub mod antenna;
 pub mod backproject;
 pub mod cancel;

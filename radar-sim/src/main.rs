@@ -11,7 +11,11 @@ use radar_sim::config::SceneFile;
 use radar_sim::run;
 
 #[derive(Parser)]
-#[command(name = "cellsar-radar-sim", version, about = "Bistatic OFDM SAR simulator and processor for cellsar")]
+#[command(
+    name = "cellsar-radar-sim",
+    version,
+    about = "Bistatic OFDM SAR simulator and processor for cellsar"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -82,7 +86,10 @@ fn simulate(plan: &Path, scene: &Path, out: &Path) -> Result<()> {
     println!(
         "simulated {} apertures ({} pulses × {} samples) in {:.1} s into {}",
         meta.apertures.len(),
-        meta.apertures.iter().map(|a| a.aperture.pulses()).sum::<usize>(),
+        meta.apertures
+            .iter()
+            .map(|a| a.aperture.pulses())
+            .sum::<usize>(),
         meta.samples_per_pulse,
         t.elapsed().as_secs_f64(),
         out.display()
@@ -160,7 +167,11 @@ fn closed_loop(mission: &Path, scene: &Path, out: &Path, horizon: Option<f64>) -
     }
     println!(
         "every landmark in view detected: {}",
-        if report.all_in_view_detected { "yes" } else { "NO" }
+        if report.all_in_view_detected {
+            "yes"
+        } else {
+            "NO"
+        }
     );
     Ok(report.all_in_view_detected)
 }

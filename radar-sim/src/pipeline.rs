@@ -133,6 +133,12 @@ impl RadarSetup {
     }
 }
 
+/// Receives one frame: its pulse metadata and `pulses × samples` IQ.
+pub type FrameSink<'a> = dyn FnMut(&[PulseMeta], &[Complex32]) -> Result<()> + 'a;
+
+/// One batch's output: per-pulse profile windows, kept spectra, canceller metrics.
+type BatchOut = (Vec<Vec<Complex32>>, Vec<Vec<Complex64>>, CancelStats);
+
 /// Synthesises the pulses of one aperture in frames of at most `frame_pulses`, handing each
 /// frame (its pulse metadata and `pulses × samples` IQ) to `sink` before the next is made.
 pub fn synthesize_frames(
@@ -140,7 +146,7 @@ pub fn synthesize_frames(
     pulses: &[PulseMeta],
     frame_pulses: usize,
     comps: Components,
-    sink: &mut dyn FnMut(&[PulseMeta], &[Complex32]) -> Result<()>,
+    sink: &mut FrameSink<'_>,
 ) -> Result<()> {
     for chunk in pulses.chunks(frame_pulses.max(1)) {
         let iq = synth.synthesize_frame(chunk, comps)?;
@@ -385,7 +391,7 @@ impl Processor {
         }
         let fs = num.sample_rate_hz();
         let ns = num.symbol_samples() as f64;
-        let results: Vec<Result<(Vec<Vec<Complex32>>, Vec<Vec<Complex64>>, CancelStats)>> = ranges
+        let results: Vec<Result<BatchOut>> = ranges
             .par_iter()
             .map(|r| {
                 let mut windows = Vec::with_capacity(r.len() * spp);

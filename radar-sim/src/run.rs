@@ -10,7 +10,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::SceneFile;
 use crate::error::{RadarError, Result};
-use crate::io::{csv_f64, read_csv, write_csv, write_json, write_png_db, NpyReader, NpyType, NpyWriter};
+use crate::io::{
+    csv_f64, read_csv, write_csv, write_json, write_png_db, NpyReader, NpyType, NpyWriter,
+};
 use crate::pipeline::{Processor, RadarSetup};
 use crate::scene::SceneObject;
 use crate::synth::Components;
@@ -98,7 +100,11 @@ pub fn simulate(
         let pulses = setup.pulses(&track, ap);
         let mid = &pulses[pulses.len() / 2];
         let landmark_gain_db = ap.landmark.map(|_| {
-            let g = setup.antenna.gain_towards(mid.pos_m, mid.heading, [ap.centre_m[0], ap.centre_m[1], 0.0]);
+            let g = setup.antenna.gain_towards(
+                mid.pos_m,
+                mid.heading,
+                [ap.centre_m[0], ap.centre_m[1], 0.0],
+            );
             10.0 * (g / setup.antenna.peak_gain).log10()
         });
         if let Some(g) = landmark_gain_db {
@@ -121,12 +127,18 @@ pub fn simulate(
             direct_to_noise_db: 10.0 * (pd / synth.noise_power_w()).log10(),
         });
         let mut w = NpyWriter::create(&iq_path(out, ap.index), NpyType::C8, &[pulses.len(), spp])?;
-        crate::pipeline::synthesize_frames(&synth, &pulses, 100, Components::ALL, &mut |ps, iq| {
-            w.write_c8(iq)?;
-            done += ps.len() as u64;
-            progress(done, total);
-            Ok(())
-        })?;
+        crate::pipeline::synthesize_frames(
+            &synth,
+            &pulses,
+            100,
+            Components::ALL,
+            &mut |ps, iq| {
+                w.write_c8(iq)?;
+                done += ps.len() as u64;
+                progress(done, total);
+                Ok(())
+            },
+        )?;
         w.finish()?;
         for p in &pulses {
             pulse_rows.push(vec![
@@ -147,7 +159,11 @@ pub fn simulate(
             ]);
         }
     }
-    if !truths.is_empty() && truths.iter().all(|t| t.landmark_gain_db.is_some_and(|g| g < -10.0)) {
+    if !truths.is_empty()
+        && truths
+            .iter()
+            .all(|t| t.landmark_gain_db.is_some_and(|g| g < -10.0))
+    {
         return Err(RadarError::Mismatch(format!(
             "no landmark is in the receive beam in any aperture (best {:.1} dB off the peak): the plan does not look at the scene",
             truths.iter().filter_map(|t| t.landmark_gain_db).fold(f64::NEG_INFINITY, f64::max)
@@ -172,8 +188,20 @@ pub fn simulate(
 }
 
 const PULSE_COLUMNS: [&str; 14] = [
-    "index", "aperture", "look", "t_s", "symbol", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps",
-    "heading_x", "heading_y", "window_delay_samples",
+    "index",
+    "aperture",
+    "look",
+    "t_s",
+    "symbol",
+    "x_m",
+    "y_m",
+    "z_m",
+    "vx_mps",
+    "vy_mps",
+    "vz_mps",
+    "heading_x",
+    "heading_y",
+    "window_delay_samples",
 ];
 
 fn write_truth(path: &Path, objects: &[SceneObject]) -> Result<()> {
@@ -190,7 +218,11 @@ fn write_truth(path: &Path, objects: &[SceneObject]) -> Result<()> {
             ]
         })
         .collect();
-    write_csv(path, &["id", "x_m", "y_m", "rcs_m2", "phase_rad", "landmark"], &rows)
+    write_csv(
+        path,
+        &["id", "x_m", "y_m", "rcs_m2", "phase_rad", "landmark"],
+        &rows,
+    )
 }
 
 /// Reads `truth.csv` (columns id,x_m,y_m,rcs_m2; phase_rad and landmark optional).
@@ -335,9 +367,8 @@ pub struct DetectionRow {
 pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metrics> {
     let meta_path = input.join("meta.json");
     let text = std::fs::read_to_string(&meta_path).map_err(|e| RadarError::io(&meta_path, e))?;
-    let meta: RecordingMeta = serde_json::from_str(&text).map_err(|e| {
-        RadarError::format(meta_path.display().to_string(), "JSON", e.to_string())
-    })?;
+    let meta: RecordingMeta = serde_json::from_str(&text)
+        .map_err(|e| RadarError::format(meta_path.display().to_string(), "JSON", e.to_string()))?;
     if meta.format != FORMAT {
         return Err(RadarError::format(
             meta_path.display().to_string(),
@@ -383,7 +414,12 @@ pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metri
             return Err(RadarError::format(
                 iq_path(input, ap.index).display().to_string(),
                 "shape",
-                format!("{:?}, expected [{}, {}]", rd.shape, pulses.len(), meta.samples_per_pulse),
+                format!(
+                    "{:?}, expected [{}, {}]",
+                    rd.shape,
+                    pulses.len(),
+                    meta.samples_per_pulse
+                ),
             ));
         }
         let iq: Vec<Complex32> = rd.read_c8(0, pulses.len() * meta.samples_per_pulse)?;
@@ -391,7 +427,8 @@ pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metri
         cancel.add(&r.cancel);
         // images
         let mut w = NpyWriter::create(
-            &out.join("images").join(format!("aperture_{:03}.npy", ap.index)),
+            &out.join("images")
+                .join(format!("aperture_{:03}.npy", ap.index)),
             NpyType::F4,
             &[r.grid.ny, r.grid.nx],
         )?;
@@ -399,7 +436,8 @@ pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metri
         w.finish()?;
         for (l, img) in r.looks.iter().enumerate() {
             let mut w = NpyWriter::create(
-                &out.join("images").join(format!("aperture_{:03}_look_{l:02}.npy", ap.index)),
+                &out.join("images")
+                    .join(format!("aperture_{:03}_look_{l:02}.npy", ap.index)),
                 NpyType::C8,
                 &[r.grid.ny, r.grid.nx],
             )?;
@@ -415,7 +453,8 @@ pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metri
             })
             .collect();
         write_png_db(
-            &out.join("images").join(format!("aperture_{:03}.png", ap.index)),
+            &out.join("images")
+                .join(format!("aperture_{:03}.png", ap.index)),
             &r.multilook,
             r.grid.nx,
             r.grid.ny,
@@ -488,7 +527,14 @@ pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metri
         let first = look * ap.pulses_per_look * meta.samples_per_pulse;
         let iq = rd.read_c8(first, pulses.len() * meta.samples_per_pulse)?;
         let grid = setup.grid(ap);
-        let c = proc.compress(&grid, &pulses, &iq, ap.pulses_per_look, Some(ap.centre_m), true)?;
+        let c = proc.compress(
+            &grid,
+            &pulses,
+            &iq,
+            ap.pulses_per_look,
+            Some(ap.centre_m),
+            true,
+        )?;
         if let Ok(rep) = proc.measure_resolution(&c, &pulses, 0..pulses.len(), ap.centre_m) {
             rr = Some(MeasuredResolution {
                 measured_m: rep.range_measured_m,
@@ -519,7 +565,9 @@ pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metri
         .collect();
     write_csv(
         &out.join("detections.csv"),
-        &["aperture", "x_m", "y_m", "snr_db", "pixels", "truth_id", "error_m"],
+        &[
+            "aperture", "x_m", "y_m", "snr_db", "pixels", "truth_id", "error_m",
+        ],
         &rows,
     )?;
     write_json(&out.join("detections.json"), &det_rows)?;
@@ -649,5 +697,6 @@ pub fn shorten(mission: &planner::Mission, horizon_s: f64) -> Result<planner::Mi
         ..Default::default()
     };
     file.params.horizon_s = Some(horizon_s);
-    planner::Mission::from_file_struct(&file).map_err(|e| RadarError::config("mission", e.to_string()))
+    planner::Mission::from_file_struct(&file)
+        .map_err(|e| RadarError::config("mission", e.to_string()))
 }

@@ -1,6 +1,8 @@
 //! Acceptance: Poisson objects no closer than d_min; Pd ≥ 0.95 for objects with image SNR ≥ 13 dB,
 //! false alarms within a factor 2 of the design rate, position error ≤ max(δ_r, δ_a).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod common;
 
 use radar_sim::config::{SceneFile, Weighting};

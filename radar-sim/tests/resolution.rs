@@ -2,6 +2,8 @@
 //! general predictions (SPEC.md §4 item 11, × 0.886) for B = 50, 100, 150 MHz at several
 //! positions along the track (different bistatic angles).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod common;
 
 use radar_sim::config::SceneFile;
