@@ -215,8 +215,6 @@ fn tile_kernel(sh: &Shared<'_>, job: &TileJob, out: &mut [Complex32]) {
     let mut a = vec![0f32; w];
     let mut idx = vec![0f32; w];
     let mut cyc = vec![0f32; w];
-    let mut i0 = vec![0usize; w];
-    let mut fr = vec![0f32; w];
     let mut vr = vec![0f32; w];
     let mut vi = vec![0f32; w];
     let mmax = (sh.m - 2) as f32;
@@ -242,35 +240,45 @@ fn tile_kernel(sh: &Shared<'_>, job: &TileJob, out: &mut [Complex32]) {
             let b = (2.0 * d[1] * eyj + eyj * eyj) as f32;
             let row = j * w;
             let dt = &dtx[row..row + w];
-            // 1: geometry (vectorisable)
-            for i in 0..w {
-                let num = a[i] + b;
+            // 1: geometry (vectorisable: equal-length zipped slices, no bounds checks)
+            for (((x, c), &ai), &dti) in idx[..w]
+                .iter_mut()
+                .zip(cyc[..w].iter_mut())
+                .zip(&a[..w])
+                .zip(dt)
+            {
+                let num = ai + b;
                 let s = (d2f + num).sqrt();
-                let delta = dt[i] + num / (dnf + s);
-                let x = (base_idx + delta * kf).clamp(0.0, mmax);
-                idx[i] = x;
-                let c = base_cyc + delta * lf;
-                cyc[i] = c - ((c + ROUND_MAGIC) - ROUND_MAGIC);
-            }
-            for i in 0..w {
-                let k = idx[i] as i32;
-                i0[i] = k as usize;
-                fr[i] = idx[i] - k as f32;
+                let delta = dti + num / (dnf + s);
+                *x = (base_idx + delta * kf).max(0.0).min(mmax);
+                let cc = base_cyc + delta * lf;
+                *c = cc - ((cc + ROUND_MAGIC) - ROUND_MAGIC);
             }
             // 2: gather + linear interpolation
-            for i in 0..w {
-                let k = i0[i];
-                if let (Some(p0), Some(p1)) = (prof.get(k), prof.get(k + 1)) {
-                    vr[i] = p0.re + fr[i] * (p1.re - p0.re);
-                    vi[i] = p0.im + fr[i] * (p1.im - p0.im);
+            for (((&x, r), im), _) in idx[..w]
+                .iter()
+                .zip(vr[..w].iter_mut())
+                .zip(vi[..w].iter_mut())
+                .zip(0..w)
+            {
+                let k = x as i32 as usize;
+                let f = x - k as f32;
+                if let Some(pp) = prof.get(k..k + 2) {
+                    *r = pp[0].re + f * (pp[1].re - pp[0].re);
+                    *im = pp[0].im + f * (pp[1].im - pp[0].im);
                 }
             }
             // 3: carrier phase and accumulation (vectorisable)
-            let (ar, ai) = (&mut acc_re[row..row + w], &mut acc_im[row..row + w]);
-            for i in 0..w {
-                let (s, c) = sincos_2pi(cyc[i]);
-                ar[i] += wt * (vr[i] * c - vi[i] * s);
-                ai[i] += wt * (vr[i] * s + vi[i] * c);
+            for ((((ar, ai), &c), &r), &im) in acc_re[row..row + w]
+                .iter_mut()
+                .zip(acc_im[row..row + w].iter_mut())
+                .zip(&cyc[..w])
+                .zip(&vr[..w])
+                .zip(&vi[..w])
+            {
+                let (s, co) = sincos_2pi(c);
+                *ar += wt * (r * co - im * s);
+                *ai += wt * (r * s + im * co);
             }
         }
     }
