@@ -247,7 +247,7 @@ pub fn plan_with_observer(
                 coarse_start(mission, ExactObjective::Energy, false, options)
             }
         }
-        .unwrap_or_else(|| guidance_start(mission)),
+        .unwrap_or_else(|| guidance_start(mission, options.resolution)),
     };
     let start_energy_j = evaluate(mission, &start).energy_j;
     let resolution = match options.scheme {
@@ -356,7 +356,7 @@ fn coarse_start(
     let mut solver = SocpSolver::new(options.socp);
     let (start, _) = make_feasible(
         &coarse,
-        guidance_start(&coarse),
+        guidance_start(&coarse, options.resolution),
         objective,
         &tuning,
         &mut solver,
