@@ -16,8 +16,8 @@ use fmu::core::{FmiVersion, MODELS};
 #[derive(Debug, Parser)]
 #[command(version, about)]
 struct Args {
-    /// The shared library to package (default: `libfmu.so` beside this executable, i.e. the one
-    /// cargo built with it).
+    /// The shared library to package (default: build it with this executable's cargo profile
+    /// and take `libfmu.so` beside this executable).
     #[arg(long)]
     lib: Option<PathBuf>,
     /// Output directory (default: `<cargo target dir>/fmu`).
@@ -62,6 +62,30 @@ fn target_dir() -> Result<PathBuf> {
     Ok(PathBuf::from(dir))
 }
 
+/// Builds the cdylib with the profile this executable was built with (`cargo run --bin` does
+/// not build it) and returns its path, beside this executable.
+fn build_library() -> Result<PathBuf> {
+    let exe = std::env::current_exe()?;
+    let dir = exe.parent().context("executable has no directory")?;
+    let profile = dir
+        .file_name()
+        .and_then(|n| n.to_str())
+        .context("cannot tell the cargo profile from the executable's directory")?;
+    let profile = if profile == "debug" { "dev" } else { profile };
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
+    tracing::info!("building the shared library (cargo build -p fmu --lib --profile {profile})");
+    let status = Command::new(&cargo)
+        .args(["build", "-p", "fmu", "--lib", "--profile", profile, "--manifest-path"])
+        .arg(&manifest)
+        .status()
+        .with_context(|| format!("running `{} build`", cargo.to_string_lossy()))?;
+    if !status.success() {
+        bail!("building the shared library failed ({status})");
+    }
+    Ok(dir.join("libfmu.so"))
+}
+
 fn main() -> Result<()> {
     tracing_subscriber::fmt()
         .with_env_filter(
@@ -73,10 +97,7 @@ fn main() -> Result<()> {
     let args = Args::parse();
     let lib = match args.lib {
         Some(l) => l,
-        None => std::env::current_exe()?
-            .parent()
-            .context("executable has no directory")?
-            .join("libfmu.so"),
+        None => build_library()?,
     };
     let library = std::fs::read(&lib).with_context(|| {
         format!(
