@@ -41,6 +41,14 @@ points = [
 ]
 """
 
+# One landmark, 2 s (4 slots): for tests that plan hundreds of times.
+TINY_MISSION = """name = "tiny test mission"
+[params]
+horizon_s = 2
+[landmarks]
+points = [ { x_m = 0, y_m = 0, from_s = 0, to_s = 2 } ]
+"""
+
 OUTPUTS = [
     "x_m", "y_m", "speed_mps", "heading_rad", "power_w", "energy_j", "xc_m", "yc_m",
     "landmark_x_m", "landmark_y_m", "in_view", "range_resolution_m", "azimuth_resolution_m",
@@ -67,6 +75,13 @@ def version(request):
 def short_mission(tmp_path):
     p = tmp_path / "short.toml"
     p.write_text(SHORT_MISSION, encoding="utf-8")
+    return p
+
+
+@pytest.fixture
+def tiny_mission(tmp_path):
+    p = tmp_path / "tiny.toml"
+    p.write_text(TINY_MISSION, encoding="utf-8")
     return p
 
 

@@ -189,18 +189,23 @@ def _rss_kib():
     raise RuntimeError("no VmRSS")
 
 
-def test_200_instantiate_free_cycles_do_not_grow_memory(version, short_mission):
+def _threads():
+    return len(os.listdir("/proc/self/task"))
+
+
+def test_200_instantiate_free_cycles_do_not_grow_memory(version, tiny_mission):
     f = Fmu(version)
 
     def cycle():
         assert f.instantiate()
-        f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+        f.init(stop=2.0, strings={"mission_file": str(tiny_mission)})
         for k in range(4):
             f.step(0.5, t=k * 0.5)
         s = f.fmu.getFMUstate() if version == "fmi2" else f.fmu.getFMUState()
         f.fmu.freeFMUstate(s) if version == "fmi2" else f.fmu.freeFMUState(s)
         f.free()
 
+    threads = _threads()
     for _ in range(20):
         cycle()
     before = _rss_kib()
@@ -208,6 +213,7 @@ def test_200_instantiate_free_cycles_do_not_grow_memory(version, short_mission):
         cycle()
     grown = _rss_kib() - before
     assert grown < 4096, f"RSS grew by {grown} KiB over 200 cycles"
+    assert _threads() == threads, "threads outlived FreeInstance"
     f.fmu.freeLibrary()
 
 
