@@ -23,7 +23,9 @@ fn cargo() -> Command {
 }
 
 fn run(cmd: &mut Command) {
-    let status = cmd.status().unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
+    let status = cmd
+        .status()
+        .unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
     assert!(status.success(), "{cmd:?} failed: {status}");
 }
 
@@ -51,9 +53,25 @@ fn fmpy_test_suite() {
         .map(PathBuf::from)
         .unwrap_or_else(|| workspace().join("target"));
     let out = target.join("fmu");
-    run(cargo().args(["build", "--release", "-p", "planner", "--bin", "cellsar-planner"]));
+    run(cargo().args([
+        "build",
+        "--release",
+        "-p",
+        "planner",
+        "--bin",
+        "cellsar-planner",
+    ]));
     run(cargo()
-        .args(["run", "--release", "-p", "fmu", "--bin", "package-fmu", "--", "--out"])
+        .args([
+            "run",
+            "--release",
+            "-p",
+            "fmu",
+            "--bin",
+            "package-fmu",
+            "--",
+            "--out",
+        ])
         .arg(&out));
     let planner = target.join("release").join("cellsar-planner");
     run(Command::new("python3")

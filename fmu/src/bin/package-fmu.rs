@@ -76,7 +76,15 @@ fn build_library() -> Result<PathBuf> {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
     tracing::info!("building the shared library (cargo build -p fmu --lib --profile {profile})");
     let status = Command::new(&cargo)
-        .args(["build", "-p", "fmu", "--lib", "--profile", profile, "--manifest-path"])
+        .args([
+            "build",
+            "-p",
+            "fmu",
+            "--lib",
+            "--profile",
+            profile,
+            "--manifest-path",
+        ])
         .arg(&manifest)
         .status()
         .with_context(|| format!("running `{} build`", cargo.to_string_lossy()))?;
