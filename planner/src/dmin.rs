@@ -222,7 +222,10 @@ mod tests {
             let correct = expected_dmin_m(5000.0, n, CdfForm::Correct).unwrap();
             // ≈ (√π/2) R/√(N−1) for large N
             let approx = PI.sqrt() / 2.0 * 5000.0 / ((n - 1) as f64).sqrt();
-            assert!((correct / approx - 1.0).abs() < 0.05, "N={n}: {correct} vs {approx}");
+            assert!(
+                (correct / approx - 1.0).abs() < 0.05,
+                "N={n}: {correct} vs {approx}"
+            );
             assert!(correct > 5.0 * printed);
         }
     }

@@ -210,7 +210,11 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         slots,
         energy_j: energy,
         violations: viol,
-        min_speed_mps: if min_speed.is_finite() { min_speed } else { 0.0 },
+        min_speed_mps: if min_speed.is_finite() {
+            min_speed
+        } else {
+            0.0
+        },
         max_speed_mps: max_speed,
         slots_out_of_view: out_of_view,
         slots_unresolved: unresolved,

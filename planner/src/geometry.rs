@@ -101,8 +101,16 @@ pub fn bistatic_range_gradient(params: &Params, uav_m: [f64; 2], point_m: [f64; 
     let rt = (v2::dot(dt, dt) + params.bs_height_m.powi(2)).sqrt();
     let dr = v2::sub(point_m, uav_m);
     let rr = (v2::dot(dr, dr) + params.altitude_m.powi(2)).sqrt();
-    let gt = if rt > 0.0 { v2::scale(dt, 1.0 / rt) } else { [0.0, 0.0] };
-    let gr = if rr > 0.0 { v2::scale(dr, 1.0 / rr) } else { [0.0, 0.0] };
+    let gt = if rt > 0.0 {
+        v2::scale(dt, 1.0 / rt)
+    } else {
+        [0.0, 0.0]
+    };
+    let gr = if rr > 0.0 {
+        v2::scale(dr, 1.0 / rr)
+    } else {
+        [0.0, 0.0]
+    };
     v2::add(gt, gr)
 }
 
@@ -250,7 +258,10 @@ mod tests {
         let uav = [point[0] - p.centre_offset_m(), point[1]];
         let general = range_resolution_general_m(&p, uav, point);
         let paper = range_resolution_paper_m(&p, point);
-        assert!((general - paper).abs() < 1e-9 * paper, "{general} vs {paper}");
+        assert!(
+            (general - paper).abs() < 1e-9 * paper,
+            "{general} vs {paper}"
+        );
         assert!(bistatic_angle_rad(&p, uav, point).abs() < 1e-12);
     }
 

@@ -7,17 +7,28 @@
 //! Layers, bottom up:
 //! - models: [`params`], [`landmarks`], [`mission`], [`power`], [`geometry`], [`dmin`];
 //! - exact-geometry evaluation of any trajectory: [`evaluate`];
-//! - trajectories and their files: [`trajectory`].
+//! - trajectories and their files: [`trajectory`];
+//! - the convex machinery: [`socp`] (Clarabel), [`schemes`] (the subproblems), [`init`]
+//!   (pre-check and start), [`driver`] (the iteration loop: [`plan`]).
 
 pub mod dmin;
+pub mod driver;
 pub mod evaluate;
 pub mod geometry;
+pub mod init;
 pub mod landmarks;
 pub mod mission;
 pub mod params;
 pub mod power;
+pub mod report;
+pub mod schemes;
+pub mod socp;
 pub mod trajectory;
 
+pub use driver::{
+    plan, plan_with_observer, IterationRecord, NoObserver, Observer, PlanError, PlanOptions,
+    PlanResult, Scheme, TerminationReason,
+};
 pub use evaluate::{evaluate, Evaluation, SlotEval, Violations};
 pub use landmarks::{LandmarkWindow, LandmarksSpec, Preset, Schedule};
 pub use mission::{Mission, MissionError, MissionFile};

@@ -107,14 +107,17 @@ impl Mission {
             params.horizon_s = preset.natural_horizon_s();
         }
         params.apply(&file.params);
-        let name = file.name.clone().unwrap_or_else(|| match file.landmarks.preset {
-            Some(p) => format!(
-                "{} ({} m)",
-                p.name(),
-                file.landmarks.spacing_m.unwrap_or(p.default_spacing_m())
-            ),
-            None => "explicit landmarks".to_string(),
-        });
+        let name = file
+            .name
+            .clone()
+            .unwrap_or_else(|| match file.landmarks.preset {
+                Some(p) => format!(
+                    "{} ({} m)",
+                    p.name(),
+                    file.landmarks.spacing_m.unwrap_or(p.default_spacing_m())
+                ),
+                None => "explicit landmarks".to_string(),
+            });
         Self::new(name, params, &file.landmarks)
     }
 
@@ -165,6 +168,29 @@ impl Mission {
             name: self.name.clone(),
             params,
             schedule,
+        })
+    }
+
+    /// The same mission on a grid of slots `factor` times longer (for a coarse first solve):
+    /// coarse slot k senses the landmark of the fine slot that ends at the same time. `None`
+    /// when `factor` is 0 or does not divide the number of slots.
+    pub fn coarsened(&self, factor: usize) -> Option<Self> {
+        let n = self.slots();
+        if factor == 0 || n % factor != 0 {
+            return None;
+        }
+        let mut params = self.params.clone();
+        params.slot_s *= factor as f64;
+        let slot_landmark = (1..=n / factor)
+            .map(|k| self.schedule.slot_landmark[k * factor - 1])
+            .collect();
+        Some(Self {
+            name: format!("{} (coarse x{factor})", self.name),
+            params,
+            schedule: Schedule {
+                landmarks: self.schedule.landmarks.clone(),
+                slot_landmark,
+            },
         })
     }
 
@@ -261,8 +287,10 @@ mod tests {
 
     #[test]
     fn unknown_field_is_rejected_with_its_name() {
-        let e = MissionFile::from_toml_str("[params]\nbandwith_hz = 1\n[landmarks]\npreset=\"default\"")
-            .unwrap_err();
+        let e = MissionFile::from_toml_str(
+            "[params]\nbandwith_hz = 1\n[landmarks]\npreset=\"default\"",
+        )
+        .unwrap_err();
         assert!(e.contains("bandwith_hz"), "{e}");
     }
 

@@ -146,7 +146,12 @@ enum Range {
 }
 
 /// One entry of the parameter table: name, accessor.
-type Field = (&'static str, fn(&Params) -> f64, fn(&mut Params, f64), Range);
+type Field = (
+    &'static str,
+    fn(&Params) -> f64,
+    fn(&mut Params, f64),
+    Range,
+);
 
 macro_rules! scalar_fields {
     ($( $name:ident : $range:expr ),* $(,)?) => {
@@ -363,7 +368,11 @@ mod tests {
     fn observation_angle_must_be_inside_open_interval() {
         let mut p = Params::default();
         p.observation_angle_rad = std::f64::consts::FRAC_PI_2;
-        assert!(p.validate().unwrap_err().to_string().contains("observation_angle_rad"));
+        assert!(p
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("observation_angle_rad"));
     }
 
     #[test]

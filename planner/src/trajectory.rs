@@ -181,7 +181,10 @@ impl Trajectory {
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             let get = |c: usize, n: &str| -> Result<f64, TrajectoryError> {
                 let s = fields.get(c).ok_or_else(|| {
-                    err(format!("line {}, column {n}", i + 1), "missing value".into())
+                    err(
+                        format!("line {}, column {n}", i + 1),
+                        "missing value".into(),
+                    )
                 })?;
                 let v: f64 = s.parse().map_err(|_| {
                     err(
@@ -206,7 +209,10 @@ impl Trajectory {
             if (t - expected).abs() > 1e-6 * expected.max(1.0) {
                 return Err(err(
                     format!("line {}, column t_s", i + 1),
-                    format!("expected t_s = {expected} (slot {}), found {t}", pos.len() + 1),
+                    format!(
+                        "expected t_s = {expected} (slot {}), found {t}",
+                        pos.len() + 1
+                    ),
                 ));
             }
             pos.push([x, y]);

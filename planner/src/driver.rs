@@ -1,0 +1,752 @@
+//! The planning driver: feasibility pre-check, start trajectory (with phase-I repair), the SCA /
+//! BCD iterations of each scheme, the stopping rule and the observer.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::evaluate::{evaluate, Evaluation};
+use crate::init::{guidance_start, precheck, Infeasibility};
+use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
+use crate::schemes::paper::{PaperObjective, PaperState};
+use crate::socp::{SocpSettings, SocpSolver, SolveError};
+use crate::{Mission, Trajectory};
+
+/// Which planner to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Scheme {
+    /// SCA on the exact geometry; every iterate feasible on it (the default).
+    Exact,
+    /// The paper's Algorithm 1 as printed: SCA + BCD between (p5) and (p6).
+    Paper,
+    /// The paper's baseline: least flight distance under the paper's convexification.
+    Baseline,
+    /// Least flight distance on the exact geometry (a baseline that is truly feasible).
+    BaselineExact,
+}
+
+impl Scheme {
+    /// All schemes.
+    pub const ALL: [Scheme; 4] = [
+        Scheme::Exact,
+        Scheme::Paper,
+        Scheme::Baseline,
+        Scheme::BaselineExact,
+    ];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::Exact => "exact",
+            Scheme::Paper => "paper",
+            Scheme::Baseline => "baseline",
+            Scheme::BaselineExact => "baseline-exact",
+        }
+    }
+
+    /// Parses a name as printed by [`Scheme::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.name() == name)
+    }
+}
+
+impl std::fmt::Display for Scheme {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Options of a planning run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanOptions {
+    /// The scheme.
+    pub scheme: Scheme,
+    /// Largest number of SCA/BCD iterations.
+    pub max_iterations: usize,
+    /// Stop when the relative change of the objective is below this.
+    pub tolerance: f64,
+    /// Start from this trajectory instead of the built-in guidance start.
+    pub init: Option<Trajectory>,
+    /// Settings of the cone-program solver.
+    pub socp: SocpSettings,
+    /// Smallest factor on the proven centre-error bound that the exact scheme tries after
+    /// successful steps (1 = always use the proven bound).
+    pub min_kappa_scale: f64,
+    /// For the exact-geometry schemes without a given start: first solve the mission on slots
+    /// about 2 s long and start from that solution (fewer, larger steps make the SCA converge
+    /// in far fewer iterations; the fine solve then only polishes).
+    pub coarse: bool,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        Self {
+            scheme: Scheme::Exact,
+            max_iterations: 200,
+            tolerance: 1e-4,
+            init: None,
+            socp: SocpSettings::default(),
+            min_kappa_scale: 1.0 / 16.0,
+            coarse: true,
+        }
+    }
+}
+
+/// Why the iterations stopped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "reason", content = "detail")]
+pub enum TerminationReason {
+    /// The relative change of the objective fell below the tolerance.
+    Converged,
+    /// The iteration limit was reached.
+    MaxIterations,
+    /// A subproblem failed even after backing off; the last accepted iterate is returned.
+    SubproblemFailed(String),
+    /// Steps kept being rejected by the exact-geometry check; the last accepted iterate is returned.
+    NoProgress,
+}
+
+/// One iteration as seen by an [`Observer`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IterationRecord {
+    /// Iteration number (1-based).
+    pub iteration: usize,
+    /// The optimiser's own objective after this iteration (J, or m for distance schemes).
+    pub objective: f64,
+    /// True energy of the iterate on the exact geometry, J.
+    pub true_energy_j: f64,
+    /// Largest sensing violation of the iterate on the exact geometry, m.
+    pub sensing_violation_m: f64,
+    /// Largest azimuth (minimum speed) violation on the exact geometry, m/s.
+    pub speed_violation_mps: f64,
+    /// Interior-point iterations spent in this iteration's cone programs.
+    pub ipm_iterations: u32,
+    /// Wall time of this iteration, s.
+    pub seconds: f64,
+    /// Whether the step was accepted.
+    pub accepted: bool,
+}
+
+/// Receives progress of a planning run.
+pub trait Observer {
+    /// Called after every iteration (accepted or rejected).
+    fn on_iteration(&mut self, _record: &IterationRecord) {}
+    /// Called when a phase starts ("repair", "solve").
+    fn on_phase(&mut self, _phase: &str) {}
+}
+
+/// An observer that ignores everything.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct NoObserver;
+impl Observer for NoObserver {}
+
+/// The result of a planning run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanResult {
+    /// The scheme that produced it.
+    pub scheme: Scheme,
+    /// The planned trajectory.
+    pub trajectory: Trajectory,
+    /// Its exact-geometry evaluation (true energy, violations, per-slot values).
+    pub evaluation: Evaluation,
+    /// The optimiser's own final objective (J for energy schemes, m for distance schemes).
+    pub objective: f64,
+    /// The optimiser's objective after each accepted iteration.
+    pub objective_history: Vec<f64>,
+    /// True energy after each accepted iteration, J.
+    pub true_energy_history: Vec<f64>,
+    /// All iterations (accepted and rejected).
+    pub records: Vec<IterationRecord>,
+    /// Number of iterations run.
+    pub iterations: usize,
+    /// True when stopped by the tolerance.
+    pub converged: bool,
+    /// Why it stopped.
+    pub termination: TerminationReason,
+    /// Wall time of the whole run (start, repair and iterations), s.
+    pub solve_seconds: f64,
+    /// True energy of the start trajectory, J.
+    pub start_energy_j: f64,
+    /// Phase-I iterations spent repairing the start.
+    pub repair_iterations: usize,
+    /// Cone programs solved.
+    pub cone_programs: usize,
+}
+
+/// Why planning failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    /// The mission cannot be flown (found before or during phase I).
+    #[error("{0}")]
+    Infeasible(#[from] Infeasibility),
+    /// The given start trajectory does not fit the mission.
+    #[error("start trajectory: {0}")]
+    InvalidInit(String),
+    /// The first subproblem could not be solved.
+    #[error("iteration {iteration}: {source}")]
+    Solver {
+        /// Iteration (0 = phase I).
+        iteration: usize,
+        /// The solver's error.
+        #[source]
+        source: SolveError,
+    },
+}
+
+/// Plans `mission` with `options`.
+pub fn plan(mission: &Mission, options: &PlanOptions) -> Result<PlanResult, PlanError> {
+    plan_with_observer(mission, options, &mut NoObserver)
+}
+
+/// Plans `mission` with `options`, reporting progress to `observer`.
+pub fn plan_with_observer(
+    mission: &Mission,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+) -> Result<PlanResult, PlanError> {
+    let started = Instant::now();
+    precheck(mission)?;
+    let p = mission.params();
+    let start = match &options.init {
+        Some(tr) => {
+            if tr.slots() != mission.slots() || (tr.slot_s - p.slot_s).abs() > 1e-12 {
+                return Err(PlanError::InvalidInit(format!(
+                    "{} slots of {} s, but the mission has {} slots of {} s",
+                    tr.slots(),
+                    tr.slot_s,
+                    mission.slots(),
+                    p.slot_s
+                )));
+            }
+            if tr.pos_m.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(PlanError::InvalidInit("non-finite position".into()));
+            }
+            tr.clone()
+        }
+        None => match options.scheme {
+            Scheme::Exact if options.coarse => {
+                coarse_start(mission, ExactObjective::Energy, options)
+            }
+            Scheme::BaselineExact if options.coarse => {
+                coarse_start(mission, ExactObjective::Distance, options)
+            }
+            _ => None,
+        }
+        .unwrap_or_else(|| guidance_start(mission)),
+    };
+    let start_energy_j = evaluate(mission, &start).energy_j;
+    let mut solver = SocpSolver::new(options.socp);
+    let mut repair_solver = SocpSolver::new(options.socp);
+    // Every scheme needs a start that is feasible on the exact geometry, except the paper's
+    // schemes started from a given path: that path is used as it is (its first (p5) is the
+    // reproduction check).
+    let phase1 = match options.scheme {
+        Scheme::Exact => Some(ExactObjective::Energy),
+        Scheme::BaselineExact => Some(ExactObjective::Distance),
+        Scheme::Paper | Scheme::Baseline => {
+            options.init.is_none().then_some(ExactObjective::Energy)
+        }
+    };
+    let (start, repair_iterations) = match phase1 {
+        Some(objective) => make_feasible(
+            mission,
+            start,
+            objective,
+            &ExactTuning::default(),
+            &mut repair_solver,
+            observer,
+        )?,
+        None => (start, 0),
+    };
+    observer.on_phase("solve");
+    let mut out = match options.scheme {
+        Scheme::Exact => run_exact(
+            mission,
+            start,
+            ExactObjective::Energy,
+            &ExactTuning::default(),
+            options,
+            &mut solver,
+            observer,
+        )?,
+        Scheme::BaselineExact => run_exact(
+            mission,
+            start,
+            ExactObjective::Distance,
+            &ExactTuning::default(),
+            options,
+            &mut solver,
+            observer,
+        )?,
+        Scheme::Paper => run_paper(
+            mission,
+            start,
+            PaperObjective::Energy,
+            options,
+            &mut solver,
+            observer,
+        )?,
+        Scheme::Baseline => run_paper(
+            mission,
+            start,
+            PaperObjective::Distance,
+            options,
+            &mut solver,
+            observer,
+        )?,
+    };
+    out.scheme = options.scheme;
+    out.start_energy_j = start_energy_j;
+    out.repair_iterations = repair_iterations;
+    out.cone_programs += repair_solver.builds.max(repair_iterations);
+    out.solve_seconds = started.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+/// Target slot length of the coarse solve, s.
+const COARSE_SLOT_S: f64 = 2.0;
+
+/// Solves the mission on a coarser grid (slots about [`COARSE_SLOT_S`] long) and interpolates the
+/// result to the mission's slots. `None` when no suitable coarse grid exists or it fails.
+fn coarse_start(
+    mission: &Mission,
+    objective: ExactObjective,
+    options: &PlanOptions,
+) -> Option<Trajectory> {
+    let n = mission.slots();
+    let delta = mission.params().slot_s;
+    let target = (COARSE_SLOT_S / delta).round() as usize;
+    let factor = (2..=target.max(2))
+        .rev()
+        .find(|&k| k <= target && n % k == 0 && n / k >= 8)?;
+    let coarse = mission.coarsened(factor)?;
+    let tuning = ExactTuning {
+        whole_slot_sensing: true,
+        ..ExactTuning::default()
+    };
+    let mut solver = SocpSolver::new(options.socp);
+    let (start, _) = make_feasible(
+        &coarse,
+        guidance_start(&coarse),
+        objective,
+        &tuning,
+        &mut solver,
+        &mut NoObserver,
+    )
+    .ok()?;
+    let sub_options = PlanOptions {
+        init: None,
+        coarse: false,
+        tolerance: options.tolerance,
+        ..options.clone()
+    };
+    let mut solver = SocpSolver::new(options.socp);
+    let solved = run_exact(
+        &coarse,
+        start,
+        objective,
+        &tuning,
+        &sub_options,
+        &mut solver,
+        &mut NoObserver,
+    )
+    .ok()?;
+    let tr = &solved.trajectory;
+    tracing::debug!(
+        factor,
+        iterations = solved.iterations,
+        energy_j = solved.evaluation.energy_j,
+        "coarse solve"
+    );
+    Some(Trajectory {
+        slot_s: delta,
+        start_m: tr.start_m,
+        pos_m: (1..=n).map(|t| tr.position_at(t as f64 * delta)).collect(),
+    })
+}
+
+/// Per-slot violation used by the elastic phase: the largest of the sensing excess (m), the
+/// azimuth speed shortfall (m/s) and the range keep-out shortfall (m) of each landmark slot,
+/// summed over slots (the same quantities that the subproblem's slack σ_t bounds).
+fn total_violation(mission: &Mission, ev: &Evaluation) -> f64 {
+    let p = mission.params();
+    let v_min = p.min_speed_mps();
+    let keepout = p.range_keepout_m();
+    ev.slots
+        .iter()
+        .filter(|s| s.landmark_m.is_some())
+        .map(|s| {
+            let sens = s.centre_error_m.unwrap_or(0.0) - p.sensing_radius_m;
+            let speed = v_min - s.speed_mps;
+            let range = keepout.map_or(0.0, |k| k - crate::geometry::v2::dist(s.centre_m, p.bs_m));
+            sens.max(speed).max(range).max(0.0)
+        })
+        .sum()
+}
+
+/// Phase I (elastic SCA): while `start` violates the exact constraints, minimise the objective
+/// plus a penalty on the total violation (a merit function that decreases monotonically); stops
+/// at the first iterate that is feasible on the exact geometry. Returns it and the iterations.
+fn make_feasible(
+    mission: &Mission,
+    start: Trajectory,
+    objective: ExactObjective,
+    base: &ExactTuning,
+    solver: &mut SocpSolver,
+    observer: &mut dyn Observer,
+) -> Result<(Trajectory, usize), PlanError> {
+    let mut current = start;
+    let mut ev = evaluate(mission, &current);
+    if ev.is_feasible() {
+        return Ok((current, 0));
+    }
+    observer.on_phase("repair");
+    let value = |ev: &Evaluation| match objective {
+        ExactObjective::Distance => ev.length_m,
+        ExactObjective::Energy => ev.energy_j,
+    };
+    let mut weight = match objective {
+        ExactObjective::Energy => 100.0,
+        ExactObjective::Distance => 10.0,
+    };
+    let mut tuning = ExactTuning {
+        elastic_weight: Some(weight),
+        ..*base
+    };
+    let mut merit = value(&ev) + weight * total_violation(mission, &ev);
+    let mut best_violation = total_violation(mission, &ev);
+    let mut stalls = 0;
+    for it in 1..=100 {
+        tuning.elastic_weight = Some(weight);
+        let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
+        let sol = solver
+            .solve(&sub.builder)
+            .map_err(|source| PlanError::Solver {
+                iteration: 0,
+                source,
+            })?;
+        let cand = sub.trajectory(&sol.x, &current);
+        let cand_ev = evaluate(mission, &cand);
+        let violation = total_violation(mission, &cand_ev);
+        let cand_merit = value(&cand_ev) + weight * violation;
+        tracing::debug!(
+            iteration = it,
+            violation,
+            merit = cand_merit,
+            weight,
+            "phase I"
+        );
+        if cand_merit <= merit * (1.0 + 1e-9) + 1e-9 {
+            current = cand;
+            ev = cand_ev;
+            merit = cand_merit;
+            if ev.is_feasible() {
+                return Ok((current, it));
+            }
+        }
+        if violation < best_violation * 0.99 {
+            best_violation = violation;
+            stalls = 0;
+        } else {
+            stalls += 1;
+            // the penalty is not exact yet: charge violations more
+            weight *= 10.0;
+            merit = value(&ev) + weight * total_violation(mission, &ev);
+            if stalls >= 6 {
+                break;
+            }
+        }
+    }
+    let first = ev
+        .slots
+        .iter()
+        .find(|s| {
+            !s.in_view
+                || (s.landmark_m.is_some() && s.speed_mps < mission.params().min_speed_mps() - 1e-4)
+        })
+        .map(|s| s.t)
+        .unwrap_or(1);
+    Err(PlanError::Infeasible(Infeasibility {
+        slot: first,
+        t_s: first as f64 * mission.params().slot_s,
+        reason: format!(
+            "no trajectory found that keeps every landmark in view at the required resolution \
+             (phase I stalled with a sensing violation of {:.2} m and a speed shortfall of {:.3} m/s)",
+            ev.violations.sensing_m, ev.violations.min_speed_mps
+        ),
+    }))
+}
+
+fn record(
+    iteration: usize,
+    objective: f64,
+    ev: &Evaluation,
+    ipm: u32,
+    seconds: f64,
+    accepted: bool,
+) -> IterationRecord {
+    IterationRecord {
+        iteration,
+        objective,
+        true_energy_j: ev.energy_j,
+        sensing_violation_m: ev.violations.sensing_m,
+        speed_violation_mps: ev.violations.min_speed_mps,
+        ipm_iterations: ipm,
+        seconds,
+        accepted,
+    }
+}
+
+fn finish(
+    mission: &Mission,
+    trajectory: Trajectory,
+    objective: f64,
+    objective_history: Vec<f64>,
+    true_energy_history: Vec<f64>,
+    records: Vec<IterationRecord>,
+    termination: TerminationReason,
+    cone_programs: usize,
+) -> PlanResult {
+    let evaluation = evaluate(mission, &trajectory);
+    PlanResult {
+        scheme: Scheme::Exact,
+        iterations: records.len(),
+        converged: termination == TerminationReason::Converged,
+        trajectory,
+        evaluation,
+        objective,
+        objective_history,
+        true_energy_history,
+        records,
+        termination,
+        solve_seconds: 0.0,
+        start_energy_j: 0.0,
+        repair_iterations: 0,
+        cone_programs,
+    }
+}
+
+/// The exact-geometry SCA loop (monotone: a step is accepted only if it is feasible on the exact
+/// geometry and does not increase the true objective; otherwise a trust region is tightened).
+fn run_exact(
+    mission: &Mission,
+    start: Trajectory,
+    objective: ExactObjective,
+    base: &ExactTuning,
+    options: &PlanOptions,
+    solver: &mut SocpSolver,
+    observer: &mut dyn Observer,
+) -> Result<PlanResult, PlanError> {
+    let true_value = |ev: &Evaluation| match objective {
+        ExactObjective::Distance => ev.length_m,
+        _ => ev.energy_j,
+    };
+    let mut current = start;
+    let mut ev = evaluate(mission, &current);
+    let mut value = true_value(&ev);
+    let mut tuning = *base;
+    let mut records = Vec::new();
+    let mut obj_hist = Vec::new();
+    let mut energy_hist = Vec::new();
+    let mut last_objective = value;
+    let mut rejects = 0;
+    let mut programs = 0;
+    let mut termination = TerminationReason::MaxIterations;
+    for it in 1..=options.max_iterations {
+        let t0 = Instant::now();
+        let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
+        programs += 1;
+        let sol = match solver.solve(&sub.builder) {
+            Ok(s) => s,
+            Err(e) => {
+                if it == 1 && tuning.trust_radius_m.is_none() && records.is_empty() {
+                    tracing::warn!(error = %e, "first subproblem failed; retrying with a trust region");
+                }
+                rejects += 1;
+                tuning.trust_radius_m = Some(tuning.trust_radius_m.map_or(2.0, |r| r * 0.5));
+                records.push(record(
+                    it,
+                    f64::NAN,
+                    &ev,
+                    0,
+                    t0.elapsed().as_secs_f64(),
+                    false,
+                ));
+                if rejects > 8 {
+                    if obj_hist.is_empty() && it <= 9 {
+                        return Err(PlanError::Solver {
+                            iteration: it,
+                            source: e,
+                        });
+                    }
+                    termination = TerminationReason::SubproblemFailed(e.to_string());
+                    break;
+                }
+                continue;
+            }
+        };
+        let mut cand = sub.trajectory(&sol.x, &current);
+        let mut cand_ev = evaluate(mission, &cand);
+        let mut cand_value = true_value(&cand_ev);
+        // over-relaxation: SCA steps limited by the conservative centre bound tend to repeat in
+        // the same direction; try longer steps along it and keep the best that stays feasible.
+        if cand_ev.is_feasible() && cand_value < value {
+            for alpha in [2.0, 4.0] {
+                let trial = extrapolate(&current, &cand, alpha);
+                let ev = evaluate(mission, &trial);
+                let v = true_value(&ev);
+                if ev.is_feasible() && v < cand_value {
+                    cand = trial;
+                    cand_ev = ev;
+                    cand_value = v;
+                } else {
+                    break;
+                }
+            }
+        }
+        let own = sub.physical_objective(sol.objective);
+        let ok = cand_ev.is_feasible() && cand_value <= value * (1.0 + 1e-9) + 1e-9;
+        let rec = record(
+            it,
+            own,
+            &cand_ev,
+            sol.iterations,
+            t0.elapsed().as_secs_f64(),
+            ok,
+        );
+        observer.on_iteration(&rec);
+        records.push(rec);
+        if !ok && tuning.kappa_scale < 1.0 {
+            // the optimistic model overreached: fall back to the proven bound and re-solve
+            tuning.kappa_scale = (tuning.kappa_scale * 2.0).min(1.0);
+            continue;
+        }
+        if !ok {
+            rejects += 1;
+            tracing::debug!(
+                iteration = it,
+                feasible = cand_ev.is_feasible(),
+                value = cand_value,
+                previous = value,
+                "step rejected"
+            );
+            tuning.trust_radius_m = Some(tuning.trust_radius_m.map_or(2.0, |r| r * 0.5));
+            if rejects > 8 {
+                termination = TerminationReason::NoProgress;
+                break;
+            }
+            continue;
+        }
+        rejects = 0;
+        let rel = (value - cand_value).abs() / value.abs().max(1e-12);
+        current = cand;
+        ev = cand_ev;
+        value = cand_value;
+        last_objective = own;
+        obj_hist.push(own);
+        energy_hist.push(ev.energy_j);
+        tracing::debug!(
+            iteration = it,
+            objective = own,
+            true_value = value,
+            rel,
+            "accepted"
+        );
+        if rel < options.tolerance {
+            termination = TerminationReason::Converged;
+            break;
+        }
+        // a successful step relaxes the trust region again and makes the centre model bolder
+        tuning.trust_radius_m = tuning.trust_radius_m.map(|r| r * 4.0).filter(|r| *r < 50.0);
+        tuning.kappa_scale = (tuning.kappa_scale * 0.8).max(options.min_kappa_scale);
+    }
+    Ok(finish(
+        mission,
+        current,
+        last_objective,
+        obj_hist,
+        energy_hist,
+        records,
+        termination,
+        programs,
+    ))
+}
+
+/// `from + alpha (to − from)`, slot by slot.
+fn extrapolate(from: &Trajectory, to: &Trajectory, alpha: f64) -> Trajectory {
+    Trajectory {
+        slot_s: to.slot_s,
+        start_m: to.start_m,
+        pos_m: from
+            .pos_m
+            .iter()
+            .zip(&to.pos_m)
+            .map(|(a, b)| [a[0] + alpha * (b[0] - a[0]), a[1] + alpha * (b[1] - a[1])])
+            .collect(),
+    }
+}
+
+/// Algorithm 1 (or the baseline) exactly as printed: alternate (p5) and (p6) from the start.
+fn run_paper(
+    mission: &Mission,
+    start: Trajectory,
+    objective: PaperObjective,
+    options: &PlanOptions,
+    solver: &mut SocpSolver,
+    observer: &mut dyn Observer,
+) -> Result<PlanResult, PlanError> {
+    let mut state = PaperState::from_trajectory(mission, &start);
+    let mut p6_solver = SocpSolver::new(options.socp);
+    let mut records = Vec::new();
+    let mut obj_hist: Vec<f64> = Vec::new();
+    let mut energy_hist = Vec::new();
+    let mut termination = TerminationReason::MaxIterations;
+    let mut programs = 0;
+    let mut traj = start;
+    for it in 1..=options.max_iterations {
+        let t0 = Instant::now();
+        let p5 = state.solve_p5(mission, objective, solver);
+        programs += 1;
+        let (own, ipm) = match p5 {
+            Ok(v) => v,
+            Err(e) => {
+                if obj_hist.is_empty() {
+                    return Err(PlanError::Solver {
+                        iteration: it,
+                        source: e,
+                    });
+                }
+                termination = TerminationReason::SubproblemFailed(e.to_string());
+                break;
+            }
+        };
+        let ipm6 = state.solve_p6(mission, &mut p6_solver);
+        programs += 1;
+        traj = state.trajectory(&traj);
+        let ev = evaluate(mission, &traj);
+        let rec = record(it, own, &ev, ipm + ipm6, t0.elapsed().as_secs_f64(), true);
+        observer.on_iteration(&rec);
+        records.push(rec);
+        let prev = obj_hist.last().copied();
+        obj_hist.push(own);
+        energy_hist.push(ev.energy_j);
+        if let Some(prev) = prev {
+            if (prev - own).abs() / prev.abs().max(1e-12) < options.tolerance {
+                termination = TerminationReason::Converged;
+                break;
+            }
+        }
+    }
+    let last = obj_hist.last().copied().unwrap_or(f64::NAN);
+    Ok(finish(
+        mission,
+        traj,
+        last,
+        obj_hist,
+        energy_hist,
+        records,
+        termination,
+        programs,
+    ))
+}

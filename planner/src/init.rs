@@ -1,0 +1,338 @@
+//! Before solving: necessary conditions of feasibility (reported with the first bad slot), and a
+//! start trajectory built by a guidance law that orbits a reference point gliding along the
+//! landmark sequence (a clockwise orbit of radius H tan η keeps a point at the sensing centre).
+
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::v2;
+use crate::power::PowerModel;
+use crate::{Mission, Trajectory};
+
+/// Why a mission cannot be flown, found before solving.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, thiserror::Error)]
+#[error("mission cannot be flown: slot {slot} (t = {t_s} s): {reason}")]
+pub struct Infeasibility {
+    /// First slot (1-based) where the mission fails.
+    pub slot: usize,
+    /// End time of that slot, s.
+    pub t_s: f64,
+    /// What cannot be met.
+    pub reason: String,
+}
+
+/// Checks necessary conditions: the azimuth requirement within the speed limit, the range
+/// requirement attainable, each landmark reachable from the start and from the previous landmark
+/// slot at the maximum speed. Passing does not prove feasibility; failing proves infeasibility.
+pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
+    let p = mission.params();
+    let offset = p.centre_offset_m();
+    let r = p.sensing_radius_m;
+    let outer = offset + r;
+    let inner = (offset - r).max(0.0);
+    let fail = |slot: usize, reason: String| Infeasibility {
+        slot,
+        t_s: slot as f64 * p.slot_s,
+        reason,
+    };
+    let landmark_slots: Vec<(usize, [f64; 2])> = (1..=mission.slots())
+        .filter_map(|t| mission.target_m(t).map(|g| (t, g)))
+        .collect();
+    let Some(&(first, _)) = landmark_slots.first() else {
+        return Ok(());
+    };
+    let v_min = p.min_speed_mps();
+    if v_min > p.max_speed_mps {
+        return Err(fail(
+            first,
+            format!(
+                "the azimuth requirement needs a speed of at least {v_min:.3} m/s \
+                 (λ_c H / (T_d d_min cos η)), above max_speed_mps = {}",
+                p.max_speed_mps
+            ),
+        ));
+    }
+    match p.range_keepout_m() {
+        Some(k) if k.is_infinite() => {
+            return Err(fail(
+                first,
+                format!(
+                    "the range requirement c/(B (sin η + sin θ)) <= d_min cannot hold anywhere: \
+                     c/(B d_min) − sin η = {:.4} >= 1",
+                    p.range_sin_threshold()
+                ),
+            ))
+        }
+        Some(k) => {
+            for &(t, g) in &landmark_slots {
+                if v2::dist(g, p.bs_m) + r < k {
+                    return Err(fail(
+                        t,
+                        format!(
+                            "landmark ({}, {}) m: the whole sensing disc lies within {k:.1} m of \
+                             the BS, where the paper's range resolution exceeds d_min",
+                            g[0], g[1]
+                        ),
+                    ));
+                }
+            }
+        }
+        None => {}
+    }
+    // reachability from the start
+    let (t0, g0) = landmark_slots[0];
+    let d = v2::dist(p.start_m, g0);
+    let gap = (d - outer).max(inner - d).max(0.0);
+    let reach = t0 as f64 * p.slot_s * p.max_speed_mps;
+    if gap > reach {
+        return Err(fail(
+            t0,
+            format!(
+                "landmark ({}, {}) m is out of reach in time: the UAV must be between {inner:.1} \
+                 and {outer:.1} m from it, {gap:.1} m from the start, but covers at most \
+                 {reach:.1} m by t = {} s at max_speed_mps = {}",
+                g0[0],
+                g0[1],
+                t0 as f64 * p.slot_s,
+                p.max_speed_mps
+            ),
+        ));
+    }
+    for w in landmark_slots.windows(2) {
+        let ((t1, g1), (t2, g2)) = (w[0], w[1]);
+        let gap = (v2::dist(g1, g2) - 2.0 * outer).max(0.0);
+        let reach = (t2 - t1) as f64 * p.slot_s * p.max_speed_mps;
+        if gap > reach {
+            return Err(fail(
+                t2,
+                format!(
+                    "landmark ({}, {}) m is out of reach in time from the landmark ({}, {}) m of \
+                     slot {t1}: at least {gap:.1} m to cover in {} s at max_speed_mps = {}",
+                    g2[0],
+                    g2[1],
+                    g1[0],
+                    g1[1],
+                    (t2 - t1) as f64 * p.slot_s,
+                    p.max_speed_mps
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The reference point of slot t: it glides along the polyline of landmark positions, reaching
+/// each landmark in the middle of its window and the midpoint between two landmarks at their
+/// switch; in slots without a landmark it is the next landmark (or the last one).
+fn reference_m(mission: &Mission, t: usize) -> Option<([f64; 2], Option<[f64; 2]>)> {
+    let sched = mission.schedule();
+    let n = mission.slots();
+    let idx = |t: usize| {
+        sched
+            .slot_landmark
+            .get(t.wrapping_sub(1))
+            .copied()
+            .flatten()
+    };
+    match idx(t) {
+        Some(k) => {
+            let g = sched.landmarks[k].pos_m();
+            // window extent in slots
+            let mut a = t;
+            while a > 1 && idx(a - 1) == Some(k) {
+                a -= 1;
+            }
+            let mut z = t;
+            while z < n && idx(z + 1) == Some(k) {
+                z += 1;
+            }
+            let len = (z - a + 1) as f64;
+            let f = (t - a) as f64 / len + 0.5 / len; // fraction of the window at slot centre
+            let prev = (a > 1).then(|| idx(a - 1)).flatten();
+            let next = (z < n).then(|| idx(z + 1)).flatten();
+            let r = if f < 0.5 {
+                match prev {
+                    Some(j) => v2::add(
+                        g,
+                        v2::scale(v2::sub(sched.landmarks[j].pos_m(), g), 0.5 - f),
+                    ),
+                    None => g,
+                }
+            } else {
+                match next {
+                    Some(j) => v2::add(
+                        g,
+                        v2::scale(v2::sub(sched.landmarks[j].pos_m(), g), f - 0.5),
+                    ),
+                    None => g,
+                }
+            };
+            Some((r, Some(g)))
+        }
+        None => {
+            let upcoming = (t + 1..=n).find_map(|s| mission.target_m(s));
+            let past = (1..t).rev().find_map(|s| mission.target_m(s));
+            upcoming.or(past).map(|g| (g, None))
+        }
+    }
+}
+
+/// A start trajectory from a guidance law: each slot picks the heading and speed that keep the
+/// sensing centre near the slot's landmark (well inside the sensing radius when possible), hold
+/// the UAV at distance H tan η from the gliding reference point, and prefer efficient speeds.
+/// It is usually feasible; the planner repairs it (phase I) when it is not.
+pub fn guidance_start(mission: &Mission) -> Trajectory {
+    let p = mission.params();
+    let model = PowerModel::new(p);
+    let delta = p.slot_s;
+    let offset = p.centre_offset_m();
+    let radius = p.sensing_radius_m;
+    let v_lo = (p.min_speed_mps() * 1.02 + 1e-3).min(p.max_speed_mps);
+    let v_hi = p.max_speed_mps * 0.98;
+    let (v_star, p_star) = model.min_power_in(v_lo, v_hi.max(v_lo));
+    let mut speeds: Vec<f64> = (0..=10)
+        .map(|i| v_lo + (v_hi - v_lo).max(0.0) * i as f64 / 10.0)
+        .collect();
+    speeds.push(v_star);
+    let headings: Vec<[f64; 2]> = (0..360)
+        .map(|i| {
+            let a = i as f64 * std::f64::consts::TAU / 360.0;
+            [a.cos(), a.sin()]
+        })
+        .collect();
+    let mut q = p.start_m;
+    let mut pos = Vec::with_capacity(mission.slots());
+    for t in 1..=mission.slots() {
+        let Some((reference, landmark)) = reference_m(mission, t) else {
+            // no landmark at all: cruise east at the least-power speed
+            q = [q[0] + delta * v_star, q[1]];
+            pos.push(q);
+            continue;
+        };
+        // While sensing, the radius to the reference only has to stay in a comfortable band
+        // (the heading can always swing the centre onto the landmark); the least-power speed is
+        // preferred. While approaching, the radius error is what matters.
+        let band = if landmark.is_some() {
+            0.25 * radius
+        } else {
+            0.0
+        };
+        let power_weight = if landmark.is_some() { 20.0 } else { 0.5 };
+        let mut best = (f64::INFINITY, q);
+        for &v in &speeds {
+            let power_pen = power_weight * (model.power_w(v) - p_star);
+            for &e in &headings {
+                let qn = v2::add(q, v2::scale(e, delta * v));
+                let radial = ((v2::dist(qn, reference) - offset).abs() - band).max(0.0);
+                let mut cost = radial * radial + power_pen;
+                if let Some(g) = landmark {
+                    let c = v2::add(qn, v2::scale(v2::right(e), offset));
+                    let err2 = v2::dot(v2::sub(c, g), v2::sub(c, g));
+                    let over = (err2.sqrt() - 0.6 * radius).max(0.0);
+                    // the least error any heading could give from the new position: being at
+                    // the right distance from the landmark matters more than this step's error
+                    let reach = ((v2::dist(qn, g) - offset).abs() - 0.5 * radius).max(0.0);
+                    cost += 1e3 * over * over + 1e4 * reach * reach + 1e-2 * err2;
+                }
+                if cost < best.0 {
+                    best = (cost, qn);
+                }
+            }
+        }
+        q = best.1;
+        pos.push(q);
+    }
+    Trajectory {
+        slot_s: delta,
+        start_m: p.start_m,
+        pos_m: pos,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::landmarks::{LandmarkWindow, LandmarksSpec, Preset};
+    use crate::{evaluate, Params};
+
+    /// The guidance start flies within the speed limits and meets the azimuth speed in every
+    /// landmark slot (the phase-I repair relies on it), and keeps most landmarks in view.
+    #[test]
+    fn guidance_start_respects_speeds() {
+        for (preset, s) in [
+            (Preset::Default, 30.0),
+            (Preset::Default, 200.0),
+            (Preset::Square, 100.0),
+        ] {
+            let m = Mission::preset(preset, s).unwrap();
+            let tr = guidance_start(&m);
+            let e = evaluate(&m, &tr);
+            assert_eq!(e.violations.min_speed_mps, 0.0, "{preset:?} {s}");
+            assert_eq!(e.violations.max_speed_mps, 0.0, "{preset:?} {s}");
+            assert!(
+                e.slots_out_of_view < m.slots() / 2,
+                "{preset:?} {s}: {} slots out of view",
+                e.slots_out_of_view
+            );
+        }
+    }
+
+    #[test]
+    fn unreachable_landmark_names_slot() {
+        let p = Params::default();
+        let spec = LandmarksSpec {
+            points: Some(vec![LandmarkWindow {
+                x_m: 50_000.0,
+                y_m: 0.0,
+                from_s: 0.0,
+                to_s: 10.0,
+            }]),
+            ..Default::default()
+        };
+        let m = Mission::new("far", p, &spec).unwrap();
+        let e = precheck(&m).unwrap_err();
+        assert_eq!(e.slot, 1);
+        assert!(e.reason.contains("out of reach"), "{e}");
+    }
+
+    #[test]
+    fn azimuth_above_max_speed_is_infeasible() {
+        let mut p = Params::default();
+        p.max_speed_mps = 5.0;
+        let m = Mission::new(
+            "slow",
+            p,
+            &LandmarksSpec {
+                preset: Some(Preset::Default),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let e = precheck(&m).unwrap_err();
+        assert!(e.reason.contains("azimuth"), "{e}");
+    }
+
+    #[test]
+    fn jump_between_landmarks_too_far() {
+        let p = Params::default();
+        let spec = LandmarksSpec {
+            points: Some(vec![
+                LandmarkWindow {
+                    x_m: 0.0,
+                    y_m: 0.0,
+                    from_s: 0.0,
+                    to_s: 10.0,
+                },
+                LandmarkWindow {
+                    x_m: 10_000.0,
+                    y_m: 0.0,
+                    from_s: 10.0,
+                    to_s: 20.0,
+                },
+            ]),
+            ..Default::default()
+        };
+        let m = Mission::new("jump", p, &spec).unwrap();
+        let e = precheck(&m).unwrap_err();
+        assert_eq!(e.slot, 21);
+    }
+}

@@ -1,0 +1,353 @@
+//! Output files of a plan: `mission.toml`, `trajectory.csv`, `summary.json`, `trajectory.svg`,
+//! `energy.svg`, `convergence.svg`; and reading a plan directory back.
+
+pub mod plot;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::driver::{PlanResult, Scheme, TerminationReason};
+use crate::power::PowerModel;
+use crate::{Mission, MissionError, Trajectory, TrajectoryError};
+use plot::{line_plot, trajectory_plot, Series, TrackStyle};
+
+/// Writing or reading report files failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// File system error, with the path.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: String,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A plot could not be drawn.
+    #[error("plot {path}: {message}")]
+    Plot {
+        /// The output file.
+        path: String,
+        /// The plotting library's message.
+        message: String,
+    },
+    /// Serialisation failed.
+    #[error("{path}: {message}")]
+    Encode {
+        /// The output file.
+        path: String,
+        /// The encoder's message.
+        message: String,
+    },
+    /// The mission file of a plan directory is invalid.
+    #[error(transparent)]
+    Mission(#[from] MissionError),
+    /// The trajectory file of a plan directory is invalid.
+    #[error(transparent)]
+    Trajectory(#[from] TrajectoryError),
+}
+
+/// Writes `text` to `path`, naming the path on error.
+pub fn write_file(path: &Path, text: &str) -> Result<(), ReportError> {
+    std::fs::write(path, text).map_err(|source| ReportError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+/// Creates a directory (and parents).
+pub fn create_dir(dir: &Path) -> Result<(), ReportError> {
+    std::fs::create_dir_all(dir).map_err(|source| ReportError::Io {
+        path: dir.display().to_string(),
+        source,
+    })
+}
+
+/// The contents of `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Scheme name.
+    pub scheme: Scheme,
+    /// Mission name.
+    pub mission: String,
+    /// Number of slots.
+    pub slots: usize,
+    /// True propulsion energy on the exact geometry, J.
+    pub energy_j: f64,
+    /// The optimiser's own final objective for energy schemes (Σ P̃_t δ), J; null for distance schemes.
+    pub objective_j: Option<f64>,
+    /// The optimiser's own final objective for distance schemes, m; null for energy schemes.
+    pub objective_m: Option<f64>,
+    /// True energy of the start trajectory, J.
+    pub start_energy_j: f64,
+    /// T · P(V*) with V* the least-power speed within the speed limits, J.
+    pub floor_energy_j: f64,
+    /// energy_j / floor_energy_j − 1.
+    pub energy_over_floor: f64,
+    /// Iterations run.
+    pub iterations: usize,
+    /// Stopped by the tolerance.
+    pub converged: bool,
+    /// Why it stopped.
+    pub termination: TerminationReason,
+    /// Wall time, s.
+    pub solve_seconds: f64,
+    /// The optimiser's objective after each accepted iteration.
+    pub objective_history: Vec<f64>,
+    /// True energy after each accepted iteration, J.
+    pub true_energy_history: Vec<f64>,
+    /// Largest (‖q_g − q_c‖ − r_s)⁺ over landmark slots on the exact geometry, m.
+    pub max_sensing_violation_m: f64,
+    /// Largest (V_min − V)⁺ over landmark slots (azimuth requirement), m/s.
+    pub max_azimuth_speed_violation_mps: f64,
+    /// Largest (V − V_m)⁺, m/s.
+    pub max_speed_limit_violation_mps: f64,
+    /// Largest (δ_r − d_min)⁺ with the paper's δ_r, m.
+    pub max_range_violation_m: f64,
+    /// Least true speed, m/s.
+    pub min_speed_mps: f64,
+    /// Largest true speed, m/s.
+    pub max_speed_mps: f64,
+    /// Path length, m.
+    pub length_m: f64,
+    /// Landmark slots with the landmark outside the true sensing disc.
+    pub slots_out_of_view: usize,
+    /// Landmark slots whose general resolution cell is wider than d_min (SPEC.md §4 item 12).
+    pub slots_unresolved_general: usize,
+    /// Largest general range resolution over landmark slots, m.
+    pub max_range_resolution_general_m: f64,
+    /// Largest paper range resolution over landmark slots, m.
+    pub max_range_resolution_paper_m: f64,
+    /// All constraints of (p2) hold on the exact geometry.
+    pub feasible: bool,
+    /// Cone programs solved.
+    pub cone_programs: usize,
+    /// Phase-I iterations spent on the start.
+    pub repair_iterations: usize,
+}
+
+impl Summary {
+    /// The summary of a plan.
+    pub fn new(mission: &Mission, result: &PlanResult) -> Self {
+        let p = mission.params();
+        let model = PowerModel::new(p);
+        let (_, p_star) = model.min_power_in(0.0, p.max_speed_mps);
+        let floor = p.horizon_s * p_star;
+        let ev = &result.evaluation;
+        let energy_scheme = matches!(result.scheme, Scheme::Exact | Scheme::Paper);
+        let landmark_slots = || ev.slots.iter().filter(|s| s.landmark_m.is_some());
+        Self {
+            scheme: result.scheme,
+            mission: mission.name().to_string(),
+            slots: mission.slots(),
+            energy_j: ev.energy_j,
+            objective_j: energy_scheme.then_some(result.objective),
+            objective_m: (!energy_scheme).then_some(result.objective),
+            start_energy_j: result.start_energy_j,
+            floor_energy_j: floor,
+            energy_over_floor: ev.energy_j / floor - 1.0,
+            iterations: result.iterations,
+            converged: result.converged,
+            termination: result.termination.clone(),
+            solve_seconds: result.solve_seconds,
+            objective_history: result.objective_history.clone(),
+            true_energy_history: result.true_energy_history.clone(),
+            max_sensing_violation_m: ev.violations.sensing_m,
+            max_azimuth_speed_violation_mps: ev.violations.min_speed_mps,
+            max_speed_limit_violation_mps: ev.violations.max_speed_mps,
+            max_range_violation_m: ev.violations.range_paper_m,
+            min_speed_mps: ev.min_speed_mps,
+            max_speed_mps: ev.max_speed_mps,
+            length_m: ev.length_m,
+            slots_out_of_view: ev.slots_out_of_view,
+            slots_unresolved_general: ev.slots_unresolved,
+            max_range_resolution_general_m: landmark_slots()
+                .map(|s| s.range_resolution_general_m)
+                .fold(0.0, f64::max),
+            max_range_resolution_paper_m: landmark_slots()
+                .map(|s| s.range_resolution_paper_m)
+                .fold(0.0, f64::max),
+            feasible: ev.is_feasible(),
+            cone_programs: result.cone_programs,
+            repair_iterations: result.repair_iterations,
+        }
+    }
+}
+
+/// The columns of `trajectory.csv`.
+pub const TRAJECTORY_COLUMNS: &str = "t_s,x_m,y_m,speed_mps,heading_rad,xc_m,yc_m,landmark_x_m,landmark_y_m,in_view,centre_error_m,power_w,energy_j,range_resolution_paper_m,range_resolution_general_m,azimuth_resolution_m,bistatic_angle_deg,grad_norm,psi_rad,along_track_width_m,cross_track_width_m,worst_width_m";
+
+/// `trajectory.csv`: one row per slot plus the start at t = 0 (undefined values are `nan`).
+pub fn trajectory_csv(result: &PlanResult) -> String {
+    let mut s = String::with_capacity(200 * (result.evaluation.slots.len() + 2));
+    s.push_str(TRAJECTORY_COLUMNS);
+    s.push('\n');
+    let st = result.trajectory.start_m;
+    let _ = writeln!(
+        s,
+        "0,{},{},nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,nan,nan",
+        st[0], st[1]
+    );
+    for e in &result.evaluation.slots {
+        let (lx, ly) = e.landmark_m.map_or((f64::NAN, f64::NAN), |l| (l[0], l[1]));
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            e.t_s,
+            e.pos_m[0],
+            e.pos_m[1],
+            e.speed_mps,
+            e.heading_rad,
+            e.centre_m[0],
+            e.centre_m[1],
+            lx,
+            ly,
+            u8::from(e.in_view),
+            e.centre_error_m.unwrap_or(f64::NAN),
+            e.power_w,
+            e.energy_j,
+            e.range_resolution_paper_m,
+            e.range_resolution_general_m,
+            e.azimuth_resolution_paper_m,
+            e.bistatic_angle_rad.to_degrees(),
+            e.grad_norm,
+            e.psi_rad,
+            e.along_track_width_m,
+            e.cross_track_width_m,
+            e.worst_width_m
+        );
+    }
+    // Rust prints NaN as "NaN": NumPy and pandas read both, keep one spelling
+    s.replace("NaN", "nan")
+}
+
+/// Slots whose sensing circles are drawn: a few spread over the mission.
+pub fn circle_slots(slots: usize, count: usize) -> Vec<usize> {
+    if slots == 0 || count == 0 {
+        return Vec::new();
+    }
+    (0..count)
+        .map(|k| 1 + (k * (slots - 1)) / count.max(1))
+        .collect()
+}
+
+/// Writes a plan directory: `mission.toml`, `trajectory.csv`, `summary.json`, `trajectory.svg`,
+/// `energy.svg`, `convergence.svg`. Returns the files written.
+pub fn write_plan_dir(
+    dir: &Path,
+    mission: &Mission,
+    result: &PlanResult,
+) -> Result<Vec<PathBuf>, ReportError> {
+    create_dir(dir)?;
+    let mut written = Vec::new();
+    let path = dir.join("mission.toml");
+    let toml = mission
+        .to_file_struct()
+        .to_toml_string()
+        .map_err(|message| ReportError::Encode {
+            path: path.display().to_string(),
+            message,
+        })?;
+    write_file(&path, &toml)?;
+    written.push(path);
+
+    let path = dir.join("trajectory.csv");
+    write_file(&path, &trajectory_csv(result))?;
+    written.push(path);
+
+    let path = dir.join("summary.json");
+    let json = serde_json::to_string_pretty(&Summary::new(mission, result)).map_err(|e| {
+        ReportError::Encode {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        }
+    })?;
+    write_file(&path, &json)?;
+    written.push(path);
+
+    let path = dir.join("trajectory.svg");
+    let circles = circle_slots(mission.slots(), 6);
+    trajectory_plot(
+        &path,
+        &format!("{} — scheme {}", mission.name(), result.scheme),
+        mission,
+        &[TrackStyle {
+            name: result.scheme.name(),
+            traj: &result.trajectory,
+            circle_slots: &circles,
+            dashed: false,
+        }],
+    )?;
+    written.push(path);
+
+    let path = dir.join("energy.svg");
+    let ev = &result.evaluation;
+    line_plot(
+        &path,
+        &format!(
+            "energy per slot — {} (total {:.0} J)",
+            result.scheme, ev.energy_j
+        ),
+        "t (s)",
+        "energy per slot (J)",
+        &[Series::line(
+            result.scheme.name(),
+            ev.slots.iter().map(|s| (s.t_s, s.slot_energy_j)).collect(),
+        )],
+    )?;
+    written.push(path);
+
+    let path = dir.join("convergence.svg");
+    let mut series = vec![Series {
+        name: "optimiser objective".into(),
+        points: result
+            .objective_history
+            .iter()
+            .enumerate()
+            .map(|(i, v)| ((i + 1) as f64, *v))
+            .collect(),
+        markers: true,
+        dashed: false,
+    }];
+    if matches!(result.scheme, Scheme::Exact | Scheme::Paper) {
+        series.push(Series {
+            name: "true energy".into(),
+            points: result
+                .true_energy_history
+                .iter()
+                .enumerate()
+                .map(|(i, v)| ((i + 1) as f64, *v))
+                .collect(),
+            markers: true,
+            dashed: true,
+        });
+    }
+    line_plot(
+        &path,
+        &format!("convergence — {}", result.scheme),
+        "iteration",
+        if matches!(result.scheme, Scheme::Exact | Scheme::Paper) {
+            "J"
+        } else {
+            "m"
+        },
+        &series,
+    )?;
+    written.push(path);
+    Ok(written)
+}
+
+/// Reads a plan directory written by [`write_plan_dir`]: the mission and the trajectory.
+pub fn read_plan_dir(dir: &Path) -> Result<(Mission, Trajectory), ReportError> {
+    let mission = Mission::from_path(&dir.join("mission.toml"))?;
+    let p = mission.params();
+    let traj = Trajectory::from_csv_path(
+        &dir.join("trajectory.csv"),
+        p.slot_s,
+        mission.slots(),
+        p.start_m,
+    )?;
+    Ok((mission, traj))
+}

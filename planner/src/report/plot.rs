@@ -1,0 +1,300 @@
+//! SVG plots: trajectories with landmarks, BS and sensing circles; line plots (energy per slot,
+//! convergence, power vs speed, E[d_min] vs R, ...).
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::ReportError;
+use crate::geometry::sensing_centre_m;
+use crate::Mission;
+use crate::Trajectory;
+
+/// Colours used for successive series.
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(220, 40, 40),
+    RGBColor(30, 100, 200),
+    RGBColor(20, 150, 70),
+    RGBColor(200, 120, 0),
+    RGBColor(140, 60, 170),
+    RGBColor(0, 160, 170),
+    RGBColor(120, 120, 120),
+    RGBColor(0, 0, 0),
+];
+
+/// One line of a line plot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Legend label.
+    pub name: String,
+    /// (x, y) points; NaN/∞ points are skipped.
+    pub points: Vec<(f64, f64)>,
+    /// Draw markers at the points as well.
+    pub markers: bool,
+    /// Dashed line.
+    pub dashed: bool,
+}
+
+impl Series {
+    /// A plain line.
+    pub fn line(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        Self {
+            name: name.into(),
+            points,
+            markers: false,
+            dashed: false,
+        }
+    }
+}
+
+fn err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> ReportError + '_ {
+    move |e| ReportError::Plot {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+fn finite_bounds(points: impl Iterator<Item = (f64, f64)>) -> Option<(f64, f64, f64, f64)> {
+    let mut b: Option<(f64, f64, f64, f64)> = None;
+    for (x, y) in points.filter(|(x, y)| x.is_finite() && y.is_finite()) {
+        b = Some(match b {
+            None => (x, x, y, y),
+            Some((x0, x1, y0, y1)) => (x0.min(x), x1.max(x), y0.min(y), y1.max(y)),
+        });
+    }
+    b
+}
+
+fn pad(lo: f64, hi: f64, frac: f64) -> (f64, f64) {
+    let span = (hi - lo).abs().max(1e-9 * (1.0 + lo.abs()));
+    let span = if span < 1e-12 { 1.0 } else { span };
+    (lo - frac * span, hi + frac * span)
+}
+
+/// A line plot with a legend.
+pub fn line_plot(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<(), ReportError> {
+    let e = err(path);
+    let all = series.iter().flat_map(|s| s.points.iter().copied());
+    let (x0, x1, y0, y1) = finite_bounds(all).unwrap_or((0.0, 1.0, 0.0, 1.0));
+    let (x0, x1) = pad(x0, x1, 0.02);
+    let (y0, y1) = pad(y0, y1, 0.05);
+    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(&e)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(&e)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(&e)?;
+    for (i, s) in series.iter().enumerate() {
+        let color = PALETTE[i % PALETTE.len()];
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+            .collect();
+        let style = ShapeStyle::from(&color).stroke_width(2);
+        let anno = if s.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(pts.clone(), 6, 4, style))
+                .map_err(&e)?
+        } else {
+            chart
+                .draw_series(LineSeries::new(pts.clone(), style))
+                .map_err(&e)?
+        };
+        anno.label(s.name.clone()).legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+        });
+        if s.markers {
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(&e)?;
+        }
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(&e)?;
+    root.present().map_err(&e)?;
+    Ok(())
+}
+
+/// One trajectory of a trajectory plot.
+#[derive(Debug, Clone, Copy)]
+pub struct TrackStyle<'a> {
+    /// Legend label.
+    pub name: &'a str,
+    /// The trajectory.
+    pub traj: &'a Trajectory,
+    /// Slots (1-based) whose sensing circle is drawn.
+    pub circle_slots: &'a [usize],
+    /// Dashed track.
+    pub dashed: bool,
+}
+
+/// Trajectories with landmarks (dots), the BS (triangle), the start (square), the true sensing
+/// centre track, and sensing circles at chosen slots; equal axis scales.
+pub fn trajectory_plot(
+    path: &Path,
+    title: &str,
+    mission: &Mission,
+    tracks: &[TrackStyle<'_>],
+) -> Result<(), ReportError> {
+    let e = err(path);
+    let p = mission.params();
+    let offset = p.centre_offset_m();
+    let r = p.sensing_radius_m;
+    let landmarks: Vec<(f64, f64)> = mission
+        .schedule()
+        .landmarks
+        .iter()
+        .map(|l| (l.x_m, l.y_m))
+        .collect();
+    let mut pts: Vec<(f64, f64)> = landmarks.clone();
+    pts.push((p.bs_m[0], p.bs_m[1]));
+    pts.push((p.start_m[0], p.start_m[1]));
+    for tr in tracks {
+        pts.extend(tr.traj.pos_m.iter().map(|q| (q[0], q[1])));
+    }
+    let (x0, x1, y0, y1) = finite_bounds(pts.into_iter()).unwrap_or((0.0, 1.0, 0.0, 1.0));
+    // equal scales: extend the shorter side
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let half = 0.5 * (x1 - x0).max(y1 - y0) * 1.08 + r;
+    let (w, h) = (900u32, 900u32);
+    let root = SVGBackend::new(path, (w, h)).into_drawing_area();
+    root.fill(&WHITE).map_err(&e)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
+        .map_err(&e)?;
+    chart
+        .configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(&e)?;
+    // sensing circles (as polylines, so they stay circles in data units)
+    let circle = |c: [f64; 2]| -> Vec<(f64, f64)> {
+        (0..=72)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 72.0;
+                (c[0] + r * a.cos(), c[1] + r * a.sin())
+            })
+            .collect()
+    };
+    for (i, tr) in tracks.iter().enumerate() {
+        let color = PALETTE[i % PALETTE.len()];
+        let style = ShapeStyle::from(&color).stroke_width(2);
+        let line: Vec<(f64, f64)> = std::iter::once(tr.traj.start_m)
+            .chain(tr.traj.pos_m.iter().copied())
+            .map(|q| (q[0], q[1]))
+            .collect();
+        let anno = if tr.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(line, 8, 5, style))
+                .map_err(&e)?
+        } else {
+            chart
+                .draw_series(LineSeries::new(line, style))
+                .map_err(&e)?
+        };
+        anno.label(tr.name.to_string()).legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+        });
+        let headings = tr.traj.headings_rad();
+        let centres: Vec<(f64, f64)> = (1..=tr.traj.slots())
+            .map(|t| {
+                let c = sensing_centre_m(tr.traj.q(t), headings[t - 1], offset);
+                (c[0], c[1])
+            })
+            .collect();
+        chart
+            .draw_series(
+                centres
+                    .iter()
+                    .step_by(4)
+                    .map(|&c| Circle::new(c, 1, color.mix(0.5).filled())),
+            )
+            .map_err(&e)?;
+        for &t in tr.circle_slots {
+            if t == 0 || t > tr.traj.slots() {
+                continue;
+            }
+            let c = sensing_centre_m(tr.traj.q(t), headings[t - 1], offset);
+            chart
+                .draw_series(LineSeries::new(circle(c), color.mix(0.7).stroke_width(1)))
+                .map_err(&e)?;
+            let q = tr.traj.q(t);
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(q[0], q[1]), (c[0], c[1])],
+                    color.mix(0.4).stroke_width(1),
+                )))
+                .map_err(&e)?;
+            chart
+                .draw_series(std::iter::once(TriangleMarker::new(
+                    (q[0], q[1]),
+                    5,
+                    color.filled(),
+                )))
+                .map_err(&e)?;
+        }
+    }
+    chart
+        .draw_series(landmarks.iter().map(|&l| Circle::new(l, 3, BLACK.filled())))
+        .map_err(&e)?
+        .label("landmarks")
+        .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
+    let green = RGBColor(0, 170, 0);
+    chart
+        .draw_series(std::iter::once(TriangleMarker::new(
+            (p.bs_m[0], p.bs_m[1]),
+            9,
+            green.filled(),
+        )))
+        .map_err(&e)?
+        .label("base station")
+        .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 6, green.filled()));
+    chart
+        .draw_series(std::iter::once(Rectangle::new(
+            [
+                (p.start_m[0] - 20.0, p.start_m[1] - 20.0),
+                (p.start_m[0] + 20.0, p.start_m[1] + 20.0),
+            ],
+            BLACK.stroke_width(2),
+        )))
+        .map_err(&e)?
+        .label("start")
+        .legend(|(x, y)| Rectangle::new([(x + 5, y - 5), (x + 15, y + 5)], BLACK.stroke_width(2)));
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(&e)?;
+    root.present().map_err(&e)?;
+    Ok(())
+}

@@ -1,0 +1,438 @@
+//! The `exact` scheme: SCA on the exact geometry, every iterate feasible on it.
+//!
+//! Power is tied to the true velocity v_t = q_t − q_{t−1} (Zeng et al.): the induced term uses an
+//! auxiliary a_t with 1/a_t² ≤ a_t² + ‖v_t‖²/(δ² v0²), whose right side is replaced by its tangent
+//! at the previous iterate (a global lower bound, so the surrogate over-estimates the power).
+//!
+//! The true sensing centre c_t = q_t + D J v_t/‖v_t‖ (D = H tan η, J = rotation by −90°) is
+//! replaced by its first-order expansion c̃_t around the previous velocity u_t, and the sensing
+//! disc is shrunk by a bound of the expansion error: for the unit-vector map in the plane,
+//! ‖c_t − c̃_t‖ ≤ κ_t ‖v_t − u_t‖² with κ_t = D / (√3 s_t²), valid while every velocity on the
+//! segment [u_t, v_t] has norm ≥ s_t. That norm bound is enforced by the linear constraint
+//! ĥ_t·v_t ≥ s_t (ĥ_t = u_t/‖u_t‖), which also carries the azimuth requirement ‖v_t‖ ≥ δ V_min
+//! conservatively. The subproblem is therefore a convex inner approximation of the exact
+//! problem that is tight at the previous iterate: each iterate is exactly feasible and its true
+//! energy is no larger than the previous one (a majorisation–minimisation sequence).
+
+use crate::geometry::v2;
+use crate::power::PowerModel;
+use crate::socp::{Lin, ProblemBuilder};
+use crate::{Mission, Trajectory};
+
+/// 1/√3: sup of ‖D²u‖/2 times s² for the unit-vector map u(v) = v/‖v‖ in the plane is 1/√3
+/// (‖D²u(v)[d, d]‖ ≤ (2/√3)‖d‖²/‖v‖²).
+pub const CENTRE_CURVATURE_BOUND: f64 = 0.577_350_269_189_625_8;
+
+/// Safety margin on the sensing radius, m (solver tolerances stay inside it).
+pub const SENSING_MARGIN_M: f64 = 1e-3;
+/// Safety margin on the speed limits, m/s.
+pub const SPEED_MARGIN_MPS: f64 = 1e-4;
+
+/// What the `exact` machinery minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExactObjective {
+    /// True propulsion energy (the `exact` scheme).
+    Energy,
+    /// Flight distance Σ‖q_t − q_{t−1}‖ (the baseline on the exact geometry).
+    Distance,
+}
+
+/// Tunables of one exact-SCA subproblem.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExactTuning {
+    /// Fraction of the previous speed below which a landmark slot's speed may not drop in one
+    /// iteration (keeps the centre-error bound finite).
+    pub speed_keep_fraction: f64,
+    /// Optional trust radius on ‖v_t − u_t‖ in landmark slots, m (set after a rejected step).
+    pub trust_radius_m: Option<f64>,
+    /// Factor on the centre-error bound κ: 1 is the proven bound (the subproblem is then an inner
+    /// approximation); below 1 the model is optimistic and the driver must check each step on the
+    /// exact geometry (it does, and falls back to 1 on a rejected step).
+    pub kappa_scale: f64,
+    /// Elastic mode (for an infeasible start): each landmark slot gets a violation slack σ_t
+    /// (m of sensing radius, m/s of azimuth speed, m of range keep-out) charged at this many
+    /// objective units (J or m) per unit; `None` = all constraints hard.
+    pub elastic_weight: Option<f64>,
+    /// Keep the landmark in view over the whole slot, not only at its end: the centre sweeps the
+    /// segment from q_{t−1} + D n_t to q_t + D n_t during slot t (straight flight). Used on the
+    /// coarse grid so that its solution, interpolated to the fine slots, stays feasible.
+    pub whole_slot_sensing: bool,
+}
+
+impl Default for ExactTuning {
+    fn default() -> Self {
+        Self {
+            speed_keep_fraction: 0.85,
+            trust_radius_m: None,
+            kappa_scale: 1.0,
+            elastic_weight: None,
+            whole_slot_sensing: false,
+        }
+    }
+}
+
+/// Variable layout of one slot.
+#[derive(Debug, Clone, Copy)]
+struct SlotVars {
+    x: usize,
+    y: usize,
+    /// Speed epigraph V_t ≥ ‖v_t‖/δ.
+    v: usize,
+    /// Energy only: induced auxiliary a_t, its helper s_t (s a ≥ 1, s² ≤ L), w_t ≥ V², z_t ≥ V³.
+    energy: Option<[usize; 4]>,
+    /// Landmark slots: centre-error budget e_t.
+    e: Option<usize>,
+    /// Elastic mode: violation slack σ_t.
+    sigma: Option<usize>,
+}
+
+/// The linearisation data of one slot, from the previous iterate.
+#[derive(Debug, Clone, Copy)]
+struct SlotLin {
+    /// Previous step u_t = q_t − q_{t−1}, m.
+    step_m: [f64; 2],
+    /// Unit heading of u_t (or the carried-over heading in hover).
+    dir: [f64; 2],
+    /// Induced factor ι(‖u_t‖/δ).
+    aux: f64,
+    /// Previous true centre.
+    centre_m: [f64; 2],
+}
+
+/// The exact-geometry SCA subproblem for one iteration.
+#[derive(Debug)]
+pub struct ExactSubproblem {
+    /// The assembled cone program.
+    pub builder: ProblemBuilder,
+    vars: Vec<SlotVars>,
+    objective_scale: f64,
+    objective: ExactObjective,
+    constant_j: f64,
+}
+
+impl ExactSubproblem {
+    /// Assembles the subproblem around the iterate `prev`.
+    pub fn build(
+        mission: &Mission,
+        prev: &Trajectory,
+        objective: ExactObjective,
+        tuning: &ExactTuning,
+    ) -> Self {
+        let p = mission.params();
+        let model = PowerModel::new(p);
+        let n = mission.slots();
+        let delta = p.slot_s;
+        let offset = p.centre_offset_m();
+        let radius = p.sensing_radius_m - SENSING_MARGIN_M;
+        let v_min = p.min_speed_mps() + SPEED_MARGIN_MPS;
+        let v_max = p.max_speed_mps - SPEED_MARGIN_MPS;
+        let keepout = p.range_keepout_m();
+        let v0 = p.induced_velocity_mps;
+
+        // variable layout
+        let mut vars = Vec::with_capacity(n);
+        let mut next = 0usize;
+        let mut take = || {
+            next += 1;
+            next - 1
+        };
+        for t in 1..=n {
+            let landmark = mission.target_m(t).is_some();
+            let x = take();
+            let y = take();
+            let v = take();
+            let energy =
+                (objective != ExactObjective::Distance).then(|| [take(), take(), take(), take()]);
+            let e = landmark.then(&mut take);
+            let sigma = (landmark && tuning.elastic_weight.is_some()).then(&mut take);
+            vars.push(SlotVars {
+                x,
+                y,
+                v,
+                energy,
+                e,
+                sigma,
+            });
+        }
+        let mut b = ProblemBuilder::new(next);
+
+        // linearisation data
+        let headings = prev.headings_rad();
+        let lin: Vec<SlotLin> = (1..=n)
+            .map(|t| {
+                let step = prev.step_m(t);
+                let h = headings[t - 1];
+                let dir = v2::unit(step).unwrap_or([h.cos(), h.sin()]);
+                SlotLin {
+                    step_m: step,
+                    dir,
+                    aux: model.induced_factor(v2::norm(step) / delta),
+                    centre_m: v2::add(prev.q(t), v2::scale(v2::right(dir), offset)),
+                }
+            })
+            .collect();
+
+        // objective, scaled to a mean power (W) or a mean step (m) for conditioning
+        let objective_scale = match objective {
+            ExactObjective::Distance => 1.0 / n as f64,
+            ExactObjective::Energy => 1.0 / (n as f64 * delta),
+        };
+        for sv in &vars {
+            match (objective, sv.energy) {
+                (ExactObjective::Distance, _) => b.add_linear_cost(sv.v, delta * objective_scale),
+                (_, Some([a, _s, _w, z])) => {
+                    let c = delta * objective_scale;
+                    b.add_square_cost(sv.v, c * model.blade_quadratic_coeff());
+                    b.add_linear_cost(a, c * model.induced_power_w);
+                    b.add_linear_cost(z, c * model.parasite_coeff);
+                }
+                _ => {}
+            }
+            if let (Some(sig), Some(w)) = (sv.sigma, tuning.elastic_weight) {
+                b.add_linear_cost(sig, w * objective_scale);
+            }
+        }
+
+        // per-slot constraints
+        for t in 1..=n {
+            let sv = vars[t - 1];
+            let l = lin[t - 1];
+            // v_t = q_t − q_{t−1} as affine expressions
+            let (vx, vy) = step_exprs(&vars, t, prev.start_m);
+            // speed epigraph: δ V ≥ ‖v‖ ; V ≤ V_m
+            b.soc(Lin::var(sv.v, delta), &[vx.clone(), vy.clone()]);
+            b.nonneg(Lin::var(sv.v, -1.0).plus_const(v_max));
+
+            if let Some([a, s, w, z]) = sv.energy {
+                // L = 2 a0 a − a0² + (2 u·v − ‖u‖²)/(δ² v0²)  (tangent of a² + ‖v‖²/(δ² v0²))
+                let k = 1.0 / (delta * delta * v0 * v0);
+                let u = l.step_m;
+                let lexpr = Lin::var(a, 2.0 * l.aux)
+                    .plus_const(-l.aux * l.aux - k * v2::dot(u, u))
+                    .add(&vx.clone().scaled(2.0 * k * u[0]))
+                    .add(&vy.clone().scaled(2.0 * k * u[1]));
+                // s a ≥ 1 ; s² ≤ L
+                b.rotated_soc(
+                    Lin::var(s, 1.0),
+                    Lin::var(a, 1.0),
+                    &[Lin::constant_only(1.0)],
+                );
+                b.rotated_soc(lexpr, Lin::constant_only(1.0), &[Lin::var(s, 1.0)]);
+                // V² ≤ w ; w² ≤ z V
+                b.rotated_soc(
+                    Lin::var(w, 1.0),
+                    Lin::constant_only(1.0),
+                    &[Lin::var(sv.v, 1.0)],
+                );
+                b.rotated_soc(Lin::var(z, 1.0), Lin::var(sv.v, 1.0), &[Lin::var(w, 1.0)]);
+            }
+
+            let (Some(g), Some(e)) = (mission.target_m(t), sv.e) else {
+                continue;
+            };
+            // speed floor along the previous heading, ĥ·v ≥ s_t: keeps every velocity of the
+            // segment [u_t, v_t] at least s_t long (the centre-error bound needs it) and carries
+            // the azimuth requirement ‖v‖ ≥ δ V_min conservatively. In elastic mode the azimuth
+            // part may be violated (slack σ_t); the bound's part stays hard.
+            let u_norm = v2::norm(l.step_m);
+            let h = l.dir;
+            let along = vx.clone().scaled(h[0]).add(&vy.clone().scaled(h[1]));
+            let keep = tuning.speed_keep_fraction * u_norm;
+            let s_min = match sv.sigma {
+                None => (delta * v_min).max(keep),
+                Some(sig) => {
+                    b.nonneg(along.clone().plus(sig, delta).plus_const(-delta * v_min));
+                    keep.max(delta * v_min).min(u_norm).max(1e-3)
+                }
+            };
+            b.nonneg(along.plus_const(-s_min));
+
+            // linearised centre: c̃ = q_t + D J ĥ + (D/‖u‖) J P v, P = I − ĥĥᵀ
+            let scale = if u_norm > 0.0 { offset / u_norm } else { 0.0 };
+            let pm = [
+                [1.0 - h[0] * h[0], -h[0] * h[1]],
+                [-h[0] * h[1], 1.0 - h[1] * h[1]],
+            ];
+            // J P v = ((P v)_y, −(P v)_x)
+            let pvx = vx
+                .clone()
+                .scaled(pm[0][0])
+                .add(&vy.clone().scaled(pm[0][1]));
+            let pvy = vx
+                .clone()
+                .scaled(pm[1][0])
+                .add(&vy.clone().scaled(pm[1][1]));
+            let jh = v2::right(h);
+            let cx = Lin::var(sv.x, 1.0)
+                .plus_const(offset * jh[0])
+                .add(&pvy.clone().scaled(scale));
+            let cy = Lin::var(sv.y, 1.0)
+                .plus_const(offset * jh[1])
+                .add(&pvx.clone().scaled(-scale));
+            let mut head = Lin::var(e, -1.0).plus_const(radius);
+            if let Some(sig) = sv.sigma {
+                head = head.plus(sig, 1.0);
+            }
+            if tuning.whole_slot_sensing {
+                // the centre at the start of the slot: c̃ − v (same heading, one step back)
+                b.soc(
+                    head.clone(),
+                    &[
+                        cx.clone().sub(&vx).plus_const(-g[0]),
+                        cy.clone().sub(&vy).plus_const(-g[1]),
+                    ],
+                );
+            }
+            b.soc(
+                head,
+                &[cx.clone().plus_const(-g[0]), cy.clone().plus_const(-g[1])],
+            );
+            // κ‖v − u‖² ≤ e
+            let kappa = tuning.kappa_scale * offset * CENTRE_CURVATURE_BOUND / (s_min * s_min);
+            let dvx = vx.clone().plus_const(-l.step_m[0]);
+            let dvy = vy.clone().plus_const(-l.step_m[1]);
+            b.rotated_soc(
+                Lin::var(e, 1.0 / kappa),
+                Lin::constant_only(1.0),
+                &[dvx.clone(), dvy.clone()],
+            );
+            if let Some(tr) = tuning.trust_radius_m {
+                b.soc(Lin::constant_only(tr), &[dvx, dvy]);
+            }
+            // range requirement (only when it is not vacuous): the true centre stays outside
+            // the keep-out disc around the BS; linearised along the previous centre's direction.
+            if let Some(rk) = keepout {
+                let nrm = v2::unit(v2::sub(l.centre_m, p.bs_m)).unwrap_or([1.0, 0.0]);
+                let mut expr = cx
+                    .scaled(nrm[0])
+                    .add(&cy.scaled(nrm[1]))
+                    .plus_const(-v2::dot(nrm, p.bs_m) - rk - SENSING_MARGIN_M)
+                    .plus(e, -1.0);
+                if let Some(sig) = sv.sigma {
+                    expr = expr.plus(sig, 1.0);
+                }
+                b.nonneg(expr);
+            }
+            if let Some(sig) = sv.sigma {
+                b.nonneg(Lin::var(sig, 1.0));
+            }
+        }
+        Self {
+            builder: b,
+            vars,
+            objective_scale,
+            objective,
+            constant_j: n as f64 * delta * model.blade_power_w,
+        }
+    }
+
+    /// The trajectory of a solution vector.
+    pub fn trajectory(&self, x: &[f64], template: &Trajectory) -> Trajectory {
+        Trajectory {
+            slot_s: template.slot_s,
+            start_m: template.start_m,
+            pos_m: self
+                .vars
+                .iter()
+                .map(|sv| {
+                    [
+                        x.get(sv.x).copied().unwrap_or(f64::NAN),
+                        x.get(sv.y).copied().unwrap_or(f64::NAN),
+                    ]
+                })
+                .collect(),
+        }
+    }
+
+    /// The subproblem's own objective in physical units: energy in J (Energy, including the
+    /// constant blade term N δ P0 that the cone program omits) or distance in m (Distance), plus
+    /// the elastic penalty in elastic mode.
+    pub fn physical_objective(&self, solver_objective: f64) -> f64 {
+        match self.objective {
+            ExactObjective::Energy => solver_objective / self.objective_scale + self.constant_j,
+            ExactObjective::Distance => solver_objective / self.objective_scale,
+        }
+    }
+
+    /// Largest violation slack σ_t of a repair solution, m.
+    pub fn max_slack(&self, x: &[f64]) -> f64 {
+        self.vars
+            .iter()
+            .filter_map(|sv| sv.sigma.and_then(|s| x.get(s).copied()))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// (x_t − x_{t−1}, y_t − y_{t−1}) as affine expressions (q_0 is a constant).
+fn step_exprs(vars: &[SlotVars], t: usize, start_m: [f64; 2]) -> (Lin, Lin) {
+    let cur = vars[t - 1];
+    if t == 1 {
+        (
+            Lin::var(cur.x, 1.0).plus_const(-start_m[0]),
+            Lin::var(cur.y, 1.0).plus_const(-start_m[1]),
+        )
+    } else {
+        let prev = vars[t - 2];
+        (
+            Lin::var(cur.x, 1.0).plus(prev.x, -1.0),
+            Lin::var(cur.y, 1.0).plus(prev.y, -1.0),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn unit(v: [f64; 2]) -> [f64; 2] {
+        v2::scale(v, 1.0 / v2::norm(v))
+    }
+
+    proptest! {
+        /// The expansion error of the unit-vector map is within the bound κ‖v − u‖² whenever the
+        /// segment [u, v] stays at least s away from the origin (checked here through ĥ·v ≥ s,
+        /// ‖u‖ ≥ s, exactly the subproblem's constraints).
+        #[test]
+        fn centre_error_bound_is_conservative(
+            ux in -30.0f64..30.0, uy in -30.0f64..30.0,
+            dx in -20.0f64..20.0, dy in -20.0f64..20.0,
+            frac in 0.05f64..1.0,
+        ) {
+            let u = [ux, uy];
+            let un = v2::norm(u);
+            prop_assume!(un > 0.5);
+            let v = [ux + dx, uy + dy];
+            let h = unit(u);
+            let s = frac * un;
+            prop_assume!(v2::dot(h, v) >= s);
+            let p = [[1.0 - h[0] * h[0], -h[0] * h[1]], [-h[0] * h[1], 1.0 - h[1] * h[1]]];
+            let d = v2::sub(v, u);
+            let lin = [h[0] + (p[0][0] * d[0] + p[0][1] * d[1]) / un,
+                       h[1] + (p[1][0] * d[0] + p[1][1] * d[1]) / un];
+            let err = v2::dist(unit(v), lin);
+            let bound = CENTRE_CURVATURE_BOUND * v2::dot(d, d) / (s * s);
+            prop_assert!(err <= bound * (1.0 + 1e-9) + 1e-12, "err {} > bound {}", err, bound);
+        }
+
+        /// The induced-power constraint's right side is below the true one everywhere and equal at u.
+        #[test]
+        fn induced_tangent_is_below(
+            ux in -25.0f64..25.0, uy in -25.0f64..25.0, vx in -25.0f64..25.0, vy in -25.0f64..25.0,
+            a in 0.05f64..1.5,
+        ) {
+            let model = PowerModel::new(&crate::Params::default());
+            let delta = 0.5;
+            let v0 = 5.4;
+            let k = 1.0 / (delta * delta * v0 * v0);
+            let u = [ux, uy];
+            let a0 = model.induced_factor(v2::norm(u) / delta);
+            let v = [vx, vy];
+            let lhs_true = a * a + k * v2::dot(v, v);
+            let lin = 2.0 * a0 * a - a0 * a0 + k * (2.0 * v2::dot(u, v) - v2::dot(u, u));
+            prop_assert!(lin <= lhs_true + 1e-9);
+            let at_u = 2.0 * a0 * a0 - a0 * a0 + k * v2::dot(u, u);
+            prop_assert!((at_u - (a0 * a0 + k * v2::dot(u, u))).abs() < 1e-9);
+        }
+    }
+}
