@@ -20,18 +20,18 @@ RS_M = 200.0
 
 
 def planner_bin():
-    """The `cellsar-planner` binary: $CELLSAR_PLANNER_BIN, else the workspace's release build."""
+    """A planner with the command line `plan MISSION --out DIR` (as `cellsar-planner plan`):
+    $CELLSAR_PLANNER_BIN, else the fmu crate's `plan-reference` example (release build)."""
     env = os.environ.get("CELLSAR_PLANNER_BIN")
     candidates = [pathlib.Path(env)] if env else [
-        REPO / "target" / "release" / "cellsar-planner",
-        REPO / "target" / "debug" / "cellsar-planner",
+        REPO / "target" / "release" / "examples" / "plan-reference",
     ]
     for c in candidates:
         if c.is_file():
             return c
     raise FileNotFoundError(
-        "cellsar-planner not found: build it with `cargo build --release -p planner` "
-        "or set CELLSAR_PLANNER_BIN")
+        "reference planner not found: build it with "
+        "`cargo build --release -p fmu --example plan-reference` or set CELLSAR_PLANNER_BIN")
 
 
 def reference_plan(mission, outdir):
@@ -224,3 +224,19 @@ def test_coupled_cosimulation_with_a_second_fmu(version, short_mission):
     m.fmu.terminate()
     p.unload()
     m.unload()
+
+
+def test_outputs_fed_back_to_the_inputs_change_nothing(version, short_mission):
+    """Connecting landmark_*_m to landmark_*_in_m (no delay) is not a move, also at the window
+    boundary where the outputs still show the previous window's landmark."""
+    f = Fmu(version, name="loop")
+    assert f.instantiate()
+    f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    rows = [(0.0, f.outputs())]
+    for k in range(40):
+        f.set(landmark_x_in_m=f.get("landmark_x_m"), landmark_y_in_m=f.get("landmark_y_m"))
+        f.step(0.5, t=k * 0.5)
+        rows.append(((k + 1) * 0.5, f.outputs()))
+    assert f.get("replan_count") == 0
+    assert rows == run(version, short_mission, stop=20.0, step=0.5)
+    f.unload()

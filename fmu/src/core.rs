@@ -336,6 +336,8 @@ pub struct Run {
     pub replans: u32,
     /// Wall time of the last plan or re-plan, s.
     pub solve_s: f64,
+    /// Landmark windows moved by the inputs.
+    pub moved: BTreeSet<usize>,
 }
 
 /// The planner model's state.
@@ -666,6 +668,7 @@ impl PlannerCore {
             eval,
             replans: 0,
             solve_s: planned.solve_s,
+            moved: BTreeSet::new(),
         });
         Ok(())
     }
@@ -684,35 +687,32 @@ impl PlannerCore {
         let p = run.mission.params();
         let slot_s = p.slot_s;
         let n = run.mission.slots();
-        let shown = slot_at(tau_s, slot_s, n);
-        let Some(Some(window)) = run.mission.schedule().slot_landmark.get(shown - 1).copied()
-        else {
-            return Ok(StepReport::default());
-        };
-        let Some(planned) = run
-            .mission
-            .schedule()
-            .landmarks
-            .get(window)
-            .map(|w| w.pos_m())
-        else {
-            return Ok(StepReport::default());
-        };
-        if planner::geometry::v2::dist(input, planned) <= 1e-6 {
+        // slots up to `from` are flown or committed (the UAV is on its way to q_from); the
+        // input refers to the window of the next slot to fly, from + 1
+        let from = slot_at_committed(tau_s, slot_s, n);
+        if from >= n {
             return Ok(StepReport::default());
         }
-        // slots up to `from` are flown or committed (the UAV is on its way to q_from)
-        let from = slot_at_committed(tau_s, slot_s, n);
-        if !run.mission.schedule().slot_landmark[from..].contains(&Some(window)) {
-            log.log(
-                Category::Events,
-                Status::Ok,
-                &format!(
-                    "t = {tau_s} s: landmark input ({}, {}) m ignored: the window of landmark {window} is over",
-                    input[0], input[1]
-                ),
-            );
+        let sched = run.mission.schedule();
+        let Some(window) = sched.slot_landmark[from] else {
             return Ok(StepReport::default());
+        };
+        let landmark = |w: usize| sched.landmarks.get(w).map(|l| l.pos_m());
+        let Some(planned) = landmark(window) else {
+            return Ok(StepReport::default());
+        };
+        let same = |a: [f64; 2], b: [f64; 2]| planner::geometry::v2::dist(a, b) <= 1e-6;
+        if same(input, planned) {
+            return Ok(StepReport::default());
+        }
+        // At a window boundary the outputs still show the previous slot's landmark: an input
+        // equal to it (and not moved by an input) is that output fed back, not a move.
+        let shown = slot_at(tau_s, slot_s, n);
+        if let Some(Some(w)) = sched.slot_landmark.get(shown - 1).copied() {
+            if w != window && landmark(w).is_some_and(|l| same(input, l)) && !run.moved.contains(&w)
+            {
+                return Ok(StepReport::default());
+            }
         }
         log.log(
             Category::Events,
@@ -728,6 +728,7 @@ impl PlannerCore {
         );
         match planning::replan(&run.mission, &run.traj, from, window, input) {
             Ok(re) => {
+                run.moved.insert(window);
                 run.eval = evaluate(&re.mission, &re.trajectory);
                 run.mission = re.mission;
                 run.traj = re.trajectory;
@@ -745,6 +746,7 @@ impl PlannerCore {
                 input[0], input[1]
             ))),
             Err(ReplanError::Planner { mission, message }) => {
+                run.moved.insert(window);
                 run.eval = evaluate(&mission, &run.traj);
                 run.mission = *mission;
                 let warning = format!(

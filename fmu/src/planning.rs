@@ -18,31 +18,22 @@ pub struct Planned {
 
 /// Plans `mission` with the planner's default (exact) scheme, warm-started from `init` if given.
 /// The error is the planner's message.
-///
-/// TEMPORARY (plumbing only, replaced by `planner::plan` when it lands on main): flies north at
-/// 20 m/s from the start.
 pub fn plan(mission: &Mission, init: Option<Trajectory>) -> Result<Planned, String> {
     let started = Instant::now();
-    let _ = init;
-    let p = mission.params();
-    if p.max_speed_mps < 20.0 {
-        return Err(format!(
-            "infeasible: max_speed_mps = {} < 20",
-            p.max_speed_mps
-        ));
-    }
-    let trajectory = Trajectory {
-        slot_s: p.slot_s,
-        start_m: p.start_m,
-        pos_m: (1..=mission.slots())
-            .map(|t| [p.start_m[0], p.start_m[1] + 20.0 * p.slot_s * t as f64])
-            .collect(),
+    let options = planner::PlanOptions {
+        init,
+        ..Default::default()
     };
+    let result = planner::plan(mission, &options).map_err(|e| e.to_string())?;
     let solve_s = started.elapsed().as_secs_f64();
+    let summary = format!(
+        "true energy {:.3} J, {} iterations, {:?}, {:.3} s",
+        result.evaluation.energy_j, result.iterations, result.termination, solve_s
+    );
     Ok(Planned {
-        trajectory,
+        trajectory: result.trajectory,
         solve_s,
-        summary: format!("stand-in plan, {solve_s:.3} s"),
+        summary,
     })
 }
 
