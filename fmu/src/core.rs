@@ -726,7 +726,14 @@ impl PlannerCore {
                 from + 1
             ),
         );
-        match planning::replan(&run.mission, &run.traj, from, window, input) {
+        match planning::replan(
+            &run.mission,
+            &run.traj,
+            from,
+            window,
+            input,
+            &planning::ReplanOptions::default(),
+        ) {
             Ok(re) => {
                 run.moved.insert(window);
                 run.eval = evaluate(&re.mission, &re.trajectory);

@@ -19,10 +19,56 @@ pub struct Planned {
 /// Plans `mission` with the planner's default (exact) scheme, warm-started from `init` if given.
 /// The error is the planner's message.
 pub fn plan(mission: &Mission, init: Option<Trajectory>) -> Result<Planned, String> {
+    plan_with(mission, init, &planner::PlanOptions::default())
+}
+
+/// Where a re-plan starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WarmStart {
+    /// From the rest of the current plan.
+    Always,
+    /// From the rest of the current plan when it already keeps the moved landmark in view
+    /// (exact-geometry feasible), else from the planner's own (coarse-to-fine) start: repairing
+    /// an infeasible warm start takes many small phase-I steps.
+    IfFeasible,
+    /// From the planner's own start.
+    Never,
+}
+
+/// How a receding-horizon re-plan calls the planner.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReplanOptions {
+    /// Where the re-plan starts.
+    pub warm_start: WarmStart,
+    /// Largest number of SCA iterations of the re-plan.
+    pub max_iterations: usize,
+    /// Relative objective change that ends the re-plan.
+    pub tolerance: f64,
+}
+
+/// The defaults were chosen with `cargo run --release -p fmu --example replan-bench` (see
+/// BENCHMARKS.md): the warm start is fastest in most cases, and 5 iterations keep the energy
+/// within a few J of the converged re-plan.
+impl Default for ReplanOptions {
+    fn default() -> Self {
+        Self {
+            warm_start: WarmStart::Always,
+            max_iterations: 5,
+            tolerance: 1e-3,
+        }
+    }
+}
+
+/// [`plan`] with explicit planner options (`options.init` is replaced by `init`).
+pub fn plan_with(
+    mission: &Mission,
+    init: Option<Trajectory>,
+    options: &planner::PlanOptions,
+) -> Result<Planned, String> {
     let started = Instant::now();
     let options = planner::PlanOptions {
         init,
-        ..Default::default()
+        ..options.clone()
     };
     let result = planner::plan(mission, &options).map_err(|e| e.to_string())?;
     let solve_s = started.elapsed().as_secs_f64();
@@ -49,8 +95,23 @@ pub struct Replanned {
     pub transition_slots: usize,
     /// Wall time of all planner calls, s.
     pub solve_s: f64,
+    /// Sensing excess of the warm start on the sub-mission, summed over its slots, m.
+    pub start_excess_m: f64,
+    /// Whether the accepted plan started from the rest of the current plan.
+    pub warm: bool,
     /// One line for the log.
     pub summary: String,
+}
+
+/// Sensing excess Σ (‖g − c‖ − r_s)⁺ of `traj` over the landmark slots of `mission`, m.
+pub fn sensing_excess_m(mission: &Mission, traj: &Trajectory) -> f64 {
+    let r = mission.params().sensing_radius_m;
+    planner::evaluate(mission, traj)
+        .slots
+        .iter()
+        .filter_map(|s| s.centre_error_m)
+        .map(|e| (e - r).max(0.0))
+        .sum()
 }
 
 /// Why a re-plan produced no new trajectory.
@@ -79,7 +140,13 @@ pub fn replan(
     from_slot: usize,
     window: usize,
     moved_m: [f64; 2],
+    options: &ReplanOptions,
 ) -> Result<Replanned, ReplanError> {
+    let plan_options = planner::PlanOptions {
+        max_iterations: options.max_iterations,
+        tolerance: options.tolerance,
+        ..Default::default()
+    };
     let started = Instant::now();
     let p = mission.params().clone();
     let slot_s = p.slot_s;
@@ -105,6 +172,8 @@ pub fn replan(
             trajectory: current.clone(),
             transition_slots: 0,
             solve_s: 0.0,
+            start_excess_m: 0.0,
+            warm: false,
             summary: "the horizon is over: nothing to re-plan".into(),
         });
     }
@@ -174,7 +243,13 @@ pub fn replan(
                 continue;
             }
         };
-        match plan(&sub, Some(init.clone())) {
+        let excess = sensing_excess_m(&sub, &init);
+        let warm = match options.warm_start {
+            WarmStart::Always => true,
+            WarmStart::Never => false,
+            WarmStart::IfFeasible => planner::evaluate(&sub, &init).is_feasible(),
+        };
+        match plan_with(&sub, warm.then(|| init.clone()), &plan_options) {
             Ok(planned) => {
                 let mut pos_m = current.pos_m[..from_slot].to_vec();
                 pos_m.extend_from_slice(&planned.trajectory.pos_m);
@@ -188,9 +263,14 @@ pub fn replan(
                     },
                     transition_slots: delay,
                     solve_s,
+                    start_excess_m: excess,
+                    warm,
                     summary: format!(
-                        "{} slots from t = {shift_s} s, {attempts} planner call(s), {} transition slot(s), {}",
-                        remaining, delay, planned.summary
+                        "{} slots from t = {shift_s} s, {} start (sensing excess {excess:.1} m), {attempts} planner call(s), {} transition slot(s), {}",
+                        remaining,
+                        if warm { "warm" } else { "cold" },
+                        delay,
+                        planned.summary
                     ),
                 });
             }
