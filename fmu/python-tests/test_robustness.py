@@ -213,7 +213,7 @@ def test_200_instantiate_free_cycles_do_not_grow_memory(version, tiny_mission):
         cycle()
     grown = _rss_kib() - before
     assert grown < 4096, f"RSS grew by {grown} KiB over 200 cycles"
-    assert _threads() == threads, "threads outlived FreeInstance"
+    assert _threads() <= threads, "threads outlived FreeInstance"
     f.fmu.freeLibrary()
 
 
