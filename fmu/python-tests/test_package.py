@@ -70,3 +70,15 @@ def test_only_fmi_symbols_are_exported(tmp_path):
                              capture_output=True, text=True).stdout
         symbols = {line.split()[-1] for line in out.splitlines() if line.strip()}
         assert symbols == expected, sorted(symbols ^ expected)
+
+
+@pytest.mark.skipif(shutil.which("nm") is None, reason="nm (binutils) not installed")
+def test_library_cannot_start_threads(tmp_path):
+    """No thread can outlive FreeInstance: the library does not even import pthread_create."""
+    with zipfile.ZipFile(fmu_path("fmi2")) as z:
+        so = z.extract("binaries/linux64/CellsarPlanner.so", tmp_path)
+    out = subprocess.run(["nm", "-D", "--undefined-only", so], check=True,
+                         capture_output=True, text=True).stdout
+    imported = {line.split()[-1].split("@")[0] for line in out.splitlines() if line.strip()}
+    assert "pthread_create" not in imported
+    assert "malloc" in imported or "calloc" in imported  # the listing is real
