@@ -916,6 +916,76 @@ mod tests {
         }
     }
 
+    fn run_of(pos_m: Vec<[f64; 2]>) -> Run {
+        let mut p = Params::default();
+        p.horizon_s = pos_m.len() as f64 * p.slot_s;
+        let mission = Mission::new(
+            "prop",
+            p.clone(),
+            &planner::LandmarksSpec {
+                points: Some(vec![planner::LandmarkWindow {
+                    x_m: 0.0,
+                    y_m: 0.0,
+                    from_s: 0.0,
+                    to_s: p.horizon_s,
+                }]),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let traj = Trajectory {
+            slot_s: p.slot_s,
+            start_m: p.start_m,
+            pos_m,
+        };
+        Run {
+            eval: evaluate(&mission, &traj),
+            mission,
+            source: PathBuf::new(),
+            traj,
+            replans: 0,
+            solve_s: 0.0,
+            moved: BTreeSet::new(),
+        }
+    }
+
+    proptest::proptest! {
+        /// Outputs between slot ends: position linear, energy = previous slots + power × time in
+        /// the slot (non-decreasing, continuous), slot values at slot ends equal `evaluate`.
+        #[test]
+        fn samples_interpolate_and_integrate(
+            steps in proptest::collection::vec((-12.0f64..12.0, -12.0f64..12.0), 1..12),
+            frac in 0.0f64..1.0,
+        ) {
+            let mut q = Params::default().start_m;
+            let pos: Vec<[f64; 2]> = steps.iter().map(|(dx, dy)| { q = [q[0] + dx, q[1] + dy]; q }).collect();
+            let run = run_of(pos);
+            let d = run.mission.params().slot_s;
+            let n = run.eval.slots.len();
+            let mut last_energy = 0.0;
+            for t in 1..=n {
+                let at_end = run.sample(t as f64 * d);
+                let s = &run.eval.slots[t - 1];
+                proptest::prop_assert_eq!(at_end.pos_m, s.pos_m);
+                proptest::prop_assert!((at_end.energy_j - s.energy_j).abs() <= 1e-9 * s.energy_j.max(1.0));
+                proptest::prop_assert_eq!(at_end.in_view, s.in_view);
+                let tau = (t as f64 - 1.0 + frac) * d;
+                let mid = run.sample(tau);
+                let a = run.traj.q(t - 1);
+                let b = run.traj.q(t);
+                for i in 0..2 {
+                    proptest::prop_assert!((mid.pos_m[i] - (a[i] + frac * (b[i] - a[i]))).abs() < 1e-9);
+                }
+                proptest::prop_assert!(mid.energy_j + 1e-9 >= last_energy);
+                proptest::prop_assert!(mid.energy_j <= at_end.energy_j + 1e-9);
+                proptest::prop_assert_eq!(mid.power_w, s.power_w);
+                let off = planner::geometry::v2::dist(mid.centre_m, mid.pos_m);
+                proptest::prop_assert!((off - run.mission.params().centre_offset_m()).abs() < 1e-9);
+                last_energy = at_end.energy_j;
+            }
+        }
+    }
+
     #[test]
     fn default_mission_resource_parses() {
         let f = MissionFile::from_toml_str(DEFAULT_MISSION_TOML).unwrap();
