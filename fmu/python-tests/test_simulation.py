@@ -240,3 +240,28 @@ def test_outputs_fed_back_to_the_inputs_change_nothing(version, short_mission):
     assert f.get("replan_count") == 0
     assert rows == run(version, short_mission, stop=20.0, step=0.5)
     f.unload()
+
+
+def test_parameters_override_the_mission_file(version, tmp_path):
+    """[params] of the file over SPEC defaults; FMI parameters (other than their start values)
+    over the file; after initialisation the parameters read back the values in effect."""
+    mission = tmp_path / "m.toml"
+    mission.write_text(
+        "[params]\nhorizon_s = 10\naltitude_m = 1100\nmax_speed_mps = 40\n"
+        "[landmarks]\npoints = [ { x_m = 0, y_m = 0, from_s = 0, to_s = 10 } ]\n",
+        encoding="utf-8")
+    f = Fmu(version)
+    assert f.instantiate()
+    # altitude back to its start value (as importers do): the file's 1100 m stays;
+    # max speed to 45: overrides the file's 40
+    f.init(stop=10.0, params={"altitude_m": 1000.0, "max_speed_mps": 45.0},
+           strings={"mission_file": str(mission)})
+    assert f.get("altitude_m") == 1100.0
+    assert f.get("max_speed_mps") == 45.0
+    assert f.get("horizon_s") == 10.0
+    assert f.get("bandwidth_hz") == 150e6
+    # the sensing centre lies H tan(eta) = 1100 m from the UAV
+    f.step(0.5, t=0.0)
+    assert math.isclose(math.hypot(f.get("xc_m") - f.get("x_m"), f.get("yc_m") - f.get("y_m")),
+                        1100.0, rel_tol=1e-12)
+    f.unload()

@@ -346,7 +346,8 @@ pub struct PlannerCore {
     /// Parameter values as set through FMI (SPEC defaults at start); after initialisation the
     /// values in effect.
     params: Params,
-    /// Names of the parameters set through FMI: they override the mission file.
+    /// Names of the parameters set through FMI to a value other than their start value: they
+    /// override the mission file.
     params_set: BTreeSet<String>,
     /// `mission_file`.
     mission_file: String,
@@ -536,7 +537,19 @@ impl PlannerCore {
                 .set_by_name(var.name, value)
                 .map_err(|e| FmuError::error(e.to_string()))?,
         }
-        self.params_set.insert(var.name.to_string());
+        // A parameter overrides the mission file only while it differs from its start value, so
+        // importers that write every start value back do not undo the file.
+        let d = Params::default();
+        let at_start = match var.vr {
+            pv::START_M => self.params.start_m == d.start_m,
+            pv::BS_M => self.params.bs_m == d.bs_m,
+            _ => self.params.get_by_name(var.name) == d.get_by_name(var.name),
+        };
+        if at_start {
+            self.params_set.remove(var.name);
+        } else {
+            self.params_set.insert(var.name.to_string());
+        }
         self.run = None;
         Ok(())
     }
