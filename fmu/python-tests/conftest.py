@@ -4,6 +4,7 @@ The FMUs are taken from $CELLSAR_FMU_DIR (default: <repo>/target/fmu), as writte
 `cargo run --release -p fmu --bin package-fmu`. fmpy must be 0.3.32.
 """
 
+import atexit
 import ctypes
 import os
 import pathlib
@@ -105,6 +106,7 @@ class Fmu:
         if unzipdir is None:
             if key not in Fmu._extracted:
                 Fmu._extracted[key] = extract(str(self.path))
+                atexit.register(shutil.rmtree, Fmu._extracted[key], True)
             unzipdir = Fmu._extracted[key]
         self.unzipdir = unzipdir
         self.vars = {v.name: v for v in self.md.modelVariables}
