@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::evaluate::{evaluate, Evaluation};
+use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
 use crate::init::{guidance_start, precheck, Infeasibility};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::schemes::paper::{PaperObjective, PaperState};
@@ -75,8 +75,15 @@ pub struct PlanOptions {
     pub min_kappa_scale: f64,
     /// For the exact-geometry schemes without a given start: first solve the mission on slots
     /// about 2 s long and start from that solution (fewer, larger steps make the SCA converge
-    /// in far fewer iterations; the fine solve then only polishes).
+    /// in far fewer iterations; the fine solve then only polishes). When false, the coarse grid
+    /// only provides a feasible start.
     pub coarse: bool,
+    /// Try longer steps along each accepted SCA step of the exact scheme (2× and 4×, kept when
+    /// still feasible and better). Off gives the plain SCA sequence.
+    pub over_relaxation: bool,
+    /// Resolution requirement of the exact-geometry schemes (the paper's schemes always use the
+    /// paper's, as printed).
+    pub resolution: ResolutionMode,
 }
 
 impl Default for PlanOptions {
@@ -89,6 +96,8 @@ impl Default for PlanOptions {
             socp: SocpSettings::default(),
             min_kappa_scale: 1.0 / 16.0,
             coarse: true,
+            over_relaxation: true,
+            resolution: ResolutionMode::Paper,
         }
     }
 }
@@ -172,6 +181,8 @@ pub struct PlanResult {
     pub repair_iterations: usize,
     /// Cone programs solved.
     pub cone_programs: usize,
+    /// The resolution requirement the plan was made for.
+    pub resolution: ResolutionMode,
 }
 
 /// Why planning failed.
@@ -224,18 +235,25 @@ pub fn plan_with_observer(
             }
             tr.clone()
         }
+        // The built-in start: the guidance law on a coarse grid made feasible there (phase I);
+        // for the exact-geometry schemes also optimised there. The paper's schemes get the plain
+        // feasible path, as Algorithm 1's step 1 asks ("a feasible initial flight path").
         None => match options.scheme {
-            Scheme::Exact if options.coarse => {
-                coarse_start(mission, ExactObjective::Energy, options)
+            Scheme::Exact => coarse_start(mission, ExactObjective::Energy, options.coarse, options),
+            Scheme::BaselineExact => {
+                coarse_start(mission, ExactObjective::Distance, options.coarse, options)
             }
-            Scheme::BaselineExact if options.coarse => {
-                coarse_start(mission, ExactObjective::Distance, options)
+            Scheme::Paper | Scheme::Baseline => {
+                coarse_start(mission, ExactObjective::Energy, false, options)
             }
-            _ => None,
         }
         .unwrap_or_else(|| guidance_start(mission)),
     };
     let start_energy_j = evaluate(mission, &start).energy_j;
+    let resolution = match options.scheme {
+        Scheme::Exact | Scheme::BaselineExact => options.resolution,
+        Scheme::Paper | Scheme::Baseline => ResolutionMode::Paper,
+    };
     let mut solver = SocpSolver::new(options.socp);
     let mut repair_solver = SocpSolver::new(options.socp);
     // Every scheme needs a start that is feasible on the exact geometry, except the paper's
@@ -253,19 +271,26 @@ pub fn plan_with_observer(
             mission,
             start,
             objective,
-            &ExactTuning::default(),
+            &ExactTuning {
+                resolution,
+                ..ExactTuning::default()
+            },
             &mut repair_solver,
             observer,
         )?,
         None => (start, 0),
     };
     observer.on_phase("solve");
+    let base = ExactTuning {
+        resolution,
+        ..ExactTuning::default()
+    };
     let mut out = match options.scheme {
         Scheme::Exact => run_exact(
             mission,
             start,
             ExactObjective::Energy,
-            &ExactTuning::default(),
+            &base,
             options,
             &mut solver,
             observer,
@@ -274,7 +299,7 @@ pub fn plan_with_observer(
             mission,
             start,
             ExactObjective::Distance,
-            &ExactTuning::default(),
+            &base,
             options,
             &mut solver,
             observer,
@@ -297,6 +322,7 @@ pub fn plan_with_observer(
         )?,
     };
     out.scheme = options.scheme;
+    out.resolution = resolution;
     out.start_energy_j = start_energy_j;
     out.repair_iterations = repair_iterations;
     out.cone_programs += repair_solver.builds.max(repair_iterations);
@@ -312,6 +338,7 @@ const COARSE_SLOT_S: f64 = 2.0;
 fn coarse_start(
     mission: &Mission,
     objective: ExactObjective,
+    optimise: bool,
     options: &PlanOptions,
 ) -> Option<Trajectory> {
     let n = mission.slots();
@@ -319,10 +346,11 @@ fn coarse_start(
     let target = (COARSE_SLOT_S / delta).round() as usize;
     let factor = (2..=target.max(2))
         .rev()
-        .find(|&k| k <= target && n % k == 0 && n / k >= 8)?;
+        .find(|&k| k <= target && n.is_multiple_of(k) && n / k >= 8)?;
     let coarse = mission.coarsened(factor)?;
     let tuning = ExactTuning {
         whole_slot_sensing: true,
+        resolution: options.resolution,
         ..ExactTuning::default()
     };
     let mut solver = SocpSolver::new(options.socp);
@@ -335,30 +363,33 @@ fn coarse_start(
         &mut NoObserver,
     )
     .ok()?;
-    let sub_options = PlanOptions {
-        init: None,
-        coarse: false,
-        tolerance: options.tolerance,
-        ..options.clone()
+    let tr = if optimise {
+        let sub_options = PlanOptions {
+            init: None,
+            coarse: false,
+            ..options.clone()
+        };
+        let mut solver = SocpSolver::new(options.socp);
+        let solved = run_exact(
+            &coarse,
+            start,
+            objective,
+            &tuning,
+            &sub_options,
+            &mut solver,
+            &mut NoObserver,
+        )
+        .ok()?;
+        tracing::debug!(
+            factor,
+            iterations = solved.iterations,
+            energy_j = solved.evaluation.energy_j,
+            "coarse solve"
+        );
+        solved.trajectory
+    } else {
+        start
     };
-    let mut solver = SocpSolver::new(options.socp);
-    let solved = run_exact(
-        &coarse,
-        start,
-        objective,
-        &tuning,
-        &sub_options,
-        &mut solver,
-        &mut NoObserver,
-    )
-    .ok()?;
-    let tr = &solved.trajectory;
-    tracing::debug!(
-        factor,
-        iterations = solved.iterations,
-        energy_j = solved.evaluation.energy_j,
-        "coarse solve"
-    );
     Some(Trajectory {
         slot_s: delta,
         start_m: tr.start_m,
@@ -369,7 +400,7 @@ fn coarse_start(
 /// Per-slot violation used by the elastic phase: the largest of the sensing excess (m), the
 /// azimuth speed shortfall (m/s) and the range keep-out shortfall (m) of each landmark slot,
 /// summed over slots (the same quantities that the subproblem's slack σ_t bounds).
-fn total_violation(mission: &Mission, ev: &Evaluation) -> f64 {
+fn total_violation(mission: &Mission, ev: &Evaluation, mode: ResolutionMode) -> f64 {
     let p = mission.params();
     let v_min = p.min_speed_mps();
     let keepout = p.range_keepout_m();
@@ -380,7 +411,15 @@ fn total_violation(mission: &Mission, ev: &Evaluation) -> f64 {
             let sens = s.centre_error_m.unwrap_or(0.0) - p.sensing_radius_m;
             let speed = v_min - s.speed_mps;
             let range = keepout.map_or(0.0, |k| k - crate::geometry::v2::dist(s.centre_m, p.bs_m));
-            sens.max(speed).max(range).max(0.0)
+            let width = match mode {
+                ResolutionMode::General => s.worst_width_m - p.d_min_m,
+                ResolutionMode::Paper => 0.0,
+            };
+            // a blind slot has an infinite width: count it as a large, finite violation
+            sens.max(speed)
+                .max(range)
+                .max(width.min(10.0 * p.d_min_m))
+                .max(0.0)
         })
         .sum()
 }
@@ -396,9 +435,10 @@ fn make_feasible(
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
 ) -> Result<(Trajectory, usize), PlanError> {
+    let mode = base.resolution;
     let mut current = start;
     let mut ev = evaluate(mission, &current);
-    if ev.is_feasible() {
+    if ev.is_feasible_for(mode) {
         return Ok((current, 0));
     }
     observer.on_phase("repair");
@@ -407,15 +447,15 @@ fn make_feasible(
         ExactObjective::Energy => ev.energy_j,
     };
     let mut weight = match objective {
-        ExactObjective::Energy => 100.0,
-        ExactObjective::Distance => 10.0,
+        ExactObjective::Energy => 1000.0,
+        ExactObjective::Distance => 100.0,
     };
     let mut tuning = ExactTuning {
         elastic_weight: Some(weight),
         ..*base
     };
-    let mut merit = value(&ev) + weight * total_violation(mission, &ev);
-    let mut best_violation = total_violation(mission, &ev);
+    let mut merit = value(&ev) + weight * total_violation(mission, &ev, mode);
+    let mut best_violation = total_violation(mission, &ev, mode);
     let mut stalls = 0;
     for it in 1..=100 {
         tuning.elastic_weight = Some(weight);
@@ -428,7 +468,7 @@ fn make_feasible(
             })?;
         let cand = sub.trajectory(&sol.x, &current);
         let cand_ev = evaluate(mission, &cand);
-        let violation = total_violation(mission, &cand_ev);
+        let violation = total_violation(mission, &cand_ev, mode);
         let cand_merit = value(&cand_ev) + weight * violation;
         tracing::debug!(
             iteration = it,
@@ -441,7 +481,7 @@ fn make_feasible(
             current = cand;
             ev = cand_ev;
             merit = cand_merit;
-            if ev.is_feasible() {
+            if ev.is_feasible_for(mode) {
                 return Ok((current, it));
             }
         }
@@ -450,30 +490,39 @@ fn make_feasible(
             stalls = 0;
         } else {
             stalls += 1;
-            // the penalty is not exact yet: charge violations more
-            weight *= 10.0;
-            merit = value(&ev) + weight * total_violation(mission, &ev);
-            if stalls >= 6 {
+            if stalls >= 8 {
                 break;
+            }
+            if stalls % 3 == 0 && weight < 1e5 {
+                // the penalty may not be exact yet: charge violations more
+                weight *= 10.0;
+                merit = value(&ev) + weight * total_violation(mission, &ev, mode);
             }
         }
     }
+    let p = mission.params();
     let first = ev
         .slots
         .iter()
         .find(|s| {
             !s.in_view
-                || (s.landmark_m.is_some() && s.speed_mps < mission.params().min_speed_mps() - 1e-4)
+                || (s.landmark_m.is_some()
+                    && (s.speed_mps < p.min_speed_mps() - 1e-4
+                        || (mode == ResolutionMode::General && s.worst_width_m > p.d_min_m + 1e-4)))
         })
         .map(|s| s.t)
         .unwrap_or(1);
     Err(PlanError::Infeasible(Infeasibility {
         slot: first,
-        t_s: first as f64 * mission.params().slot_s,
+        t_s: first as f64 * p.slot_s,
         reason: format!(
             "no trajectory found that keeps every landmark in view at the required resolution \
-             (phase I stalled with a sensing violation of {:.2} m and a speed shortfall of {:.3} m/s)",
-            ev.violations.sensing_m, ev.violations.min_speed_mps
+             ({} resolution; phase I stalled with a sensing violation of {:.2} m, a speed \
+             shortfall of {:.3} m/s and a worst cell width of d_min + {:.2} m)",
+            mode.name(),
+            ev.violations.sensing_m,
+            ev.violations.min_speed_mps,
+            ev.violations.worst_width_m
         ),
     }))
 }
@@ -498,6 +547,7 @@ fn record(
     }
 }
 
+#[allow(clippy::too_many_arguments)] // a private constructor of PlanResult
 fn finish(
     mission: &Mission,
     trajectory: Trajectory,
@@ -524,6 +574,7 @@ fn finish(
         start_energy_j: 0.0,
         repair_iterations: 0,
         cone_programs,
+        resolution: ResolutionMode::Paper,
     }
 }
 
@@ -591,12 +642,13 @@ fn run_exact(
         let mut cand_value = true_value(&cand_ev);
         // over-relaxation: SCA steps limited by the conservative centre bound tend to repeat in
         // the same direction; try longer steps along it and keep the best that stays feasible.
-        if cand_ev.is_feasible() && cand_value < value {
+        let mode = base.resolution;
+        if options.over_relaxation && cand_ev.is_feasible_for(mode) && cand_value < value {
             for alpha in [2.0, 4.0] {
                 let trial = extrapolate(&current, &cand, alpha);
                 let ev = evaluate(mission, &trial);
                 let v = true_value(&ev);
-                if ev.is_feasible() && v < cand_value {
+                if ev.is_feasible_for(mode) && v < cand_value {
                     cand = trial;
                     cand_ev = ev;
                     cand_value = v;
@@ -606,7 +658,7 @@ fn run_exact(
             }
         }
         let own = sub.physical_objective(sol.objective);
-        let ok = cand_ev.is_feasible() && cand_value <= value * (1.0 + 1e-9) + 1e-9;
+        let ok = cand_ev.is_feasible_for(mode) && cand_value <= value * (1.0 + 1e-9) + 1e-9;
         let rec = record(
             it,
             own,
@@ -626,7 +678,7 @@ fn run_exact(
             rejects += 1;
             tracing::debug!(
                 iteration = it,
-                feasible = cand_ev.is_feasible(),
+                feasible = cand_ev.is_feasible_for(mode),
                 value = cand_value,
                 previous = value,
                 "step rejected"

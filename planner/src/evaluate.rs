@@ -14,6 +14,32 @@ use crate::{Mission, Trajectory};
 /// Default tolerance for calling a trajectory feasible: metres for distances, m/s for speeds.
 pub const FEASIBILITY_TOL: f64 = 1e-4;
 
+/// Which resolution requirement a plan must meet in every landmark slot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ResolutionMode {
+    /// The paper's: δ_r ≤ d_min and δ_a ≤ d_min with its formulas (SPEC.md §4 items 2, 11).
+    #[default]
+    Paper,
+    /// The general 2-D cell: its worst width (SPEC.md §4 item 12) ≤ d_min, which also keeps the
+    /// plan away from blind geometry. Implies the paper's requirement in the default geometry.
+    General,
+}
+
+impl ResolutionMode {
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ResolutionMode::Paper => "paper",
+            ResolutionMode::General => "general",
+        }
+    }
+}
+
+/// A landmark slot is called blind when the angle ψ between the range gradient and the track is
+/// below this (the cell's cross-track extent is then more than 1/sin 5° ≈ 11 times its range width).
+pub const BLIND_PSI_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
+
 /// One slot of an evaluated trajectory.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SlotEval {
@@ -107,12 +133,24 @@ pub struct Evaluation {
     pub slots_out_of_view: usize,
     /// Landmark slots whose worst cell width exceeds d_min.
     pub slots_unresolved: usize,
+    /// Landmark slots in blind geometry (ψ < [`BLIND_PSI_RAD`]).
+    pub slots_blind: usize,
 }
 
 impl Evaluation {
     /// True when every constraint of (p2) holds on the exact geometry within [`FEASIBILITY_TOL`].
     pub fn is_feasible(&self) -> bool {
         self.violations.p2_ok(FEASIBILITY_TOL)
+    }
+
+    /// [`Evaluation::is_feasible`], plus, under [`ResolutionMode::General`], the worst width of
+    /// the resolution cell ≤ d_min in every landmark slot.
+    pub fn is_feasible_for(&self, mode: ResolutionMode) -> bool {
+        self.is_feasible()
+            && match mode {
+                ResolutionMode::Paper => true,
+                ResolutionMode::General => self.violations.worst_width_m <= FEASIBILITY_TOL,
+            }
     }
 }
 
@@ -130,6 +168,7 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
     let mut max_speed: f64 = 0.0;
     let mut out_of_view = 0;
     let mut unresolved = 0;
+    let mut blind = 0;
     for t in 1..=traj.slots() {
         let pos = traj.q(t);
         let vel = traj.velocity_mps(t);
@@ -164,8 +203,11 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
             if !in_view {
                 out_of_view += 1;
             }
-            if !(cell.worst_width_m <= p.d_min_m) {
+            if cell.worst_width_m > p.d_min_m || cell.worst_width_m.is_nan() {
                 unresolved += 1;
+            }
+            if cell.psi_rad < BLIND_PSI_RAD || cell.psi_rad.is_nan() {
+                blind += 1;
             }
         }
         slots.push(SlotEval {
@@ -218,6 +260,7 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         max_speed_mps: max_speed,
         slots_out_of_view: out_of_view,
         slots_unresolved: unresolved,
+        slots_blind: blind,
     }
 }
 

@@ -213,6 +213,53 @@ impl ResolutionCell {
     }
 }
 
+/// The resolution-cell quantities that are linear in the UAV velocity, at a fixed UAV position:
+/// the range gradient g, the map A with Doppler gradient d = A v, and the vector k with
+/// g × (A v) = k · v. With them the worst-width requirement splits into
+/// |k·v| ≥ ‖g‖/(T_d d_min) (iso-range width) and |k·v| ≥ c/(B d_min) ‖A v‖ (cross-track width).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CellLinear {
+    /// Bistatic range gradient g at the point.
+    pub grad: [f64; 2],
+    /// Symmetric map from the UAV ground velocity (m/s) to the Doppler gradient (1/(m s)).
+    pub doppler_map: [[f64; 2]; 2],
+    /// k = A (−g_y, g_x): g × (A v) = k · v.
+    pub cross: [f64; 2],
+}
+
+impl CellLinear {
+    /// The quantities for a UAV at `uav_m` looking at `point_m`.
+    pub fn new(params: &Params, uav_m: [f64; 2], point_m: [f64; 2]) -> Self {
+        let g = bistatic_range_gradient(params, uav_m, point_m);
+        let d = v2::sub(point_m, uav_m);
+        let r2 = v2::dot(d, d) + params.altitude_m * params.altitude_m;
+        let k = 1.0 / (params.wavelength_m * r2.sqrt());
+        let a = [
+            [k * (1.0 - d[0] * d[0] / r2), -k * d[0] * d[1] / r2],
+            [-k * d[0] * d[1] / r2, k * (1.0 - d[1] * d[1] / r2)],
+        ];
+        let w = [-g[1], g[0]];
+        let cross = [
+            a[0][0] * w[0] + a[0][1] * w[1],
+            a[1][0] * w[0] + a[1][1] * w[1],
+        ];
+        Self {
+            grad: g,
+            doppler_map: a,
+            cross,
+        }
+    }
+
+    /// A v.
+    pub fn doppler_gradient(&self, velocity_mps: [f64; 2]) -> [f64; 2] {
+        let a = &self.doppler_map;
+        [
+            a[0][0] * velocity_mps[0] + a[0][1] * velocity_mps[1],
+            a[1][0] * velocity_mps[0] + a[1][1] * velocity_mps[1],
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -278,6 +325,26 @@ mod tests {
         assert!((general - paper).abs() < 1e-9 * paper);
     }
 
+    /// β = 90°: BS→point ⟂ UAV→point; ‖g‖ = sqrt(sin²θ_t + sin²θ_r).
+    #[test]
+    fn right_bistatic_angle() {
+        let p = Params::default();
+        let point = [0.0, 0.0];
+        let uav = [0.0, p.centre_offset_m()]; // UAV north of the point: ĝ_r = (0, −1)
+        let mut q = p.clone();
+        q.bs_m = [-2000.0, 0.0]; // BS west: ĝ_t = (1, 0)
+        assert!((bistatic_angle_rad(&q, uav, point).to_degrees() - 90.0).abs() < 1e-9);
+        let st = sin_incidence_bs(&q, point);
+        let sr = p.observation_angle_rad.sin();
+        let want = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * (st * st + sr * sr).sqrt());
+        let got = range_resolution_general_m(&q, uav, point);
+        assert!((got - want).abs() < 1e-9 * want);
+        // flying west (heading π): g = (st, −sr) makes ψ with the track; sin ψ = sr / ‖g‖
+        let cell = ResolutionCell::new(&q, uav, [-18.0, 0.0], point);
+        let want_psi = (sr / (st * st + sr * sr).sqrt()).asin();
+        assert!((cell.psi_rad - want_psi).abs() < 1e-9);
+    }
+
     #[test]
     fn blind_geometry_has_infinite_cross_track_width() {
         let p = Params::default();
@@ -304,6 +371,29 @@ mod tests {
     }
 
     proptest! {
+        /// CellLinear reproduces ResolutionCell: g × d = k·v, and the two width conditions.
+        #[test]
+        fn cell_linear_matches_cell(
+            ux in -3000.0f64..3000.0, uy in -3000.0f64..3000.0,
+            px in -3000.0f64..3000.0, py in -3000.0f64..3000.0,
+            vx in -40.0f64..40.0, vy in -40.0f64..40.0,
+        ) {
+            let p = Params::default();
+            let (uav, point, vel) = ([ux, uy], [px, py], [vx, vy]);
+            prop_assume!(v2::norm(vel) > 1.0);
+            let cl = CellLinear::new(&p, uav, point);
+            let d = doppler_gradient(&p, uav, vel, point);
+            let d2 = cl.doppler_gradient(vel);
+            prop_assert!(v2::dist(d, d2) <= 1e-9 * (1.0 + v2::norm(d)));
+            let gxd = v2::cross(cl.grad, d);
+            prop_assert!((gxd - v2::dot(cl.cross, vel)).abs() <= 1e-9 * (1.0 + gxd.abs()));
+            let cell = ResolutionCell::new(&p, uav, vel, point);
+            let iso = v2::norm(cl.grad) / (p.integration_time_s * gxd.abs());
+            let cross = SPEED_OF_LIGHT_MPS * v2::norm(d) / (p.bandwidth_hz * gxd.abs());
+            prop_assert!((iso - cell.iso_range_width_m).abs() <= 1e-6 * iso);
+            prop_assert!((cross - cell.cross_track_width_m).abs() <= 1e-6 * cross);
+        }
+
         /// The general range resolution lies between c/(B(sin θ_t + sin θ_r)) and c/(B|sin θ_t − sin θ_r|).
         #[test]
         fn general_range_resolution_bounds(
@@ -326,7 +416,7 @@ mod tests {
 
         /// Heading/centre round trip: the centre lies exactly `offset` to the right.
         #[test]
-        fn centre_distance_and_side(x in -1e4f64..1e4, y in -1e4f64..1e4, a in 0.0f64..6.28, off in 1.0f64..3000.0) {
+        fn centre_distance_and_side(x in -1e4f64..1e4, y in -1e4f64..1e4, a in 0.0f64..std::f64::consts::TAU, off in 1.0f64..3000.0) {
             let c = sensing_centre_m([x, y], a, off);
             let d = v2::sub(c, [x, y]);
             prop_assert!((v2::norm(d) - off).abs() < 1e-6 * off);

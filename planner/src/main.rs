@@ -1,5 +1,330 @@
-//! `cellsar-planner`: command-line front end of the planner library.
+//! `cellsar-planner`: plan a mission, evaluate a trajectory, reproduce the paper, compute E[d_min].
+//!
+//! Exit codes: 0 success, 1 internal failure (I/O, solver), 2 bad input (names the field, slot
+//! or file), 3 the mission cannot be flown (names the first slot and the reason).
 
-fn main() {
-    println!("cellsar-planner");
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use planner::dmin::{expected_dmin_m, expected_dmin_monte_carlo_m, CdfForm};
+use planner::evaluate::ResolutionMode;
+use planner::report::{self, reproduce, Summary};
+use planner::{
+    evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanError, PlanOptions,
+    Scheme, Trajectory,
+};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "cellsar-planner",
+    version,
+    about = "Least-energy UAV trajectories for cellular-assisted bistatic SAR (Hu et al.), checked on the exact geometry"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Plan a mission and write trajectory.csv, summary.json, mission.toml and plots to --out.
+    Plan {
+        /// Mission file (TOML, or JSON with a .json extension).
+        mission: PathBuf,
+        /// exact (default): feasible on the exact geometry; paper: Algorithm 1 as printed;
+        /// baseline: the paper's least-distance scheme; baseline-exact: least distance on the
+        /// exact geometry.
+        #[arg(long, default_value = "exact", value_parser = parse_scheme)]
+        scheme: Scheme,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Start from this trajectory (CSV with at least t_s,x_m,y_m; one row per slot, the
+        /// start optional at t = 0).
+        #[arg(long)]
+        init: Option<PathBuf>,
+        /// Largest number of SCA/BCD iterations.
+        #[arg(long, default_value_t = 200)]
+        max_iterations: usize,
+        /// Stop when the relative change of the objective is below this.
+        #[arg(long, default_value_t = 1e-4)]
+        tolerance: f64,
+        /// Skip the coarse first solve of the exact-geometry schemes.
+        #[arg(long)]
+        no_coarse: bool,
+        /// Plain SCA for the exact scheme: always the proven centre-error bound, no
+        /// over-relaxation (for comparisons with other implementations of the same scheme).
+        #[arg(long)]
+        plain_sca: bool,
+        /// Resolution requirement of the exact-geometry schemes: general (the worst width of the
+        /// 2-D resolution cell ≤ d_min, away from blind geometry) or paper (δ_r, δ_a ≤ d_min).
+        #[arg(long, default_value = "paper", value_parser = parse_resolution)]
+        resolution: ResolutionMode,
+    },
+    /// Evaluate a trajectory of a mission on the exact geometry (true energy, violations).
+    Evaluate {
+        /// Mission file.
+        mission: PathBuf,
+        /// Trajectory CSV (t_s,x_m,y_m).
+        #[arg(long)]
+        trajectory: PathBuf,
+    },
+    /// Regenerate every figure and table of the paper's Section IV (CSV + SVG) and REPORT.md.
+    Reproduce {
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Fewer random realisations (figure 11) for a fast check.
+        #[arg(long)]
+        quick: bool,
+        /// Only these figures (comma-separated: 4a,4b,4c,5,6,7,8,9,10,11,12,t3); default all.
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
+    },
+    /// Expected least object distance E[d_min] in a disk: correct formula, as printed, Monte Carlo.
+    Dmin {
+        /// Disk radius R, m.
+        #[arg(long)]
+        radius_m: f64,
+        /// Number of objects N.
+        #[arg(long)]
+        objects: u64,
+        /// Monte Carlo trials.
+        #[arg(long, default_value_t = 2000)]
+        trials: u32,
+        /// Monte Carlo seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+}
+
+fn parse_resolution(s: &str) -> Result<ResolutionMode, String> {
+    match s {
+        "general" => Ok(ResolutionMode::General),
+        "paper" => Ok(ResolutionMode::Paper),
+        _ => Err(format!(
+            "unknown resolution `{s}`; expected general or paper"
+        )),
+    }
+}
+
+fn parse_scheme(s: &str) -> Result<Scheme, String> {
+    Scheme::from_name(s).ok_or_else(|| {
+        format!(
+            "unknown scheme `{s}`; expected one of: {}",
+            Scheme::ALL.map(Scheme::name).join(", ")
+        )
+    })
+}
+
+/// How a command failed, for the exit code.
+enum Failure {
+    BadInput(anyhow::Error),
+    Infeasible(anyhow::Error),
+    Internal(anyhow::Error),
+}
+
+impl From<anyhow::Error> for Failure {
+    fn from(e: anyhow::Error) -> Self {
+        Failure::Internal(e)
+    }
+}
+
+fn bad(e: impl Into<anyhow::Error>) -> Failure {
+    Failure::BadInput(e.into())
+}
+
+/// Shows iterations on a spinner (hidden when stderr is not a terminal).
+struct Progress(ProgressBar);
+
+impl Observer for Progress {
+    fn on_phase(&mut self, phase: &str) {
+        self.0.set_prefix(phase.to_string());
+    }
+    fn on_iteration(&mut self, r: &IterationRecord) {
+        self.0.set_message(format!(
+            "iteration {:>3}  objective {:>10.2}  true energy {:>10.2} J  {}",
+            r.iteration,
+            r.objective,
+            r.true_energy_j,
+            if r.accepted { "" } else { "(step rejected)" }
+        ));
+        self.0.tick();
+    }
+}
+
+fn spinner() -> ProgressBar {
+    let pb = ProgressBar::new_spinner();
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {prefix:>7} {msg} [{elapsed}]")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    pb
+}
+
+fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        Command::Plan {
+            mission,
+            scheme,
+            out,
+            init,
+            max_iterations,
+            tolerance,
+            no_coarse,
+            plain_sca,
+            resolution,
+        } => {
+            let m = Mission::from_path(&mission).map_err(bad)?;
+            if !(tolerance.is_finite() && tolerance > 0.0) {
+                return Err(bad(anyhow::anyhow!(
+                    "--tolerance {tolerance}: must be a finite number > 0"
+                )));
+            }
+            let p = m.params();
+            let init = match init {
+                Some(path) => Some(
+                    Trajectory::from_csv_path(&path, p.slot_s, m.slots(), p.start_m)
+                        .map_err(bad)?,
+                ),
+                None => None,
+            };
+            let options = PlanOptions {
+                scheme,
+                max_iterations,
+                tolerance,
+                init,
+                coarse: !no_coarse,
+                over_relaxation: !plain_sca,
+                resolution,
+                min_kappa_scale: if plain_sca {
+                    1.0
+                } else {
+                    PlanOptions::default().min_kappa_scale
+                },
+                ..PlanOptions::default()
+            };
+            let pb = spinner();
+            let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));
+            pb.finish_and_clear();
+            let result = result.map_err(|e| match e {
+                PlanError::Infeasible(_) => Failure::Infeasible(e.into()),
+                PlanError::InvalidInit(_) => Failure::BadInput(e.into()),
+                PlanError::Solver { .. } => Failure::Internal(e.into()),
+            })?;
+            let files = report::write_plan_dir(&out, &m, &result)
+                .with_context(|| format!("writing {}", out.display()))?;
+            let s = Summary::new(&m, &result);
+            println!(
+                "{}: scheme {}, true energy {:.1} J ({:+.2}% vs floor {:.1} J), own objective {}, {} iterations ({:?}), {:.3} s",
+                m.name(),
+                s.scheme,
+                s.energy_j,
+                100.0 * s.energy_over_floor,
+                s.floor_energy_j,
+                s.objective_j
+                    .map(|v| format!("{v:.1} J"))
+                    .or(s.objective_m.map(|v| format!("{v:.1} m")))
+                    .unwrap_or_default(),
+                s.iterations,
+                s.termination,
+                s.solve_seconds
+            );
+            println!(
+                "exact geometry: feasible {}, sensing violation {:.3} m ({} slots out of view), azimuth speed shortfall {:.3} m/s, speeds {:.2}..{:.2} m/s",
+                s.feasible,
+                s.max_sensing_violation_m,
+                s.slots_out_of_view,
+                s.max_azimuth_speed_violation_mps,
+                s.min_speed_mps,
+                s.max_speed_mps
+            );
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+            Ok(())
+        }
+        Command::Evaluate {
+            mission,
+            trajectory,
+        } => {
+            let m = Mission::from_path(&mission).map_err(bad)?;
+            let p = m.params();
+            let tr = Trajectory::from_csv_path(&trajectory, p.slot_s, m.slots(), p.start_m)
+                .map_err(bad)?;
+            let ev = evaluate(&m, &tr);
+            let json = serde_json::json!({
+                "energy_j": ev.energy_j,
+                "feasible": ev.is_feasible(),
+                "violations": ev.violations,
+                "min_speed_mps": ev.min_speed_mps,
+                "max_speed_mps": ev.max_speed_mps,
+                "length_m": ev.length_m,
+                "slots_out_of_view": ev.slots_out_of_view,
+                "slots_unresolved_general": ev.slots_unresolved,
+                "slots_blind": ev.slots_blind,
+            });
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&json).context("encoding the evaluation")?
+            );
+            Ok(())
+        }
+        Command::Reproduce { out, quick, only } => {
+            let figures =
+                reproduce::FigureSet::parse(&only).map_err(|e| bad(anyhow::anyhow!(e)))?;
+            let report = reproduce::reproduce(&out, quick, &figures)
+                .with_context(|| format!("reproducing into {}", out.display()))?;
+            println!("wrote {}", report.display());
+            Ok(())
+        }
+        Command::Dmin {
+            radius_m,
+            objects,
+            trials,
+            seed,
+        } => {
+            let correct = expected_dmin_m(radius_m, objects, CdfForm::Correct).map_err(bad)?;
+            let printed = expected_dmin_m(radius_m, objects, CdfForm::AsPrinted).map_err(bad)?;
+            let (mc, se) =
+                expected_dmin_monte_carlo_m(radius_m, objects, trials, seed).map_err(bad)?;
+            println!("R = {radius_m} m, N = {objects}");
+            println!("E[d_min] correct formula : {correct:.3} m");
+            println!(
+                "E[d_min] as printed      : {printed:.3} m  (the paper's eq. lacks a factor l)"
+            );
+            println!("E[d_min] Monte Carlo     : {mc:.3} ± {se:.3} m  ({trials} trials)");
+            Ok(())
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::BadInput(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Infeasible(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(3)
+        }
+        Err(Failure::Internal(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
 }

@@ -176,7 +176,7 @@ impl Mission {
     /// when `factor` is 0 or does not divide the number of slots.
     pub fn coarsened(&self, factor: usize) -> Option<Self> {
         let n = self.slots();
-        if factor == 0 || n % factor != 0 {
+        if factor == 0 || !n.is_multiple_of(factor) {
             return None;
         }
         let mut params = self.params.clone();

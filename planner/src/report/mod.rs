@@ -2,6 +2,7 @@
 //! `energy.svg`, `convergence.svg`; and reading a plan directory back.
 
 pub mod plot;
+pub mod reproduce;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -116,6 +117,12 @@ pub struct Summary {
     pub slots_out_of_view: usize,
     /// Landmark slots whose general resolution cell is wider than d_min (SPEC.md §4 item 12).
     pub slots_unresolved_general: usize,
+    /// Landmark slots in blind geometry (ψ < 5°).
+    pub slots_blind: usize,
+    /// Largest worst width of the resolution cell over landmark slots, m.
+    pub max_worst_width_m: f64,
+    /// The resolution requirement the plan was made for.
+    pub resolution: crate::evaluate::ResolutionMode,
     /// Largest general range resolution over landmark slots, m.
     pub max_range_resolution_general_m: f64,
     /// Largest paper range resolution over landmark slots, m.
@@ -163,13 +170,18 @@ impl Summary {
             length_m: ev.length_m,
             slots_out_of_view: ev.slots_out_of_view,
             slots_unresolved_general: ev.slots_unresolved,
+            slots_blind: ev.slots_blind,
+            max_worst_width_m: landmark_slots()
+                .map(|s| s.worst_width_m)
+                .fold(0.0, f64::max),
+            resolution: result.resolution,
             max_range_resolution_general_m: landmark_slots()
                 .map(|s| s.range_resolution_general_m)
                 .fold(0.0, f64::max),
             max_range_resolution_paper_m: landmark_slots()
                 .map(|s| s.range_resolution_paper_m)
                 .fold(0.0, f64::max),
-            feasible: ev.is_feasible(),
+            feasible: ev.is_feasible_for(result.resolution),
             cone_programs: result.cone_programs,
             repair_iterations: result.repair_iterations,
         }

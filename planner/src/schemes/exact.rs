@@ -14,7 +14,9 @@
 //! problem that is tight at the previous iterate: each iterate is exactly feasible and its true
 //! energy is no larger than the previous one (a majorisation–minimisation sequence).
 
-use crate::geometry::v2;
+use crate::evaluate::ResolutionMode;
+use crate::geometry::{v2, CellLinear};
+use crate::params::SPEED_OF_LIGHT_MPS;
 use crate::power::PowerModel;
 use crate::socp::{Lin, ProblemBuilder};
 use crate::{Mission, Trajectory};
@@ -57,6 +59,8 @@ pub struct ExactTuning {
     /// segment from q_{t−1} + D n_t to q_t + D n_t during slot t (straight flight). Used on the
     /// coarse grid so that its solution, interpolated to the fine slots, stays feasible.
     pub whole_slot_sensing: bool,
+    /// Which resolution requirement to impose in landmark slots.
+    pub resolution: ResolutionMode,
 }
 
 impl Default for ExactTuning {
@@ -67,6 +71,7 @@ impl Default for ExactTuning {
             kappa_scale: 1.0,
             elastic_weight: None,
             whole_slot_sensing: false,
+            resolution: ResolutionMode::Paper,
         }
     }
 }
@@ -84,6 +89,8 @@ struct SlotVars {
     e: Option<usize>,
     /// Elastic mode: violation slack σ_t.
     sigma: Option<usize>,
+    /// General resolution: m_t ≥ ‖q_t − q_t^(ℓ)‖ (for the position margin of the cell terms).
+    shift: Option<usize>,
 }
 
 /// The linearisation data of one slot, from the previous iterate.
@@ -145,6 +152,7 @@ impl ExactSubproblem {
                 (objective != ExactObjective::Distance).then(|| [take(), take(), take(), take()]);
             let e = landmark.then(&mut take);
             let sigma = (landmark && tuning.elastic_weight.is_some()).then(&mut take);
+            let shift = (landmark && tuning.resolution == ResolutionMode::General).then(&mut take);
             vars.push(SlotVars {
                 x,
                 y,
@@ -152,6 +160,7 @@ impl ExactSubproblem {
                 energy,
                 e,
                 sigma,
+                shift,
             });
         }
         let mut b = ProblemBuilder::new(next);
@@ -209,8 +218,8 @@ impl ExactSubproblem {
                 let u = l.step_m;
                 let lexpr = Lin::var(a, 2.0 * l.aux)
                     .plus_const(-l.aux * l.aux - k * v2::dot(u, u))
-                    .add(&vx.clone().scaled(2.0 * k * u[0]))
-                    .add(&vy.clone().scaled(2.0 * k * u[1]));
+                    .plus_lin(&vx.clone().scaled(2.0 * k * u[0]))
+                    .plus_lin(&vy.clone().scaled(2.0 * k * u[1]));
                 // s a ≥ 1 ; s² ≤ L
                 b.rotated_soc(
                     Lin::var(s, 1.0),
@@ -236,7 +245,7 @@ impl ExactSubproblem {
             // part may be violated (slack σ_t); the bound's part stays hard.
             let u_norm = v2::norm(l.step_m);
             let h = l.dir;
-            let along = vx.clone().scaled(h[0]).add(&vy.clone().scaled(h[1]));
+            let along = vx.clone().scaled(h[0]).plus_lin(&vy.clone().scaled(h[1]));
             let keep = tuning.speed_keep_fraction * u_norm;
             let s_min = match sv.sigma {
                 None => (delta * v_min).max(keep),
@@ -257,18 +266,18 @@ impl ExactSubproblem {
             let pvx = vx
                 .clone()
                 .scaled(pm[0][0])
-                .add(&vy.clone().scaled(pm[0][1]));
+                .plus_lin(&vy.clone().scaled(pm[0][1]));
             let pvy = vx
                 .clone()
                 .scaled(pm[1][0])
-                .add(&vy.clone().scaled(pm[1][1]));
+                .plus_lin(&vy.clone().scaled(pm[1][1]));
             let jh = v2::right(h);
             let cx = Lin::var(sv.x, 1.0)
                 .plus_const(offset * jh[0])
-                .add(&pvy.clone().scaled(scale));
+                .plus_lin(&pvy.clone().scaled(scale));
             let cy = Lin::var(sv.y, 1.0)
                 .plus_const(offset * jh[1])
-                .add(&pvx.clone().scaled(-scale));
+                .plus_lin(&pvx.clone().scaled(-scale));
             let mut head = Lin::var(e, -1.0).plus_const(radius);
             if let Some(sig) = sv.sigma {
                 head = head.plus(sig, 1.0);
@@ -278,8 +287,8 @@ impl ExactSubproblem {
                 b.soc(
                     head.clone(),
                     &[
-                        cx.clone().sub(&vx).plus_const(-g[0]),
-                        cy.clone().sub(&vy).plus_const(-g[1]),
+                        cx.clone().minus_lin(&vx).plus_const(-g[0]),
+                        cy.clone().minus_lin(&vy).plus_const(-g[1]),
                     ],
                 );
             }
@@ -305,13 +314,30 @@ impl ExactSubproblem {
                 let nrm = v2::unit(v2::sub(l.centre_m, p.bs_m)).unwrap_or([1.0, 0.0]);
                 let mut expr = cx
                     .scaled(nrm[0])
-                    .add(&cy.scaled(nrm[1]))
+                    .plus_lin(&cy.scaled(nrm[1]))
                     .plus_const(-v2::dot(nrm, p.bs_m) - rk - SENSING_MARGIN_M)
                     .plus(e, -1.0);
                 if let Some(sig) = sv.sigma {
                     expr = expr.plus(sig, 1.0);
                 }
                 b.nonneg(expr);
+            }
+            if let Some(m) = sv.shift {
+                resolution_cell_constraints(
+                    &mut b,
+                    mission,
+                    ResolutionSlot {
+                        q0: prev.q(t),
+                        step0: l.step_m,
+                        landmark: g,
+                        x: sv.x,
+                        y: sv.y,
+                        shift: m,
+                        sigma: sv.sigma,
+                    },
+                    &vx,
+                    &vy,
+                );
             }
             if let Some(sig) = sv.sigma {
                 b.nonneg(Lin::var(sig, 1.0));
@@ -361,6 +387,99 @@ impl ExactSubproblem {
             .filter_map(|sv| sv.sigma.and_then(|s| x.get(s).copied()))
             .fold(0.0, f64::max)
     }
+}
+
+/// Where the resolution-cell constraints of one landmark slot are expanded.
+#[derive(Debug, Clone, Copy)]
+struct ResolutionSlot {
+    /// Previous position q_t^(ℓ).
+    q0: [f64; 2],
+    /// Previous step u_t.
+    step0: [f64; 2],
+    /// The landmark.
+    landmark: [f64; 2],
+    x: usize,
+    y: usize,
+    /// m_t ≥ ‖q_t − q0‖.
+    shift: usize,
+    sigma: Option<usize>,
+}
+
+/// Safety factor on the finite-difference Lipschitz estimates of the cell terms in q.
+const CELL_MARGIN_FACTOR: f64 = 3.0;
+
+/// The worst width of the resolution cell ≤ d_min (SPEC.md §4 item 12), convexified.
+///
+/// At a fixed UAV position both width conditions are convex in the velocity v (CellLinear):
+/// s k·v ≥ ‖g‖/(T_d d_min) (linear) and s k·v ≥ c/(B d_min) ‖A v‖ (a second-order cone), with
+/// s the side of the blind line the previous iterate is on. Their dependence on the position is
+/// covered by a margin L ‖q_t − q_t^(ℓ)‖ with L a (safety-factored) finite-difference bound, so
+/// the constraints are exact at the previous iterate; each step is checked on the exact geometry.
+fn resolution_cell_constraints(
+    b: &mut ProblemBuilder,
+    mission: &Mission,
+    rs: ResolutionSlot,
+    vx: &Lin,
+    vy: &Lin,
+) {
+    let p = mission.params();
+    let delta = p.slot_s;
+    let cl = CellLinear::new(p, rs.q0, rs.landmark);
+    let side = if v2::dot(cl.cross, rs.step0) >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
+    let iso_rhs = |c: &CellLinear| v2::norm(c.grad) / (p.integration_time_s * p.d_min_m);
+    let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
+    // finite-difference sensitivities to the position, per unit speed (velocity ≤ V_m)
+    let h = 1.0;
+    let mut l_iso: f64 = 0.0;
+    let mut l_cross: f64 = 0.0;
+    for dir in [[h, 0.0], [0.0, h], [-h, 0.0], [0.0, -h]] {
+        let c2 = CellLinear::new(p, v2::add(rs.q0, dir), rs.landmark);
+        let dk = v2::norm(v2::sub(c2.cross, cl.cross)) / h;
+        let dg = (iso_rhs(&c2) - iso_rhs(&cl)).abs() / h;
+        let da = (0..2)
+            .flat_map(|i| (0..2).map(move |j| (i, j)))
+            .map(|(i, j)| (c2.doppler_map[i][j] - cl.doppler_map[i][j]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            / h;
+        l_iso = l_iso.max(dk * p.max_speed_mps + dg);
+        l_cross = l_cross.max((dk + k_cross * da) * p.max_speed_mps);
+    }
+    l_iso *= CELL_MARGIN_FACTOR;
+    l_cross *= CELL_MARGIN_FACTOR;
+    // m ≥ ‖q_t − q0‖
+    b.soc(
+        Lin::var(rs.shift, 1.0),
+        &[
+            Lin::var(rs.x, 1.0).plus_const(-rs.q0[0]),
+            Lin::var(rs.y, 1.0).plus_const(-rs.q0[1]),
+        ],
+    );
+    // s k·v/δ, with v the step (m per slot)
+    let kv = vx
+        .clone()
+        .scaled(side * cl.cross[0] / delta)
+        .plus_lin(&vy.clone().scaled(side * cl.cross[1] / delta));
+    let rhs = iso_rhs(&cl);
+    let mut iso = kv.clone().plus_const(-rhs).plus(rs.shift, -l_iso);
+    let mut head = kv.plus(rs.shift, -l_cross);
+    if let Some(sig) = rs.sigma {
+        // one metre of slack relaxes the width requirement by about one metre
+        iso = iso.plus(sig, rhs / p.d_min_m);
+        head = head.plus(sig, rhs / p.d_min_m);
+    }
+    b.nonneg(iso);
+    let a = cl.doppler_map;
+    let av = |i: usize| {
+        vx.clone()
+            .scaled(k_cross * a[i][0] / delta)
+            .plus_lin(&vy.clone().scaled(k_cross * a[i][1] / delta))
+    };
+    b.soc(head, &[av(0), av(1)]);
 }
 
 /// (x_t − x_{t−1}, y_t − y_{t−1}) as affine expressions (q_0 is a constant).

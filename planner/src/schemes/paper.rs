@@ -160,7 +160,7 @@ impl PaperState {
             b.nonneg(Lin::var(vv, 1.0).plus_const(-v_min));
             // (p52) w δ V ≤ y_t − y_{t−1} ; (p53) x_t − x_{t−1} ≤ u δ V
             b.nonneg(dy.clone().plus(vv, -w * delta));
-            b.nonneg(Lin::var(vv, u * delta).sub(&dx));
+            b.nonneg(Lin::var(vv, u * delta).minus_lin(&dx));
             // sensing disc with the modelled centre (x + w D, y − u D)
             b.soc(
                 Lin::constant_only(r),

@@ -38,14 +38,14 @@ impl Lin {
     }
 
     /// `self + other`.
-    pub fn add(mut self, other: &Lin) -> Self {
+    pub fn plus_lin(mut self, other: &Lin) -> Self {
         self.terms.extend_from_slice(&other.terms);
         self.c += other.c;
         self
     }
 
     /// `self − other`.
-    pub fn sub(mut self, other: &Lin) -> Self {
+    pub fn minus_lin(mut self, other: &Lin) -> Self {
         self.terms.extend(other.terms.iter().map(|&(j, a)| (j, -a)));
         self.c -= other.c;
         self
@@ -101,8 +101,8 @@ mod tests {
         let b = Lin::var(1, 1.0).plus_const(4.0);
         let x = [1.0, 2.0];
         assert_eq!(a.eval(&x), 9.0);
-        assert_eq!(a.clone().sub(&b).eval(&x), 9.0 - 6.0);
-        assert_eq!(a.clone().add(&b).eval(&x), 15.0);
+        assert_eq!(a.clone().minus_lin(&b).eval(&x), 9.0 - 6.0);
+        assert_eq!(a.clone().plus_lin(&b).eval(&x), 15.0);
         assert_eq!(a.scaled(-2.0).eval(&x), -18.0);
     }
 }

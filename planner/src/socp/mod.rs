@@ -100,9 +100,9 @@ impl ProblemBuilder {
     /// `‖w‖² ≤ a·b` with a, b ≥ 0 (rotated cone), as the SOC (a + b, a − b, 2w).
     pub fn rotated_soc(&mut self, a: Lin, b: Lin, w: &[Lin]) {
         let mut tail = Vec::with_capacity(1 + w.len());
-        tail.push(a.clone().sub(&b));
+        tail.push(a.clone().minus_lin(&b));
         tail.extend(w.iter().map(|wi| wi.clone().scaled(2.0)));
-        self.soc(a.add(&b), &tail);
+        self.soc(a.plus_lin(&b), &tail);
     }
 
     /// Value of an affine expression at `x`.

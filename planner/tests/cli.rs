@@ -1,0 +1,245 @@
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+//! The `cellsar-planner` binary end to end: files written, exit codes, messages.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_cellsar-planner"))
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("cellsar-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn plan_writes_the_plan_directory() {
+    let out = tmp("plan");
+    let o = bin()
+        .args(["plan"])
+        .arg(repo().join("missions/explicit.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "trajectory.csv",
+        "summary.json",
+        "mission.toml",
+        "trajectory.svg",
+        "energy.svg",
+        "convergence.svg",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    for col in [
+        "t_s",
+        "x_m",
+        "y_m",
+        "speed_mps",
+        "heading_rad",
+        "xc_m",
+        "yc_m",
+        "landmark_x_m",
+        "landmark_y_m",
+        "power_w",
+        "energy_j",
+    ] {
+        assert!(header.split(',').any(|c| c == col), "column {col}");
+    }
+    assert_eq!(csv.lines().count(), 1 + 1 + 120); // header, start, 120 slots
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "scheme",
+        "energy_j",
+        "objective_j",
+        "iterations",
+        "converged",
+        "solve_seconds",
+        "objective_history",
+        "max_sensing_violation_m",
+        "min_speed_mps",
+        "max_speed_mps",
+    ] {
+        assert!(summary.get(key).is_some(), "summary lacks {key}");
+    }
+    assert_eq!(summary["scheme"], "exact");
+    assert_eq!(summary["feasible"], true);
+    // the plan directory reads back, and its trajectory re-plans as --init
+    let (m, tr) = planner::report::read_plan_dir(&out).unwrap();
+    assert_eq!(tr.slots(), m.slots());
+    let out2 = tmp("plan-init");
+    let o = bin()
+        .args(["plan"])
+        .arg(out.join("mission.toml"))
+        .args(["--scheme", "paper", "--max-iterations", "2", "--init"])
+        .arg(out.join("trajectory.csv"))
+        .arg("--out")
+        .arg(&out2)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn bad_parameter_exits_2_and_names_the_field() {
+    let d = tmp("bad");
+    let f = d.join("m.toml");
+    std::fs::write(
+        &f,
+        "[params]\nd_min_m = -5\n[landmarks]\npreset = \"default\"\n",
+    )
+    .unwrap();
+    let o = bin()
+        .arg("plan")
+        .arg(&f)
+        .arg("--out")
+        .arg(d.join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("d_min_m"));
+
+    std::fs::write(
+        &f,
+        "[params]\nbandwith_hz = 1\n[landmarks]\npreset = \"default\"\n",
+    )
+    .unwrap();
+    let o = bin()
+        .arg("plan")
+        .arg(&f)
+        .arg("--out")
+        .arg(d.join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("bandwith_hz"));
+
+    let o = bin()
+        .arg("plan")
+        .arg(d.join("missing.toml"))
+        .arg("--out")
+        .arg(d.join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.toml"));
+}
+
+#[test]
+fn infeasible_mission_exits_3_and_names_the_slot() {
+    let d = tmp("infeasible");
+    let f = d.join("m.toml");
+    std::fs::write(
+        &f,
+        "[params]\nhorizon_s = 30\n[landmarks]\npoints = [{ x_m = 0, y_m = 0, from_s = 0, to_s = 10 }, { x_m = 9000, y_m = 0, from_s = 10, to_s = 30 }]\n",
+    )
+    .unwrap();
+    let o = bin()
+        .arg("plan")
+        .arg(&f)
+        .arg("--out")
+        .arg(d.join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("slot 21"), "{err}");
+}
+
+#[test]
+fn bad_init_csv_exits_2_and_names_the_line() {
+    let d = tmp("badinit");
+    let init = d.join("init.csv");
+    std::fs::write(&init, "t_s,x_m,y_m\n0.5,1,zz\n").unwrap();
+    let o = bin()
+        .arg("plan")
+        .arg(repo().join("missions/explicit.toml"))
+        .arg("--init")
+        .arg(&init)
+        .arg("--out")
+        .arg(d.join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("line 2, column y_m"));
+}
+
+#[test]
+fn dmin_prints_the_three_values() {
+    let o = bin()
+        .args([
+            "dmin",
+            "--radius-m",
+            "5000",
+            "--objects",
+            "1000",
+            "--trials",
+            "300",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("correct formula") && s.contains("as printed") && s.contains("Monte Carlo"));
+    let o = bin()
+        .args(["dmin", "--radius-m=-1", "--objects", "10"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("radius_m"));
+}
+
+#[test]
+fn reproduce_writes_figures_and_report() {
+    let out = tmp("repro");
+    let o = bin()
+        .args(["reproduce", "--quick", "--only", "4a,4c,t3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "REPORT.md",
+        "fig4a/dmin.svg",
+        "fig4a/dmin.csv",
+        "fig4c/power.svg",
+        "table3/table3.csv",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+    assert!(report.contains("| 50 | 3.81 |"), "{report}");
+    let o = bin()
+        .args(["reproduce", "--only", "99", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn every_example_mission_loads() {
+    for e in std::fs::read_dir(repo().join("missions")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "toml" || x == "json") {
+            planner::Mission::from_path(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        }
+    }
+}

@@ -1,0 +1,458 @@
+//! Direct-path (and zero-Doppler clutter) cancellation with the known reference: the
+//! Extensive Cancellation Algorithm (ECA) and its batched version ECA-B (Colone et al., 2009).
+//!
+//! The received FFT window r (N samples) is projected onto the orthogonal complement of the
+//! subspace spanned by the reference (the transmitted useful part u of the same symbol) delayed by
+//! the taps i ∈ [−taps_before, taps_after) (cyclic shifts: the window is CP-free and the direct
+//! path lies in the CP) and, with Doppler bins, modulated by e^{j2π l ν t}, l = −D..D:
+//! `r' = r − B (BᴴB + δI)⁻¹ Bᴴ r`. ECA uses one weight vector for all windows of a look; ECA-B one
+//! per batch of pulses. With D = 0 the Gram matrix is Toeplitz in the taps and everything is
+//! computed in the frequency domain in O(K N_sc) per window; with D > 0 the basis is built
+//! explicitly in the time domain (O(C² N), C = K(2D+1)).
+//!
+//! Metrics (per batch, summed over its windows): input and output power, the matched-filter
+//! output at the direct path's (fractional) delay before and after, and the power loss of a unit
+//! test target at a given delay through the same projection.
+
+use std::sync::Arc;
+
+use rustfft::num_complex::{Complex32, Complex64};
+use rustfft::Fft;
+use serde::{Deserialize, Serialize};
+
+use crate::config::{CancellerKind, ProcessingConfig};
+use crate::error::{RadarError, Result};
+use crate::linalg::cholesky_solve;
+use crate::waveform::Numerology;
+
+/// One received symbol window, in the frequency domain.
+#[derive(Debug, Clone)]
+pub struct SymbolWindow {
+    /// FFT of the received window (N bins, unnormalised forward FFT); cancelled in place.
+    pub spectrum: Vec<Complex64>,
+    /// The transmitted QAM data of this symbol (N_sc values).
+    pub data: Arc<Vec<Complex32>>,
+    /// Window start time, s (for Doppler bins across a batch).
+    pub t_s: f64,
+    /// The direct path's delay in this window from navigation, samples (for metrics).
+    pub dp_delay_samples: f64,
+}
+
+/// Power metrics of one cancellation (sums over windows; combine batches with [`CancelStats::add`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct CancelStats {
+    /// Windows processed.
+    pub windows: usize,
+    /// Σ mean |r|² before, W.
+    pub input_power: f64,
+    /// Σ mean |r'|² after, W.
+    pub output_power: f64,
+    /// Σ |matched-filter output at the direct-path delay|² before.
+    pub dp_mf_before: f64,
+    /// Σ |matched-filter output at the direct-path delay|² after.
+    pub dp_mf_after: f64,
+    /// Σ unit-target energy before.
+    pub target_energy_before: f64,
+    /// Σ unit-target energy after the projection.
+    pub target_energy_after: f64,
+}
+
+impl CancelStats {
+    /// Accumulates another batch.
+    pub fn add(&mut self, o: &CancelStats) {
+        self.windows += o.windows;
+        self.input_power += o.input_power;
+        self.output_power += o.output_power;
+        self.dp_mf_before += o.dp_mf_before;
+        self.dp_mf_after += o.dp_mf_after;
+        self.target_energy_before += o.target_energy_before;
+        self.target_energy_after += o.target_energy_after;
+    }
+
+    /// Cancellation (clutter attenuation) P_in / P_out, dB.
+    pub fn cancellation_db(&self) -> f64 {
+        10.0 * (self.input_power / self.output_power).log10()
+    }
+
+    /// Direct-path reduction, dB: the direct-path power before cancellation (the matched-filter
+    /// output at its delay, |p(Δ_d)|², normalised so that it equals the path's power) over the
+    /// total residual power after it (noise and echoes included, so this is a lower bound on the
+    /// suppression of the direct path itself). The matched-filter output at Δ_d after the
+    /// projection is ~0 by construction and so is no measure.
+    pub fn dp_reduction_db(&self) -> f64 {
+        10.0 * (self.dp_mf_before / self.output_power).log10()
+    }
+
+    /// Power loss of a target through the projection, dB (≥ 0).
+    pub fn target_loss_db(&self) -> f64 {
+        if self.target_energy_before > 0.0 {
+            -10.0 * (self.target_energy_after / self.target_energy_before).log10()
+        } else {
+            0.0
+        }
+    }
+
+    /// Mean output power per sample, W.
+    pub fn mean_output_power(&self) -> f64 {
+        self.output_power / self.windows.max(1) as f64
+    }
+
+    /// Mean input power per sample, W.
+    pub fn mean_input_power(&self) -> f64 {
+        self.input_power / self.windows.max(1) as f64
+    }
+}
+
+/// The canceller of a processing configuration.
+#[derive(Debug, Clone)]
+pub struct Canceller {
+    kind: CancellerKind,
+    taps: Vec<i64>,
+    dopplers_hz: Vec<f64>,
+    loading: f64,
+    num: Numerology,
+    force_general: bool,
+}
+
+impl Canceller {
+    /// Builds the canceller of `cfg` for numerology `num`.
+    pub fn new(cfg: &ProcessingConfig, num: &Numerology) -> Result<Self> {
+        cfg.validate()?;
+        let taps = (-(cfg.taps_before as i64)..cfg.taps_after as i64).collect();
+        let nu = cfg
+            .doppler_spacing_hz
+            .unwrap_or(num.subcarrier_spacing_hz / 4.0);
+        let d = cfg.doppler_bins as i64;
+        Ok(Self {
+            kind: cfg.canceller,
+            taps,
+            dopplers_hz: (-d..=d).map(|l| l as f64 * nu).collect(),
+            loading: cfg.diagonal_loading,
+            num: num.clone(),
+            force_general: false,
+        })
+    }
+
+    /// Uses the explicit time-domain basis even without Doppler bins (for cross-checks).
+    pub fn with_general_path(mut self, on: bool) -> Self {
+        self.force_general = on;
+        self
+    }
+
+    /// The kind.
+    pub fn kind(&self) -> CancellerKind {
+        self.kind
+    }
+
+    /// Number of basis vectors.
+    pub fn dimension(&self) -> usize {
+        self.taps.len() * self.dopplers_hz.len()
+    }
+
+    /// U_k = N X_k / √N_sc at occupied subcarrier i.
+    fn u_of(&self, x: &[Complex32]) -> Vec<Complex64> {
+        let n = self.num.fft_size as f64;
+        let s = n / (self.num.subcarriers as f64).sqrt();
+        x.iter()
+            .map(|v| Complex64::new(v.re as f64 * s, v.im as f64 * s))
+            .collect()
+    }
+
+    /// Cancels one batch of windows in place (their weights are shared). `target_delay` is the
+    /// delay (samples) of the unit test target for the target-loss metric.
+    pub fn cancel_batch(
+        &self,
+        windows: &mut [SymbolWindow],
+        target_delay: Option<f64>,
+        fft: &dyn Fft<f64>,
+        ifft: &dyn Fft<f64>,
+    ) -> Result<CancelStats> {
+        let mut st = CancelStats {
+            windows: windows.len(),
+            ..Default::default()
+        };
+        let n = self.num.fft_size as f64;
+        for w in windows.iter() {
+            st.input_power += w.spectrum.iter().map(|v| v.norm_sqr()).sum::<f64>() / (n * n);
+            st.dp_mf_before += self.mf_at(w, w.dp_delay_samples).norm_sqr();
+        }
+        if self.kind == CancellerKind::None || windows.is_empty() {
+            st.output_power = st.input_power;
+            st.dp_mf_after = st.dp_mf_before;
+            if let Some(d) = target_delay {
+                for w in windows.iter() {
+                    let e = self.target_energy(w, d);
+                    st.target_energy_before += e;
+                    st.target_energy_after += e;
+                }
+            }
+            return Ok(st);
+        }
+        if self.dopplers_hz.len() == 1 && !self.force_general {
+            self.cancel_fast(windows, target_delay, &mut st)?;
+        } else {
+            self.cancel_general(windows, target_delay, fft, ifft, &mut st)?;
+        }
+        for w in windows.iter() {
+            st.output_power += w.spectrum.iter().map(|v| v.norm_sqr()).sum::<f64>() / (n * n);
+            st.dp_mf_after += self.mf_at(w, w.dp_delay_samples).norm_sqr();
+        }
+        Ok(st)
+    }
+
+    /// Matched-filter output (1/N) Σ U_k* Y_k e^{j2πkΔ/N} / ‖u‖² at fractional delay Δ.
+    fn mf_at(&self, w: &SymbolWindow, delay: f64) -> Complex64 {
+        let n = self.num.fft_size as f64;
+        let u = self.u_of(&w.data);
+        let k0 = self.num.subcarrier_index(0) as f64;
+        let step = Complex64::from_polar(1.0, std::f64::consts::TAU * delay / n);
+        let mut ph = Complex64::from_polar(1.0, std::f64::consts::TAU * (k0 * delay / n).fract());
+        let mut acc = Complex64::new(0.0, 0.0);
+        let mut e = 0.0;
+        for (i, ui) in u.iter().enumerate() {
+            acc += ui.conj() * w.spectrum[self.num.bin(i)] * ph;
+            e += ui.norm_sqr();
+            ph *= step;
+        }
+        // e/N = ‖u‖²
+        acc / e
+    }
+
+    /// Energy of a unit target at `delay` in this window: ‖u‖² = (1/N) Σ |U_k|².
+    fn target_energy(&self, w: &SymbolWindow, _delay: f64) -> f64 {
+        let n = self.num.fft_size as f64;
+        self.u_of(&w.data).iter().map(|v| v.norm_sqr()).sum::<f64>() / n
+    }
+
+    fn loaded_solve(
+        &self,
+        g: &mut [Complex64],
+        c: &[Complex64],
+        stage: &str,
+    ) -> Result<Vec<Complex64>> {
+        let k = c.len();
+        let mean_diag = (0..k).map(|i| g[i * k + i].re).sum::<f64>() / k as f64;
+        for i in 0..k {
+            g[i * k + i] += Complex64::new(self.loading * mean_diag, 0.0);
+        }
+        cholesky_solve(g, c).ok_or_else(|| RadarError::Numerical {
+            stage: stage.to_string(),
+            reason: "canceller Gram matrix is not positive definite (raise diagonal_loading or use fewer taps)".into(),
+        })
+    }
+
+    /// Frequency-domain ECA without Doppler bins.
+    fn cancel_fast(
+        &self,
+        windows: &mut [SymbolWindow],
+        target_delay: Option<f64>,
+        st: &mut CancelStats,
+    ) -> Result<()> {
+        let num = &self.num;
+        let n = num.fft_size as f64;
+        let k = self.taps.len();
+        let nsc = num.subcarriers;
+        let tmin = self.taps[0];
+        // e^{j2π k_i t/N} for all taps t and subcarriers i, built per window (cheap relative to FFTs)
+        let k0 = num.subcarrier_index(0);
+        let tw = std::f64::consts::TAU / n;
+        // phase table: ph[t][i]
+        let mut ph = vec![Complex64::new(0.0, 0.0); k * nsc];
+        for (a, &t) in self.taps.iter().enumerate() {
+            let step = Complex64::from_polar(1.0, tw * t as f64);
+            let mut p =
+                Complex64::from_polar(1.0, tw * ((k0 * t).rem_euclid(num.fft_size as i64)) as f64);
+            for i in 0..nsc {
+                ph[a * nsc + i] = p;
+                p *= step;
+            }
+        }
+        // g[δ] for δ = t_a − t_b ∈ [−(k−1), k−1], summed over windows
+        let mut gk = vec![Complex64::new(0.0, 0.0); 2 * k - 1];
+        let mut c = vec![Complex64::new(0.0, 0.0); k];
+        let mut ct = vec![Complex64::new(0.0, 0.0); k];
+        let mut et = 0.0;
+        let us: Vec<Vec<Complex64>> = windows.iter().map(|w| self.u_of(&w.data)).collect();
+        for (w, u) in windows.iter().zip(&us) {
+            let p2: Vec<f64> = u.iter().map(|v| v.norm_sqr()).collect();
+            for (j, g) in gk.iter_mut().enumerate() {
+                // δ = j − (k−1) = t_a − t_b: e^{j2πkδ/N} = ph[t_a]·conj(ph[t_b]) with t_b = tmin
+                let d = j as i64 - (k as i64 - 1);
+                let step = Complex64::from_polar(1.0, tw * d as f64);
+                let mut p = Complex64::from_polar(
+                    1.0,
+                    tw * ((k0 * d).rem_euclid(num.fft_size as i64)) as f64,
+                );
+                let mut s = Complex64::new(0.0, 0.0);
+                for pi in &p2 {
+                    s += p * *pi;
+                    p *= step;
+                }
+                *g += s / n;
+            }
+            for a in 0..k {
+                let row = &ph[a * nsc..(a + 1) * nsc];
+                let mut s = Complex64::new(0.0, 0.0);
+                for i in 0..nsc {
+                    s += u[i].conj() * w.spectrum[num.bin(i)] * row[i];
+                }
+                c[a] += s / n;
+            }
+            if let Some(dt) = target_delay {
+                // S_k = U_k e^{−j2πkΔ/N}: c_t[a] = (1/N) Σ |U_k|² e^{j2πk(t_a − Δ)/N}
+                for (a, &t) in self.taps.iter().enumerate() {
+                    let d = t as f64 - dt;
+                    let step = Complex64::from_polar(1.0, tw * d);
+                    let mut p = Complex64::from_polar(1.0, tw * (k0 as f64 * d).rem_euclid(n));
+                    let mut s = Complex64::new(0.0, 0.0);
+                    for pi in &p2 {
+                        s += p * *pi;
+                        p *= step;
+                    }
+                    ct[a] += s / n;
+                }
+                et += p2.iter().sum::<f64>() / n;
+            }
+        }
+        let _ = tmin;
+        let mut g = vec![Complex64::new(0.0, 0.0); k * k];
+        for a in 0..k {
+            for b in 0..k {
+                g[a * k + b] = gk[(self.taps[a] - self.taps[b] + k as i64 - 1) as usize];
+            }
+        }
+        let mut gl = g.clone();
+        let wts = self.loaded_solve(&mut gl, &c, "cancel (ECA, frequency domain)")?;
+        // Y'_k = Y_k − U_k Σ_a w_a e^{−j2πk t_a/N}
+        for (w, u) in windows.iter_mut().zip(&us) {
+            for i in 0..nsc {
+                let mut s = Complex64::new(0.0, 0.0);
+                for a in 0..k {
+                    s += wts[a] * ph[a * nsc + i].conj();
+                }
+                w.spectrum[num.bin(i)] -= u[i] * s;
+            }
+        }
+        if target_delay.is_some() {
+            let mut gl = g;
+            let wt = self.loaded_solve(&mut gl, &ct, "cancel (target loss)")?;
+            let proj: f64 = ct.iter().zip(&wt).map(|(a, b)| (a.conj() * b).re).sum();
+            st.target_energy_before += et;
+            st.target_energy_after += (et - proj).max(0.0);
+        }
+        Ok(())
+    }
+
+    /// Time-domain ECA with an explicit basis (taps × Doppler bins).
+    fn cancel_general(
+        &self,
+        windows: &mut [SymbolWindow],
+        target_delay: Option<f64>,
+        fft: &dyn Fft<f64>,
+        ifft: &dyn Fft<f64>,
+        st: &mut CancelStats,
+    ) -> Result<()> {
+        let num = &self.num;
+        let nn = num.fft_size;
+        let n = nn as f64;
+        let fs = num.sample_rate_hz();
+        let cdim = self.dimension();
+        let tc = windows.iter().map(|w| w.t_s).sum::<f64>() / windows.len().max(1) as f64;
+        let mut g = vec![Complex64::new(0.0, 0.0); cdim * cdim];
+        let mut c = vec![Complex64::new(0.0, 0.0); cdim];
+        let mut ct = vec![Complex64::new(0.0, 0.0); cdim];
+        let mut et = 0.0;
+        let mut bases: Vec<Vec<Complex64>> = Vec::with_capacity(windows.len());
+        let mut sig: Vec<Vec<Complex64>> = Vec::with_capacity(windows.len());
+        for w in windows.iter() {
+            let u_k = self.u_of(&w.data);
+            let mut u = vec![Complex64::new(0.0, 0.0); nn];
+            for (i, v) in u_k.iter().enumerate() {
+                u[num.bin(i)] = *v;
+            }
+            let mut s_t = u.clone();
+            ifft.process(&mut u);
+            for v in u.iter_mut() {
+                *v /= n;
+            }
+            let mut r = w.spectrum.clone();
+            ifft.process(&mut r);
+            for v in r.iter_mut() {
+                *v /= n;
+            }
+            // basis: column (a, l) = u[(n − t_a) mod N] e^{j2π ν_l (t_w + n/f_s − t_c)}
+            let mut b = vec![Complex64::new(0.0, 0.0); cdim * nn];
+            for (l, &nu) in self.dopplers_hz.iter().enumerate() {
+                for (a, &t) in self.taps.iter().enumerate() {
+                    let col =
+                        &mut b[(l * self.taps.len() + a) * nn..(l * self.taps.len() + a + 1) * nn];
+                    let ph0 = std::f64::consts::TAU * nu * (w.t_s - tc);
+                    for (k, v) in col.iter_mut().enumerate() {
+                        let src = (k as i64 - t).rem_euclid(nn as i64) as usize;
+                        let phi = ph0 + std::f64::consts::TAU * nu * k as f64 / fs;
+                        *v = u[src] * Complex64::from_polar(1.0, phi);
+                    }
+                }
+            }
+            for p in 0..cdim {
+                let bp = &b[p * nn..(p + 1) * nn];
+                c[p] += bp
+                    .iter()
+                    .zip(&r)
+                    .map(|(x, y)| x.conj() * y)
+                    .sum::<Complex64>();
+                for q in p..cdim {
+                    let bq = &b[q * nn..(q + 1) * nn];
+                    let s: Complex64 = bp.iter().zip(bq).map(|(x, y)| x.conj() * y).sum();
+                    g[p * cdim + q] += s;
+                    if q != p {
+                        g[q * cdim + p] += s.conj();
+                    }
+                }
+            }
+            if let Some(dt) = target_delay {
+                let k0 = num.subcarrier_index(0) as f64;
+                for i in 0..num.subcarriers {
+                    let k = k0 + i as f64;
+                    s_t[num.bin(i)] *=
+                        Complex64::from_polar(1.0, -std::f64::consts::TAU * (k * dt / n).fract());
+                }
+                ifft.process(&mut s_t);
+                for v in s_t.iter_mut() {
+                    *v /= n;
+                }
+                for p in 0..cdim {
+                    let bp = &b[p * nn..(p + 1) * nn];
+                    ct[p] += bp
+                        .iter()
+                        .zip(&s_t)
+                        .map(|(x, y)| x.conj() * y)
+                        .sum::<Complex64>();
+                }
+                et += s_t.iter().map(|v| v.norm_sqr()).sum::<f64>();
+            }
+            bases.push(b);
+            sig.push(r);
+        }
+        let mut gl = g.clone();
+        let wts = self.loaded_solve(&mut gl, &c, "cancel (ECA, time domain)")?;
+        for ((w, b), mut r) in windows.iter_mut().zip(&bases).zip(sig) {
+            for p in 0..cdim {
+                let bp = &b[p * nn..(p + 1) * nn];
+                for (x, y) in r.iter_mut().zip(bp) {
+                    *x -= wts[p] * y;
+                }
+            }
+            fft.process(&mut r);
+            w.spectrum = r;
+        }
+        if target_delay.is_some() {
+            let mut gl = g;
+            let wt = self.loaded_solve(&mut gl, &ct, "cancel (target loss)")?;
+            let proj: f64 = ct.iter().zip(&wt).map(|(a, b)| (a.conj() * b).re).sum();
+            st.target_energy_before += et;
+            st.target_energy_after += (et - proj).max(0.0);
+        }
+        Ok(())
+    }
+}

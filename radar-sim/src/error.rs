@@ -1,0 +1,88 @@
+//! Typed errors of the radar library. Each names the field, file, pulse or aperture at fault.
+
+/// Everything that can go wrong in the radar library.
+#[derive(Debug, thiserror::Error)]
+pub enum RadarError {
+    /// A configuration value is invalid; `field` is its dotted name in the scene file.
+    #[error("{field}: {reason}")]
+    Config {
+        /// Dotted name, e.g. `radar.prf_hz`.
+        field: String,
+        /// What the value must satisfy.
+        reason: String,
+    },
+    /// The plan and the scene do not fit (e.g. no landmark in the beam, an empty aperture).
+    #[error("plan/scene mismatch: {0}")]
+    Mismatch(String),
+    /// A numerical step failed (e.g. a singular canceller Gram matrix).
+    #[error("numerical failure in {stage}: {reason}")]
+    Numerical {
+        /// Processing stage, e.g. `cancel` (pulse 17).
+        stage: String,
+        /// What happened.
+        reason: String,
+    },
+    /// An input array has the wrong shape.
+    #[error("{what}: expected {expected}, found {found}")]
+    Shape {
+        /// Which array.
+        what: String,
+        /// Expected size or shape.
+        expected: String,
+        /// Actual size or shape.
+        found: String,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file has bad content; `location` names the line, field or header entry.
+    #[error("{path}, {location}: {reason}")]
+    Format {
+        /// The file.
+        path: String,
+        /// Where in the file.
+        location: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+impl RadarError {
+    /// Shorthand for [`RadarError::Config`].
+    pub fn config(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self::Config {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Shorthand for [`RadarError::Format`].
+    pub fn format(
+        path: impl Into<String>,
+        location: impl Into<String>,
+        reason: impl Into<String>,
+    ) -> Self {
+        Self::Format {
+            path: path.into(),
+            location: location.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Shorthand for [`RadarError::Io`].
+    pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.display().to_string(),
+            source,
+        }
+    }
+}
+
+/// Result alias of the radar library.
+pub type Result<T> = std::result::Result<T, RadarError>;

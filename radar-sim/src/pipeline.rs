@@ -1,0 +1,746 @@
+//! The streaming API: a [`RadarSetup`] fixes the mission, scene and radar; a [`Synthesizer`]
+//! produces frames of pulses one at a time ([`synthesize_frames`]); a [`Processor`] turns the
+//! pulses of one aperture into range profiles ([`Processor::compress`]), look images
+//! ([`Processor::image_look`]) and detections ([`Processor::process_aperture`]).
+//!
+//! Frame layout (also on the wire and in `iq/*.npy`): `pulses × samples` complex f32,
+//! row-major, little-endian interleaved (re, im); a pulse holds `symbols_per_pulse` FFT windows
+//! of N samples each, symbol-major; [`PulseMeta`] carries each pulse's time, symbol index, UAV
+//! position/velocity/heading and receiver window delay.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use rustfft::num_complex::{Complex32, Complex64};
+use rustfft::{Fft, FftPlanner};
+
+use crate::antenna::Antenna;
+use crate::backproject::{backproject, profile_windows, BpGeometry, BpPulse, Grid};
+use crate::cancel::{CancelStats, Canceller, SymbolWindow};
+use crate::cfar::{ca_cfar, cluster, CfarParams, Detection};
+use crate::compress::RangeCompressor;
+use crate::config::{CancellerKind, RangeFilter, SceneFile};
+use crate::error::{RadarError, Result};
+use crate::resolution::{cut_directions, half_power_width, ResolutionReport};
+use crate::scene::SceneObject;
+use crate::scoring::{score, Score, TruthInImage};
+use crate::synth::{Components, Synthesizer};
+use crate::track::{plan_apertures, plan_pulses, Aperture, PulseMeta, Track};
+use crate::waveform::{Numerology, C_MPS};
+use planner::geometry::{self as pg, v2};
+
+/// Everything fixed by a mission's parameters and a scene file.
+#[derive(Debug, Clone)]
+pub struct RadarSetup {
+    /// The mission parameters (geometry, B, λ, T_d, d_min, ...).
+    pub params: planner::Params,
+    /// The scene file.
+    pub scene: SceneFile,
+    /// The resolved OFDM numerology.
+    pub num: Numerology,
+    /// The receive antenna.
+    pub antenna: Antenna,
+    /// BS antenna position (x, y, H_b), m.
+    pub bs_m: [f64; 3],
+    /// Coherent look length, s.
+    pub look_s: f64,
+}
+
+impl RadarSetup {
+    /// Resolves a setup; errors name the bad field.
+    pub fn new(params: &planner::Params, scene: &SceneFile) -> Result<Self> {
+        params
+            .validate()
+            .map_err(|e| RadarError::config("params", e.to_string()))?;
+        scene.validate()?;
+        let num = Numerology::new(&scene.radar, params.bandwidth_hz, params.wavelength_m)?;
+        let antenna = Antenna::new(
+            &scene.radar,
+            params.wavelength_m,
+            params.observation_angle_rad,
+        );
+        Ok(Self {
+            params: params.clone(),
+            scene: scene.clone(),
+            antenna,
+            bs_m: [params.bs_m[0], params.bs_m[1], params.bs_height_m],
+            look_s: scene.processing.look_s.unwrap_or(params.integration_time_s),
+            num,
+        })
+    }
+
+    /// Backprojection constants.
+    pub fn geometry(&self) -> BpGeometry {
+        BpGeometry {
+            bs_m: self.bs_m,
+            fs_hz: self.num.sample_rate_hz(),
+            upsample: self.scene.processing.upsample,
+            wavelength_m: self.num.wavelength_m(),
+        }
+    }
+
+    /// The synthesiser for `objects`.
+    pub fn synthesizer(&self, objects: Vec<SceneObject>) -> Result<Synthesizer> {
+        Synthesizer::new(
+            self.num.clone(),
+            &self.scene.radar,
+            self.antenna,
+            self.bs_m,
+            objects,
+        )
+    }
+
+    /// The scene's objects for `mission` (landmarks first when included).
+    pub fn objects(&self, mission: &planner::Mission) -> Result<Vec<SceneObject>> {
+        let lm: Vec<[f64; 2]> = mission
+            .schedule()
+            .landmarks
+            .iter()
+            .map(|w| w.pos_m())
+            .collect();
+        crate::scene::generate(&self.scene.objects, &lm, self.params.d_min_m)
+    }
+
+    /// One aperture per landmark window of `mission`.
+    pub fn apertures(&self, mission: &planner::Mission) -> Result<Vec<Aperture>> {
+        let windows: Vec<_> = mission
+            .schedule()
+            .landmarks
+            .iter()
+            .enumerate()
+            .map(|(i, w)| (w.pos_m(), Some(i), w.from_s.max(0.0), w.to_s))
+            .collect();
+        if windows.is_empty() {
+            return Err(RadarError::Mismatch(
+                "the mission has no landmark windows: nothing to image".into(),
+            ));
+        }
+        plan_apertures(&windows, self.look_s, self.scene.radar.prf_hz)
+    }
+
+    /// The pulses of aperture `ap` along `track`.
+    pub fn pulses(&self, track: &dyn Track, ap: &Aperture) -> Vec<PulseMeta> {
+        plan_pulses(track, &self.num, self.bs_m, ap, self.scene.radar.prf_hz)
+    }
+
+    /// The image grid of aperture `ap`.
+    pub fn grid(&self, ap: &Aperture) -> Grid {
+        Grid::square(
+            ap.centre_m,
+            self.scene.processing.grid_half_m,
+            self.scene.processing.pixel_m,
+        )
+    }
+}
+
+/// Receives one frame: its pulse metadata and `pulses × samples` IQ.
+pub type FrameSink<'a> = dyn FnMut(&[PulseMeta], &[Complex32]) -> Result<()> + 'a;
+
+/// One batch's output: per-pulse profile windows, kept spectra, canceller metrics.
+type BatchOut = (Vec<Vec<Complex32>>, Vec<Vec<Complex64>>, CancelStats);
+
+/// Synthesises the pulses of one aperture in frames of at most `frame_pulses`, handing each
+/// frame (its pulse metadata and `pulses × samples` IQ) to `sink` before the next is made.
+pub fn synthesize_frames(
+    synth: &Synthesizer,
+    pulses: &[PulseMeta],
+    frame_pulses: usize,
+    comps: Components,
+    sink: &mut FrameSink<'_>,
+) -> Result<()> {
+    for chunk in pulses.chunks(frame_pulses.max(1)) {
+        let iq = synth.synthesize_frame(chunk, comps)?;
+        sink(chunk, &iq)?;
+    }
+    Ok(())
+}
+
+/// Range-compressed pulses of one aperture, ready for backprojection.
+#[derive(Debug, Clone)]
+pub struct Compressed {
+    /// Per pulse: position, window delay, profile start, weight.
+    pub pulses: Vec<BpPulse>,
+    /// Profile windows, pulses × `m`.
+    pub profiles: Vec<Complex32>,
+    /// Profile window length.
+    pub m: usize,
+    /// Compressed spectra Z per pulse (kept on request, for exact evaluation).
+    pub spectra: Option<Vec<Vec<Complex64>>>,
+    /// Canceller metrics over all pulses.
+    pub cancel: CancelStats,
+}
+
+/// The image products and scores of one aperture.
+#[derive(Debug, Clone)]
+pub struct ApertureResult {
+    /// The aperture.
+    pub aperture: Aperture,
+    /// Its grid.
+    pub grid: Grid,
+    /// Mean over looks of |I|² / (per-look noise variance): unit-mean noise, SNR for targets.
+    pub multilook: Vec<f32>,
+    /// Complex look images (when `save_complex`).
+    pub looks: Vec<Vec<Complex32>>,
+    /// Detections.
+    pub detections: Vec<Detection>,
+    /// Scoring against the truth in the image.
+    pub score: Score,
+    /// Canceller metrics.
+    pub cancel: CancelStats,
+    /// CFAR exceedance pixels away from every truth object.
+    pub false_alarm_pixels: usize,
+    /// Pixels tested away from every truth object.
+    pub clear_pixels: usize,
+    /// Predicted resolution cell at the image centre (general geometry).
+    pub cell: pg::ResolutionCell,
+    /// The matching gate used, m.
+    pub gate_m: f64,
+    /// Per-look noise variance of the complex image, W.
+    pub noise_var: f64,
+    /// Pixels per coherence area (independent cell) used by the CFAR.
+    pub pixels_per_cell: f64,
+}
+
+impl ApertureResult {
+    /// Expected number of false-alarm pixels by design (P_fa × clear pixels).
+    pub fn design_false_alarm_pixels(&self, pfa: f64) -> f64 {
+        pfa * self.clear_pixels as f64
+    }
+
+    /// Expected number of false-alarm clusters by design (one per exceeding independent cell).
+    pub fn design_false_alarm_clusters(&self, pfa: f64) -> f64 {
+        pfa * self.grid.pixels() as f64 / self.pixels_per_cell
+    }
+}
+
+/// CFAR guard half-widths (x, y) in pixels and pixels per coherence area for the response at
+/// a point with bistatic range gradient `g` and Doppler gradient `d` (ground vectors).
+///
+/// The response is separable in the range coordinate g·x and the Doppler coordinate d·x. Its
+/// intensity-correlation area is `c_r c_a δ_r δ_a / sin ψ` (c: the weighting's
+/// [`crate::config::Weighting::coherence_factor`], δ_r = c/(B|g|), δ_a = 1/(T|d|)); the guard is
+/// the bounding box of the parallelogram |g·x| ≤ c_r c/B, |d·x| ≤ c_a/T (the main lobe out to
+/// its first nulls), capped at 200 pixels.
+pub fn cfar_geometry(
+    g: [f64; 2],
+    d: [f64; 2],
+    bandwidth_hz: f64,
+    look_s: f64,
+    pc: &crate::config::ProcessingConfig,
+    pixel_m: f64,
+) -> (usize, usize, f64) {
+    let cr = pc.range_weighting.coherence_factor();
+    let ca = pc.azimuth_weighting.coherence_factor();
+    let (gn, dn) = (v2::norm(g), v2::norm(d));
+    let dr = C_MPS / (bandwidth_hz * gn.max(1e-9));
+    let da = 1.0 / (look_s * dn.max(1e-12));
+    let s = if gn > 0.0 && dn > 0.0 {
+        (v2::cross(g, d) / (gn * dn)).abs().max(0.05)
+    } else {
+        0.05
+    };
+    let area = cr * ca * dr * da / s;
+    // e1 ⟂ g (iso-range), e2 ⟂ d (iso-Doppler)
+    let e1 = [-g[1] / gn.max(1e-12), g[0] / gn.max(1e-12)];
+    let e2 = [-d[1] / dn.max(1e-12), d[0] / dn.max(1e-12)];
+    let ea = ca * da / s;
+    let eb = cr * dr / s;
+    let x = ea * e1[0].abs() + eb * e2[0].abs();
+    let y = ea * e1[1].abs() + eb * e2[1].abs();
+    let px = |v: f64| ((v / pixel_m).ceil() as usize).clamp(1, 200);
+    (px(x), px(y), (area / (pixel_m * pixel_m)).max(1.0))
+}
+
+/// The processor of one setup.
+pub struct Processor {
+    setup: RadarSetup,
+    canceller: Canceller,
+    compressor: RangeCompressor,
+    fft: Arc<dyn Fft<f64>>,
+    ifft: Arc<dyn Fft<f64>>,
+    link: Synthesizer,
+}
+
+impl std::fmt::Debug for Processor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Processor")
+            .field("canceller", &self.canceller)
+            .field("compressor", &self.compressor)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Processor {
+    /// A processor for `setup`.
+    pub fn new(setup: RadarSetup) -> Result<Self> {
+        let pc = &setup.scene.processing;
+        let canceller = Canceller::new(pc, &setup.num)?;
+        let compressor =
+            RangeCompressor::new(&setup.num, pc.range_filter, pc.range_weighting, pc.upsample);
+        let mut planner = FftPlanner::new();
+        let fft = planner.plan_fft_forward(setup.num.fft_size);
+        let ifft = planner.plan_fft_inverse(setup.num.fft_size);
+        let link = setup.synthesizer(Vec::new())?;
+        Ok(Self {
+            setup,
+            canceller,
+            compressor,
+            fft,
+            ifft,
+            link,
+        })
+    }
+
+    /// The setup.
+    pub fn setup(&self) -> &RadarSetup {
+        &self.setup
+    }
+
+    /// The range compressor.
+    pub fn compressor(&self) -> &RangeCompressor {
+        &self.compressor
+    }
+
+    /// Variance of one profile sample from thermal noise, W.
+    pub fn profile_noise_var(&self) -> f64 {
+        let num = &self.setup.num;
+        let pc = &self.setup.scene.processing;
+        let w = pc.range_weighting.weights(num.subcarriers);
+        let s1: f64 = w.iter().sum();
+        let s2: f64 = w.iter().map(|x| x * x).sum();
+        let f2 = match pc.range_filter {
+            RangeFilter::Matched => 1.0,
+            RangeFilter::Reciprocal => num.mean_inverse_power(),
+        };
+        let spp = self.setup.scene.radar.symbols_per_pulse as f64;
+        self.link.noise_power_w() * f2 * s2 * num.subcarriers as f64
+            / (num.fft_size as f64 * spp * s1 * s1)
+    }
+
+    /// Slow-time weights of a look of `n` pulses.
+    pub fn look_weights(&self, n: usize) -> Vec<f32> {
+        self.setup
+            .scene
+            .processing
+            .azimuth_weighting
+            .weights(n)
+            .into_iter()
+            .map(|w| w as f32)
+            .collect()
+    }
+
+    /// Per-look noise variance of an image pixel, W.
+    pub fn look_noise_var(&self, n: usize) -> f64 {
+        let w = self.look_weights(n);
+        self.profile_noise_var() * w.iter().map(|x| (*x as f64).powi(2)).sum::<f64>()
+    }
+
+    /// Expected per-look image SNR of `obj` over `pulses` (one look), dB: (Σ w √P)² / (Σ w² σ_p²).
+    pub fn expected_snr_db(&self, obj: &SceneObject, pulses: &[PulseMeta]) -> f64 {
+        let w = self.look_weights(pulses.len());
+        let amp: f64 = pulses
+            .iter()
+            .zip(&w)
+            .map(|(p, w)| *w as f64 * self.link.echo_power_w(obj, p.pos_m, p.heading).sqrt())
+            .sum();
+        10.0 * (amp * amp / self.look_noise_var(pulses.len())).log10()
+    }
+
+    /// Cancels and range-compresses `pulses` (IQ: pulses × samples) for imaging on `grid`.
+    /// `looks` gives the pulses per look (ECA batches never cross looks).
+    pub fn compress(
+        &self,
+        grid: &Grid,
+        pulses: &[PulseMeta],
+        iq: &[Complex32],
+        pulses_per_look: usize,
+        target_m: Option<[f64; 2]>,
+        keep_spectra: bool,
+    ) -> Result<Compressed> {
+        let num = &self.setup.num;
+        let spp = self.setup.scene.radar.symbols_per_pulse;
+        let n = num.fft_size;
+        if iq.len() != pulses.len() * spp * n {
+            return Err(RadarError::Shape {
+                what: "IQ frame".into(),
+                expected: format!("{} pulses × {} samples", pulses.len(), spp * n),
+                found: format!("{} samples", iq.len()),
+            });
+        }
+        let geom = self.setup.geometry();
+        let raw: Vec<([f64; 3], i64)> = pulses
+            .iter()
+            .map(|p| (p.pos_m, p.window_delay_samples))
+            .collect();
+        let (j0s, m) = profile_windows(&geom, grid, &raw);
+        let pc = &self.setup.scene.processing;
+        let batch = match pc.canceller {
+            CancellerKind::None => 1,
+            CancellerKind::EcaB => pc.batch_pulses,
+            CancellerKind::Eca => pulses_per_look.max(1),
+        };
+        // batches never cross looks
+        let ppl = pulses_per_look.max(1);
+        let mut ranges = Vec::new();
+        let mut s = 0;
+        while s < pulses.len() {
+            let look_end = ((s / ppl) + 1) * ppl;
+            let e = (s + batch).min(look_end).min(pulses.len());
+            ranges.push(s..e);
+            s = e;
+        }
+        let fs = num.sample_rate_hz();
+        let ns = num.symbol_samples() as f64;
+        let results: Vec<Result<BatchOut>> = ranges
+            .par_iter()
+            .map(|r| {
+                let mut windows = Vec::with_capacity(r.len() * spp);
+                for (k, p) in pulses[r.clone()].iter().enumerate() {
+                    let rd = crate::track::dist3(p.pos_m, self.setup.bs_m);
+                    let dp = rd * fs / C_MPS - p.window_delay_samples as f64;
+                    for s in 0..spp {
+                        let off = ((r.start + k) * spp + s) * n;
+                        let mut spec: Vec<Complex64> = iq[off..off + n]
+                            .iter()
+                            .map(|v| Complex64::new(v.re as f64, v.im as f64))
+                            .collect();
+                        self.fft.process(&mut spec);
+                        let m_sym = p.symbol + s as u64;
+                        windows.push(SymbolWindow {
+                            spectrum: spec,
+                            data: Arc::new(num.symbol_data(m_sym)),
+                            t_s: (m_sym as f64 * ns
+                                + num.cp_samples as f64
+                                + p.window_delay_samples as f64)
+                                / fs,
+                            dp_delay_samples: dp,
+                        });
+                    }
+                }
+                let mid = &pulses[(r.start + r.end) / 2];
+                let td =
+                    target_m.map(|t| geom.delay_samples(t, mid.pos_m, mid.window_delay_samples));
+                let stats = self.canceller.cancel_batch(
+                    &mut windows,
+                    td,
+                    self.fft.as_ref(),
+                    self.ifft.as_ref(),
+                )?;
+                let mut profs = Vec::with_capacity(r.len());
+                let mut specs = Vec::new();
+                for (k, pi) in r.clone().enumerate() {
+                    let z = self.compressor.spectrum(&windows[k * spp..(k + 1) * spp]);
+                    profs.push(self.compressor.profile_window(&z, j0s[pi], m));
+                    if keep_spectra {
+                        specs.push(z);
+                    }
+                }
+                Ok((profs, specs, stats))
+            })
+            .collect();
+        let mut profiles = Vec::with_capacity(pulses.len() * m);
+        let mut spectra = keep_spectra.then(Vec::new);
+        let mut cancel = CancelStats::default();
+        for r in results {
+            let (p, z, st) = r?;
+            for v in p {
+                profiles.extend_from_slice(&v);
+            }
+            if let Some(s) = spectra.as_mut() {
+                s.extend(z);
+            }
+            cancel.add(&st);
+        }
+        let mut bp = Vec::with_capacity(pulses.len());
+        for (k, (p, j0)) in pulses.iter().zip(&j0s).enumerate() {
+            let w = self.look_weights(ppl.min(pulses.len()));
+            bp.push(BpPulse {
+                pos_m: p.pos_m,
+                window_delay_samples: p.window_delay_samples,
+                j0: *j0,
+                weight: w.get(k % ppl).copied().unwrap_or(1.0),
+            });
+        }
+        Ok(Compressed {
+            pulses: bp,
+            profiles,
+            m,
+            spectra,
+            cancel,
+        })
+    }
+
+    /// The complex image of pulses `range` of `c` on `grid`.
+    pub fn image_look(
+        &self,
+        grid: &Grid,
+        c: &Compressed,
+        range: std::ops::Range<usize>,
+    ) -> Result<Vec<Complex32>> {
+        let m = c.m;
+        backproject(
+            &self.setup.geometry(),
+            grid,
+            &c.pulses[range.clone()],
+            &c.profiles[range.start * m..range.end * m],
+            m,
+            32,
+        )
+    }
+
+    /// Exact (sinc-interpolated, f64) image values at `points` from the kept spectra.
+    pub fn image_points_exact(
+        &self,
+        c: &Compressed,
+        range: std::ops::Range<usize>,
+        points: &[[f64; 2]],
+    ) -> Result<Vec<Complex64>> {
+        let spectra = c.spectra.as_ref().ok_or_else(|| RadarError::Numerical {
+            stage: "exact image".into(),
+            reason: "compress() was called without keep_spectra".into(),
+        })?;
+        let geom = self.setup.geometry();
+        let lam = geom.wavelength_m;
+        Ok(points
+            .par_iter()
+            .map(|p| {
+                let mut acc = Complex64::new(0.0, 0.0);
+                for k in range.clone() {
+                    let pl = &c.pulses[k];
+                    let r = geom.bistatic_range_m(*p, pl.pos_m);
+                    let d = r * geom.fs_hz / C_MPS - pl.window_delay_samples as f64;
+                    let cyc = r / lam;
+                    acc += self.compressor.evaluate(&spectra[k], d)
+                        * Complex64::from_polar(
+                            pl.weight as f64,
+                            std::f64::consts::TAU * (cyc - cyc.floor()),
+                        );
+                }
+                acc
+            })
+            .collect())
+    }
+
+    /// Measures the −3 dB range and Doppler widths of a point target at `target_m` from the
+    /// exact image of pulses `range` (one look) and compares them with the predictions.
+    pub fn measure_resolution(
+        &self,
+        c: &Compressed,
+        pulses: &[PulseMeta],
+        range: std::ops::Range<usize>,
+        target_m: [f64; 2],
+    ) -> Result<ResolutionReport> {
+        let ps = &pulses[range.clone()];
+        let (first, last) = match (ps.first(), ps.last()) {
+            (Some(a), Some(b)) if ps.len() >= 2 => (a, b),
+            _ => {
+                return Err(RadarError::Mismatch(
+                    "resolution check needs at least 2 pulses".into(),
+                ))
+            }
+        };
+        let params = &self.setup.params;
+        let uc = [
+            (first.pos_m[0] + last.pos_m[0]) / 2.0,
+            (first.pos_m[1] + last.pos_m[1]) / 2.0,
+        ];
+        let dt = last.t_s - first.t_s;
+        let vel = v2::scale(
+            [
+                last.pos_m[0] - first.pos_m[0],
+                last.pos_m[1] - first.pos_m[1],
+            ],
+            1.0 / dt,
+        );
+        let g = pg::bistatic_range_gradient(params, uc, target_m);
+        let d = pg::doppler_gradient(params, uc, vel, target_m);
+        let (vr, va) = cut_directions(g, d).ok_or_else(|| {
+            RadarError::Mismatch("degenerate geometry: zero range or Doppler gradient".into())
+        })?;
+        let pc = &self.setup.scene.processing;
+        let t_look = ps.len() as f64 / self.setup.scene.radar.prf_hz;
+        let fr = pc.range_weighting.mainlobe_factor();
+        let fa = pc.azimuth_weighting.mainlobe_factor();
+        let b = self.setup.num.bandwidth_hz();
+        let range_general = fr * C_MPS / (b * v2::norm(g));
+        let az_general = fa / (t_look * v2::norm(d));
+        let measure = |dir: [f64; 2], proj: f64| -> Result<f64> {
+            // width along the cut ≈ predicted ground width / |cos| of the mapping
+            let expect = proj.max(1e-3);
+            let step = expect / 30.0;
+            let s: Vec<f64> = (-105..=105).map(|i| i as f64 * step).collect();
+            let pts: Vec<[f64; 2]> = s
+                .iter()
+                .map(|t| [target_m[0] + t * dir[0], target_m[1] + t * dir[1]])
+                .collect();
+            let img = self.image_points_exact(c, range.clone(), &pts)?;
+            let pw: Vec<f64> = img.iter().map(|v| v.norm_sqr()).collect();
+            half_power_width(&s, &pw).ok_or_else(|| RadarError::Numerical {
+                stage: "resolution".into(),
+                reason: "the response does not fall by 3 dB within the cut".into(),
+            })
+        };
+        let gn = v2::norm(g);
+        let dn = v2::norm(d);
+        let cr = v2::dot(g, vr).abs() / gn; // ground width along g = W_cut · cr
+        let ca = v2::dot(d, va).abs() / dn;
+        let w_r = measure(vr, range_general / cr.max(1e-6))?;
+        let w_a = measure(va, az_general / ca.max(1e-6))?;
+        let cell = pg::ResolutionCell::new(params, uc, vel, target_m);
+        Ok(ResolutionReport {
+            range_measured_m: w_r * cr,
+            range_general_m: range_general,
+            range_paper_m: pg::range_resolution_paper_m(params, target_m),
+            azimuth_measured_m: w_a * ca,
+            azimuth_general_m: az_general,
+            azimuth_paper_m: pg::azimuth_resolution_paper_m(params, v2::norm(vel)),
+            mainlobe_factor: fr,
+            bistatic_angle_deg: pg::bistatic_angle_rad(params, uc, target_m).to_degrees(),
+            psi_deg: cell.psi_rad.to_degrees(),
+        })
+    }
+
+    /// Processes one aperture: cancellation, compression, look images, multilook, CFAR,
+    /// clustering, scoring against `objects` inside the grid.
+    pub fn process_aperture(
+        &self,
+        ap: &Aperture,
+        pulses: &[PulseMeta],
+        iq: &[Complex32],
+        objects: &[SceneObject],
+    ) -> Result<ApertureResult> {
+        if pulses.len() != ap.pulses() {
+            return Err(RadarError::Shape {
+                what: format!("aperture {} pulses", ap.index),
+                expected: ap.pulses().to_string(),
+                found: pulses.len().to_string(),
+            });
+        }
+        let grid = self.setup.grid(ap);
+        let pc = &self.setup.scene.processing;
+        let ppl = ap.pulses_per_look;
+        let c = self.compress(&grid, pulses, iq, ppl, Some(ap.centre_m), false)?;
+        let noise_var = self.look_noise_var(ppl);
+        let mut multilook = vec![0f32; grid.pixels()];
+        let mut looks = Vec::new();
+        for l in 0..ap.looks {
+            let img = self.image_look(&grid, &c, l * ppl..(l + 1) * ppl)?;
+            let s = (1.0 / (noise_var * ap.looks as f64)) as f32;
+            for (o, v) in multilook.iter_mut().zip(&img) {
+                *o += v.norm_sqr() * s;
+            }
+            if pc.save_complex {
+                looks.push(img);
+            }
+        }
+        // predicted cell at the image centre, mid-aperture
+        let mid = &pulses[pulses.len() / 2];
+        let (a, b) = (&pulses[0], &pulses[pulses.len() - 1]);
+        let vel = v2::scale(
+            [b.pos_m[0] - a.pos_m[0], b.pos_m[1] - a.pos_m[1]],
+            1.0 / (b.t_s - a.t_s).max(1e-9),
+        );
+        let vel = if v2::norm(vel) > 1e-9 {
+            vel
+        } else {
+            [mid.heading[0] * 1e-9, mid.heading[1] * 1e-9]
+        };
+        let mut params = self.setup.params.clone();
+        params.integration_time_s = self.setup.look_s;
+        let cell = pg::ResolutionCell::new(&params, [mid.pos_m[0], mid.pos_m[1]], vel, ap.centre_m);
+        let uc = [mid.pos_m[0], mid.pos_m[1]];
+        let (gx, gy, ppc) = cfar_geometry(
+            pg::bistatic_range_gradient(&params, uc, ap.centre_m),
+            pg::doppler_gradient(&params, uc, vel, ap.centre_m),
+            self.setup.num.bandwidth_hz(),
+            self.setup.look_s,
+            pc,
+            grid.spacing_m,
+        );
+        let cfar = CfarParams {
+            pfa: pc.pfa,
+            guard_x_px: pc.cfar_guard_px.unwrap_or(gx),
+            guard_y_px: pc.cfar_guard_px.unwrap_or(gy),
+            train_px: pc.cfar_train_px,
+            looks: ap.looks,
+            pixels_per_cell: ppc,
+        };
+        let map = ca_cfar(&multilook, grid.nx, grid.ny, &cfar);
+        let d_min = self.setup.params.d_min_m;
+        let dets = cluster(
+            &multilook,
+            &map,
+            &grid,
+            pc.cluster_radius_m.unwrap_or(d_min / 2.0),
+            ap.index,
+        );
+        let gate = pc.match_radius_m.unwrap_or(d_min / 2.0);
+        // truth inside the grid (one pixel margin)
+        let margin = grid.spacing_m;
+        let half_x = (grid.nx as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
+        let half_y = (grid.ny as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
+        let look0 = &pulses[..ppl];
+        let truth: Vec<TruthInImage> = objects
+            .iter()
+            .filter(|o| {
+                (o.x_m - grid.centre_m[0]).abs() <= half_x
+                    && (o.y_m - grid.centre_m[1]).abs() <= half_y
+            })
+            .map(|o| {
+                // mean over looks of the expected per-look SNR (linear)
+                let lin: f64 = (0..ap.looks)
+                    .map(|l| {
+                        10f64.powf(self.expected_snr_db(o, &pulses[l * ppl..(l + 1) * ppl]) / 10.0)
+                    })
+                    .sum::<f64>()
+                    / ap.looks as f64;
+                let _ = look0;
+                TruthInImage {
+                    id: o.id,
+                    pos_m: o.pos_m(),
+                    expected_snr_db: 10.0 * lin.log10(),
+                    landmark: o.landmark,
+                }
+            })
+            .collect();
+        let sc = score(&truth, &dets, gate);
+        // pixel-level false alarms away from the truth: outside every object's gate and main
+        // lobe (the CFAR guard box)
+        let (bx, by) = (
+            cfar.guard_x_px as f64 * grid.spacing_m,
+            cfar.guard_y_px as f64 * grid.spacing_m,
+        );
+        let mut fa_px = 0;
+        let mut clear = 0;
+        for iy in 0..grid.ny {
+            for ix in 0..grid.nx {
+                let (x, y) = (grid.x(ix), grid.y(iy));
+                let near = objects.iter().any(|o| {
+                    (o.x_m - x).hypot(o.y_m - y) <= gate
+                        || ((o.x_m - x).abs() <= bx && (o.y_m - y).abs() <= by)
+                });
+                if !near {
+                    clear += 1;
+                    if map.hits[iy * grid.nx + ix] {
+                        fa_px += 1;
+                    }
+                }
+            }
+        }
+        Ok(ApertureResult {
+            aperture: ap.clone(),
+            grid,
+            multilook,
+            looks,
+            detections: dets,
+            score: sc,
+            cancel: c.cancel,
+            false_alarm_pixels: fa_px,
+            clear_pixels: clear,
+            cell,
+            gate_m: gate,
+            noise_var,
+            pixels_per_cell: ppc,
+        })
+    }
+}

@@ -1,0 +1,702 @@
+//! The file-level steps behind the CLI: `simulate` (plan directory + scene → raw IQ, truth),
+//! `process` (recording → images, detections, metrics) and `closed_loop` (mission → plan →
+//! simulate → process → report). Every step streams one aperture at a time, so memory stays
+//! bounded by one aperture's IQ (~33 MB for 10 s at the defaults) whatever the mission length.
+
+use std::path::{Path, PathBuf};
+
+use rustfft::num_complex::Complex32;
+use serde::{Deserialize, Serialize};
+
+use crate::config::SceneFile;
+use crate::error::{RadarError, Result};
+use crate::io::{
+    csv_f64, read_csv, write_csv, write_json, write_png_db, NpyReader, NpyType, NpyWriter,
+};
+use crate::pipeline::{Processor, RadarSetup};
+use crate::scene::SceneObject;
+use crate::synth::Components;
+use crate::track::{Aperture, PlannedTrack, PulseMeta};
+use crate::waveform::Numerology;
+
+/// Format tag of a recording directory.
+pub const FORMAT: &str = "cellsar-radar-sim/1";
+
+/// Frame layout, as written into `meta.json`.
+pub const FRAME_LAYOUT: &str = "iq/aperture_NNN.npy: pulses × samples complex64 (<c8), row-major, \
+little-endian (re, im); samples = symbols_per_pulse × fft_size, symbol-major; each symbol is the \
+CP-free FFT window of the UAV receiver, synced to the direct path (pulses.csv: window_delay_samples)";
+
+/// Per-aperture facts known to the simulator (truth side).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ApertureTruth {
+    /// The aperture.
+    pub aperture: Aperture,
+    /// Landmark antenna gain relative to the peak at the middle pulse, dB.
+    pub landmark_gain_db: Option<f64>,
+    /// Direct-path power over the summed echo power at the middle pulse, dB.
+    pub direct_to_echo_db: f64,
+    /// Direct-path power over the noise power per sample, dB.
+    pub direct_to_noise_db: f64,
+}
+
+/// `meta.json` of a recording.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RecordingMeta {
+    /// [`FORMAT`].
+    pub format: String,
+    /// [`FRAME_LAYOUT`].
+    pub frame_layout: String,
+    /// Mission name.
+    pub mission: String,
+    /// Mission parameters.
+    pub params: planner::Params,
+    /// The scene file used.
+    pub scene: SceneFile,
+    /// The numerology.
+    pub numerology: Numerology,
+    /// Noise variance per complex sample, W.
+    pub noise_power_w: f64,
+    /// Complex samples per pulse.
+    pub samples_per_pulse: usize,
+    /// Apertures with their truth-side facts.
+    pub apertures: Vec<ApertureTruth>,
+    /// Warnings (e.g. a landmark outside the beam).
+    pub warnings: Vec<String>,
+}
+
+/// Progress callback: (done, total).
+pub type Progress<'a> = &'a mut dyn FnMut(u64, u64);
+
+fn mkdir(p: &Path) -> Result<()> {
+    std::fs::create_dir_all(p).map_err(|e| RadarError::io(p, e))
+}
+
+fn iq_path(dir: &Path, ap: usize) -> PathBuf {
+    dir.join("iq").join(format!("aperture_{ap:03}.npy"))
+}
+
+/// Simulates the recording of `mission` flown along `traj` over the scene into `out`.
+pub fn simulate(
+    mission: &planner::Mission,
+    traj: &planner::Trajectory,
+    scene: &SceneFile,
+    out: &Path,
+    progress: Progress<'_>,
+) -> Result<RecordingMeta> {
+    let setup = RadarSetup::new(mission.params(), scene)?;
+    let objects = setup.objects(mission)?;
+    let aps = setup.apertures(mission)?;
+    let track = PlannedTrack::new(traj.clone(), mission.params().altitude_m);
+    let synth = setup.synthesizer(objects.clone())?;
+    mkdir(&out.join("iq"))?;
+    let spp = synth.samples_per_pulse();
+    let total: u64 = aps.iter().map(|a| a.pulses() as u64).sum();
+    let mut done = 0u64;
+    let mut pulse_rows = Vec::new();
+    let mut truths = Vec::new();
+    let mut warnings = Vec::new();
+    for ap in &aps {
+        let pulses = setup.pulses(&track, ap);
+        let mid = &pulses[pulses.len() / 2];
+        let landmark_gain_db = ap.landmark.map(|_| {
+            let g = setup.antenna.gain_towards(
+                mid.pos_m,
+                mid.heading,
+                [ap.centre_m[0], ap.centre_m[1], 0.0],
+            );
+            10.0 * (g / setup.antenna.peak_gain).log10()
+        });
+        if let Some(g) = landmark_gain_db {
+            if g < -10.0 {
+                warnings.push(format!(
+                    "aperture {} (t = {:.1}..{:.1} s): landmark {:?} is {:.1} dB off the beam peak at mid-aperture",
+                    ap.index, ap.t_start_s, ap.t_end_s, ap.landmark, g
+                ));
+            }
+        }
+        let pd = synth.direct_power_w(mid.pos_m, mid.heading);
+        let pe: f64 = objects
+            .iter()
+            .map(|o| synth.echo_power_w(o, mid.pos_m, mid.heading))
+            .sum();
+        truths.push(ApertureTruth {
+            aperture: ap.clone(),
+            landmark_gain_db,
+            direct_to_echo_db: 10.0 * (pd / pe.max(1e-300)).log10(),
+            direct_to_noise_db: 10.0 * (pd / synth.noise_power_w()).log10(),
+        });
+        let mut w = NpyWriter::create(&iq_path(out, ap.index), NpyType::C8, &[pulses.len(), spp])?;
+        crate::pipeline::synthesize_frames(
+            &synth,
+            &pulses,
+            100,
+            Components::ALL,
+            &mut |ps, iq| {
+                w.write_c8(iq)?;
+                done += ps.len() as u64;
+                progress(done, total);
+                Ok(())
+            },
+        )?;
+        w.finish()?;
+        for p in &pulses {
+            pulse_rows.push(vec![
+                p.index.to_string(),
+                p.aperture.to_string(),
+                p.look.to_string(),
+                format!("{:.9}", p.t_s),
+                p.symbol.to_string(),
+                format!("{:.6}", p.pos_m[0]),
+                format!("{:.6}", p.pos_m[1]),
+                format!("{:.6}", p.pos_m[2]),
+                format!("{:.6}", p.vel_mps[0]),
+                format!("{:.6}", p.vel_mps[1]),
+                format!("{:.6}", p.vel_mps[2]),
+                format!("{:.12}", p.heading[0]),
+                format!("{:.12}", p.heading[1]),
+                p.window_delay_samples.to_string(),
+            ]);
+        }
+    }
+    if !truths.is_empty()
+        && truths
+            .iter()
+            .all(|t| t.landmark_gain_db.is_some_and(|g| g < -10.0))
+    {
+        return Err(RadarError::Mismatch(format!(
+            "no landmark is in the receive beam in any aperture (best {:.1} dB off the peak): the plan does not look at the scene",
+            truths.iter().filter_map(|t| t.landmark_gain_db).fold(f64::NEG_INFINITY, f64::max)
+        )));
+    }
+    write_csv(&out.join("pulses.csv"), &PULSE_COLUMNS, &pulse_rows)?;
+    write_truth(&out.join("truth.csv"), &objects)?;
+    let meta = RecordingMeta {
+        format: FORMAT.into(),
+        frame_layout: FRAME_LAYOUT.into(),
+        mission: mission.name().to_string(),
+        params: mission.params().clone(),
+        scene: scene.clone(),
+        numerology: setup.num.clone(),
+        noise_power_w: synth.noise_power_w(),
+        samples_per_pulse: spp,
+        apertures: truths,
+        warnings,
+    };
+    write_json(&out.join("meta.json"), &meta)?;
+    Ok(meta)
+}
+
+const PULSE_COLUMNS: [&str; 14] = [
+    "index",
+    "aperture",
+    "look",
+    "t_s",
+    "symbol",
+    "x_m",
+    "y_m",
+    "z_m",
+    "vx_mps",
+    "vy_mps",
+    "vz_mps",
+    "heading_x",
+    "heading_y",
+    "window_delay_samples",
+];
+
+fn write_truth(path: &Path, objects: &[SceneObject]) -> Result<()> {
+    let rows: Vec<Vec<String>> = objects
+        .iter()
+        .map(|o| {
+            vec![
+                o.id.to_string(),
+                format!("{:.6}", o.x_m),
+                format!("{:.6}", o.y_m),
+                format!("{:.6e}", o.rcs_m2),
+                format!("{:.9}", o.phase_rad),
+                o.landmark.map(|l| l.to_string()).unwrap_or_default(),
+            ]
+        })
+        .collect();
+    write_csv(
+        path,
+        &["id", "x_m", "y_m", "rcs_m2", "phase_rad", "landmark"],
+        &rows,
+    )
+}
+
+/// Reads `truth.csv` (columns id,x_m,y_m,rcs_m2; phase_rad and landmark optional).
+pub fn read_truth(path: &Path) -> Result<Vec<SceneObject>> {
+    let (h, rows) = read_csv(path)?;
+    rows.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let line = i + 2;
+            let phase = if h.iter().any(|c| c == "phase_rad") {
+                csv_f64(path, &h, r, line, "phase_rad")?
+            } else {
+                0.0
+            };
+            let landmark = h
+                .iter()
+                .position(|c| c == "landmark")
+                .and_then(|k| r.get(k))
+                .and_then(|s| s.parse::<usize>().ok());
+            Ok(SceneObject {
+                id: csv_f64(path, &h, r, line, "id")? as usize,
+                x_m: csv_f64(path, &h, r, line, "x_m")?,
+                y_m: csv_f64(path, &h, r, line, "y_m")?,
+                rcs_m2: csv_f64(path, &h, r, line, "rcs_m2")?,
+                phase_rad: phase,
+                landmark,
+            })
+        })
+        .collect()
+}
+
+/// Reads `pulses.csv`.
+pub fn read_pulses(path: &Path) -> Result<Vec<PulseMeta>> {
+    let (h, rows) = read_csv(path)?;
+    rows.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let l = i + 2;
+            let f = |c: &str| csv_f64(path, &h, r, l, c);
+            Ok(PulseMeta {
+                index: f("index")? as usize,
+                aperture: f("aperture")? as usize,
+                look: f("look")? as usize,
+                t_s: f("t_s")?,
+                symbol: f("symbol")? as u64,
+                pos_m: [f("x_m")?, f("y_m")?, f("z_m")?],
+                vel_mps: [f("vx_mps")?, f("vy_mps")?, f("vz_mps")?],
+                heading: [f("heading_x")?, f("heading_y")?],
+                window_delay_samples: f("window_delay_samples")? as i64,
+            })
+        })
+        .collect()
+}
+
+/// A measured resolution with its predictions (for `metrics.json`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct MeasuredResolution {
+    /// Measured −3 dB width, m.
+    pub measured_m: f64,
+    /// General prediction × main-lobe factor, m.
+    pub predicted_general_m: f64,
+    /// The paper's value, m.
+    pub paper_m: f64,
+}
+
+/// Per-aperture summary in `metrics.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ApertureSummary {
+    /// Aperture index.
+    pub aperture: usize,
+    /// Landmark index.
+    pub landmark: Option<usize>,
+    /// Landmark detected (matched within the gate).
+    pub landmark_detected: Option<bool>,
+    /// Expected per-look SNR of the landmark, dB.
+    pub landmark_snr_db: Option<f64>,
+    /// Detections.
+    pub detections: usize,
+    /// Unmatched detections.
+    pub false_alarms: usize,
+    /// Canceller: direct-path reduction, dB.
+    pub dpi_reduction_db: f64,
+    /// Canceller: residual over noise, dB.
+    pub residual_to_noise_db: f64,
+    /// Worst resolution-cell width at the landmark (SPEC §4 item 12), m.
+    pub worst_width_m: f64,
+}
+
+/// `metrics.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Metrics {
+    /// Detection probability over objects with expected SNR ≥ 13 dB.
+    pub pd: f64,
+    /// Objects with expected SNR ≥ 13 dB.
+    pub strong_objects: usize,
+    /// Detection probability over all objects in the images.
+    pub pd_all: f64,
+    /// Unmatched detections.
+    pub false_alarms: usize,
+    /// Expected false-alarm clusters by design.
+    pub design_false_alarms: f64,
+    /// Mean position error of matched detections, m.
+    pub mean_position_error_m: f64,
+    /// Canceller: mean drop of the matched-filter output at the direct-path delay, dB.
+    pub dpi_reduction_db: f64,
+    /// Canceller: mean power reduction P_in/P_out, dB.
+    pub cancellation_db: f64,
+    /// Canceller: mean residual over thermal noise, dB.
+    pub residual_to_noise_db: f64,
+    /// Canceller: power loss of a target at the landmark delay, dB.
+    pub target_loss_db: f64,
+    /// Measured range resolution (along g) of the strongest landmark.
+    pub range_resolution_m: Option<MeasuredResolution>,
+    /// Measured azimuth resolution (along the Doppler gradient).
+    pub azimuth_resolution_m: Option<MeasuredResolution>,
+    /// Aperture and look of the resolution measurement.
+    pub resolution_from: Option<(usize, usize)>,
+    /// Per aperture.
+    pub apertures: Vec<ApertureSummary>,
+}
+
+/// One row of `detections.csv`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct DetectionRow {
+    /// Aperture.
+    pub aperture: usize,
+    /// x, m.
+    pub x_m: f64,
+    /// y, m.
+    pub y_m: f64,
+    /// SNR over the local noise, dB.
+    pub snr_db: f64,
+    /// Pixels.
+    pub pixels: usize,
+    /// Matched truth id.
+    pub truth_id: Option<usize>,
+    /// Distance to the matched truth, m.
+    pub error_m: Option<f64>,
+}
+
+/// Processes the recording in `input` into `out`.
+pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metrics> {
+    let meta_path = input.join("meta.json");
+    let text = std::fs::read_to_string(&meta_path).map_err(|e| RadarError::io(&meta_path, e))?;
+    let meta: RecordingMeta = serde_json::from_str(&text)
+        .map_err(|e| RadarError::format(meta_path.display().to_string(), "JSON", e.to_string()))?;
+    if meta.format != FORMAT {
+        return Err(RadarError::format(
+            meta_path.display().to_string(),
+            "format",
+            format!("`{}` is not `{FORMAT}`", meta.format),
+        ));
+    }
+    let setup = RadarSetup::new(&meta.params, &meta.scene)?;
+    let proc = Processor::new(setup.clone())?;
+    let truth_path = input.join("truth.csv");
+    let truth = if truth_path.exists() {
+        read_truth(&truth_path)?
+    } else {
+        Vec::new()
+    };
+    let pulses_all = read_pulses(&input.join("pulses.csv"))?;
+    mkdir(&out.join("images"))?;
+    let pc = &meta.scene.processing;
+    let mut det_rows = Vec::new();
+    let mut summaries = Vec::new();
+    let (mut strong, mut strong_hit, mut all, mut all_hit) = (0usize, 0usize, 0usize, 0usize);
+    let mut errors = Vec::new();
+    let (mut fa, mut design_fa) = (0usize, 0.0);
+    let mut cancel = crate::cancel::CancelStats::default();
+    let mut best: Option<(f64, usize, usize)> = None; // (snr, aperture, look)
+    let total = meta.apertures.len() as u64;
+    for (k, at) in meta.apertures.iter().enumerate() {
+        let ap = &at.aperture;
+        let pulses: Vec<PulseMeta> = pulses_all
+            .iter()
+            .filter(|p| p.aperture == ap.index)
+            .copied()
+            .collect();
+        if pulses.len() != ap.pulses() {
+            return Err(RadarError::format(
+                input.join("pulses.csv").display().to_string(),
+                format!("aperture {}", ap.index),
+                format!("{} pulses listed, {} expected", pulses.len(), ap.pulses()),
+            ));
+        }
+        let mut rd = NpyReader::open(&iq_path(input, ap.index))?;
+        if rd.shape != [pulses.len(), meta.samples_per_pulse] {
+            return Err(RadarError::format(
+                iq_path(input, ap.index).display().to_string(),
+                "shape",
+                format!(
+                    "{:?}, expected [{}, {}]",
+                    rd.shape,
+                    pulses.len(),
+                    meta.samples_per_pulse
+                ),
+            ));
+        }
+        let iq: Vec<Complex32> = rd.read_c8(0, pulses.len() * meta.samples_per_pulse)?;
+        let r = proc.process_aperture(ap, &pulses, &iq, &truth)?;
+        cancel.add(&r.cancel);
+        // images
+        let mut w = NpyWriter::create(
+            &out.join("images")
+                .join(format!("aperture_{:03}.npy", ap.index)),
+            NpyType::F4,
+            &[r.grid.ny, r.grid.nx],
+        )?;
+        w.write_f4(&r.multilook)?;
+        w.finish()?;
+        for (l, img) in r.looks.iter().enumerate() {
+            let mut w = NpyWriter::create(
+                &out.join("images")
+                    .join(format!("aperture_{:03}_look_{l:02}.npy", ap.index)),
+                NpyType::C8,
+                &[r.grid.ny, r.grid.nx],
+            )?;
+            w.write_c8(img)?;
+            w.finish()?;
+        }
+        let markers: Vec<(usize, usize)> = r
+            .detections
+            .iter()
+            .map(|d| {
+                let (x, y) = r.grid.index_of([d.x_m, d.y_m]);
+                (x.round().max(0.0) as usize, y.round().max(0.0) as usize)
+            })
+            .collect();
+        write_png_db(
+            &out.join("images")
+                .join(format!("aperture_{:03}.png", ap.index)),
+            &r.multilook,
+            r.grid.nx,
+            r.grid.ny,
+            40.0,
+            &markers,
+        )?;
+        for (di, d) in r.detections.iter().enumerate() {
+            let m = r.score.outcomes.iter().find(|o| o.detection == Some(di));
+            det_rows.push(DetectionRow {
+                aperture: ap.index,
+                x_m: d.x_m,
+                y_m: d.y_m,
+                snr_db: d.snr_db,
+                pixels: d.pixels,
+                truth_id: m.map(|o| o.truth.id),
+                error_m: m.and_then(|o| o.error_m),
+            });
+        }
+        let mut lm_det = None;
+        let mut lm_snr = None;
+        for o in &r.score.outcomes {
+            all += 1;
+            if o.detection.is_some() {
+                all_hit += 1;
+            }
+            if o.truth.expected_snr_db >= 13.0 {
+                strong += 1;
+                if o.detection.is_some() {
+                    strong_hit += 1;
+                }
+            }
+            if let Some(e) = o.error_m {
+                errors.push(e);
+            }
+            if o.truth.landmark.is_some() && o.truth.landmark == ap.landmark {
+                lm_det = Some(o.detection.is_some());
+                lm_snr = Some(o.truth.expected_snr_db);
+                if best.is_none_or(|b| o.truth.expected_snr_db > b.0) {
+                    best = Some((o.truth.expected_snr_db, ap.index, ap.looks / 2));
+                }
+            }
+        }
+        fa += r.score.false_alarms.len();
+        design_fa += r.design_false_alarm_clusters(pc.pfa);
+        summaries.push(ApertureSummary {
+            aperture: ap.index,
+            landmark: ap.landmark,
+            landmark_detected: lm_det,
+            landmark_snr_db: lm_snr,
+            detections: r.detections.len(),
+            false_alarms: r.score.false_alarms.len(),
+            dpi_reduction_db: r.cancel.dp_reduction_db(),
+            residual_to_noise_db: 10.0
+                * (r.cancel.mean_output_power() / meta.noise_power_w).log10(),
+            worst_width_m: r.cell.worst_width_m,
+        });
+        progress(k as u64 + 1, total);
+    }
+    // resolution on the strongest landmark: one look, exact evaluation
+    let (mut rr, mut ra, mut from) = (None, None, None);
+    if let Some((_, ai, look)) = best {
+        let at = &meta.apertures[ai];
+        let ap = &at.aperture;
+        let pulses: Vec<PulseMeta> = pulses_all
+            .iter()
+            .filter(|p| p.aperture == ap.index && p.look == look)
+            .copied()
+            .collect();
+        let mut rd = NpyReader::open(&iq_path(input, ap.index))?;
+        let first = look * ap.pulses_per_look * meta.samples_per_pulse;
+        let iq = rd.read_c8(first, pulses.len() * meta.samples_per_pulse)?;
+        let grid = setup.grid(ap);
+        let c = proc.compress(
+            &grid,
+            &pulses,
+            &iq,
+            ap.pulses_per_look,
+            Some(ap.centre_m),
+            true,
+        )?;
+        if let Ok(rep) = proc.measure_resolution(&c, &pulses, 0..pulses.len(), ap.centre_m) {
+            rr = Some(MeasuredResolution {
+                measured_m: rep.range_measured_m,
+                predicted_general_m: rep.range_general_m,
+                paper_m: rep.range_paper_m,
+            });
+            ra = Some(MeasuredResolution {
+                measured_m: rep.azimuth_measured_m,
+                predicted_general_m: rep.azimuth_general_m,
+                paper_m: rep.azimuth_paper_m,
+            });
+            from = Some((ap.index, look));
+        }
+    }
+    let rows: Vec<Vec<String>> = det_rows
+        .iter()
+        .map(|d| {
+            vec![
+                d.aperture.to_string(),
+                format!("{:.3}", d.x_m),
+                format!("{:.3}", d.y_m),
+                format!("{:.2}", d.snr_db),
+                d.pixels.to_string(),
+                d.truth_id.map(|v| v.to_string()).unwrap_or_default(),
+                d.error_m.map(|v| format!("{v:.3}")).unwrap_or_default(),
+            ]
+        })
+        .collect();
+    write_csv(
+        &out.join("detections.csv"),
+        &[
+            "aperture", "x_m", "y_m", "snr_db", "pixels", "truth_id", "error_m",
+        ],
+        &rows,
+    )?;
+    write_json(&out.join("detections.json"), &det_rows)?;
+    let frac = |a: usize, b: usize| if b > 0 { a as f64 / b as f64 } else { f64::NAN };
+    let metrics = Metrics {
+        pd: frac(strong_hit, strong),
+        strong_objects: strong,
+        pd_all: frac(all_hit, all),
+        false_alarms: fa,
+        design_false_alarms: design_fa,
+        mean_position_error_m: if errors.is_empty() {
+            f64::NAN
+        } else {
+            errors.iter().sum::<f64>() / errors.len() as f64
+        },
+        dpi_reduction_db: cancel.dp_reduction_db(),
+        cancellation_db: cancel.cancellation_db(),
+        residual_to_noise_db: 10.0 * (cancel.mean_output_power() / meta.noise_power_w).log10(),
+        target_loss_db: cancel.target_loss_db(),
+        range_resolution_m: rr,
+        azimuth_resolution_m: ra,
+        resolution_from: from,
+        apertures: summaries,
+    };
+    write_json(&out.join("metrics.json"), &metrics)?;
+    Ok(metrics)
+}
+
+/// Closed-loop report row: one aperture.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LoopRow {
+    /// Aperture.
+    pub aperture: usize,
+    /// Landmark.
+    pub landmark: Option<usize>,
+    /// Fraction of the window's slots in which the plan keeps the landmark in view.
+    pub in_view_fraction: f64,
+    /// Landmark detected.
+    pub detected: bool,
+    /// Expected per-look SNR, dB.
+    pub snr_db: Option<f64>,
+}
+
+/// The closed-loop report.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LoopReport {
+    /// Mission name.
+    pub mission: String,
+    /// Plan energy on the exact geometry, J.
+    pub energy_j: f64,
+    /// Per aperture.
+    pub rows: Vec<LoopRow>,
+    /// Every landmark in view (≥ half of its window) was detected.
+    pub all_in_view_detected: bool,
+    /// Processing metrics.
+    pub metrics: Metrics,
+}
+
+/// In-view fraction per landmark window from the plan's exact evaluation.
+pub fn in_view_fractions(mission: &planner::Mission, eval: &planner::Evaluation) -> Vec<f64> {
+    let n = mission.schedule().landmarks.len();
+    let mut count = vec![0usize; n];
+    let mut inv = vec![0usize; n];
+    for (s, lm) in eval.slots.iter().zip(&mission.schedule().slot_landmark) {
+        if let Some(l) = lm {
+            count[*l] += 1;
+            if s.in_view {
+                inv[*l] += 1;
+            }
+        }
+    }
+    count
+        .iter()
+        .zip(&inv)
+        .map(|(c, i)| if *c > 0 { *i as f64 / *c as f64 } else { 0.0 })
+        .collect()
+}
+
+/// Builds the loop report from a processed run.
+pub fn loop_report(
+    mission: &planner::Mission,
+    eval: &planner::Evaluation,
+    metrics: Metrics,
+) -> LoopReport {
+    let frac = in_view_fractions(mission, eval);
+    let rows: Vec<LoopRow> = metrics
+        .apertures
+        .iter()
+        .map(|a| LoopRow {
+            aperture: a.aperture,
+            landmark: a.landmark,
+            in_view_fraction: a.landmark.and_then(|l| frac.get(l).copied()).unwrap_or(0.0),
+            detected: a.landmark_detected.unwrap_or(false),
+            snr_db: a.landmark_snr_db,
+        })
+        .collect();
+    LoopReport {
+        mission: mission.name().to_string(),
+        energy_j: eval.energy_j,
+        all_in_view_detected: rows
+            .iter()
+            .filter(|r| r.in_view_fraction >= 0.5)
+            .all(|r| r.detected),
+        rows,
+        metrics,
+    }
+}
+
+/// Cuts `mission` to the windows that end within `horizon_s` and sets the horizon.
+pub fn shorten(mission: &planner::Mission, horizon_s: f64) -> Result<planner::Mission> {
+    let mut file = mission.to_file_struct();
+    let keep: Vec<planner::LandmarkWindow> = mission
+        .schedule()
+        .landmarks
+        .iter()
+        .filter(|w| w.to_s <= horizon_s + 1e-9)
+        .copied()
+        .collect();
+    if keep.is_empty() {
+        return Err(RadarError::config(
+            "horizon_s",
+            format!("{horizon_s} s holds no whole landmark window"),
+        ));
+    }
+    file.landmarks = planner::LandmarksSpec {
+        points: Some(keep),
+        ..Default::default()
+    };
+    file.params.horizon_s = Some(horizon_s);
+    planner::Mission::from_file_struct(&file)
+        .map_err(|e| RadarError::config("mission", e.to_string()))
+}
