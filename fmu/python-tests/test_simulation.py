@@ -20,18 +20,17 @@ RS_M = 200.0
 
 
 def planner_bin():
-    """A planner with the command line `plan MISSION --out DIR` (as `cellsar-planner plan`):
-    $CELLSAR_PLANNER_BIN, else the fmu crate's `plan-reference` example (release build)."""
+    """`cellsar-planner`: $CELLSAR_PLANNER_BIN, else the workspace's release build."""
     env = os.environ.get("CELLSAR_PLANNER_BIN")
     candidates = [pathlib.Path(env)] if env else [
-        REPO / "target" / "release" / "examples" / "plan-reference",
+        REPO / "target" / "release" / "cellsar-planner",
     ]
     for c in candidates:
         if c.is_file():
             return c
     raise FileNotFoundError(
-        "reference planner not found: build it with "
-        "`cargo build --release -p fmu --example plan-reference` or set CELLSAR_PLANNER_BIN")
+        "cellsar-planner not found: build it with "
+        "`cargo build --release -p planner --bin cellsar-planner` or set CELLSAR_PLANNER_BIN")
 
 
 def reference_plan(mission, outdir):

@@ -1,7 +1,6 @@
 //! Runs the fmpy test suite (fmu/python-tests) against freshly packaged FMUs.
 //!
-//! Builds `package-fmu` and the reference planner (`examples/plan-reference.rs`, the command line
-//! of `cellsar-planner plan`) in release mode,
+//! Builds `package-fmu` and `cellsar-planner` (the reference plans) in release mode,
 //! packages the FMUs into `<target>/fmu`, then runs `python3 -m pytest fmu/python-tests`.
 //! fmpy 0.3.32 and pytest must be installed (`pip install fmpy==0.3.32 pytest`); the test fails
 //! loudly without them unless `CELLSAR_SKIP_FMPY=1` is set.
@@ -74,10 +73,7 @@ fn fmpy_test_suite() {
             "--out",
         ])
         .arg(&out));
-    let planner = target
-        .join("release")
-        .join("examples")
-        .join("plan-reference");
+    let planner = target.join("release").join("cellsar-planner");
     run(Command::new("python3")
         .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
         .arg(workspace().join("fmu").join("python-tests"))
