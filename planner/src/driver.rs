@@ -460,21 +460,45 @@ fn make_feasible(
     for it in 1..=100 {
         tuning.elastic_weight = Some(weight);
         let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
-        let sol = solver
-            .solve(&sub.builder)
-            .map_err(|source| PlanError::Solver {
-                iteration: 0,
-                source,
-            })?;
-        let cand = sub.trajectory(&sol.x, &current);
-        let cand_ev = evaluate(mission, &cand);
+        let sol = match solver.solve(&sub.builder) {
+            Ok(sol) => sol,
+            Err(source) if tuning.kappa_scale >= 1.0 => {
+                return Err(PlanError::Solver {
+                    iteration: 0,
+                    source,
+                })
+            }
+            Err(_) => {
+                tuning.kappa_scale = 1.0;
+                continue;
+            }
+        };
+        let merit_of = |ev: &Evaluation| value(ev) + weight * total_violation(mission, ev, mode);
+        let mut cand = sub.trajectory(&sol.x, &current);
+        let mut cand_ev = evaluate(mission, &cand);
+        let mut cand_merit = merit_of(&cand_ev);
+        if cand_merit < merit {
+            // over-relaxation along the step, as in the main loop
+            for alpha in [2.0, 4.0] {
+                let trial = extrapolate(&current, &cand, alpha);
+                let ev = evaluate(mission, &trial);
+                let m = merit_of(&ev);
+                if m < cand_merit {
+                    cand = trial;
+                    cand_ev = ev;
+                    cand_merit = m;
+                } else {
+                    break;
+                }
+            }
+        }
         let violation = total_violation(mission, &cand_ev, mode);
-        let cand_merit = value(&cand_ev) + weight * violation;
         tracing::debug!(
             iteration = it,
             violation,
             merit = cand_merit,
             weight,
+            kappa_scale = tuning.kappa_scale,
             "phase I"
         );
         if cand_merit <= merit * (1.0 + 1e-9) + 1e-9 {
@@ -484,6 +508,11 @@ fn make_feasible(
             if ev.is_feasible_for(mode) {
                 return Ok((current, it));
             }
+            tuning.kappa_scale = (tuning.kappa_scale * 0.5).max(1.0 / 16.0);
+        } else if tuning.kappa_scale < 1.0 {
+            // the optimistic centre model overreached: back to the proven bound
+            tuning.kappa_scale = (tuning.kappa_scale * 4.0).min(1.0);
+            continue;
         }
         if violation < best_violation * 0.99 {
             best_violation = violation;
