@@ -43,6 +43,9 @@ pub const COMPLEX32_BYTES: u16 = 8;
 pub const DESCRIPTOR_LEN: usize = 24;
 /// Offset of the first sample in a frame's Zenoh payload.
 pub const WIRE_PREFIX_LEN: usize = HEADER_LEN + DESCRIPTOR_LEN;
+/// Frame header flag: the frame came in from Zenoh through a bridge and is never sent back
+/// out (see [`crate::forward`]). Only used in shared memory; never on the wire.
+pub const FLAG_BRIDGED: u16 = 2;
 /// Default largest frame payload (64 MiB).
 pub const DEFAULT_MAX_FRAME_BYTES: usize = 64 << 20;
 
@@ -58,7 +61,7 @@ pub struct FrameHeader {
     pub schema_version: u16,
     /// Bytes per element (8 for complex f32).
     pub element_size: u16,
-    /// Flags ([`FLAG_CRC`]: `checksum` is valid).
+    /// Flags ([`FLAG_CRC`]: `checksum` is valid; [`FLAG_BRIDGED`]).
     pub flags: u16,
     /// CRC-32 (IEEE) of the payload bytes.
     pub checksum: u32,
@@ -198,10 +201,13 @@ impl FrameHeader {
         actual_payload_len: usize,
         max_payload: usize,
     ) -> Result<(), CodecError> {
-        if self.flags & !FLAG_CRC != 0 {
+        if self.flags & !(FLAG_CRC | FLAG_BRIDGED) != 0 {
             return Err(CodecError::Field {
                 field: "flags",
-                reason: format!("unknown flag bits {:#06x}", self.flags & !FLAG_CRC),
+                reason: format!(
+                    "unknown flag bits {:#06x}",
+                    self.flags & !(FLAG_CRC | FLAG_BRIDGED)
+                ),
             });
         }
         if self.payload_len > max_payload as u64 {

@@ -18,6 +18,7 @@
 //! whenever a service is opened). [`IoxEnv::isolated`] gives tests their own root directory
 //! and shared-memory prefix so they can run in parallel.
 
+use std::cell::{Cell, RefCell};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -84,18 +85,25 @@ fn ierr(step: &'static str, service: &str, e: impl std::fmt::Debug) -> IoxError 
 #[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
 pub struct IoxArgs {
     /// Root directory of iceoryx2's files (default: iceoryx2's own, /tmp/iceoryx2).
-    #[arg(long = "iox-root", value_name = "DIR")]
+    #[arg(id = "iox_root", long = "iox-root", value_name = "DIR")]
     pub root: Option<PathBuf>,
     /// Prefix of every iceoryx2 resource name (default: "iox2_"); processes only see each
     /// other with the same root and prefix.
-    #[arg(long = "iox-prefix", value_name = "PREFIX")]
+    #[arg(id = "iox_prefix", long = "iox-prefix", value_name = "PREFIX")]
     pub prefix: Option<String>,
+    /// An iceoryx2 configuration file (TOML); default: iceoryx2's built-in defaults.
+    #[arg(id = "iox_config", long = "iox-config", value_name = "FILE")]
+    pub config: Option<PathBuf>,
 }
 
 impl IoxArgs {
     /// The flags as command-line arguments (to pass them on to a child process).
     pub fn to_cli_args(&self) -> Vec<String> {
         let mut v = Vec::new();
+        if let Some(c) = &self.config {
+            v.push("--iox-config".into());
+            v.push(c.display().to_string());
+        }
         if let Some(r) = &self.root {
             v.push("--iox-root".into());
             v.push(r.display().to_string());
@@ -109,7 +117,15 @@ impl IoxArgs {
 
     /// The environment these flags select.
     pub fn env(&self) -> Result<IoxEnv, IoxError> {
-        let mut config = Config::global_config().clone();
+        let mut config = match &self.config {
+            Some(file) => {
+                let s = file.display().to_string();
+                let path = FilePath::new(s.as_bytes())
+                    .map_err(|e| ierr("config path (--iox-config)", &s, e))?;
+                Config::from_file(&path).map_err(|e| ierr("read config (--iox-config)", &s, e))?
+            }
+            None => Config::default(),
+        };
         if let Some(p) = &self.prefix {
             config.global.prefix =
                 FileName::new(p.as_bytes()).map_err(|e| ierr("set prefix (--iox-prefix)", p, e))?;
@@ -133,10 +149,10 @@ pub struct IoxEnv {
 }
 
 impl IoxEnv {
-    /// iceoryx2's global configuration.
-    pub fn global() -> Self {
+    /// iceoryx2's built-in defaults (root `/tmp/iceoryx2`, prefix `iox2_`).
+    pub fn default_env() -> Self {
         IoxEnv {
-            config: Config::global_config().clone(),
+            config: Config::default(),
         }
     }
 
@@ -146,6 +162,7 @@ impl IoxEnv {
         IoxArgs {
             root: Some(root.to_path_buf()),
             prefix: Some(prefix.to_string()),
+            config: None,
         }
         .env()
     }
@@ -372,16 +389,23 @@ impl FrameNode {
         let counters = Arc::new(Counters::default());
         let full = Arc::new(AtomicU64::new(0));
         let f = full.clone();
-        let publisher = service
+        let builder = service
             .publisher_builder()
             .initial_max_slice_len(spec.max_payload_bytes)
             .allocation_strategy(AllocationStrategy::Static)
-            .max_loaned_samples(spec.publisher_max_loaned)
-            .backpressure_strategy(BackpressureStrategy::DiscardData)
-            .set_backpressure_handler(move |_info: &iceoryx2::port::BackpressureInfo| {
-                f.fetch_add(1, Ordering::Relaxed);
-                BackpressureAction::DiscardData
-            })
+            .max_loaned_samples(spec.publisher_max_loaned);
+        let builder = match opts.backpressure {
+            Backpressure::Discard => builder
+                .backpressure_strategy(BackpressureStrategy::DiscardData)
+                .set_backpressure_handler(move |_info: &iceoryx2::port::BackpressureInfo| {
+                    f.fetch_add(1, Ordering::Relaxed);
+                    BackpressureAction::DiscardData
+                }),
+            Backpressure::Block => {
+                builder.backpressure_strategy(BackpressureStrategy::RetryUntilDelivered)
+            }
+        };
+        let publisher = builder
             .create()
             .map_err(|e| ierr("create publisher", &spec.name, e))?;
         let notifier = event
@@ -419,12 +443,23 @@ impl FrameNode {
             listener,
             counters: Counters::default(),
             log: BadPayloadLog::default(),
-            seq: SeqTracker::new(),
-            missed: 0,
+            seq: RefCell::new(SeqTracker::new()),
+            missed: Cell::new(0),
             spec: spec.clone(),
-            ignore_origin: None,
+            ignore_origin: Cell::new(None),
         })
     }
+}
+
+/// What a publisher does when a subscriber's buffer is full.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Backpressure {
+    /// Skip that subscriber for this frame and count it (never stalls; the default).
+    #[default]
+    Discard,
+    /// Wait until the subscriber takes a frame (lossless, but a frozen subscriber stalls the
+    /// publisher: only for benchmarks and strictly paired pipelines).
+    Block,
 }
 
 /// Options of a frame publisher.
@@ -432,11 +467,16 @@ impl FrameNode {
 pub struct FramePublisherOptions {
     /// Compute the CRC-32 of every payload into the header.
     pub checksum: bool,
+    /// Behaviour on full subscriber buffers.
+    pub backpressure: Backpressure,
 }
 
 impl Default for FramePublisherOptions {
     fn default() -> Self {
-        FramePublisherOptions { checksum: true }
+        FramePublisherOptions {
+            checksum: true,
+            backpressure: Backpressure::Discard,
+        }
     }
 }
 
@@ -472,7 +512,7 @@ impl FramePublisher {
             .map_err(|e| ierr("loan", &self.spec.name, e))?;
         let mut sample = sample.write_from_slice(payload);
         *sample.user_header_mut() = header;
-        self.finish(sample)
+        self.finish(sample, true)
     }
 
     /// Sends a copy of complex samples.
@@ -508,7 +548,7 @@ impl FramePublisher {
             .then(|| frame::checksum(sample.payload()));
         let header = self.header(meta, len, checksum)?;
         *sample.user_header_mut() = header;
-        self.finish(sample)
+        self.finish(sample, true)
     }
 
     /// Sends a frame whose header was made elsewhere (the bridge re-publishing a remote
@@ -562,7 +602,7 @@ impl FramePublisher {
         // above (the chunks cover 0..len exactly, checked by `written == len`).
         let mut sample = unsafe { sample.assume_init() };
         *sample.user_header_mut() = *header;
-        self.finish(sample)
+        self.finish(sample, false)
     }
 
     fn check_len(&self, len: usize) -> Result<(), IoxError> {
@@ -599,11 +639,17 @@ impl FramePublisher {
         Ok(header)
     }
 
+    /// Sends; `stamp` sets `time_unix_ns` to "now" just before the hand-off (so a receiver
+    /// measures the hand-off, not the filling).
     fn finish(
         &self,
-        sample: iceoryx2::sample_mut::SampleMut<ipc::Service, [u8], FrameHeader>,
+        mut sample: iceoryx2::sample_mut::SampleMut<ipc::Service, [u8], FrameHeader>,
+        stamp: bool,
     ) -> Result<SendReport, IoxError> {
         let len = sample.payload().len();
+        if stamp {
+            sample.user_header_mut().time_unix_ns = crate::envelope::now_unix_ns();
+        }
         let before = self.full.load(Ordering::Relaxed);
         let delivered = match sample.send() {
             Ok(n) => n,
@@ -696,22 +742,22 @@ pub struct FrameSubscriber {
     listener: Listener<ipc::Service>,
     counters: Counters,
     log: BadPayloadLog,
-    seq: SeqTracker,
-    missed: u64,
+    seq: RefCell<SeqTracker>,
+    missed: Cell<u64>,
     spec: FrameServiceSpec,
-    ignore_origin: Option<u128>,
+    ignore_origin: Cell<Option<u128>>,
 }
 
 impl FrameSubscriber {
     /// Silently skips frames sent by the publisher with this id (the bridge uses it so it
     /// never forwards what it published itself).
-    pub fn ignore_origin(&mut self, publisher_id: u128) {
-        self.ignore_origin = Some(publisher_id);
+    pub fn ignore_origin(&self, publisher_id: u128) {
+        self.ignore_origin.set(Some(publisher_id));
     }
 
     /// Takes the next good frame, if any. Malformed frames (inconsistent header) are counted,
     /// logged and skipped; sequence gaps are counted in [`FrameSubscriber::missed`].
-    pub fn receive(&mut self) -> Result<Option<Frame>, IoxError> {
+    pub fn receive(&self) -> Result<Option<Frame>, IoxError> {
         loop {
             let Some(sample) = self
                 .subscriber
@@ -721,7 +767,7 @@ impl FrameSubscriber {
                 return Ok(None);
             };
             let origin = sample.origin().value();
-            if Some(origin) == self.ignore_origin {
+            if Some(origin) == self.ignore_origin.get() {
                 continue;
             }
             let f = Frame { sample };
@@ -734,8 +780,9 @@ impl FrameSubscriber {
                 self.log.log(&self.spec.name, f.payload().len(), &e);
                 continue;
             }
-            match self.seq.observe(origin, f.header().seq) {
-                SeqObservation::Gap { missing } => self.missed += missing,
+            let observed = self.seq.borrow_mut().observe(origin, f.header().seq);
+            match observed {
+                SeqObservation::Gap { missing } => self.missed.set(self.missed.get() + missing),
                 SeqObservation::Duplicate | SeqObservation::First | SeqObservation::InOrder => {}
             }
             self.counters.on_delivered();
@@ -754,7 +801,7 @@ impl FrameSubscriber {
     }
 
     /// The next frame, waiting up to `timeout` for one.
-    pub fn receive_timeout(&mut self, timeout: Duration) -> Result<Option<Frame>, IoxError> {
+    pub fn receive_timeout(&self, timeout: Duration) -> Result<Option<Frame>, IoxError> {
         let deadline = std::time::Instant::now() + timeout;
         loop {
             if let Some(f) = self.receive()? {
@@ -783,12 +830,12 @@ impl FrameSubscriber {
 
     /// Frames that never arrived here, from gaps in the publishers' sequence numbers.
     pub fn missed(&self) -> u64 {
-        self.missed
+        self.missed.get()
     }
 
     /// Duplicate sequence numbers seen.
     pub fn duplicates(&self) -> u64 {
-        self.seq.duplicates()
+        self.seq.borrow().duplicates()
     }
 
     /// Counters (`received`, `delivered`, `malformed`).

@@ -1018,6 +1018,16 @@ impl ZenohFramePublisher {
         self.put_raw(bytes)
     }
 
+    /// Whether a subscriber this publisher may deliver to currently matches its key (with
+    /// `Locality::Remote`: a subscriber of another session).
+    pub fn has_remote_subscribers(&self) -> bool {
+        self.publisher
+            .matching_status()
+            .wait()
+            .map(|m| m.matching())
+            .unwrap_or(true)
+    }
+
     /// Publishes an already encoded payload as is (also used to inject malformed payloads in
     /// tests).
     pub fn put_raw(&self, bytes: Vec<u8>) -> Result<(), NetError> {

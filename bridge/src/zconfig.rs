@@ -46,19 +46,29 @@ pub const DEFAULT_LISTEN: &str = "tcp/127.0.0.1:0";
 #[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
 pub struct ZenohArgs {
     /// A Zenoh configuration file (JSON5); the other flags override it.
-    #[arg(short = 'c', long = "config", value_name = "FILE")]
+    #[arg(id = "zenoh_config", short = 'c', long = "config", value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// The Zenoh session mode [default: peer].
-    #[arg(short = 'm', long = "mode", value_enum)]
+    #[arg(id = "zenoh_mode", short = 'm', long = "mode", value_enum)]
     pub mode: Option<Mode>,
     /// Endpoints to connect to, e.g. tcp/192.168.1.2:7447 (repeatable).
-    #[arg(short = 'e', long = "connect", value_name = "ENDPOINT")]
+    #[arg(
+        id = "zenoh_connect",
+        short = 'e',
+        long = "connect",
+        value_name = "ENDPOINT"
+    )]
     pub connect: Vec<String>,
     /// Endpoints to listen on, e.g. tcp/127.0.0.1:7447 (repeatable).
-    #[arg(short = 'l', long = "listen", value_name = "ENDPOINT")]
+    #[arg(
+        id = "zenoh_listen",
+        short = 'l',
+        long = "listen",
+        value_name = "ENDPOINT"
+    )]
     pub listen: Vec<String>,
     /// Disable the multicast-based scouting mechanism.
-    #[arg(long = "no-multicast-scouting")]
+    #[arg(id = "zenoh_no_multicast_scouting", long = "no-multicast-scouting")]
     pub no_multicast_scouting: bool,
 }
 
@@ -191,6 +201,33 @@ mod tests {
     struct Cli {
         #[command(flatten)]
         zenoh: ZenohArgs,
+        #[command(flatten)]
+        iox: crate::iox::IoxArgs,
+    }
+
+    #[test]
+    fn zenoh_and_iox_flags_fit_in_one_parser() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+        let cli = Cli::try_parse_from([
+            "x",
+            "-c",
+            "z.json5",
+            "--iox-config",
+            "i.toml",
+            "--iox-prefix",
+            "p_",
+        ])
+        .unwrap();
+        assert_eq!(
+            cli.zenoh.config.as_deref(),
+            Some(std::path::Path::new("z.json5"))
+        );
+        assert_eq!(cli.iox.prefix.as_deref(), Some("p_"));
+        let back =
+            Cli::try_parse_from(std::iter::once("x".to_string()).chain(cli.iox.to_cli_args()))
+                .unwrap();
+        assert_eq!(back.iox, cli.iox);
     }
 
     #[test]
