@@ -175,6 +175,20 @@ impl BadPayloadLog {
     }
 }
 
+impl Drop for BadPayloadLog {
+    fn drop(&mut self) {
+        if let Ok(w) = self.state.lock() {
+            if w.suppressed > 0 {
+                tracing::warn!(
+                    suppressed = w.suppressed,
+                    "{} more rejected payloads were logged at DEBUG only",
+                    w.suppressed
+                );
+            }
+        }
+    }
+}
+
 impl Default for BadPayloadLog {
     fn default() -> Self {
         BadPayloadLog::new(10)

@@ -514,6 +514,12 @@ pub fn split<'a>(
             actual: body.len() as u64,
         });
     }
+    if header.body_format == BodyFormat::Bincode && !header.has_crc() {
+        return Err(CodecError::Field {
+            field: "flags",
+            reason: "a bincode envelope must carry a body CRC (flag bit 0)".into(),
+        });
+    }
     if limits.verify_crc && header.has_crc() && header.body_format == BodyFormat::Bincode {
         let actual = crc32fast::hash(body);
         if actual != header.body_crc32 {
@@ -785,8 +791,8 @@ mod tests {
             body_format: BodyFormat::Bincode,
             kind: Ping::KIND,
             schema_version: Ping::SCHEMA_VERSION,
-            flags: 0,
-            body_crc32: 0,
+            flags: FLAG_CRC,
+            body_crc32: crc32fast::hash(&body),
             mission_id: MissionId(1),
             seq: 0,
             time_unix_ns: 0,
@@ -796,6 +802,130 @@ mod tests {
         b.extend_from_slice(&body);
         let err = decode::<Ping>(&b, &DecodeLimits::default()).unwrap_err();
         assert!(matches!(err, CodecError::Body { .. }), "{err}");
+    }
+
+    use proptest::prelude::*;
+
+    fn arb_ping() -> impl Strategy<Value = Ping> {
+        (
+            any::<u32>(),
+            ".{0,40}",
+            proptest::collection::vec(-1e12f64..1e12, 0..20),
+        )
+            .prop_map(|(n, text, v)| Ping { n, text, v })
+    }
+
+    fn arb_meta() -> impl Strategy<Value = Meta> {
+        (any::<u64>(), any::<u64>(), 1..u64::MAX).prop_map(|(m, seq, t)| Meta {
+            mission_id: MissionId(m),
+            seq,
+            time_unix_ns: t,
+        })
+    }
+
+    proptest! {
+        /// encode -> decode is the identity, in both forms, and keeps the header fields.
+        #[test]
+        fn roundtrip_any_message(p in arb_ping(), meta in arb_meta()) {
+            let l = DecodeLimits::default();
+            let b = encode(&p, meta).unwrap();
+            let env = decode::<Ping>(&b, &l).unwrap();
+            prop_assert_eq!(&env.message, &p);
+            prop_assert_eq!(env.header.mission_id, meta.mission_id);
+            prop_assert_eq!(env.header.seq, meta.seq);
+            prop_assert_eq!(env.header.time_unix_ns, meta.time_unix_ns);
+            let j = encode_json(&p, meta).unwrap();
+            let env = decode_json::<Ping>(&j, &l).unwrap();
+            prop_assert_eq!(&env.message, &p);
+            prop_assert_eq!(env.header.seq, meta.seq);
+            prop_assert_eq!(env.header.mission_id, meta.mission_id);
+        }
+
+        /// Any bytes: decoding returns (Ok or Err) without panicking; an accepted payload is
+        /// canonical (re-encoding gives the same bytes).
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
+            let l = DecodeLimits::default();
+            if let Ok(env) = decode::<Ping>(&bytes, &l) {
+                let meta = Meta { mission_id: env.header.mission_id, seq: env.header.seq, time_unix_ns: env.header.time_unix_ns };
+                prop_assert_eq!(encode(&env.message, meta).unwrap(), bytes.clone());
+            }
+            let _ = decode_json::<Ping>(&bytes, &l);
+            let _ = Header::parse(&bytes);
+        }
+
+        /// Flipping any bit of a valid envelope is detected (header check, length, CRC or
+        /// decoder), except in the fields the decoder does not constrain (mission id, seq,
+        /// time), which then decode to the flipped value.
+        #[test]
+        fn single_bit_flips_are_caught(p in arb_ping(), meta in arb_meta(), bit in any::<prop::sample::Index>()) {
+            let b = encode(&p, meta).unwrap();
+            let i = bit.index(b.len() * 8);
+            let mut m = b.clone();
+            m[i / 8] ^= 1 << (i % 8);
+            let r = decode::<Ping>(&m, &DecodeLimits::default());
+            let free = (16..40).contains(&(i / 8));
+            prop_assert_eq!(r.is_ok(), free, "bit {} -> {:?}", i, r.err());
+        }
+    }
+
+    /// 10,000 random and mutated payloads: every one is rejected or decoded, none panics,
+    /// and each is counted exactly once.
+    #[test]
+    fn fuzz_10k_payloads() {
+        let l = DecodeLimits::default();
+        let valid = encode(&ping(), meta()).unwrap();
+        let valid_json = encode_json(&ping(), meta()).unwrap();
+        let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+        let mut next = move || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            state.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        };
+        let (mut ok, mut rejected) = (0u32, 0u32);
+        let mut kinds = std::collections::BTreeMap::new();
+        for i in 0..10_000u32 {
+            let payload: Vec<u8> = match i % 4 {
+                0 => (0..next() % 256).map(|_| next() as u8).collect(),
+                1 => {
+                    let mut v = valid.clone();
+                    for _ in 0..1 + next() % 8 {
+                        let p = (next() as usize) % v.len();
+                        v[p] = next() as u8;
+                    }
+                    v
+                }
+                2 => {
+                    let mut v = valid_json.clone();
+                    let p = (next() as usize) % v.len();
+                    v[p] = next() as u8;
+                    v
+                }
+                _ => {
+                    let mut v = valid.clone();
+                    v.truncate((next() as usize) % v.len());
+                    v
+                }
+            };
+            let r = if i % 4 == 2 {
+                decode_json::<Ping>(&payload, &l).map(|_| ())
+            } else {
+                decode::<Ping>(&payload, &l).map(|_| ())
+            };
+            match r {
+                Ok(()) => ok += 1,
+                Err(e) => {
+                    rejected += 1;
+                    let name = format!("{e:?}");
+                    let name = name.split([' ', '(', '{']).next().unwrap_or("").to_string();
+                    *kinds.entry(name).or_insert(0u32) += 1;
+                }
+            }
+        }
+        assert_eq!(ok + rejected, 10_000);
+        assert!(rejected >= 9_500, "only {rejected} rejected: {kinds:?}");
+        assert!(kinds.len() >= 6, "too few error kinds exercised: {kinds:?}");
     }
 
     #[test]

@@ -497,6 +497,31 @@ mod tests {
         }
     }
 
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any consistent header survives the wire prefix unchanged; any bytes decode
+        /// without panicking.
+        #[test]
+        fn prefix_roundtrip(kind in any::<u16>(), ver in any::<u16>(), rows in 0u32..64, cols in 0u32..64,
+                            elem in 1u16..17, crc in any::<Option<u32>>(), mission in any::<u64>(),
+                            seq in any::<u64>(), mt in any::<i64>(), t in any::<u64>()) {
+            let m = FrameMeta { kind, schema_version: ver, element_size: elem, mission_id: MissionId(mission), seq, mission_time_ns: mt, shape: [rows, cols] };
+            let mut h = m.header(crc).unwrap();
+            h.time_unix_ns = t;
+            let len = h.payload_len as usize;
+            let prefix = h.to_wire_prefix();
+            let back = FrameHeader::from_wire_prefix(&prefix, WIRE_PREFIX_LEN + len, 1 << 20).unwrap();
+            prop_assert_eq!(back, h);
+        }
+
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..200), max in 0usize..1000) {
+            let _ = decode_wire(&bytes, max, true);
+            let _ = bytes_as_samples(&bytes);
+        }
+    }
+
     #[test]
     fn sample_views() {
         let s = vec![Complex32::new(1.0, 2.0); 3];

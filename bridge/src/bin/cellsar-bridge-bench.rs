@@ -190,6 +190,7 @@ struct RxReport {
     frames: u64,
     bytes: u64,
     missed: u64,
+    duplicates: u64,
     malformed: u64,
     checksum_errors: u64,
     last_seq: Option<u64>,
@@ -410,7 +411,7 @@ impl RxStats {
         }
         matches!(self.last, Some(l) if l.elapsed().as_secs_f64() > rx.idle_s)
     }
-    fn report(mut self, missed: u64, malformed: u64) -> RxReport {
+    fn report(mut self, missed: u64, duplicates: u64, malformed: u64) -> RxReport {
         self.lat_us.sort_by(f64::total_cmp);
         let q = |p: f64| -> f64 {
             if self.lat_us.is_empty() {
@@ -438,6 +439,7 @@ impl RxStats {
             frames: self.frames,
             bytes: self.bytes,
             missed,
+            duplicates,
             malformed,
             checksum_errors: self.checksum_errors,
             last_seq: self.last_seq,
@@ -475,7 +477,7 @@ fn iox_sub(svc: &ServiceArgs, rx: &RxArgs) -> Result<()> {
     }
     let missed = sub.missed();
     let malformed = sub.counters().snapshot().malformed;
-    report(&st.report(missed, malformed))
+    report(&st.report(missed, sub.duplicates(), malformed))
 }
 
 fn z_node(zenoh: &ZenohArgs, role: &str) -> Result<ZenohNode> {
@@ -548,7 +550,7 @@ fn z_sub(key: &str, max_frame_bytes: usize, rx: &RxArgs, zenoh: &ZenohArgs) -> R
         }
     }
     let c = sub.counters().snapshot();
-    let r = st.report(tracker.missing(), c.malformed);
+    let r = st.report(tracker.missing(), tracker.duplicates(), c.malformed);
     drop(sub);
     node.close()?;
     report(&r)
