@@ -502,10 +502,10 @@ fn wait_ready(
 }
 
 /// Splits a Zenoh frame payload into its checked header and the payload slices.
-fn split_frame<'a>(
-    payload: &'a ZBytes,
+fn split_frame(
+    payload: &ZBytes,
     max_payload: usize,
-) -> Result<(FrameHeader, Vec<&'a [u8]>), CodecError> {
+) -> Result<(FrameHeader, Vec<&[u8]>), CodecError> {
     let total = payload.len();
     if total > WIRE_PREFIX_LEN.saturating_add(max_payload) {
         return Err(CodecError::TooLarge {

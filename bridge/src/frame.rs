@@ -228,9 +228,12 @@ impl FrameHeader {
             });
         }
         if self.payload_len != actual_payload_len as u64 {
-            return Err(CodecError::LengthMismatch {
-                declared: self.payload_len,
-                actual: actual_payload_len as u64,
+            return Err(CodecError::Field {
+                field: "payload_len",
+                reason: format!(
+                    "the frame header says {} bytes but {actual_payload_len} bytes are present",
+                    self.payload_len
+                ),
             });
         }
         Ok(())
@@ -335,7 +338,7 @@ impl FrameHeader {
 pub const MAX_FRAME_HARD_LIMIT: usize = 1 << 30;
 
 // The frame descriptor keeps samples 8-byte aligned after the envelope header.
-const _: () = assert!(WIRE_PREFIX_LEN % 8 == 0);
+const _: () = assert!(WIRE_PREFIX_LEN.is_multiple_of(8));
 const _: () = assert!(std::mem::size_of::<FrameHeader>() == 64);
 const _: () = assert!(MAX_BODY_BYTES <= MAX_FRAME_HARD_LIMIT);
 
@@ -399,7 +402,7 @@ pub fn bytes_as_samples_mut(bytes: &mut [u8]) -> Result<&mut [Complex32], CodecE
 
 /// Copies bytes into a new vector of complex samples (for unaligned buffers).
 pub fn samples_from_bytes(bytes: &[u8]) -> Result<Vec<Complex32>, CodecError> {
-    if bytes.len() % usize::from(COMPLEX32_BYTES) != 0 {
+    if !bytes.len().is_multiple_of(usize::from(COMPLEX32_BYTES)) {
         return Err(CodecError::Field {
             field: "samples",
             reason: format!("{} bytes is not a multiple of 8", bytes.len()),
@@ -463,10 +466,8 @@ mod tests {
         let wire = encode_wire(&h, samples_as_bytes(&s)).unwrap();
         let mut w = wire.clone();
         w.pop();
-        assert!(matches!(
-            decode_wire(&w, DEFAULT_MAX_FRAME_BYTES, true),
-            Err(CodecError::LengthMismatch { .. })
-        ));
+        let e = decode_wire(&w, DEFAULT_MAX_FRAME_BYTES, true).unwrap_err();
+        assert!(e.to_string().contains("payload_len"), "{e}");
         let mut w = wire.clone();
         *w.last_mut().unwrap() ^= 1;
         assert!(matches!(

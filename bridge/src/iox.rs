@@ -310,9 +310,12 @@ impl FrameNode {
     /// not block this one.
     pub fn new(env: &IoxEnv, name: &str) -> Result<(Self, CleanupReport), IoxError> {
         let node_name = NodeName::new(name).map_err(|e| ierr("node name", name, e))?;
+        // Clean up explicitly (below) rather than silently inside the builder, to report it.
+        let mut config = env.config().clone();
+        config.global.node.cleanup_dead_nodes_on_creation = false;
         let node = NodeBuilder::new()
             .name(&node_name)
-            .config(env.config())
+            .config(&config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
             .create::<ipc::Service>()
             .map_err(|e| ierr("create node", name, e))?;
@@ -586,7 +589,16 @@ impl FramePublisher {
                     },
                 });
             };
-            d.write_copy_of_slice(chunk);
+            // SAFETY: `d` is exactly `chunk.len()` elements long (the range above);
+            // `MaybeUninit<u8>` has the layout of `u8`; the source (a Zenoh buffer) and the
+            // destination (this publisher's loaned shared-memory sample) do not overlap.
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    chunk.as_ptr(),
+                    d.as_mut_ptr().cast::<u8>(),
+                    chunk.len(),
+                );
+            }
             written = end;
         }
         if written != len {
@@ -792,12 +804,13 @@ impl FrameSubscriber {
 
     /// Waits up to `timeout` for a notification from a publisher (returns at once if one is
     /// pending). Returns whether one arrived.
+    /// A signal interrupting the wait (e.g. SIGSTOP/SIGCONT) counts as "nothing arrived".
     pub fn wait(&self, timeout: Duration) -> Result<bool, IoxError> {
-        let n = self
-            .listener
-            .timed_wait(|_| {}, timeout)
-            .map_err(|e| ierr("wait", &self.spec.name, e))?;
-        Ok(n > 0)
+        match self.listener.timed_wait(|_| {}, timeout) {
+            Ok(n) => Ok(n > 0),
+            Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => Ok(false),
+            Err(e) => Err(ierr("wait", &self.spec.name, e)),
+        }
     }
 
     /// The next frame, waiting up to `timeout` for one.

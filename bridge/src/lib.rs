@@ -16,6 +16,8 @@
 //! This crate knows no domain type: the planner and radar crates define their messages and
 //! implement [`Message`] for them.
 
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
+
 pub mod counters;
 pub mod envelope;
 pub mod forward;

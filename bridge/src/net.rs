@@ -728,6 +728,27 @@ impl<M: Message> TypedPublisher<M> {
         }
     }
 
+    /// Whether a subscriber that this publisher may deliver to matches its key now.
+    pub fn has_subscribers(&self) -> bool {
+        self.publisher
+            .matching_status()
+            .wait()
+            .map(|m| m.matching())
+            .unwrap_or(false)
+    }
+
+    /// Waits up to `timeout` for a matching subscriber; returns whether one appeared.
+    pub fn wait_for_subscribers(&self, timeout: Duration) -> bool {
+        let deadline = std::time::Instant::now() + timeout;
+        while !self.has_subscribers() {
+            if std::time::Instant::now() >= deadline {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        true
+    }
+
     /// Counters of this publisher.
     pub fn counters(&self) -> &Counters {
         &self.counters

@@ -278,7 +278,7 @@ fn report<T: Serialize>(r: &T) -> Result<()> {
 }
 
 fn pattern(frame_bytes: usize) -> Result<Vec<Complex32>> {
-    if frame_bytes % 8 != 0 || frame_bytes == 0 {
+    if !frame_bytes.is_multiple_of(8) || frame_bytes == 0 {
         bail!("--frame-bytes must be a positive multiple of 8, got {frame_bytes}");
     }
     Ok((0..frame_bytes / 8)
@@ -405,10 +405,12 @@ impl RxStats {
         self.last = Some(t);
         self.last_seq = Some(seq);
     }
+    /// Enough frames, or out of time.
     fn done(&self, rx: &RxArgs, start: Instant) -> bool {
-        if self.frames >= rx.frames || start.elapsed().as_secs_f64() > rx.timeout_s {
-            return true;
-        }
+        self.frames >= rx.frames || start.elapsed().as_secs_f64() > rx.timeout_s
+    }
+    /// Nothing for `idle_s` since the last frame (checked only when nothing is pending).
+    fn idle(&self, rx: &RxArgs) -> bool {
         matches!(self.last, Some(l) if l.elapsed().as_secs_f64() > rx.idle_s)
     }
     fn report(mut self, missed: u64, duplicates: u64, malformed: u64) -> RxReport {
@@ -471,6 +473,9 @@ fn iox_sub(svc: &ServiceArgs, rx: &RxArgs) -> Result<()> {
                 }
             }
             None => {
+                if st.idle(rx) {
+                    break;
+                }
                 sub.wait(Duration::from_millis(50))?;
             }
         }
@@ -541,12 +546,16 @@ fn z_sub(key: &str, max_frame_bytes: usize, rx: &RxArgs, zenoh: &ZenohArgs) -> R
     let mut st = RxStats::new();
     let mut tracker = bridge::seq::SeqTracker::new();
     while !st.done(rx, start) {
-        if let Some(f) = sub.recv_timeout(Duration::from_millis(50)) {
-            tracker.observe(0, f.header.seq);
-            st.on_frame(f.header.time_unix_ns, f.payload().len(), f.header.seq, true);
-            if rx.hold_ms > 0 {
-                std::thread::sleep(Duration::from_millis(rx.hold_ms));
+        match sub.recv_timeout(Duration::from_millis(50)) {
+            Some(f) => {
+                tracker.observe(0, f.header.seq);
+                st.on_frame(f.header.time_unix_ns, f.payload().len(), f.header.seq, true);
+                if rx.hold_ms > 0 {
+                    std::thread::sleep(Duration::from_millis(rx.hold_ms));
+                }
             }
+            None if st.idle(rx) => break,
+            None => {}
         }
     }
     let c = sub.counters().snapshot();
@@ -997,16 +1006,18 @@ fn bench(
 
 /// Waits until a liveliness token of a bridge on `key` from bridge A is visible.
 fn wait_bridged(connect: &[String], key: &str, timeout: Duration) -> Result<()> {
-    let mut args = ZenohArgs::default();
-    args.no_multicast_scouting = true;
-    args.connect = connect
-        .iter()
-        .skip_while(|a| *a != "-e")
-        .nth(1)
-        .cloned()
-        .into_iter()
-        .collect();
-    args.mode = Some(bridge::zconfig::Mode::Peer);
+    let args = ZenohArgs {
+        no_multicast_scouting: true,
+        connect: connect
+            .iter()
+            .skip_while(|a| *a != "-e")
+            .nth(1)
+            .cloned()
+            .into_iter()
+            .collect(),
+        mode: Some(bridge::zconfig::Mode::Peer),
+        ..ZenohArgs::default()
+    };
     let node = ZenohNode::open(
         args.to_config()?,
         "bench-probe",
