@@ -74,6 +74,9 @@ struct RxArgs {
     /// Hold each frame this many milliseconds before taking the next (a slow consumer).
     #[arg(long, default_value_t = 0)]
     hold_ms: u64,
+    /// Busy-poll instead of sleeping on the event (measures the bare hand-off; iceoryx2 only).
+    #[arg(long)]
+    spin: bool,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -175,9 +178,16 @@ enum Cmd {
         /// Frames per size and path.
         #[arg(long, default_value_t = 100)]
         frames: u64,
-        /// Frames per second of the latency runs.
+        /// Frames per second of the latency runs (at most).
         #[arg(long, default_value_t = 20.0)]
         latency_rate_hz: f64,
+        /// Latency runs are paced to at most this many MB/s, so they measure latency and not
+        /// queueing.
+        #[arg(long, default_value_t = 100.0)]
+        latency_budget_mb_s: f64,
+        /// Repetitions (plain Zenoh and bridged runs alternate within each).
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
         /// Also write the raw reports (JSON) here.
         #[arg(long)]
         json_out: Option<PathBuf>,
@@ -261,8 +271,17 @@ fn run(cli: Cli) -> Result<()> {
             sizes_mib,
             frames,
             latency_rate_hz,
+            latency_budget_mb_s,
+            repeats,
             json_out,
-        } => bench(&sizes_mib, frames, latency_rate_hz, json_out.as_deref()),
+        } => bench(
+            &sizes_mib,
+            frames,
+            latency_rate_hz,
+            latency_budget_mb_s,
+            repeats.max(1),
+            json_out.as_deref(),
+        ),
     }
 }
 
@@ -347,6 +366,11 @@ fn iox_pub(svc: &ServiceArgs, f: &FrameArgs, wait_subscribers: usize, block: boo
             );
         }
         std::thread::sleep(Duration::from_millis(10));
+    }
+    if wait_subscribers > 0 {
+        // A subscriber connects to a new publisher on its next receive or wake-up (iceoryx2
+        // has no history here): give it that moment, or the first frames find no connection.
+        std::thread::sleep(Duration::from_millis(250));
     }
     ready();
     let start = Instant::now();
@@ -476,7 +500,11 @@ fn iox_sub(svc: &ServiceArgs, rx: &RxArgs) -> Result<()> {
                 if st.idle(rx) {
                     break;
                 }
-                sub.wait(Duration::from_millis(50))?;
+                if rx.spin {
+                    std::hint::spin_loop();
+                } else {
+                    sub.wait(Duration::from_millis(50))?;
+                }
             }
         }
     }
@@ -767,20 +795,224 @@ fn free_port() -> Result<u16> {
     Ok(l.local_addr()?.port())
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Clone)]
 struct BenchRow {
     path: String,
     mode: String,
     frame_mib: usize,
+    rep: usize,
+    rate_hz: f64,
     tx: TxReport,
     rx: RxReport,
 }
 
-#[allow(clippy::too_many_lines)]
+struct BenchCtx {
+    me: PathBuf,
+    bridge_exe: PathBuf,
+    root: PathBuf,
+    max: usize,
+    run: usize,
+}
+
+impl BenchCtx {
+    fn prefix(&mut self, tag: &str) -> String {
+        self.run += 1;
+        format!("cb{}_{}_{tag}_", std::process::id(), self.run)
+    }
+
+    fn svc(&self, prefix: &str) -> Vec<String> {
+        vec![
+            s("--service"),
+            s("bench/frames"),
+            s("--max-frame-bytes"),
+            self.max.to_string(),
+            s("--iox-root"),
+            self.root.display().to_string(),
+            s("--iox-prefix"),
+            prefix.to_string(),
+        ]
+    }
+
+    fn timeout(frames: u64, rate: f64) -> Duration {
+        let paced = if rate > 0.0 {
+            frames as f64 / rate
+        } else {
+            0.0
+        };
+        Duration::from_secs_f64(60.0 + 2.0 * paced + frames as f64)
+    }
+
+    /// Producer -> consumer on one iceoryx2 service.
+    fn iox(
+        &mut self,
+        bytes: usize,
+        frames: u64,
+        rate: f64,
+        block: bool,
+        spin: bool,
+    ) -> Result<(TxReport, RxReport)> {
+        let prefix = self.prefix("iox");
+        let mut sub_args = vec![s("iox-sub")];
+        sub_args.extend(self.svc(&prefix));
+        sub_args.extend([s("--frames"), frames.to_string()]);
+        if spin {
+            sub_args.push(s("--spin"));
+        }
+        let mut sub = Proc::spawn("iox-sub", &self.me, &sub_args)?;
+        sub.ready()?;
+        let mut pub_args = vec![s("iox-pub")];
+        pub_args.extend(self.svc(&prefix));
+        pub_args.extend(tx_args(frames, bytes, rate));
+        if block {
+            pub_args.push(s("--block"));
+        }
+        let mut publ = Proc::spawn("iox-pub", &self.me, &pub_args)?;
+        publ.ready()?;
+        let t = Self::timeout(frames, rate);
+        Ok((publ.report(t)?, sub.report(t)?))
+    }
+
+    /// Plain Zenoh publisher -> subscriber (two processes, TCP loopback).
+    fn zenoh(
+        &mut self,
+        bytes: usize,
+        frames: u64,
+        rate: f64,
+        key: &str,
+    ) -> Result<(TxReport, RxReport)> {
+        let port = free_port()?;
+        let ep = format!("tcp/127.0.0.1:{port}");
+        let mut sub_args = vec![
+            s("z-sub"),
+            s("--key"),
+            s(key),
+            s("--frames"),
+            frames.to_string(),
+            s("--max-frame-bytes"),
+            self.max.to_string(),
+            s("--no-multicast-scouting"),
+            s("-l"),
+            ep.clone(),
+        ];
+        sub_args.push(s("--idle-s"));
+        sub_args.push(s("10"));
+        let mut sub = Proc::spawn("z-sub", &self.me, &sub_args)?;
+        sub.ready()?;
+        let mut pub_args = vec![
+            s("z-pub"),
+            s("--key"),
+            s(key),
+            s("--wait-matching"),
+            s("--no-multicast-scouting"),
+            s("-e"),
+            ep,
+        ];
+        pub_args.extend(tx_args(frames, bytes, rate));
+        let mut publ = Proc::spawn("z-pub", &self.me, &pub_args)?;
+        publ.ready()?;
+        let t = Self::timeout(frames, rate);
+        Ok((publ.report(t)?, sub.report(t)?))
+    }
+
+    /// iceoryx2 producer (host A) -> bridge A -> Zenoh (TCP loopback) -> bridge B -> iceoryx2
+    /// consumer (host B); the "hosts" are two isolated iceoryx2 environments.
+    fn bridged(
+        &mut self,
+        bytes: usize,
+        frames: u64,
+        rate: f64,
+        block: bool,
+        key: &str,
+    ) -> Result<(TxReport, RxReport)> {
+        let port = free_port()?;
+        let ep = format!("tcp/127.0.0.1:{port}");
+        let pa = self.prefix("a");
+        let pb = self.prefix("b");
+        let bridge_args = |instance: &str, prefix: &str, dir: &str, z: &[String]| -> Vec<String> {
+            let mut v = vec![
+                s("--instance"),
+                s(instance),
+                s("--service"),
+                format!("bench/frames={key}@{dir}"),
+                s("--max-frame-bytes"),
+                self.max.to_string(),
+                s("--iox-root"),
+                self.root.display().to_string(),
+                s("--iox-prefix"),
+                prefix.to_string(),
+                s("--no-verify-checksum"),
+                s("--stats-interval-s"),
+                s("3600"),
+                s("--no-multicast-scouting"),
+            ];
+            v.extend(z.iter().cloned());
+            v
+        };
+        let bb = Proc::spawn(
+            "bridge-b",
+            &self.bridge_exe,
+            &bridge_args("bench-b", &pb, "in", &[s("-l"), ep.clone()]),
+        )?;
+        let mut sub_args = vec![s("iox-sub")];
+        sub_args.extend(self.svc(&pb));
+        sub_args.extend([s("--frames"), frames.to_string(), s("--idle-s"), s("10")]);
+        let mut sub = Proc::spawn("iox-sub(b)", &self.me, &sub_args)?;
+        sub.ready()?;
+        let ba = Proc::spawn(
+            "bridge-a",
+            &self.bridge_exe,
+            &bridge_args("bench-a", &pa, "out", &[s("-e"), ep.clone()]),
+        )?;
+        wait_bridged(&ep, key, Duration::from_secs(30))?;
+        let mut pub_args = vec![s("iox-pub")];
+        pub_args.extend(self.svc(&pa));
+        pub_args.extend(tx_args(frames, bytes, rate));
+        if block {
+            pub_args.push(s("--block"));
+        }
+        let mut publ = Proc::spawn("iox-pub(a)", &self.me, &pub_args)?;
+        publ.ready()?;
+        let t = Self::timeout(frames, rate);
+        let r = (publ.report(t)?, sub.report(t)?);
+        drop(ba);
+        drop(bb);
+        Ok(r)
+    }
+}
+
+fn tx_args(frames: u64, bytes: usize, rate: f64) -> Vec<String> {
+    vec![
+        s("--frames"),
+        frames.to_string(),
+        s("--frame-bytes"),
+        bytes.to_string(),
+        s("--rate-hz"),
+        rate.to_string(),
+        s("--no-checksum"),
+    ]
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 fn bench(
     sizes_mib: &[usize],
     frames: u64,
     latency_rate_hz: f64,
+    latency_budget_mb_s: f64,
+    repeats: usize,
     json_out: Option<&Path>,
 ) -> Result<()> {
     let me = std::env::current_exe()?;
@@ -790,213 +1022,112 @@ fn bench(
     }
     let root = std::env::temp_dir().join(format!("cellsar-bench-{}", std::process::id()));
     std::fs::create_dir_all(&root)?;
-    let max = sizes_mib.iter().copied().max().unwrap_or(32) << 20;
-    let mut rows = Vec::new();
-    let t = |n: u64| Duration::from_secs(30 + n);
-
+    let mut ctx = BenchCtx {
+        me,
+        bridge_exe,
+        root: root.clone(),
+        max: sizes_mib.iter().copied().max().unwrap_or(32) << 20,
+        run: 0,
+    };
+    let mut rows: Vec<BenchRow> = Vec::new();
+    let push = |rows: &mut Vec<BenchRow>,
+                path: &str,
+                mode: &str,
+                mib: usize,
+                rep: usize,
+                rate: f64,
+                r: (TxReport, RxReport)| {
+        eprintln!(
+            "{path} {mode} {mib} MiB rep {rep}: tx {:?}\n    rx {:?}",
+            r.0, r.1
+        );
+        rows.push(BenchRow {
+            path: s(path),
+            mode: s(mode),
+            frame_mib: mib,
+            rep,
+            rate_hz: rate,
+            tx: r.0,
+            rx: r.1,
+        });
+    };
     for &mib in sizes_mib {
         let bytes = mib << 20;
-        for (mode, rate, block) in [
-            ("latency", latency_rate_hz, false),
-            ("throughput", 0.0, true),
-        ] {
-            // --- iceoryx2 hand-off
-            let prefix = format!("cb{}_{mib}_{mode}_", std::process::id());
-            let svc = vec![
-                s("--service"),
-                s("bench/frames"),
-                s("--max-frame-bytes"),
-                max.to_string(),
-                s("--iox-root"),
-                root.display().to_string(),
-                s("--iox-prefix"),
-                prefix.clone(),
-            ];
-            let mut sub_args = vec![s("iox-sub")];
-            sub_args.extend(svc.clone());
-            sub_args.extend([s("--frames"), frames.to_string()]);
-            let mut sub = Proc::spawn("iox-sub", &me, &sub_args)?;
-            sub.ready()?;
-            let mut pub_args = vec![s("iox-pub")];
-            pub_args.extend(svc.clone());
-            pub_args.extend([
-                s("--frames"),
-                frames.to_string(),
-                s("--frame-bytes"),
-                bytes.to_string(),
-                s("--rate-hz"),
-                rate.to_string(),
-                s("--no-checksum"),
-            ]);
-            if block {
-                pub_args.push(s("--block"));
-            }
-            let mut publ = Proc::spawn("iox-pub", &me, &pub_args)?;
-            publ.ready()?;
-            let tx: TxReport = publ.report(t(frames))?;
-            let rx: RxReport = sub.report(t(frames))?;
-            eprintln!("iceoryx2 {mib} MiB {mode}: tx {tx:?}\n  rx {rx:?}");
-            rows.push(BenchRow {
-                path: s("iceoryx2"),
-                mode: s(mode),
-                frame_mib: mib,
-                tx,
-                rx,
-            });
-
-            // --- plain Zenoh, then through the bridges, same frames
-            for path in ["zenoh", "bridge"] {
-                let port = free_port()?;
-                let listen = format!("tcp/127.0.0.1:{port}");
-                let zl = vec![s("--no-multicast-scouting"), s("-l"), listen.clone()];
-                let ze = vec![s("--no-multicast-scouting"), s("-e"), listen.clone()];
-                let key = format!("bench/{path}/{mib}");
-                if path == "zenoh" {
-                    let mut sub_args = vec![
-                        s("z-sub"),
-                        s("--key"),
-                        key.clone(),
-                        s("--frames"),
-                        frames.to_string(),
-                        s("--max-frame-bytes"),
-                        max.to_string(),
-                    ];
-                    sub_args.extend(zl.clone());
-                    let mut sub = Proc::spawn("z-sub", &me, &sub_args)?;
-                    sub.ready()?;
-                    let mut pub_args = vec![
-                        s("z-pub"),
-                        s("--key"),
-                        key.clone(),
-                        s("--frames"),
-                        frames.to_string(),
-                        s("--frame-bytes"),
-                        bytes.to_string(),
-                        s("--rate-hz"),
-                        rate.to_string(),
-                        s("--no-checksum"),
-                        s("--wait-matching"),
-                    ];
-                    pub_args.extend(ze.clone());
-                    let mut publ = Proc::spawn("z-pub", &me, &pub_args)?;
-                    publ.ready()?;
-                    let tx: TxReport = publ.report(t(4 * frames))?;
-                    let rx: RxReport = sub.report(t(4 * frames))?;
-                    eprintln!("zenoh {mib} MiB {mode}: tx {tx:?}\n  rx {rx:?}");
-                    rows.push(BenchRow {
-                        path: s("zenoh"),
-                        mode: s(mode),
-                        frame_mib: mib,
-                        tx,
-                        rx,
-                    });
-                } else {
-                    // host A: producer + bridge A (out); host B: bridge B (in) + consumer.
-                    let pa = format!("cba{}_{mib}_{mode}_", std::process::id());
-                    let pb = format!("cbb{}_{mib}_{mode}_", std::process::id());
-                    let common = |prefix: &str, dir: &str| -> Vec<String> {
-                        vec![
-                            s("--service"),
-                            format!("bench/frames={key}@{dir}"),
-                            s("--max-frame-bytes"),
-                            max.to_string(),
-                            s("--iox-root"),
-                            root.display().to_string(),
-                            s("--iox-prefix"),
-                            prefix.to_string(),
-                            s("--no-verify-checksum"),
-                            s("--stats-interval-s"),
-                            s("3600"),
-                        ]
-                    };
-                    let mut bb_args = vec![s("--instance"), s("bench-b")];
-                    bb_args.extend(common(&pb, "in"));
-                    bb_args.extend(zl.clone());
-                    let bb = Proc::spawn("bridge-b", &bridge_exe, &bb_args)?;
-                    let svc_b = vec![
-                        s("--service"),
-                        s("bench/frames"),
-                        s("--max-frame-bytes"),
-                        max.to_string(),
-                        s("--iox-root"),
-                        root.display().to_string(),
-                        s("--iox-prefix"),
-                        pb.clone(),
-                    ];
-                    let mut sub_args = vec![s("iox-sub")];
-                    sub_args.extend(svc_b);
-                    sub_args.extend([s("--frames"), frames.to_string()]);
-                    let mut sub = Proc::spawn("iox-sub(b)", &me, &sub_args)?;
-                    sub.ready()?;
-                    let mut ba_args = vec![s("--instance"), s("bench-a")];
-                    ba_args.extend(common(&pa, "out"));
-                    ba_args.extend(ze.clone());
-                    let ba = Proc::spawn("bridge-a", &bridge_exe, &ba_args)?;
-                    // wait until bridge A's key matches bridge B's subscriber: probe with a
-                    // plain subscriber-less check through a short sleep loop on liveliness
-                    wait_bridged(&ze, &key, Duration::from_secs(20))?;
-                    let svc_a = vec![
-                        s("--service"),
-                        s("bench/frames"),
-                        s("--max-frame-bytes"),
-                        max.to_string(),
-                        s("--iox-root"),
-                        root.display().to_string(),
-                        s("--iox-prefix"),
-                        pa.clone(),
-                    ];
-                    let mut pub_args = vec![s("iox-pub")];
-                    pub_args.extend(svc_a);
-                    pub_args.extend([
-                        s("--frames"),
-                        frames.to_string(),
-                        s("--frame-bytes"),
-                        bytes.to_string(),
-                        s("--rate-hz"),
-                        rate.to_string(),
-                        s("--no-checksum"),
-                    ]);
-                    if block {
-                        pub_args.push(s("--block"));
-                    }
-                    let mut publ = Proc::spawn("iox-pub(a)", &me, &pub_args)?;
-                    publ.ready()?;
-                    let tx: TxReport = publ.report(t(4 * frames))?;
-                    let rx: RxReport = sub.report(t(4 * frames))?;
-                    eprintln!("bridge {mib} MiB {mode}: tx {tx:?}\n  rx {rx:?}");
-                    rows.push(BenchRow {
-                        path: s("bridge"),
-                        mode: s(mode),
-                        frame_mib: mib,
-                        tx,
-                        rx,
-                    });
-                    drop(ba);
-                    drop(bb);
-                }
-            }
+        // paced well below the path's capacity so latency is not queueing delay
+        let lat_rate = latency_rate_hz.min(latency_budget_mb_s * 1e6 / bytes as f64);
+        for rep in 0..repeats {
+            let r = ctx.iox(bytes, frames, lat_rate, false, false)?;
+            push(&mut rows, "iceoryx2", "latency", mib, rep, lat_rate, r);
+            let r = ctx.iox(bytes, frames, lat_rate, false, true)?;
+            push(&mut rows, "iceoryx2", "latency-spin", mib, rep, lat_rate, r);
+            let r = ctx.iox(bytes, frames, 0.0, true, false)?;
+            push(&mut rows, "iceoryx2", "throughput", mib, rep, 0.0, r);
+            // plain Zenoh and the bridged path alternate, so load changes hit both alike
+            let key = format!("bench/{mib}/{rep}");
+            let r = ctx.zenoh(bytes, frames, lat_rate, &format!("{key}/zl"))?;
+            push(&mut rows, "zenoh", "latency", mib, rep, lat_rate, r);
+            let r = ctx.bridged(bytes, frames, lat_rate, false, &format!("{key}/bl"))?;
+            push(&mut rows, "bridge", "latency", mib, rep, lat_rate, r);
+            let r = ctx.zenoh(bytes, frames, 0.0, &format!("{key}/zt"))?;
+            push(&mut rows, "zenoh", "throughput", mib, rep, 0.0, r);
+            let r = ctx.bridged(bytes, frames, 0.0, true, &format!("{key}/bt"))?;
+            push(&mut rows, "bridge", "throughput", mib, rep, 0.0, r);
         }
     }
     let _ = std::fs::remove_dir_all(&root);
 
-    println!(
-        "| path | mode | frame | frames rx/tx | lost | p50 latency | p90 | p99 | throughput (rx) |"
-    );
+    println!("Medians over {repeats} repetition(s) of {frames} frames each.\n");
+    println!("| path | mode | frame | rate | frames rx/tx (all reps) | p50 latency | p90 | p99 | throughput (rx) |");
     println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
+    let mut keys: Vec<(String, String, usize)> = Vec::new();
     for r in &rows {
+        let k = (r.path.clone(), r.mode.clone(), r.frame_mib);
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    for (path, mode, mib) in &keys {
+        let sel: Vec<&BenchRow> = rows
+            .iter()
+            .filter(|r| &r.path == path && &r.mode == mode && r.frame_mib == *mib)
+            .collect();
+        let rx: u64 = sel.iter().map(|r| r.rx.frames).sum();
+        let tx: u64 = sel.iter().map(|r| r.tx.frames).sum();
+        let m = |f: &dyn Fn(&BenchRow) -> f64| median(sel.iter().map(|r| f(r)).collect());
+        let rate = sel.first().map(|r| r.rate_hz).unwrap_or(0.0);
         println!(
-            "| {} | {} | {} MiB | {}/{} | {} | {:.1} µs | {:.1} µs | {:.1} µs | {:.0} MB/s |",
-            r.path,
-            r.mode,
-            r.frame_mib,
-            r.rx.frames,
-            r.tx.frames,
-            r.tx.frames.saturating_sub(r.rx.frames),
-            r.rx.lat_us_p50,
-            r.rx.lat_us_p90,
-            r.rx.lat_us_p99,
-            r.rx.throughput_mb_s
+            "| {path} | {mode} | {mib} MiB | {} | {rx}/{tx} | {:.1} µs | {:.1} µs | {:.1} µs | {:.0} MB/s |",
+            if rate > 0.0 { format!("{rate:.1} Hz") } else { s("max") },
+            m(&|r| r.rx.lat_us_p50),
+            m(&|r| r.rx.lat_us_p90),
+            m(&|r| r.rx.lat_us_p99),
+            m(&|r| r.rx.throughput_mb_s),
         );
+    }
+    println!("\n| frame | bridge / plain Zenoh throughput (median of per-repetition ratios) | bridge / plain p50 latency |");
+    println!("|---:|---:|---:|");
+    for &mib in sizes_mib {
+        let pick = |path: &str, mode: &str, rep: usize| {
+            rows.iter()
+                .find(|r| r.path == path && r.mode == mode && r.frame_mib == mib && r.rep == rep)
+        };
+        let mut tp = Vec::new();
+        let mut lat = Vec::new();
+        for rep in 0..repeats {
+            if let (Some(b), Some(z)) = (
+                pick("bridge", "throughput", rep),
+                pick("zenoh", "throughput", rep),
+            ) {
+                tp.push(b.rx.throughput_mb_s / z.rx.throughput_mb_s);
+            }
+            if let (Some(b), Some(z)) = (
+                pick("bridge", "latency", rep),
+                pick("zenoh", "latency", rep),
+            ) {
+                lat.push(b.rx.lat_us_p50 / z.rx.lat_us_p50);
+            }
+        }
+        println!("| {mib} MiB | {:.3} | {:.3} |", median(tp), median(lat));
     }
     if let Some(p) = json_out {
         std::fs::write(p, serde_json::to_string_pretty(&rows)?)?;
@@ -1004,17 +1135,11 @@ fn bench(
     Ok(())
 }
 
-/// Waits until a liveliness token of a bridge on `key` from bridge A is visible.
-fn wait_bridged(connect: &[String], key: &str, timeout: Duration) -> Result<()> {
+/// Waits until bridge A's route on `key` is up (its liveliness token is visible).
+fn wait_bridged(endpoint: &str, key: &str, timeout: Duration) -> Result<()> {
     let args = ZenohArgs {
         no_multicast_scouting: true,
-        connect: connect
-            .iter()
-            .skip_while(|a| *a != "-e")
-            .nth(1)
-            .cloned()
-            .into_iter()
-            .collect(),
+        connect: vec![endpoint.to_string()],
         mode: Some(bridge::zconfig::Mode::Peer),
         ..ZenohArgs::default()
     };
