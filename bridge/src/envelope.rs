@@ -564,6 +564,8 @@ pub fn decode<M: Message>(
 #[derive(Serialize, Deserialize)]
 struct JsonEnvelope<B> {
     kind: u16,
+    /// Informative only (optional when decoding).
+    #[serde(default)]
     kind_name: String,
     schema_version: u16,
     mission_id: MissionId,

@@ -25,17 +25,15 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::prelude::*;
 use serde::{Deserialize, Serialize};
-use zenoh::bytes::ZBytes;
 use zenoh::qos::CongestionControl;
 use zenoh::sample::{Locality, Sample, SampleKind};
 use zenoh::Wait;
 
 use crate::counters::BadPayloadLog;
 use crate::envelope::CodecError;
-use crate::frame::{FrameHeader, WIRE_PREFIX_LEN};
 use crate::iox::{FrameNode, FramePublisherOptions, FrameServiceSpec, IoxEnv, IoxError};
 use crate::keys;
-use crate::net::{NetError, ZenohFramePublisher, ZenohNode};
+use crate::net::{split_frame_payload, NetError, ZenohFramePublisher, ZenohNode};
 use crate::stats::BridgeStats;
 
 pub use crate::frame::FLAG_BRIDGED;
@@ -501,41 +499,6 @@ fn wait_ready(
     }
 }
 
-/// Splits a Zenoh frame payload into its checked header and the payload slices.
-fn split_frame(
-    payload: &ZBytes,
-    max_payload: usize,
-) -> Result<(FrameHeader, Vec<&[u8]>), CodecError> {
-    let total = payload.len();
-    if total > WIRE_PREFIX_LEN.saturating_add(max_payload) {
-        return Err(CodecError::TooLarge {
-            what: "frame",
-            len: total as u64,
-            limit: (WIRE_PREFIX_LEN + max_payload) as u64,
-        });
-    }
-    let mut prefix = [0u8; WIRE_PREFIX_LEN];
-    let mut filled = 0usize;
-    let mut chunks = Vec::new();
-    for slice in payload.slices() {
-        let mut s = slice;
-        if filled < WIRE_PREFIX_LEN {
-            let take = (WIRE_PREFIX_LEN - filled).min(s.len());
-            prefix[filled..filled + take].copy_from_slice(&s[..take]);
-            filled += take;
-            s = &s[take..];
-        }
-        if !s.is_empty() {
-            chunks.push(s);
-        }
-    }
-    if filled < WIRE_PREFIX_LEN {
-        return Err(CodecError::TooShort { len: total });
-    }
-    let header = FrameHeader::from_wire_prefix(&prefix, total, max_payload)?;
-    Ok((header, chunks))
-}
-
 #[allow(clippy::too_many_arguments)]
 fn inbound_thread(
     env: &IoxEnv,
@@ -589,8 +552,8 @@ fn inbound_thread(
         let c = &counters[i].inb;
         DirectionCounters::add(&c.received, 1);
         let payload = sample.payload();
-        let checked =
-            split_frame(payload, route.service.max_payload_bytes).and_then(|(h, chunks)| {
+        let checked = split_frame_payload(payload, route.service.max_payload_bytes).and_then(
+            |(h, chunks)| {
                 if verify_checksum && h.has_checksum() {
                     let mut hasher = crc32fast::Hasher::new();
                     for ch in &chunks {
@@ -605,7 +568,8 @@ fn inbound_thread(
                     }
                 }
                 Ok((h, chunks))
-            });
+            },
+        );
         let (mut header, chunks) = match checked {
             Ok(v) => v,
             Err(e) => {
@@ -782,6 +746,7 @@ mod tests {
     fn split_frame_handles_any_slicing() {
         use crate::frame::{encode_wire, FrameMeta};
         use crate::MissionId;
+        use zenoh::bytes::ZBytes;
         let payload: Vec<u8> = (0..200u32).map(|i| i as u8).collect();
         let h = FrameMeta::bytes(9, MissionId(1), 4, payload.len())
             .unwrap()
@@ -789,13 +754,13 @@ mod tests {
             .unwrap();
         let wire = encode_wire(&h, &payload).unwrap();
         let z = ZBytes::from(wire.clone());
-        let (h2, chunks) = split_frame(&z, 1000).unwrap();
+        let (h2, chunks) = split_frame_payload(&z, 1000).unwrap();
         assert_eq!(h2, h);
         assert_eq!(chunks.concat(), payload);
-        assert!(split_frame(&z, 100).is_err());
+        assert!(split_frame_payload(&z, 100).is_err());
         let short = ZBytes::from(wire[..50].to_vec());
         assert!(matches!(
-            split_frame(&short, 1000),
+            split_frame_payload(&short, 1000),
             Err(CodecError::TooShort { .. })
         ));
     }

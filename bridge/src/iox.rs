@@ -689,9 +689,25 @@ impl FramePublisher {
         self.publisher.id().value()
     }
 
-    /// Subscribers currently connected to the service.
+    /// Subscribers currently registered with the service.
     pub fn subscriber_count(&self) -> usize {
         self.service.dynamic_config().number_of_subscribers()
+    }
+
+    /// Waits up to `timeout` until at least `n` subscribers are registered, then `settle`
+    /// more: a subscriber connects to a new publisher on its next receive or wake-up, and
+    /// frames sent before that (with no history) never reach it. Returns whether `n` were
+    /// reached.
+    pub fn wait_for_subscribers(&self, n: usize, timeout: Duration, settle: Duration) -> bool {
+        let deadline = std::time::Instant::now() + timeout;
+        while self.subscriber_count() < n {
+            if std::time::Instant::now() >= deadline {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        std::thread::sleep(settle);
+        true
     }
 
     /// Counters: `sent`, `bytes_out`, `dropped` (= deliveries skipped because a subscriber's

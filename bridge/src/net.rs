@@ -511,20 +511,23 @@ impl ZenohNode {
             publisher,
             key: key.to_string(),
             counters: Arc::new(Counters::default()),
+            pool: BufPool::default(),
         })
     }
 
-    /// Declares a subscriber of raw frames on `key`: each good frame is copied once into an
-    /// 8-byte-aligned buffer and queued; bad ones are counted, logged and dropped.
+    /// Declares a subscriber of raw frames on `key`. The Zenoh callback only checks the frame
+    /// header (72 bytes) and queues the sample; the payload is read (copied or verified) in the
+    /// consumer's thread, so a slow consumer never holds up Zenoh's receive path.
     pub fn frame_subscriber(
         &self,
         key: &str,
         opts: FrameSubscribeOptions,
     ) -> Result<ZenohFrameSubscriber, NetError> {
-        let (tx, rx) = mpsc::sync_channel::<OwnedFrame>(opts.capacity.max(1));
+        let (tx, rx) = mpsc::sync_channel::<ZenohFrame>(opts.capacity.max(1));
         let counters = Arc::new(Counters::default());
         let log = Arc::new(BadPayloadLog::default());
         let c = counters.clone();
+        let cb_log = log.clone();
         let block = opts.on_full == OnFull::Block;
         let subscriber = self
             .session
@@ -533,14 +536,23 @@ impl ZenohNode {
                 if sample.kind() != SampleKind::Put {
                     return;
                 }
-                let payload = sample.payload();
-                c.on_received(payload.len());
-                match OwnedFrame::from_zbytes(payload, opts.max_payload_bytes, opts.verify_checksum)
-                {
-                    Ok(f) => deliver(&tx, f, block, &c),
+                let len = sample.payload().len();
+                c.on_received(len);
+                match split_frame_payload(sample.payload(), opts.max_payload_bytes) {
+                    Ok((header, _)) => {
+                        let f = ZenohFrame { header, sample };
+                        let sent = if block {
+                            tx.send(f).is_ok()
+                        } else {
+                            tx.try_send(f).is_ok()
+                        };
+                        if !sent {
+                            c.on_dropped(1);
+                        }
+                    }
                     Err(e) => {
                         c.on_malformed();
-                        log.log(sample.key_expr().as_str(), payload.len(), &e);
+                        cb_log.log(sample.key_expr().as_str(), len, &e);
                     }
                 }
             })
@@ -551,6 +563,9 @@ impl ZenohNode {
             _subscriber: subscriber,
             rx,
             counters,
+            log,
+            verify_checksum: opts.verify_checksum,
+            key: key.to_string(),
         })
     }
 
@@ -956,59 +971,6 @@ impl OwnedFrame {
         Ok(OwnedFrame { header, words })
     }
 
-    /// Parses a Zenoh frame payload, copying the samples once (slice by slice).
-    pub fn from_zbytes(
-        payload: &ZBytes,
-        max_payload: usize,
-        verify_checksum: bool,
-    ) -> Result<Self, CodecError> {
-        let total = payload.len();
-        let mut prefix = [0u8; WIRE_PREFIX_LEN];
-        let mut filled = 0usize;
-        let mut words: Vec<u64> = Vec::new();
-        let mut header: Option<FrameHeader> = None;
-        let mut written = 0usize;
-        for slice in payload.slices() {
-            let mut s = slice;
-            if header.is_none() {
-                let take = (WIRE_PREFIX_LEN - filled).min(s.len());
-                prefix[filled..filled + take].copy_from_slice(&s[..take]);
-                filled += take;
-                s = &s[take..];
-                if filled < WIRE_PREFIX_LEN {
-                    continue;
-                }
-                let h = FrameHeader::from_wire_prefix(&prefix, total, max_payload)?;
-                words = vec![0u64; (h.payload_len as usize).div_ceil(8)];
-                header = Some(h);
-            }
-            let dst = bytemuck::cast_slice_mut::<u64, u8>(&mut words);
-            let end = written + s.len();
-            let Some(d) = dst.get_mut(written..end) else {
-                return Err(CodecError::LengthMismatch {
-                    declared: written as u64,
-                    actual: end as u64,
-                });
-            };
-            d.copy_from_slice(s);
-            written = end;
-        }
-        let Some(header) = header else {
-            return Err(CodecError::TooShort { len: total });
-        };
-        if written as u64 != header.payload_len {
-            return Err(CodecError::LengthMismatch {
-                declared: header.payload_len,
-                actual: written as u64,
-            });
-        }
-        let f = OwnedFrame { header, words };
-        if verify_checksum {
-            header.verify_checksum(f.payload())?;
-        }
-        Ok(f)
-    }
-
     /// The payload bytes.
     pub fn payload(&self) -> &[u8] {
         let len = usize::try_from(self.header.payload_len).unwrap_or(usize::MAX);
@@ -1022,21 +984,86 @@ impl OwnedFrame {
     }
 }
 
+/// Reused send buffers: frames of 32 MiB and more are above glibc's largest mmap threshold,
+/// so a fresh buffer per frame would be mmap'ed, page-faulted and zeroed every time (this
+/// halved the throughput at 32 MiB). A buffer returns here when Zenoh is done with it.
+#[derive(Clone, Debug, Default)]
+struct BufPool(Arc<Mutex<Vec<Vec<u8>>>>);
+
+const POOLED_BUFFERS: usize = 4;
+
+impl BufPool {
+    fn take(&self, capacity: usize) -> Vec<u8> {
+        let mut v = self
+            .0
+            .lock()
+            .ok()
+            .and_then(|mut p| p.pop())
+            .unwrap_or_default();
+        v.clear();
+        v.reserve(capacity);
+        v
+    }
+}
+
+/// A pooled buffer handed to Zenoh (as `bytes::Bytes`) without a copy.
+struct PooledBuf {
+    buf: Vec<u8>,
+    pool: BufPool,
+}
+
+impl AsRef<[u8]> for PooledBuf {
+    fn as_ref(&self) -> &[u8] {
+        &self.buf
+    }
+}
+
+impl Drop for PooledBuf {
+    fn drop(&mut self) {
+        let buf = std::mem::take(&mut self.buf);
+        if let Ok(mut p) = self.pool.0.lock() {
+            if p.len() < POOLED_BUFFERS {
+                p.push(buf);
+            }
+        }
+    }
+}
+
 /// A publisher of raw frames on Zenoh.
 pub struct ZenohFramePublisher {
     publisher: zenoh::pubsub::Publisher<'static>,
     key: String,
     counters: Arc<Counters>,
+    pool: BufPool,
 }
 
 impl ZenohFramePublisher {
-    /// Publishes a frame (one copy: prefix + payload into one buffer).
+    /// Publishes a frame (one copy: prefix + payload into a reused buffer).
     pub fn put(&self, header: &FrameHeader, payload: &[u8]) -> Result<(), NetError> {
-        let bytes = frame::encode_wire(header, payload).map_err(|source| NetError::Codec {
-            key: self.key.clone(),
-            source,
-        })?;
-        self.put_raw(bytes)
+        header
+            .validate(payload.len(), frame::MAX_FRAME_HARD_LIMIT)
+            .map_err(|source| NetError::Codec {
+                key: self.key.clone(),
+                source,
+            })?;
+        let mut buf = self.pool.take(WIRE_PREFIX_LEN + payload.len());
+        buf.extend_from_slice(&header.to_wire_prefix());
+        buf.extend_from_slice(payload);
+        let len = buf.len();
+        let bytes = bytes::Bytes::from_owner(PooledBuf {
+            buf,
+            pool: self.pool.clone(),
+        });
+        match self.publisher.put(ZBytes::from(bytes)).wait() {
+            Ok(()) => {
+                self.counters.on_sent(len);
+                Ok(())
+            }
+            Err(e) => {
+                self.counters.on_send_error();
+                Err(zerr("put", &self.key, e))
+            }
+        }
     }
 
     /// Whether a subscriber this publisher may deliver to currently matches its key (with
@@ -1074,18 +1101,149 @@ impl ZenohFramePublisher {
 /// A subscriber of raw frames on Zenoh.
 pub struct ZenohFrameSubscriber {
     _subscriber: zenoh::pubsub::Subscriber<()>,
-    rx: Receiver<OwnedFrame>,
+    rx: Receiver<ZenohFrame>,
     counters: Arc<Counters>,
+    log: Arc<BadPayloadLog>,
+    verify_checksum: bool,
+    key: String,
 }
 
 impl ZenohFrameSubscriber {
-    /// Waits up to `timeout` for the next frame.
-    pub fn recv_timeout(&self, timeout: Duration) -> Option<OwnedFrame> {
-        self.rx.recv_timeout(timeout).ok()
+    /// Waits up to `timeout` for the next good frame, without copying its payload (the
+    /// checksum, if enabled, is verified slice by slice).
+    pub fn recv_frame_timeout(&self, timeout: Duration) -> Option<ZenohFrame> {
+        let deadline = std::time::Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            let f = self.rx.recv_timeout(left).ok()?;
+            if self.verify_checksum {
+                if let Err(e) = f.verify_checksum() {
+                    self.counters.on_malformed();
+                    self.log.log(&self.key, f.sample.payload().len(), &e);
+                    continue;
+                }
+            }
+            self.counters.on_delivered();
+            return Some(f);
+        }
     }
 
-    /// Counters of this subscriber.
+    /// Waits up to `timeout` for the next good frame, copied once into an aligned buffer.
+    pub fn recv_timeout(&self, timeout: Duration) -> Option<OwnedFrame> {
+        let f = self.recv_frame_timeout(timeout)?;
+        match f.to_owned_frame() {
+            Ok(o) => Some(o),
+            Err(e) => {
+                // cannot happen for a frame whose header was checked; counted if it does
+                self.counters.on_malformed();
+                self.log.log(&self.key, f.sample.payload().len(), &e);
+                None
+            }
+        }
+    }
+
+    /// Counters of this subscriber (`delivered` counts frames handed out, `malformed`
+    /// includes checksum failures found when they are taken).
     pub fn counters(&self) -> &Counters {
         &self.counters
     }
+}
+
+/// A frame received over Zenoh, still in Zenoh's buffers (possibly many slices).
+pub struct ZenohFrame {
+    /// The checked header.
+    pub header: FrameHeader,
+    sample: Sample,
+}
+
+impl ZenohFrame {
+    /// The payload as consecutive slices (no copy).
+    pub fn payload_chunks(&self) -> Vec<&[u8]> {
+        split_frame_payload(self.sample.payload(), usize::MAX)
+            .map(|(_, c)| c)
+            .unwrap_or_default()
+    }
+
+    /// Verifies the CRC (if present) over the slices.
+    pub fn verify_checksum(&self) -> Result<(), CodecError> {
+        if !self.header.has_checksum() {
+            return Ok(());
+        }
+        let mut h = crc32fast::Hasher::new();
+        for c in self.payload_chunks() {
+            h.update(c);
+        }
+        let actual = h.finalize();
+        if actual != self.header.checksum {
+            return Err(CodecError::Checksum {
+                expected: self.header.checksum,
+                actual,
+            });
+        }
+        Ok(())
+    }
+
+    /// Copies the payload into an 8-byte-aligned [`OwnedFrame`].
+    pub fn to_owned_frame(&self) -> Result<OwnedFrame, CodecError> {
+        let len = usize::try_from(self.header.payload_len).unwrap_or(usize::MAX);
+        let mut words = vec![0u64; len.div_ceil(8)];
+        let dst = bytemuck::cast_slice_mut::<u64, u8>(&mut words);
+        let mut written = 0usize;
+        for c in self.payload_chunks() {
+            let end = written + c.len();
+            let Some(d) = dst.get_mut(written..end) else {
+                return Err(CodecError::LengthMismatch {
+                    declared: len as u64,
+                    actual: end as u64,
+                });
+            };
+            d.copy_from_slice(c);
+            written = end;
+        }
+        if written != len {
+            return Err(CodecError::LengthMismatch {
+                declared: len as u64,
+                actual: written as u64,
+            });
+        }
+        Ok(OwnedFrame {
+            header: self.header,
+            words,
+        })
+    }
+}
+
+/// Splits a Zenoh frame payload into its checked header and the payload slices (no copy).
+pub fn split_frame_payload(
+    payload: &ZBytes,
+    max_payload: usize,
+) -> Result<(FrameHeader, Vec<&[u8]>), CodecError> {
+    let total = payload.len();
+    if total > WIRE_PREFIX_LEN.saturating_add(max_payload) {
+        return Err(CodecError::TooLarge {
+            what: "frame",
+            len: total as u64,
+            limit: WIRE_PREFIX_LEN.saturating_add(max_payload) as u64,
+        });
+    }
+    let mut prefix = [0u8; WIRE_PREFIX_LEN];
+    let mut filled = 0usize;
+    let mut chunks = Vec::new();
+    for slice in payload.slices() {
+        let mut s = slice;
+        if filled < WIRE_PREFIX_LEN {
+            let take = (WIRE_PREFIX_LEN - filled).min(s.len());
+            prefix[filled..filled + take].copy_from_slice(&s[..take]);
+            filled += take;
+            s = &s[take..];
+        }
+        if !s.is_empty() {
+            chunks.push(s);
+        }
+    }
+    if filled < WIRE_PREFIX_LEN {
+        return Err(CodecError::TooShort { len: total });
+    }
+    let header = FrameHeader::from_wire_prefix(&prefix, total, max_payload)?;
+    Ok((header, chunks))
 }

@@ -357,20 +357,18 @@ fn iox_pub(svc: &ServiceArgs, f: &FrameArgs, wait_subscribers: usize, block: boo
         },
     )?;
     let samples = pattern(f.frame_bytes)?;
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while publisher.subscriber_count() < wait_subscribers {
-        if Instant::now() > deadline {
-            bail!(
-                "no {wait_subscribers} subscriber(s) on {} within 20 s",
-                svc.service
-            );
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    if wait_subscribers > 0 {
-        // A subscriber connects to a new publisher on its next receive or wake-up (iceoryx2
-        // has no history here): give it that moment, or the first frames find no connection.
-        std::thread::sleep(Duration::from_millis(250));
+    // A subscriber connects to a new publisher on its next receive or wake-up: wait for the
+    // subscribers, then give them that moment, or the first frames find no connection.
+    let settle = if wait_subscribers > 0 {
+        Duration::from_millis(250)
+    } else {
+        Duration::ZERO
+    };
+    if !publisher.wait_for_subscribers(wait_subscribers, Duration::from_secs(20), settle) {
+        bail!(
+            "no {wait_subscribers} subscriber(s) on {} within 20 s",
+            svc.service
+        );
     }
     ready();
     let start = Instant::now();
@@ -574,10 +572,16 @@ fn z_sub(key: &str, max_frame_bytes: usize, rx: &RxArgs, zenoh: &ZenohArgs) -> R
     let mut st = RxStats::new();
     let mut tracker = bridge::seq::SeqTracker::new();
     while !st.done(rx, start) {
-        match sub.recv_timeout(Duration::from_millis(50)) {
+        // zero copy: the payload stays in Zenoh's buffers (CRC checked there with --verify)
+        match sub.recv_frame_timeout(Duration::from_millis(50)) {
             Some(f) => {
                 tracker.observe(0, f.header.seq);
-                st.on_frame(f.header.time_unix_ns, f.payload().len(), f.header.seq, true);
+                st.on_frame(
+                    f.header.time_unix_ns,
+                    f.header.payload_len as usize,
+                    f.header.seq,
+                    true,
+                );
                 if rx.hold_ms > 0 {
                     std::thread::sleep(Duration::from_millis(rx.hold_ms));
                 }
