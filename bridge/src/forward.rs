@@ -611,7 +611,7 @@ fn outbound_thread(
         }
         let waitset = WaitSetBuilder::new()
             .signal_handling_mode(SignalHandlingMode::Disabled)
-            .create::<ipc::Service>()
+            .create::<crate::iox::IoxService>()
             .map_err(|e| IoxError::Iceoryx {
                 step: "create waitset",
                 service: instance.to_string(),
@@ -684,14 +684,17 @@ fn outbound_thread(
                     DirectionCounters::add(&c.unmatched, 1);
                     continue;
                 }
-                match zpub.put(&header, frame.payload()) {
+                let len = frame.payload().len();
+                // zero copy: Zenoh reads the payload straight from shared memory while it
+                // fragments it; the sample goes back to the producer when `put` returns
+                match zpub.put_owned(&header, frame) {
                     Ok(()) => {
                         DirectionCounters::add(&c.forwarded, 1);
                         DirectionCounters::add(&c.bytes, header.payload_len);
                     }
                     Err(e) => {
                         DirectionCounters::add(&c.send_errors, 1);
-                        log.log(&route.key, frame.payload().len(), &e);
+                        log.log(&route.key, len, &e);
                     }
                 }
             }

@@ -278,12 +278,18 @@ impl FrameServiceSpec {
     }
 }
 
-type FrameService = ps_factory::PortFactory<ipc::Service, [u8], FrameHeader>;
-type EventService = event_factory::PortFactory<ipc::Service>;
+/// The iceoryx2 service type of every cellsar port: the IPC service with mutex-protected
+/// ports, so nodes, publishers, subscribers and received frames are `Send` (usable from worker
+/// threads, and a received frame can be handed to Zenoh without a copy). It uses the same
+/// shared-memory resources as `ipc::Service` and interoperates with it.
+pub type IoxService = ipc_threadsafe::Service;
 
-/// An iceoryx2 node of this process (not `Send`: keep it on the thread that created it).
+type FrameService = ps_factory::PortFactory<IoxService, [u8], FrameHeader>;
+type EventService = event_factory::PortFactory<IoxService>;
+
+/// An iceoryx2 node of this process.
 pub struct FrameNode {
-    node: Node<ipc::Service>,
+    node: Node<IoxService>,
     name: String,
 }
 
@@ -317,7 +323,7 @@ impl FrameNode {
             .name(&node_name)
             .config(&config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
-            .create::<ipc::Service>()
+            .create::<IoxService>()
             .map_err(|e| ierr("create node", name, e))?;
         let state = node.try_cleanup_dead_nodes();
         let report = CleanupReport {
@@ -347,7 +353,7 @@ impl FrameNode {
     }
 
     /// The underlying iceoryx2 node.
-    pub fn node(&self) -> &Node<ipc::Service> {
+    pub fn node(&self) -> &Node<IoxService> {
         &self.node
     }
 
@@ -496,8 +502,8 @@ pub struct SendReport {
 pub struct FramePublisher {
     service: FrameService,
     _event: EventService,
-    publisher: Publisher<ipc::Service, [u8], FrameHeader>,
-    notifier: Notifier<ipc::Service>,
+    publisher: Publisher<IoxService, [u8], FrameHeader>,
+    notifier: Notifier<IoxService>,
     counters: Arc<Counters>,
     full: Arc<AtomicU64>,
     spec: FrameServiceSpec,
@@ -655,7 +661,7 @@ impl FramePublisher {
     /// measures the hand-off, not the filling).
     fn finish(
         &self,
-        mut sample: iceoryx2::sample_mut::SampleMut<ipc::Service, [u8], FrameHeader>,
+        mut sample: iceoryx2::sample_mut::SampleMut<IoxService, [u8], FrameHeader>,
         stamp: bool,
     ) -> Result<SendReport, IoxError> {
         let len = sample.payload().len();
@@ -724,7 +730,7 @@ impl FramePublisher {
 
 /// A frame taken from a subscriber; the shared-memory sample is returned when it is dropped.
 pub struct Frame {
-    sample: Sample<ipc::Service, [u8], FrameHeader>,
+    sample: Sample<IoxService, [u8], FrameHeader>,
 }
 
 impl std::fmt::Debug for Frame {
@@ -762,12 +768,18 @@ impl Frame {
     }
 }
 
+impl AsRef<[u8]> for Frame {
+    fn as_ref(&self) -> &[u8] {
+        self.payload()
+    }
+}
+
 /// Receives frames from one frame service.
 pub struct FrameSubscriber {
     _service: FrameService,
     _event: EventService,
-    subscriber: Subscriber<ipc::Service, [u8], FrameHeader>,
-    listener: Listener<ipc::Service>,
+    subscriber: Subscriber<IoxService, [u8], FrameHeader>,
+    listener: Listener<IoxService>,
     counters: Counters,
     log: BadPayloadLog,
     seq: RefCell<SeqTracker>,
@@ -853,7 +865,7 @@ impl FrameSubscriber {
     }
 
     /// The listener (to attach to an iceoryx2 `WaitSet`).
-    pub fn listener(&self) -> &Listener<ipc::Service> {
+    pub fn listener(&self) -> &Listener<IoxService> {
         &self.listener
     }
 

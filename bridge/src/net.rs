@@ -1066,6 +1066,36 @@ impl ZenohFramePublisher {
         }
     }
 
+    /// Publishes a frame whose payload is owned by `owner` (e.g. an iceoryx2
+    /// [`crate::iox::Frame`]) without copying it: Zenoh reads the payload in place while it
+    /// sends it, and `owner` is dropped when Zenoh no longer needs it.
+    pub fn put_owned<O>(&self, header: &FrameHeader, owner: O) -> Result<(), NetError>
+    where
+        O: AsRef<[u8]> + Send + 'static,
+    {
+        let payload_len = owner.as_ref().len();
+        header
+            .validate(payload_len, frame::MAX_FRAME_HARD_LIMIT)
+            .map_err(|source| NetError::Codec {
+                key: self.key.clone(),
+                source,
+            })?;
+        let mut writer = ZBytes::writer();
+        writer.append(ZBytes::from(header.to_wire_prefix().to_vec()));
+        writer.append(ZBytes::from(bytes::Bytes::from_owner(owner)));
+        let len = WIRE_PREFIX_LEN + payload_len;
+        match self.publisher.put(writer.finish()).wait() {
+            Ok(()) => {
+                self.counters.on_sent(len);
+                Ok(())
+            }
+            Err(e) => {
+                self.counters.on_send_error();
+                Err(zerr("put", &self.key, e))
+            }
+        }
+    }
+
     /// Whether a subscriber this publisher may deliver to currently matches its key (with
     /// `Locality::Remote`: a subscriber of another session).
     pub fn has_remote_subscribers(&self) -> bool {

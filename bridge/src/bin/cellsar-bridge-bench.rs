@@ -984,6 +984,42 @@ impl BenchCtx {
     }
 }
 
+/// Copies `bytes` from one buffer to another `frames` times (pages touched beforehand).
+fn memcpy_baseline(bytes: usize, frames: u64) -> (TxReport, RxReport) {
+    let src = vec![0x5au8; bytes];
+    let mut dst = vec![0u8; bytes];
+    dst.copy_from_slice(&src);
+    let t = Instant::now();
+    for i in 0..frames {
+        dst.copy_from_slice(&src);
+        std::hint::black_box(&dst[(i as usize * 4096) % bytes]);
+    }
+    let el = t.elapsed().as_secs_f64();
+    let total = bytes as u64 * frames;
+    let tp = total as f64 / el / 1e6;
+    (
+        TxReport {
+            frames,
+            bytes: total,
+            dropped: 0,
+            send_errors: 0,
+            elapsed_s: el,
+            throughput_mb_s: tp,
+        },
+        RxReport {
+            frames,
+            bytes: total,
+            elapsed_s: el,
+            throughput_mb_s: tp,
+            lat_us_p50: f64::NAN,
+            lat_us_p90: f64::NAN,
+            lat_us_p99: f64::NAN,
+            lat_us_max: f64::NAN,
+            ..RxReport::default()
+        },
+    )
+}
+
 fn tx_args(frames: u64, bytes: usize, rate: f64) -> Vec<String> {
     vec![
         s("--frames"),
@@ -1060,6 +1096,10 @@ fn bench(
         // paced well below the path's capacity so latency is not queueing delay
         let lat_rate = latency_rate_hz.min(latency_budget_mb_s * 1e6 / bytes as f64);
         for rep in 0..repeats {
+            // reference: one process copying the same bytes (the memory bandwidth the
+            // iceoryx2 producer's copy into shared memory is bound by)
+            let r = memcpy_baseline(bytes, frames);
+            push(&mut rows, "memcpy", "throughput", mib, rep, 0.0, r);
             let r = ctx.iox(bytes, frames, lat_rate, false, false)?;
             push(&mut rows, "iceoryx2", "latency", mib, rep, lat_rate, r);
             let r = ctx.iox(bytes, frames, lat_rate, false, true)?;
