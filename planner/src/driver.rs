@@ -233,7 +233,24 @@ pub fn plan_with_observer(
             if tr.pos_m.iter().flatten().any(|v| !v.is_finite()) {
                 return Err(PlanError::InvalidInit("non-finite position".into()));
             }
-            tr.clone()
+            // A given start that is infeasible (a warm start after the mission changed, say)
+            // is repaired and re-optimised on the coarse grid first, like the built-in start:
+            // large steps fix large violations in few iterations.
+            let objective = match options.scheme {
+                Scheme::BaselineExact => Some(ExactObjective::Distance),
+                Scheme::Exact => Some(ExactObjective::Energy),
+                Scheme::Paper | Scheme::Baseline => None,
+            };
+            match objective {
+                Some(obj)
+                    if options.coarse
+                        && !evaluate(mission, tr).is_feasible_for(options.resolution) =>
+                {
+                    coarse_start_from(mission, obj, true, options, Some(tr))
+                        .unwrap_or_else(|| tr.clone())
+                }
+                _ => tr.clone(),
+            }
         }
         // The built-in start: the guidance law on a coarse grid made feasible there (phase I);
         // for the exact-geometry schemes also optimised there. The paper's schemes get the plain
@@ -341,6 +358,18 @@ fn coarse_start(
     optimise: bool,
     options: &PlanOptions,
 ) -> Option<Trajectory> {
+    coarse_start_from(mission, objective, optimise, options, None)
+}
+
+/// [`coarse_start`] from a given fine-grid trajectory (sampled at the coarse slot ends) instead
+/// of the guidance law.
+fn coarse_start_from(
+    mission: &Mission,
+    objective: ExactObjective,
+    optimise: bool,
+    options: &PlanOptions,
+    warm: Option<&Trajectory>,
+) -> Option<Trajectory> {
     let n = mission.slots();
     let delta = mission.params().slot_s;
     let target = (COARSE_SLOT_S / delta).round() as usize;
@@ -356,7 +385,14 @@ fn coarse_start(
     let mut solver = SocpSolver::new(options.socp);
     let (start, _) = make_feasible(
         &coarse,
-        guidance_start(&coarse, options.resolution),
+        match warm {
+            Some(w) => Trajectory {
+                slot_s: coarse.params().slot_s,
+                start_m: w.start_m,
+                pos_m: (1..=coarse.slots()).map(|k| w.q(k * factor)).collect(),
+            },
+            None => guidance_start(&coarse, options.resolution),
+        },
         objective,
         &tuning,
         &mut solver,
