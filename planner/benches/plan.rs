@@ -8,6 +8,8 @@
 //! - `sca_iteration`: one exact SCA iteration (`ExactSubproblem::build` + `SocpSolver::solve`) at
 //!   a feasible start, with the solver's pattern reused (`reuse: true`, values updated in place)
 //!   or rebuilt every time (`reuse: false`), and the assembly alone (`build_only`);
+//! - `sca_settings`: the same iteration (pattern reused) under variants of Clarabel's tolerances
+//!   and iterative refinement, with the status, interior-point iterations and objective of each;
 //! - `scaling_iteration` / `scaling_plan`: the default 30 m mission with slot lengths 2 … 0.0625 s
 //!   (T_w = 150 … 4800): one SCA iteration at a feasible start, and the whole default plan.
 //!
@@ -21,7 +23,7 @@ use std::hint::black_box;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use criterion::{criterion_group, BenchmarkId, Criterion, SamplingMode};
+use criterion::{BenchmarkId, Criterion, SamplingMode};
 use planner::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use planner::socp::{SocpSettings, SocpSolver};
 use planner::{
@@ -39,6 +41,9 @@ static SAMPLES: Mutex<BTreeMap<(String, usize), Vec<f64>>> = Mutex::new(BTreeMap
 
 /// Interior-point iterations of one solve per (label, T_w), recorded once per bench.
 static IPM: Mutex<BTreeMap<(String, usize), u32>> = Mutex::new(BTreeMap::new());
+
+/// Solver-settings diagnostic lines (status, IPM iterations, objective), one per variant.
+static SETTINGS: Mutex<Vec<String>> = Mutex::new(Vec::new());
 
 /// Phase split of the default plans, one line each.
 static PHASES: Mutex<Vec<String>> = Mutex::new(Vec::new());
@@ -90,12 +95,7 @@ fn feasible_start(m: &Mission) -> Trajectory {
 
 /// One exact SCA iteration: assemble the subproblem around `start` and solve it.
 fn sca_iteration(m: &Mission, start: &Trajectory, solver: &mut SocpSolver) -> (f64, u32) {
-    let sub = ExactSubproblem::build(
-        m,
-        start,
-        ExactObjective::Energy,
-        &ExactTuning::default(),
-    );
+    let sub = ExactSubproblem::build(m, start, ExactObjective::Energy, &ExactTuning::default());
     let sol = must(solver.solve(&sub.builder), "exact subproblem");
     (sub.physical_objective(sol.objective), sol.iterations)
 }
@@ -221,6 +221,96 @@ fn sca_reuse(c: &mut Criterion) {
     g.finish();
 }
 
+/// Variants of the cone-program settings tried on the first SCA subproblem: Clarabel's
+/// tolerances and iterative refinement (where the interior-point time goes).
+fn settings_variants() -> Vec<(&'static str, SocpSettings)> {
+    let d = SocpSettings::default();
+    vec![
+        ("default (tol 1e-8, refine <= 10)", d),
+        (
+            "tol 1e-6",
+            SocpSettings {
+                tol_feas: 1e-6,
+                tol_gap_rel: 1e-6,
+                ..d
+            },
+        ),
+        (
+            "refine <= 2",
+            SocpSettings {
+                refine_max_iter: 2,
+                ..d
+            },
+        ),
+        (
+            "tol 1e-6, refine <= 2",
+            SocpSettings {
+                tol_feas: 1e-6,
+                tol_gap_rel: 1e-6,
+                refine_max_iter: 2,
+                ..d
+            },
+        ),
+    ]
+}
+
+fn sca_settings(c: &mut Criterion) {
+    let mut g = c.benchmark_group("sca_settings");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(1))
+        .measurement_time(Duration::from_secs(3))
+        .sampling_mode(SamplingMode::Flat);
+    for spacing in SPACINGS_M {
+        let m = mission(spacing, 0.5);
+        let mut start: Option<Trajectory> = None;
+        let mut reference: Option<f64> = None;
+        for (k, (label, settings)) in settings_variants().into_iter().enumerate() {
+            let mut warm: Option<SocpSolver> = None;
+            g.bench_function(BenchmarkId::new(format!("v{k}"), format!("{spacing}m")), |b| {
+                let s = start.get_or_insert_with(|| feasible_start(&m));
+                let solver = warm.get_or_insert_with(|| {
+                    let mut solver = SocpSolver::new(settings);
+                    let sub = ExactSubproblem::build(
+                        &m,
+                        s,
+                        ExactObjective::Energy,
+                        &ExactTuning::default(),
+                    );
+                    let line = match solver.solve(&sub.builder) {
+                        Ok(sol) => {
+                            let obj = sub.physical_objective(sol.objective);
+                            let r = *reference.get_or_insert(obj);
+                            format!(
+                                "| {spacing} m | v{k}: {label} | {:?} | {} | {:.3e} | {:.6} | {:.1e} |",
+                                sol.status,
+                                sol.iterations,
+                                sol.violation,
+                                obj,
+                                (obj - r).abs() / r
+                            )
+                        }
+                        Err(e) => format!("| {spacing} m | v{k}: {label} | error: {e} | | | | |"),
+                    };
+                    if let Ok(mut l) = SETTINGS.lock() {
+                        l.push(line);
+                    }
+                    solver
+                });
+                b.iter(|| {
+                    let sub = ExactSubproblem::build(
+                        &m,
+                        s,
+                        ExactObjective::Energy,
+                        &ExactTuning::default(),
+                    );
+                    black_box(solver.solve(&sub.builder).ok())
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
 fn scaling(c: &mut Criterion) {
     let mut g = c.benchmark_group("scaling_iteration");
     g.sample_size(10)
@@ -248,7 +338,11 @@ fn scaling(c: &mut Criterion) {
                     black_box(sca_iteration(m, s, solver));
                 }
                 let d = t0.elapsed();
-                record("scaling_iteration", n, d.as_secs_f64() / iters.max(1) as f64);
+                record(
+                    "scaling_iteration",
+                    n,
+                    d.as_secs_f64() / iters.max(1) as f64,
+                );
                 d
             })
         });
@@ -310,6 +404,16 @@ fn summary() {
             }
         }
     }
+    if let Ok(l) = SETTINGS.lock() {
+        if !l.is_empty() {
+            println!("\nFirst SCA subproblem at the feasible start under solver-settings variants (times: sca_settings/vK above):");
+            println!("| mission | variant | status | IPM iterations | cone violation | objective J | rel. diff to v0 |");
+            println!("|---|---|---|---|---|---|---|");
+            for line in l.iter() {
+                println!("{line}");
+            }
+        }
+    }
     let samples = match SAMPLES.lock() {
         Ok(s) => s.clone(),
         Err(_) => return,
@@ -350,10 +454,12 @@ fn summary() {
     }
 }
 
-criterion_group!(benches, plan_default, sca_reuse, scaling);
-
 fn main() {
-    benches();
-    Criterion::default().configure_from_args().final_summary();
+    let mut c = Criterion::default().configure_from_args();
+    plan_default(&mut c);
+    sca_reuse(&mut c);
+    sca_settings(&mut c);
+    scaling(&mut c);
+    c.final_summary();
     summary();
 }
