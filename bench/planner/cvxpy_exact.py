@@ -43,12 +43,17 @@ import math
 import sys
 import time
 import tomllib
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 import cvxpy as cp
+
+# Clarabel's AlmostSolved comes back as "optimal_inaccurate" with a warning per solve; the status
+# is recorded per iteration instead.
+warnings.filterwarnings("ignore", message="Solution may be inaccurate")
 
 # SPEC defaults (planner::Params::default()).
 DEFAULTS = {
@@ -364,7 +369,15 @@ class Subproblem:
     """The cone program of one SCA iteration. With `parametric`, the linearisation data are
     cp.Parameters (DPP: compiled once, values updated); otherwise numeric constants."""
 
-    def __init__(self, m: Mission, start: np.ndarray, data: dict, trust: bool, parametric: bool):
+    def __init__(
+        self,
+        m: Mission,
+        start: np.ndarray,
+        data: dict,
+        trust: bool,
+        parametric: bool,
+        speed_scale_mps: float | None = None,
+    ):
         n = m.slots
         delta = m.delta
         self.m = m
@@ -381,12 +394,27 @@ class Subproblem:
 
         x = cp.Variable(n, name="x")
         y = cp.Variable(n, name="y")
-        V = cp.Variable(n, name="V")
         a = cp.Variable(n, name="a")
         s = cp.Variable(n, name="s")
-        w = cp.Variable(n, name="w")
-        z = cp.Variable(n, name="z")
-        self.x, self.y, self.V, self.a, self.z = x, y, V, a, z
+        if speed_scale_mps is None:
+            # the Rust formulation: V (m/s), w >= V^2, z >= V^3 as they are
+            V = cp.Variable(n, name="V")
+            w = cp.Variable(n, name="w")
+            z = cp.Variable(n, name="z")
+            Vs, ws, zs = V, w, z
+            self.V_val = lambda: V.value
+            self.z_val = lambda: z.value
+        else:
+            # the same program in units of a reference speed r: V = r V', w = r^2 w', z = r^3 z'
+            # (V^2 <= w <=> V'^2 <= w', w^2 <= z V <=> w'^2 <= z' V'), so z ~ 1e4 becomes ~1
+            r = float(speed_scale_mps)
+            Vs = cp.Variable(n, name="V_scaled")
+            ws = cp.Variable(n, name="w_scaled")
+            zs = cp.Variable(n, name="z_scaled")
+            V = r * Vs
+            self.V_val = lambda: r * Vs.value
+            self.z_val = lambda: r**3 * zs.value
+        self.x, self.y, self.a = x, y, a
         # v_t = q_t - q_{t-1}: a sparse difference operator and the start as a constant
         D = sp.eye(n, format="csr") - sp.eye(n, k=-1, format="csr")
         c0x = np.zeros(n)
@@ -408,9 +436,9 @@ class Subproblem:
             # s^2 <= L * 1
             cp.SOC(L + 1.0, cp.vstack([L - 1.0, 2.0 * s]), axis=0),
             # V^2 <= w * 1
-            cp.SOC(w + 1.0, cp.vstack([w - 1.0, 2.0 * V]), axis=0),
+            cp.SOC(ws + 1.0, cp.vstack([ws - 1.0, 2.0 * Vs]), axis=0),
             # w^2 <= z V
-            cp.SOC(z + V, cp.vstack([z - V, 2.0 * w]), axis=0),
+            cp.SOC(zs + Vs, cp.vstack([zs - Vs, 2.0 * ws]), axis=0),
         ]
         I = m.lm_idx
         if len(I):
@@ -441,10 +469,11 @@ class Subproblem:
                 )
         c = 1.0 / n  # delta * objective_scale, objective_scale = 1 / (T_w delta)
         self.c = c
+        r2, r3 = (1.0, 1.0) if speed_scale_mps is None else (speed_scale_mps**2, speed_scale_mps**3)
         obj = (
-            c * m.blade_quadratic_coeff * cp.sum_squares(V)
+            c * m.blade_quadratic_coeff * r2 * cp.sum_squares(Vs)
             + c * m.p["induced_power_w"] * cp.sum(a)
-            + c * m.parasite_coeff * cp.sum(z)
+            + c * m.parasite_coeff * r3 * cp.sum(zs)
         )
         self.problem = cp.Problem(cp.Minimize(obj), cons)
         if parametric and not self.problem.is_dpp():
@@ -464,7 +493,7 @@ class Subproblem:
         """ExactSubproblem::physical_objective of the solution, evaluated at x like the Rust
         side (ProblemBuilder::objective): objective / objective_scale + T_w delta P0."""
         m = self.m
-        V, a, z = self.V.value, self.a.value, self.z.value
+        V, a, z = self.V_val(), self.a.value, self.z_val()
         own = self.c * (
             m.blade_quadratic_coeff * float(V @ V)
             + m.p["induced_power_w"] * float(np.sum(a))
@@ -487,6 +516,7 @@ class Record:
     solve_seconds: float
     clarabel_seconds: float
     ipm_iterations: int
+    status: str
 
 
 @dataclass
@@ -495,9 +525,18 @@ class Result:
     objective_history: list = field(default_factory=list)
     true_energy_history: list = field(default_factory=list)
     termination: str = "max_iterations"
+    first_status: str = ""
 
 
-def run(m: Mission, start: np.ndarray, pos: np.ndarray, max_iterations: int, tolerance: float, mode: str):
+def run(
+    m: Mission,
+    start: np.ndarray,
+    pos: np.ndarray,
+    max_iterations: int,
+    tolerance: float,
+    mode: str,
+    speed_scale_mps: float | None = None,
+):
     ev = evaluate(m, start, pos)
     if not ev.feasible:
         raise InputError(
@@ -521,17 +560,19 @@ def run(m: Mission, start: np.ndarray, pos: np.ndarray, max_iterations: int, tol
         if mode == "dpp":
             sub = cache.get(key)
             if sub is None:
-                sub = Subproblem(m, start, data, key, parametric=True)
+                sub = Subproblem(m, start, data, key, True, speed_scale_mps)
                 cache[key] = sub
             else:
                 sub.update(data)
         else:
-            sub = Subproblem(m, start, data, key, parametric=False)
+            sub = Subproblem(m, start, data, key, False, speed_scale_mps)
         ts = time.perf_counter()
         try:
             status = sub.solve()
         except cp.error.SolverError as err:
             status = f"solver error: {err}"
+        if it == 1:
+            res.first_status = str(status)
         te = time.perf_counter()
         stats = sub.problem.solver_stats
         clarabel_s = float(stats.solve_time or 0.0) if stats is not None else 0.0
@@ -539,7 +580,9 @@ def run(m: Mission, start: np.ndarray, pos: np.ndarray, max_iterations: int, tol
         if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or sub.x.value is None:
             rejects += 1
             trust = 2.0 if trust is None else trust * 0.5
-            res.records.append(Record(it, math.nan, value, False, time.perf_counter() - t0, te - tb, clarabel_s, ipm))
+            res.records.append(
+                Record(it, math.nan, value, False, time.perf_counter() - t0, te - tb, clarabel_s, ipm, str(status))
+            )
             if rejects > 8:
                 res.termination = f"subproblem_failed: {status}"
                 break
@@ -549,7 +592,7 @@ def run(m: Mission, start: np.ndarray, pos: np.ndarray, max_iterations: int, tol
         own = sub.physical_objective()
         ok = cand_ev.feasible and cand_ev.energy_j <= value * (1.0 + 1e-9) + 1e-9
         res.records.append(
-            Record(it, own, cand_ev.energy_j, ok, time.perf_counter() - t0, te - tb, clarabel_s, ipm)
+            Record(it, own, cand_ev.energy_j, ok, time.perf_counter() - t0, te - tb, clarabel_s, ipm, str(status))
         )
         if not ok:
             rejects += 1
@@ -580,6 +623,14 @@ def main(argv=None) -> int:
     ap.add_argument("--max-iterations", type=int, default=200)
     ap.add_argument("--tolerance", type=float, default=1e-4)
     ap.add_argument("--mode", choices=["dpp", "rebuild"], default="dpp")
+    ap.add_argument(
+        "--formulation",
+        choices=["mirror", "scaled"],
+        default="mirror",
+        help="mirror: exactly the Rust cone program; scaled: the same program with V, w, z in units "
+        "of --speed-scale-mps (better conditioned; gives the subproblem's accurate optimum)",
+    )
+    ap.add_argument("--speed-scale-mps", type=float, default=20.0)
     ap.add_argument("--out", type=Path, help="write the JSON summary here")
     args = ap.parse_args(argv)
     t_all = time.perf_counter()
@@ -603,14 +654,17 @@ def main(argv=None) -> int:
     m = Mission(p=p, slots=slots, landmark=lms, lm_idx=np.flatnonzero(~np.isnan(lms[:, 0])))
     t0 = time.perf_counter()
     try:
-        traj, ev, res = run(m, start, pos, args.max_iterations, args.tolerance, args.mode)
+        scale = args.speed_scale_mps if args.formulation == "scaled" else None
+        traj, ev, res = run(m, start, pos, args.max_iterations, args.tolerance, args.mode, scale)
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     seconds = time.perf_counter() - t0
     accepted = [r for r in res.records if r.accepted]
     summary = {
-        "implementation": f"cvxpy {cp.__version__} + clarabel ({args.mode})",
+        "implementation": f"cvxpy {cp.__version__} + clarabel ({args.mode}, {args.formulation})",
+        "formulation": args.formulation,
+        "first_status": res.first_status,
         "slots": slots,
         "iterations": len(res.records),
         "accepted": len(accepted),
@@ -625,11 +679,13 @@ def main(argv=None) -> int:
         "cvxpy_solve_seconds": [r.solve_seconds for r in res.records],
         "clarabel_seconds": [r.clarabel_seconds for r in res.records],
         "ipm_iterations": [r.ipm_iterations for r in res.records],
+        "statuses": [r.status for r in res.records],
+        "objectives": [r.objective for r in res.records],
     }
     if args.out:
         args.out.write_text(json.dumps(summary, indent=1))
     print(
-        f"cvxpy ({args.mode}): {slots} slots, {len(res.records)} iterations ({res.termination}), "
+        f"cvxpy ({args.mode}, {args.formulation}): {slots} slots, {len(res.records)} iterations ({res.termination}), "
         f"true energy {ev.energy_j:.1f} J, feasible {ev.feasible}, {seconds:.3f} s"
     )
     return 0
