@@ -434,16 +434,35 @@ fn summary() {
         if points.len() < 2 {
             continue;
         }
+        // interior-point iterations of the timed subproblem (the same one every call)
+        let ipm_of = |n: f64| {
+            (group == "scaling_iteration")
+                .then(|| ipm.get(&("scaling".to_string(), n as usize)).copied())
+                .flatten()
+        };
         println!("\n{group}: median seconds per call vs T_w");
-        println!("| T_w | seconds | seconds / slot (µs) | local slope |");
-        println!("|---|---|---|---|");
+        println!(
+            "| T_w | seconds | µs per slot | local slope | IPM iterations | ms per IPM iteration |"
+        );
+        println!("|---|---|---|---|---|---|");
+        let mut per_ipm = Vec::new();
         for (i, &(n, t)) in points.iter().enumerate() {
             let local = if i == 0 {
                 "".to_string()
             } else {
                 format!("{:.2}", loglog_slope(&points[i - 1..=i]))
             };
-            println!("| {n} | {t:.4} | {:.1} | {local} |", 1e6 * t / n);
+            let (k, ms) = match ipm_of(n) {
+                Some(k) if k > 0 => {
+                    per_ipm.push((n, t / f64::from(k)));
+                    (k.to_string(), format!("{:.2}", 1e3 * t / f64::from(k)))
+                }
+                _ => (String::new(), String::new()),
+            };
+            println!(
+                "| {n} | {t:.4} | {:.1} | {local} | {k} | {ms} |",
+                1e6 * t / n
+            );
         }
         println!(
             "fitted exponent (log-log least squares over T_w = {}..{}): {:.2}",
@@ -451,6 +470,12 @@ fn summary() {
             points[points.len() - 1].0,
             loglog_slope(&points)
         );
+        if per_ipm.len() == points.len() {
+            println!(
+                "fitted exponent of the time per interior-point iteration: {:.2}",
+                loglog_slope(&per_ipm)
+            );
+        }
     }
 }
 
