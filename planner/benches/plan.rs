@@ -2,7 +2,7 @@
 //! one SCA iteration's cone program with and without pattern reuse, and the growth of the time per
 //! iteration and of the whole plan with the number of slots T_w.
 //!
-//! Run with `cargo bench -p planner --bench plan` (about 4–6 minutes on 2 busy cores). Groups:
+//! Run with `cargo bench -p planner --bench plan` (7–10 minutes on 2 busy cores). Groups:
 //! - `plan_default`: `planner::plan` with the default options (exact scheme, coarse start,
 //!   over-relaxation, tolerance 1e-4) on the paper's default mission at 30 m and 200 m spacing;
 //! - `sca_iteration`: one exact SCA iteration (`ExactSubproblem::build` + `SocpSolver::solve`) at
