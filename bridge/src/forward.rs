@@ -243,6 +243,10 @@ pub struct RouteStats {
     pub service: String,
     /// Zenoh data key.
     pub key: String,
+    /// Whether a remote subscriber (another bridge, a Zenoh frame subscriber) matches the data
+    /// key, as last seen by the to-Zenoh side (refreshed at least every 100 ms; always false
+    /// for in-only routes).
+    pub remote_subscribers: bool,
     /// Local service -> Zenoh.
     pub to_zenoh: DirectionStats,
     /// Zenoh -> local service.
@@ -253,6 +257,7 @@ pub struct RouteStats {
 struct RouteCounters {
     out: DirectionCounters,
     inb: DirectionCounters,
+    remote_subscribers: AtomicBool,
 }
 
 /// Reads a forwarder's counters from any thread.
@@ -277,6 +282,7 @@ impl StatsSource {
                 .map(|((service, key), c)| RouteStats {
                     service: service.clone(),
                     key: key.clone(),
+                    remote_subscribers: c.remote_subscribers.load(Ordering::Relaxed),
                     to_zenoh: c.out.snapshot(),
                     from_zenoh: c.inb.snapshot(),
                 })
@@ -663,6 +669,9 @@ fn outbound_thread(
         }
         for (k, (i, route, zpub, sub)) in subs.iter().enumerate() {
             let c = &counters[*i].out;
+            counters[*i]
+                .remote_subscribers
+                .store(zpub.has_remote_subscribers(), Ordering::Relaxed);
             if let Err(e) = sub.clear_notifications() {
                 tracing::warn!(service = %route.service.name, error = %e, "clearing notifications failed");
             }
