@@ -1119,6 +1119,15 @@ fn bench(
         }
     }
     let _ = std::fs::remove_dir_all(&root);
+    // iceoryx2 leaves a small management segment per prefix in /dev/shm: remove ours
+    let ours = format!("cb{}_", std::process::id());
+    if let Ok(rd) = std::fs::read_dir("/dev/shm") {
+        for e in rd.flatten() {
+            if e.file_name().to_string_lossy().starts_with(&ours) {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
 
     println!("Medians over {repeats} repetition(s) of {frames} frames each.\n");
     println!("| path | mode | frame | rate | frames rx/tx (all reps) | p50 latency | p90 | p99 | throughput (rx) |");
