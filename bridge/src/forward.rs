@@ -31,7 +31,9 @@ use zenoh::Wait;
 
 use crate::counters::BadPayloadLog;
 use crate::envelope::CodecError;
-use crate::iox::{FrameNode, FramePublisherOptions, FrameServiceSpec, IoxEnv, IoxError};
+use crate::iox::{
+    Backpressure, FrameNode, FramePublisherOptions, FrameServiceSpec, IoxEnv, IoxError,
+};
 use crate::keys;
 use crate::net::{split_frame_payload, NetError, ZenohFramePublisher, ZenohNode};
 use crate::stats::BridgeStats;
@@ -120,6 +122,10 @@ pub struct ForwarderConfig {
     pub congestion_control: CongestionControl,
     /// Frames queued between the Zenoh callbacks and the inbound thread.
     pub inbound_queue: usize,
+    /// What re-publishing a remote frame does when a local subscriber's buffer is full:
+    /// `Discard` (default: skip and count, a frozen local consumer never stalls the bridge) or
+    /// `Block` (lossless: wait, back-pressuring Zenoh and the remote sender).
+    pub inbound_backpressure: Backpressure,
 }
 
 impl ForwarderConfig {
@@ -341,7 +347,7 @@ impl Forwarder {
             let c = counters.clone();
             let s = stop.clone();
             let instance = config.instance.clone();
-            let verify = config.verify_checksum;
+            let verify = (config.verify_checksum, config.inbound_backpressure);
             let routes = inbound_routes.clone();
             let ready = ready_tx.clone();
             let h = std::thread::Builder::new()
@@ -510,7 +516,7 @@ fn inbound_thread(
     env: &IoxEnv,
     instance: &str,
     routes: &[(usize, Route)],
-    verify_checksum: bool,
+    (verify_checksum, backpressure): (bool, Backpressure),
     rx: Receiver<Inbound>,
     counters: &[RouteCounters],
     stop: &AtomicBool,
@@ -524,7 +530,7 @@ fn inbound_thread(
                 &r.service,
                 FramePublisherOptions {
                     checksum: false,
-                    ..Default::default()
+                    backpressure,
                 },
             )?;
             pubs.push((*i, r.clone(), p));
@@ -750,6 +756,7 @@ mod tests {
             verify_checksum: true,
             congestion_control: CongestionControl::Block,
             inbound_queue: 4,
+            inbound_backpressure: Backpressure::Discard,
         };
         assert!(c.validate().unwrap_err().to_string().contains("twice"));
     }
