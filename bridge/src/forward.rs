@@ -31,7 +31,9 @@ use zenoh::Wait;
 
 use crate::counters::BadPayloadLog;
 use crate::envelope::CodecError;
-use crate::iox::{FrameNode, FramePublisherOptions, FrameServiceSpec, IoxEnv, IoxError};
+use crate::iox::{
+    Backpressure, FrameNode, FramePublisherOptions, FrameServiceSpec, IoxEnv, IoxError,
+};
 use crate::keys;
 use crate::net::{split_frame_payload, NetError, ZenohFramePublisher, ZenohNode};
 use crate::stats::BridgeStats;
@@ -120,6 +122,10 @@ pub struct ForwarderConfig {
     pub congestion_control: CongestionControl,
     /// Frames queued between the Zenoh callbacks and the inbound thread.
     pub inbound_queue: usize,
+    /// What re-publishing a remote frame does when a local subscriber's buffer is full:
+    /// `Discard` (default: skip and count, a frozen local consumer never stalls the bridge) or
+    /// `Block` (lossless: wait, back-pressuring Zenoh and the remote sender).
+    pub inbound_backpressure: Backpressure,
 }
 
 impl ForwarderConfig {
@@ -243,6 +249,10 @@ pub struct RouteStats {
     pub service: String,
     /// Zenoh data key.
     pub key: String,
+    /// Whether a remote subscriber (another bridge, a Zenoh frame subscriber) matches the data
+    /// key, as last seen by the to-Zenoh side (refreshed at least every 100 ms; always false
+    /// for in-only routes).
+    pub remote_subscribers: bool,
     /// Local service -> Zenoh.
     pub to_zenoh: DirectionStats,
     /// Zenoh -> local service.
@@ -253,6 +263,7 @@ pub struct RouteStats {
 struct RouteCounters {
     out: DirectionCounters,
     inb: DirectionCounters,
+    remote_subscribers: AtomicBool,
 }
 
 /// Reads a forwarder's counters from any thread.
@@ -277,6 +288,7 @@ impl StatsSource {
                 .map(|((service, key), c)| RouteStats {
                     service: service.clone(),
                     key: key.clone(),
+                    remote_subscribers: c.remote_subscribers.load(Ordering::Relaxed),
                     to_zenoh: c.out.snapshot(),
                     from_zenoh: c.inb.snapshot(),
                 })
@@ -335,7 +347,7 @@ impl Forwarder {
             let c = counters.clone();
             let s = stop.clone();
             let instance = config.instance.clone();
-            let verify = config.verify_checksum;
+            let verify = (config.verify_checksum, config.inbound_backpressure);
             let routes = inbound_routes.clone();
             let ready = ready_tx.clone();
             let h = std::thread::Builder::new()
@@ -504,7 +516,7 @@ fn inbound_thread(
     env: &IoxEnv,
     instance: &str,
     routes: &[(usize, Route)],
-    verify_checksum: bool,
+    (verify_checksum, backpressure): (bool, Backpressure),
     rx: Receiver<Inbound>,
     counters: &[RouteCounters],
     stop: &AtomicBool,
@@ -518,7 +530,7 @@ fn inbound_thread(
                 &r.service,
                 FramePublisherOptions {
                     checksum: false,
-                    ..Default::default()
+                    backpressure,
                 },
             )?;
             pubs.push((*i, r.clone(), p));
@@ -663,6 +675,9 @@ fn outbound_thread(
         }
         for (k, (i, route, zpub, sub)) in subs.iter().enumerate() {
             let c = &counters[*i].out;
+            counters[*i]
+                .remote_subscribers
+                .store(zpub.has_remote_subscribers(), Ordering::Relaxed);
             if let Err(e) = sub.clear_notifications() {
                 tracing::warn!(service = %route.service.name, error = %e, "clearing notifications failed");
             }
@@ -741,6 +756,7 @@ mod tests {
             verify_checksum: true,
             congestion_control: CongestionControl::Block,
             inbound_queue: 4,
+            inbound_backpressure: Backpressure::Discard,
         };
         assert!(c.validate().unwrap_err().to_string().contains("twice"));
     }

@@ -32,8 +32,15 @@ pub mod zconfig;
 pub use counters::{CounterSnapshot, Counters};
 pub use envelope::{CodecError, DecodeLimits, Envelope, Header, Message, Meta, MissionId};
 pub use frame::{FrameHeader, FrameMeta};
-pub use iox::{FrameNode, FramePublisher, FrameServiceSpec, FrameSubscriber, IoxArgs, IoxEnv};
-pub use net::{NetError, PublishOptions, Received, SubscribeOptions, WireFormat, ZenohNode};
+pub use iox::{
+    Frame, FrameNode, FramePublisher, FramePublisherOptions, FrameServiceSpec, FrameSubscriber,
+    IoxArgs, IoxEnv, IoxError,
+};
+pub use net::{
+    FrameSubscribeOptions, NetError, OwnedFrame, PublishOptions, QueryOptions, Received,
+    SubscribeOptions, WireFormat, ZenohFrame, ZenohNode,
+};
+pub use seq::{SeqObservation, SeqTracker};
 pub use zconfig::ZenohArgs;
 
 /// Re-export of the complex sample type of IQ frames.

@@ -261,7 +261,13 @@ fn typed_subscriber_counts_10k_malformed() {
             },
         )
         .unwrap();
-    let raw = a.session().declare_publisher(key).wait().unwrap();
+    // lossless, so that every one of the 10,000 arrives (Zenoh's default is to drop)
+    let raw = a
+        .session()
+        .declare_publisher(key)
+        .congestion_control(CongestionControl::Block)
+        .wait()
+        .unwrap();
     let good = a
         .publisher::<PlanSummary>(key, PublishOptions::default())
         .unwrap();
@@ -764,6 +770,12 @@ fn bridges_forward_both_ways_without_loops() {
     .unwrap();
     wait_route(&probe, "a", key);
     wait_route(&probe, "b", key);
+    // each bridge's to-Zenoh side sees the other's subscriber: nothing sent is unmatched
+    for b in ["a", "b"] {
+        wait_until("remote subscriber matched", Duration::from_secs(20), || {
+            query_stats(&probe, b)["body"]["routes"][0]["remote_subscribers"] == true
+        });
+    }
     let (na, nb) = (20u64, 15u64);
     let rx_args = [
         s("--frames"),
@@ -826,7 +838,13 @@ fn bridges_forward_both_ways_without_loops() {
     let ra = sub_a.report(Duration::from_secs(40));
     let rb = sub_b.report(Duration::from_secs(40));
     for r in [&ra, &rb] {
-        assert_eq!(r["frames"], na + nb, "exactly both producers' frames: {r}");
+        assert_eq!(
+            r["frames"],
+            na + nb,
+            "exactly both producers' frames: {r}\nstats a: {}\nstats b: {}",
+            query_stats(&probe, "a"),
+            query_stats(&probe, "b")
+        );
         assert_eq!(r["duplicates"], 0, "{r}");
         assert_eq!(r["missed"], 0, "{r}");
         assert_eq!(r["checksum_errors"], 0, "{r}");

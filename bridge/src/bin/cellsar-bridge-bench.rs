@@ -26,6 +26,7 @@ use bridge::iox::{
 use bridge::net::{FrameSubscribeOptions, OnFull};
 use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::sample::Locality;
+use bridge::zenoh::Wait;
 use bridge::{Complex32, MissionId, ZenohArgs, ZenohNode};
 use clap::{Parser, Subcommand};
 use serde::{Deserialize, Serialize};
@@ -952,10 +953,15 @@ impl BenchCtx {
             v.extend(z.iter().cloned());
             v
         };
+        // lossless runs: bridge B waits for the consumer instead of skipping it
+        let mut zb = vec![s("-l"), ep.clone()];
+        if block {
+            zb.extend([s("--inbound-backpressure"), s("block")]);
+        }
         let bb = Proc::spawn(
             "bridge-b",
             &self.bridge_exe,
-            &bridge_args("bench-b", &pb, "in", &[s("-l"), ep.clone()]),
+            &bridge_args("bench-b", &pb, "in", &zb),
         )?;
         let mut sub_args = vec![s("iox-sub")];
         sub_args.extend(self.svc(&pb));
@@ -1119,6 +1125,15 @@ fn bench(
         }
     }
     let _ = std::fs::remove_dir_all(&root);
+    // iceoryx2 leaves a small management segment per prefix in /dev/shm: remove ours
+    let ours = format!("cb{}_", std::process::id());
+    if let Ok(rd) = std::fs::read_dir("/dev/shm") {
+        for e in rd.flatten() {
+            if e.file_name().to_string_lossy().starts_with(&ours) {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
 
     println!("Medians over {repeats} repetition(s) of {frames} frames each.\n");
     println!("| path | mode | frame | rate | frames rx/tx (all reps) | p50 latency | p90 | p99 | throughput (rx) |");
@@ -1179,7 +1194,8 @@ fn bench(
     Ok(())
 }
 
-/// Waits until bridge A's route on `key` is up (its liveliness token is visible).
+/// Waits until bridge A's route on `key` is up and sees bridge B's subscriber (its stats say
+/// `remote_subscribers`), so no frame is sent before it can be delivered.
 fn wait_bridged(endpoint: &str, key: &str, timeout: Duration) -> Result<()> {
     let args = ZenohArgs {
         no_multicast_scouting: true,
@@ -1192,19 +1208,28 @@ fn wait_bridged(endpoint: &str, key: &str, timeout: Duration) -> Result<()> {
         "bench-probe",
         &format!("p{}", std::process::id()),
     )?;
-    let sel = format!("cellsar/bridged/bench-a/{key}");
+    let stats_key = bridge::keys::bridge_stats("bench-a")?;
     let deadline = Instant::now() + timeout;
     loop {
-        if !node.alive_now(&sel, Duration::from_millis(500))?.is_empty() {
+        let replies = node
+            .session()
+            .get(&stats_key)
+            .timeout(Duration::from_millis(500))
+            .wait()
+            .map_err(|e| anyhow!("query {stats_key}: {e}"))?;
+        let matched = replies.recv().ok().and_then(|r| {
+            let sample = r.result().ok()?;
+            let v: serde_json::Value = serde_json::from_slice(&sample.payload().to_bytes()).ok()?;
+            v["body"]["routes"][0]["remote_subscribers"].as_bool()
+        });
+        if matched == Some(true) {
             break;
         }
         if Instant::now() > deadline {
-            bail!("bridge A did not come up on {key}");
+            bail!("bridge A did not see a remote subscriber on {key}");
         }
         std::thread::sleep(Duration::from_millis(50));
     }
     node.close()?;
-    // the route is declared; give the subscription a moment to propagate
-    std::thread::sleep(Duration::from_millis(300));
     Ok(())
 }

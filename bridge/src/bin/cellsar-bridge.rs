@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context, Result};
 use bridge::envelope::{encode_json, Meta};
 use bridge::forward::{Forwarder, ForwarderConfig, Route};
-use bridge::iox::{init_iceoryx_logging, IoxArgs};
+use bridge::iox::{init_iceoryx_logging, Backpressure, IoxArgs};
 use bridge::net::{PublishOptions, WireFormat};
 use bridge::stats::BridgeStats;
 use bridge::zenoh::qos::CongestionControl;
@@ -33,6 +33,14 @@ enum Congestion {
     Block,
     /// Never stall: Zenoh drops what its queues cannot take.
     Drop,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum LocalBackpressure {
+    /// Skip the full subscriber for that frame and count it.
+    Discard,
+    /// Wait until it has room.
+    Block,
 }
 
 /// Forwards iceoryx2 frame services to Zenoh keys and back, without loops.
@@ -67,6 +75,10 @@ struct Cli {
     /// Frames queued between Zenoh and the iceoryx2 side.
     #[arg(long, default_value_t = 4)]
     inbound_queue: usize,
+    /// When a local subscriber's buffer is full: discard (skip and count; never stall) or
+    /// block (lossless; back-pressures Zenoh and the remote sender).
+    #[arg(long, value_enum, default_value_t = LocalBackpressure::Discard)]
+    inbound_backpressure: LocalBackpressure,
     /// Seconds between counter logs and stats publications.
     #[arg(long, default_value_t = 5.0)]
     stats_interval_s: f64,
@@ -121,6 +133,10 @@ fn run(cli: Cli) -> Result<()> {
             Congestion::Drop => CongestionControl::Drop,
         },
         inbound_queue: cli.inbound_queue,
+        inbound_backpressure: match cli.inbound_backpressure {
+            LocalBackpressure::Discard => Backpressure::Discard,
+            LocalBackpressure::Block => Backpressure::Block,
+        },
     };
     config.validate()?;
 
