@@ -17,6 +17,7 @@ pub mod cancel;
 pub mod cfar;
 pub mod compress;
 pub mod config;
+pub mod cputime;
 pub mod error;
 pub mod io;
 pub mod linalg;
