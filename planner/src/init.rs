@@ -4,7 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::geometry::v2;
+use crate::evaluate::ResolutionMode;
+use crate::geometry::{v2, ResolutionCell};
 use crate::power::PowerModel;
 use crate::{Mission, Trajectory};
 
@@ -180,7 +181,7 @@ fn reference_m(mission: &Mission, t: usize) -> Option<([f64; 2], Option<[f64; 2]
 /// sensing centre near the slot's landmark (well inside the sensing radius when possible), hold
 /// the UAV at distance H tan η from the gliding reference point, and prefer efficient speeds.
 /// It is usually feasible; the planner repairs it (phase I) when it is not.
-pub fn guidance_start(mission: &Mission) -> Trajectory {
+pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajectory {
     let p = mission.params();
     let model = PowerModel::new(p);
     let delta = p.slot_s;
@@ -232,6 +233,11 @@ pub fn guidance_start(mission: &Mission) -> Trajectory {
                     // the right distance from the landmark matters more than this step's error
                     let reach = ((v2::dist(qn, g) - offset).abs() - 0.5 * radius).max(0.0);
                     cost += 1e3 * over * over + 1e4 * reach * reach + 1e-2 * err2;
+                    if resolution == ResolutionMode::General {
+                        let cell = ResolutionCell::new(p, qn, v2::scale(e, v), g);
+                        let excess = (cell.worst_width_m.min(1e4) - 0.9 * p.d_min_m).max(0.0);
+                        cost += 1e3 * excess * excess;
+                    }
                 }
                 if cost < best.0 {
                     best = (cost, qn);
@@ -264,7 +270,7 @@ mod tests {
             (Preset::Square, 100.0),
         ] {
             let m = Mission::preset(preset, s).unwrap();
-            let tr = guidance_start(&m);
+            let tr = guidance_start(&m, ResolutionMode::Paper);
             let e = evaluate(&m, &tr);
             assert_eq!(e.violations.min_speed_mps, 0.0, "{preset:?} {s}");
             assert_eq!(e.violations.max_speed_mps, 0.0, "{preset:?} {s}");

@@ -25,6 +25,11 @@ use crate::{Mission, Trajectory};
 /// (‖D²u(v)[d, d]‖ ≤ (2/√3)‖d‖²/‖v‖²).
 pub const CENTRE_CURVATURE_BOUND: f64 = 0.577_350_269_189_625_8;
 
+/// Unit of the speed variables V, w = V², z = V³ in the cone programs: with V in m/s, z ≈ V³
+/// spans 10³–10⁵ next to auxiliaries of order 0.1, which Clarabel solves inaccurately and slowly;
+/// in units of 20 m/s all are of order 1.
+pub const SPEED_UNIT_MPS: f64 = 20.0;
+
 /// Safety margin on the sensing radius, m (solver tolerances stay inside it).
 pub const SENSING_MARGIN_M: f64 = 1e-3;
 /// Safety margin on the speed limits, m/s.
@@ -81,9 +86,10 @@ impl Default for ExactTuning {
 struct SlotVars {
     x: usize,
     y: usize,
-    /// Speed epigraph V_t ≥ ‖v_t‖/δ.
+    /// Speed epigraph V_t ≥ ‖v_t‖/δ, in units of [`SPEED_UNIT_MPS`].
     v: usize,
-    /// Energy only: induced auxiliary a_t, its helper s_t (s a ≥ 1, s² ≤ L), w_t ≥ V², z_t ≥ V³.
+    /// Energy only: induced auxiliary a_t, its helper s_t (s a ≥ 1, s² ≤ L), w_t ≥ V², z_t ≥ V³
+    /// (w, z in units of SPEED_UNIT_MPS², SPEED_UNIT_MPS³).
     energy: Option<[usize; 4]>,
     /// Landmark slots: centre-error budget e_t.
     e: Option<usize>,
@@ -188,12 +194,17 @@ impl ExactSubproblem {
         };
         for sv in &vars {
             match (objective, sv.energy) {
-                (ExactObjective::Distance, _) => b.add_linear_cost(sv.v, delta * objective_scale),
+                (ExactObjective::Distance, _) => {
+                    b.add_linear_cost(sv.v, SPEED_UNIT_MPS * delta * objective_scale)
+                }
                 (_, Some([a, _s, _w, z])) => {
                     let c = delta * objective_scale;
-                    b.add_square_cost(sv.v, c * model.blade_quadratic_coeff());
+                    b.add_square_cost(
+                        sv.v,
+                        c * model.blade_quadratic_coeff() * SPEED_UNIT_MPS.powi(2),
+                    );
                     b.add_linear_cost(a, c * model.induced_power_w);
-                    b.add_linear_cost(z, c * model.parasite_coeff);
+                    b.add_linear_cost(z, c * model.parasite_coeff * SPEED_UNIT_MPS.powi(3));
                 }
                 _ => {}
             }
@@ -209,8 +220,11 @@ impl ExactSubproblem {
             // v_t = q_t − q_{t−1} as affine expressions
             let (vx, vy) = step_exprs(&vars, t, prev.start_m);
             // speed epigraph: δ V ≥ ‖v‖ ; V ≤ V_m
-            b.soc(Lin::var(sv.v, delta), &[vx.clone(), vy.clone()]);
-            b.nonneg(Lin::var(sv.v, -1.0).plus_const(v_max));
+            b.soc(
+                Lin::var(sv.v, delta * SPEED_UNIT_MPS),
+                &[vx.clone(), vy.clone()],
+            );
+            b.nonneg(Lin::var(sv.v, -SPEED_UNIT_MPS).plus_const(v_max));
 
             if let Some([a, s, w, z]) = sv.energy {
                 // L = 2 a0 a − a0² + (2 u·v − ‖u‖²)/(δ² v0²)  (tangent of a² + ‖v‖²/(δ² v0²))
@@ -408,6 +422,33 @@ struct ResolutionSlot {
 /// Safety factor on the finite-difference Lipschitz estimates of the cell terms in q.
 const CELL_MARGIN_FACTOR: f64 = 3.0;
 
+/// Position sensitivities (L_iso, L_cross) of the two cell conditions around `q0`: for speeds up to
+/// V_m, |f(q, v) − f(q0, v)| ≤ L ‖q − q0‖ for f = s k(q)·v − ‖g(q)‖/(T_d d_min) (iso-range) and
+/// f = s k(q)·v − c/(B d_min) ‖A(q) v‖ (cross-track), estimated by finite differences and
+/// multiplied by [`CELL_MARGIN_FACTOR`]; the property test in this module checks the bound.
+pub fn cell_margins(p: &crate::Params, q0: [f64; 2], landmark: [f64; 2]) -> (f64, f64) {
+    let cl = CellLinear::new(p, q0, landmark);
+    let iso_rhs = |c: &CellLinear| v2::norm(c.grad) / (p.integration_time_s * p.d_min_m);
+    let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
+    let h = 1.0;
+    let mut l_iso: f64 = 0.0;
+    let mut l_cross: f64 = 0.0;
+    for dir in [[h, 0.0], [0.0, h], [-h, 0.0], [0.0, -h]] {
+        let c2 = CellLinear::new(p, v2::add(q0, dir), landmark);
+        let dk = v2::norm(v2::sub(c2.cross, cl.cross)) / h;
+        let dg = (iso_rhs(&c2) - iso_rhs(&cl)).abs() / h;
+        let da = (0..2)
+            .flat_map(|i| (0..2).map(move |j| (i, j)))
+            .map(|(i, j)| (c2.doppler_map[i][j] - cl.doppler_map[i][j]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            / h;
+        l_iso = l_iso.max(dk * p.max_speed_mps + dg);
+        l_cross = l_cross.max((dk + k_cross * da) * p.max_speed_mps);
+    }
+    (l_iso * CELL_MARGIN_FACTOR, l_cross * CELL_MARGIN_FACTOR)
+}
+
 /// The worst width of the resolution cell ≤ d_min (SPEC.md §4 item 12), convexified.
 ///
 /// At a fixed UAV position both width conditions are convex in the velocity v (CellLinear):
@@ -432,25 +473,7 @@ fn resolution_cell_constraints(
     };
     let iso_rhs = |c: &CellLinear| v2::norm(c.grad) / (p.integration_time_s * p.d_min_m);
     let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
-    // finite-difference sensitivities to the position, per unit speed (velocity ≤ V_m)
-    let h = 1.0;
-    let mut l_iso: f64 = 0.0;
-    let mut l_cross: f64 = 0.0;
-    for dir in [[h, 0.0], [0.0, h], [-h, 0.0], [0.0, -h]] {
-        let c2 = CellLinear::new(p, v2::add(rs.q0, dir), rs.landmark);
-        let dk = v2::norm(v2::sub(c2.cross, cl.cross)) / h;
-        let dg = (iso_rhs(&c2) - iso_rhs(&cl)).abs() / h;
-        let da = (0..2)
-            .flat_map(|i| (0..2).map(move |j| (i, j)))
-            .map(|(i, j)| (c2.doppler_map[i][j] - cl.doppler_map[i][j]).powi(2))
-            .sum::<f64>()
-            .sqrt()
-            / h;
-        l_iso = l_iso.max(dk * p.max_speed_mps + dg);
-        l_cross = l_cross.max((dk + k_cross * da) * p.max_speed_mps);
-    }
-    l_iso *= CELL_MARGIN_FACTOR;
-    l_cross *= CELL_MARGIN_FACTOR;
+    let (l_iso, l_cross) = cell_margins(mission.params(), rs.q0, rs.landmark);
     // m ≥ ‖q_t − q0‖
     b.soc(
         Lin::var(rs.shift, 1.0),
@@ -509,6 +532,37 @@ mod tests {
     }
 
     proptest! {
+        /// The cell constraints linearised at q0 with the position margin imply the exact ones at
+        /// q0 + Δq (|Δq| ≤ 60 m, speeds ≤ V_m, UAV at least 500 m from the landmark).
+        #[test]
+        fn cell_margin_is_conservative(
+            qx in -3000.0f64..3000.0, qy in -3000.0f64..3000.0,
+            lx in -1500.0f64..1500.0, ly in -1500.0f64..1500.0,
+            dqx in -60.0f64..60.0, dqy in -60.0f64..60.0,
+            vx in -50.0f64..50.0, vy in -50.0f64..50.0,
+        ) {
+            let p = crate::Params::default();
+            let q0 = [qx, qy];
+            let lm = [lx, ly];
+            prop_assume!(v2::dist(q0, lm) > 500.0);
+            let v = [vx, vy];
+            prop_assume!(v2::norm(v) <= p.max_speed_mps);
+            let q1 = v2::add(q0, [dqx, dqy]);
+            let (l_iso, l_cross) = cell_margins(&p, q0, lm);
+            let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
+            let f_iso = |q: [f64; 2]| {
+                let c = CellLinear::new(&p, q, lm);
+                v2::dot(c.cross, v) - v2::norm(c.grad) / (p.integration_time_s * p.d_min_m)
+            };
+            let f_cross = |q: [f64; 2]| {
+                let c = CellLinear::new(&p, q, lm);
+                v2::dot(c.cross, v) - k_cross * v2::norm(c.doppler_gradient(v))
+            };
+            let dq = v2::norm([dqx, dqy]);
+            prop_assert!(f_iso(q1) >= f_iso(q0) - l_iso * dq - 1e-12);
+            prop_assert!(f_cross(q1) >= f_cross(q0) - l_cross * dq - 1e-12);
+        }
+
         /// The expansion error of the unit-vector map is within the bound κ‖v − u‖² whenever the
         /// segment [u, v] stays at least s away from the origin (checked here through ĥ·v ≥ s,
         /// ‖u‖ ≥ s, exactly the subproblem's constraints).

@@ -1,0 +1,42 @@
+//! # cellsar bridge: the transport layer
+//!
+//! - [`envelope`]: the versioned 48-byte header + bincode 2 body of every message, its JSON
+//!   form, and the [`Message`] trait (kind + schema version per type). Decoding is bounded and
+//!   never panics.
+//! - [`frame`]: bulk frames (IQ pulses) with the `#[repr(C)]` [`FrameHeader`]; raw
+//!   little-endian complex f32 samples after the header.
+//! - [`net`]: typed Zenoh publishers, subscribers, queryables and queries, frames over Zenoh,
+//!   liveliness tokens `cellsar/alive/<role>/<instance>` and liveliness watching.
+//! - [`zconfig`]: the `-m/-e/-l/-c/--no-multicast-scouting` flags ([`ZenohArgs`]).
+//! - [`iox`]: zero-copy frame services over iceoryx2 (explicit sizing, event wake-ups,
+//!   stale-resource cleanup, isolated roots for tests).
+//! - [`forward`]: the iceoryx2 <-> Zenoh forwarder behind the `cellsar-bridge` binary.
+//! - [`counters`], [`seq`]: what every endpoint counts; sequence gaps and duplicates.
+//!
+//! This crate knows no domain type: the planner and radar crates define their messages and
+//! implement [`Message`] for them.
+
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
+
+pub mod counters;
+pub mod envelope;
+pub mod forward;
+pub mod frame;
+pub mod iox;
+pub mod keys;
+pub mod net;
+pub mod seq;
+pub mod stats;
+pub mod zconfig;
+
+pub use counters::{CounterSnapshot, Counters};
+pub use envelope::{CodecError, DecodeLimits, Envelope, Header, Message, Meta, MissionId};
+pub use frame::{FrameHeader, FrameMeta};
+pub use iox::{FrameNode, FramePublisher, FrameServiceSpec, FrameSubscriber, IoxArgs, IoxEnv};
+pub use net::{NetError, PublishOptions, Received, SubscribeOptions, WireFormat, ZenohNode};
+pub use zconfig::ZenohArgs;
+
+/// Re-export of the complex sample type of IQ frames.
+pub use num_complex::Complex32;
+/// Re-export of the zenoh crate (same version as this crate uses).
+pub use zenoh;

@@ -1,0 +1,316 @@
+//! Zenoh configuration from the command line, following the zenoh examples' conventions.
+//!
+//! Every cellsar binary flattens [`ZenohArgs`] into its clap parser:
+//!
+//! ```text
+//! -m, --mode <peer|client|router>   session mode [default: peer]
+//! -e, --connect <ENDPOINT>          endpoints to connect to (repeatable)
+//! -l, --listen <ENDPOINT>           endpoints to listen on (repeatable)
+//! -c, --config <FILE>               a Zenoh configuration file (JSON5)
+//!     --no-multicast-scouting       disable multicast scouting
+//! ```
+//!
+//! Without `--config`, the session is an embedded peer that listens on the loopback interface
+//! only (`tcp/127.0.0.1:0`) and needs no router. With `--config`, the file is the base and the
+//! flags given on the command line override it.
+
+use std::path::PathBuf;
+
+use zenoh::Config;
+
+/// The Zenoh session mode.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// Peer: talks to other peers directly (and to routers).
+    Peer,
+    /// Client: talks only through a router.
+    Client,
+    /// Router: routes for clients and peers.
+    Router,
+}
+
+impl Mode {
+    fn as_str(self) -> &'static str {
+        match self {
+            Mode::Peer => "peer",
+            Mode::Client => "client",
+            Mode::Router => "router",
+        }
+    }
+}
+
+/// The listen endpoint used when neither `--listen` nor `--config` is given.
+pub const DEFAULT_LISTEN: &str = "tcp/127.0.0.1:0";
+
+/// Zenoh flags shared by every cellsar binary (flatten with `#[command(flatten)]`).
+#[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
+pub struct ZenohArgs {
+    /// A Zenoh configuration file (JSON5); the other flags override it.
+    #[arg(id = "zenoh_config", short = 'c', long = "config", value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// The Zenoh session mode [default: peer].
+    #[arg(id = "zenoh_mode", short = 'm', long = "mode", value_enum)]
+    pub mode: Option<Mode>,
+    /// Endpoints to connect to, e.g. tcp/192.168.1.2:7447 (repeatable).
+    #[arg(
+        id = "zenoh_connect",
+        short = 'e',
+        long = "connect",
+        value_name = "ENDPOINT"
+    )]
+    pub connect: Vec<String>,
+    /// Endpoints to listen on, e.g. tcp/127.0.0.1:7447 (repeatable).
+    #[arg(
+        id = "zenoh_listen",
+        short = 'l',
+        long = "listen",
+        value_name = "ENDPOINT"
+    )]
+    pub listen: Vec<String>,
+    /// Disable the multicast-based scouting mechanism.
+    #[arg(id = "zenoh_no_multicast_scouting", long = "no-multicast-scouting")]
+    pub no_multicast_scouting: bool,
+}
+
+/// A flag or file that does not make a valid Zenoh configuration.
+#[derive(Debug, thiserror::Error)]
+#[error("invalid Zenoh configuration ({what}): {reason}")]
+pub struct ConfigError {
+    /// The flag, key or file concerned.
+    pub what: String,
+    /// Zenoh's message.
+    pub reason: String,
+}
+
+impl ZenohArgs {
+    /// Args for an isolated session: peer, no multicast scouting, the given listen and
+    /// connect endpoints (tests and local pipelines).
+    pub fn isolated(listen: &[String], connect: &[String]) -> Self {
+        ZenohArgs {
+            config: None,
+            mode: Some(Mode::Peer),
+            connect: connect.to_vec(),
+            listen: listen.to_vec(),
+            no_multicast_scouting: true,
+        }
+    }
+
+    /// The flags as command-line arguments (to pass them on to a child process).
+    pub fn to_cli_args(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if let Some(c) = &self.config {
+            v.push("--config".to_string());
+            v.push(c.display().to_string());
+        }
+        if let Some(m) = self.mode {
+            v.push("--mode".to_string());
+            v.push(m.as_str().to_string());
+        }
+        for e in &self.connect {
+            v.push("--connect".to_string());
+            v.push(e.clone());
+        }
+        for l in &self.listen {
+            v.push("--listen".to_string());
+            v.push(l.clone());
+        }
+        if self.no_multicast_scouting {
+            v.push("--no-multicast-scouting".to_string());
+        }
+        v
+    }
+
+    /// Builds the Zenoh configuration.
+    pub fn to_config(&self) -> Result<Config, ConfigError> {
+        let mut config = match &self.config {
+            Some(path) => Config::from_file(path).map_err(|e| ConfigError {
+                what: format!("--config {}", path.display()),
+                reason: e.to_string(),
+            })?,
+            None => Config::default(),
+        };
+        let mode = self.mode.or(if self.config.is_none() {
+            Some(Mode::Peer)
+        } else {
+            None
+        });
+        if let Some(m) = mode {
+            insert(&mut config, "mode", &json_str(m.as_str()), "--mode")?;
+        }
+        if !self.connect.is_empty() {
+            insert(
+                &mut config,
+                "connect/endpoints",
+                &json_list(&self.connect),
+                "--connect",
+            )?;
+        }
+        if !self.listen.is_empty() {
+            insert(
+                &mut config,
+                "listen/endpoints",
+                &json_list(&self.listen),
+                "--listen",
+            )?;
+        } else if self.config.is_none() && mode != Some(Mode::Client) {
+            insert(
+                &mut config,
+                "listen/endpoints",
+                &json_list(&[DEFAULT_LISTEN.to_string()]),
+                "default listen endpoint",
+            )?;
+        }
+        if self.no_multicast_scouting {
+            insert(
+                &mut config,
+                "scouting/multicast/enabled",
+                "false",
+                "--no-multicast-scouting",
+            )?;
+        }
+        Ok(config)
+    }
+}
+
+fn json_str(s: &str) -> String {
+    serde_json::Value::String(s.to_string()).to_string()
+}
+
+fn json_list(v: &[String]) -> String {
+    serde_json::Value::Array(
+        v.iter()
+            .map(|s| serde_json::Value::String(s.clone()))
+            .collect(),
+    )
+    .to_string()
+}
+
+fn insert(config: &mut Config, key: &str, value: &str, what: &str) -> Result<(), ConfigError> {
+    config.insert_json5(key, value).map_err(|e| ConfigError {
+        what: format!("{what} ({key} = {value})"),
+        reason: e.to_string(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(clap::Parser, Debug)]
+    struct Cli {
+        #[command(flatten)]
+        zenoh: ZenohArgs,
+        #[command(flatten)]
+        iox: crate::iox::IoxArgs,
+    }
+
+    #[test]
+    fn zenoh_and_iox_flags_fit_in_one_parser() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+        let cli = Cli::try_parse_from([
+            "x",
+            "-c",
+            "z.json5",
+            "--iox-config",
+            "i.toml",
+            "--iox-prefix",
+            "p_",
+        ])
+        .unwrap();
+        assert_eq!(
+            cli.zenoh.config.as_deref(),
+            Some(std::path::Path::new("z.json5"))
+        );
+        assert_eq!(cli.iox.prefix.as_deref(), Some("p_"));
+        let back =
+            Cli::try_parse_from(std::iter::once("x".to_string()).chain(cli.iox.to_cli_args()))
+                .unwrap();
+        assert_eq!(back.iox, cli.iox);
+    }
+
+    #[test]
+    fn parses_the_example_flags() {
+        let cli = Cli::try_parse_from([
+            "x",
+            "-m",
+            "client",
+            "-e",
+            "tcp/127.0.0.1:7447",
+            "-e",
+            "tcp/127.0.0.1:7448",
+            "--no-multicast-scouting",
+        ])
+        .unwrap();
+        assert_eq!(cli.zenoh.mode, Some(Mode::Client));
+        assert_eq!(cli.zenoh.connect.len(), 2);
+        let c = cli.zenoh.to_config().unwrap();
+        assert_eq!(c.get_json("mode").unwrap(), "\"client\"");
+        assert!(c.get_json("connect/endpoints").unwrap().contains("7448"));
+        assert_eq!(c.get_json("scouting/multicast/enabled").unwrap(), "false");
+        // client mode: no default listener
+        assert_eq!(
+            c.get_json("listen/endpoints").unwrap(),
+            cli_default_listen()
+        );
+        let back =
+            Cli::try_parse_from(std::iter::once("x".to_string()).chain(cli.zenoh.to_cli_args()))
+                .unwrap();
+        assert_eq!(back.zenoh, cli.zenoh);
+    }
+
+    fn cli_default_listen() -> String {
+        Config::default().get_json("listen/endpoints").unwrap()
+    }
+
+    #[test]
+    fn default_is_a_loopback_peer() {
+        let c = ZenohArgs::default().to_config().unwrap();
+        assert_eq!(c.get_json("mode").unwrap(), "\"peer\"");
+        assert!(c
+            .get_json("listen/endpoints")
+            .unwrap()
+            .contains("tcp/127.0.0.1:0"));
+    }
+
+    #[test]
+    fn bad_endpoint_and_file_are_named() {
+        let a = ZenohArgs {
+            listen: vec!["nonsense".into()],
+            ..Default::default()
+        };
+        let e = a.to_config().unwrap_err();
+        assert!(e.to_string().contains("--listen"), "{e}");
+        let a = ZenohArgs {
+            config: Some("/nonexistent/zenoh.json5".into()),
+            ..Default::default()
+        };
+        let e = a.to_config().unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/zenoh.json5"), "{e}");
+    }
+
+    #[test]
+    fn config_file_is_the_base() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("z.json5");
+        std::fs::write(
+            &p,
+            "{ mode: 'router', listen: { endpoints: ['tcp/127.0.0.1:17447'] } }",
+        )
+        .unwrap();
+        let a = ZenohArgs {
+            config: Some(p.clone()),
+            ..Default::default()
+        };
+        let c = a.to_config().unwrap();
+        assert_eq!(c.get_json("mode").unwrap(), "\"router\"");
+        assert!(c.get_json("listen/endpoints").unwrap().contains("17447"));
+        let a = ZenohArgs {
+            config: Some(p),
+            mode: Some(Mode::Peer),
+            ..Default::default()
+        };
+        assert_eq!(a.to_config().unwrap().get_json("mode").unwrap(), "\"peer\"");
+    }
+}

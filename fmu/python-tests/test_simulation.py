@@ -1,0 +1,266 @@
+"""Simulation: the plan matches `cellsar-planner plan`, arbitrary communication points, the
+receding-horizon re-plan, and a coupled co-simulation with a second FMU."""
+
+import csv
+import math
+import os
+import pathlib
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+
+from conftest import REPO, Fmu, fmu_path, run, status_of
+
+DEFAULT_MISSION = REPO / "fmu" / "resources" / "default_mission.toml"
+OFFSET_M = 1000.0  # H tan(eta) with the SPEC defaults
+RS_M = 200.0
+
+
+def planner_bin():
+    """`cellsar-planner`: $CELLSAR_PLANNER_BIN, else the workspace's release build."""
+    env = os.environ.get("CELLSAR_PLANNER_BIN")
+    candidates = [pathlib.Path(env)] if env else [
+        REPO / "target" / "release" / "cellsar-planner",
+    ]
+    for c in candidates:
+        if c.is_file():
+            return c
+    raise FileNotFoundError(
+        "cellsar-planner not found: build it with "
+        "`cargo build --release -p planner --bin cellsar-planner` or set CELLSAR_PLANNER_BIN")
+
+
+def reference_plan(mission, outdir):
+    """Runs `cellsar-planner plan MISSION --out DIR`; returns {t_s: (x_m, y_m)} at slot times."""
+    subprocess.run([str(planner_bin()), "plan", str(mission), "--out", str(outdir)],
+                   check=True, capture_output=True, timeout=600)
+    rows = {}
+    with open(outdir / "trajectory.csv", newline="") as f:
+        for r in csv.DictReader(f):
+            rows[round(float(r["t_s"]), 9)] = (float(r["x_m"]), float(r["y_m"]))
+    return rows
+
+
+def test_default_mission_matches_cellsar_planner(tmp_path):
+    """simulate_fmu of the default mission (resources/) against `cellsar-planner plan` on the
+    same mission file: positions agree to 1e-6 m at every slot time."""
+    ref = reference_plan(DEFAULT_MISSION, tmp_path / "plan")
+    res = simulate_fmu(str(fmu_path("fmi2")), stop_time=300.0, output_interval=0.5,
+                       output=["x_m", "y_m", "energy_j", "in_view"])
+    assert len(res) == 601 and math.isclose(res["time"][-1], 300.0)
+    worst = 0.0
+    for t, x, y in zip(res["time"], res["x_m"], res["y_m"]):
+        rx, ry = ref[round(t, 9)]
+        worst = max(worst, abs(x - rx), abs(y - ry))
+    assert worst <= 1e-6, f"largest deviation {worst} m"
+    assert np.all(np.diff(res["energy_j"]) > 0)
+
+
+def test_short_mission_matches_cellsar_planner(version, tmp_path, short_mission):
+    ref = reference_plan(short_mission, tmp_path / "plan")
+    rows = run(version, short_mission, stop=20.0, step=0.5, outputs=["x_m", "y_m"])
+    for t, o in rows:
+        rx, ry = ref[round(t, 9)]
+        assert abs(o["x_m"] - rx) <= 1e-6 and abs(o["y_m"] - ry) <= 1e-6, t
+
+
+def test_outputs_are_consistent_at_slot_times(version, short_mission):
+    rows = run(version, short_mission, stop=20.0, step=0.5)
+    energy = 0.0
+    for k, (t, o) in enumerate(rows[1:], start=1):
+        # the sensing centre lies H tan(eta) to the right of the track
+        assert math.isclose(math.hypot(o["xc_m"] - o["x_m"], o["yc_m"] - o["y_m"]), OFFSET_M,
+                            rel_tol=1e-12)
+        right = (math.sin(o["heading_rad"]), -math.cos(o["heading_rad"]))
+        assert math.isclose(o["xc_m"], o["x_m"] + OFFSET_M * right[0], abs_tol=1e-9)
+        # in_view is the distance test at the slot end
+        d = math.hypot(o["xc_m"] - o["landmark_x_m"], o["yc_m"] - o["landmark_y_m"])
+        assert o["in_view"] == (d <= RS_M)
+        # speed from the positions; energy is the running sum of power * slot
+        px, py = rows[k - 1][1]["x_m"], rows[k - 1][1]["y_m"]
+        assert math.isclose(o["speed_mps"], math.hypot(o["x_m"] - px, o["y_m"] - py) / 0.5,
+                            rel_tol=1e-9, abs_tol=1e-9)
+        energy += o["power_w"] * 0.5
+        assert math.isclose(o["energy_j"], energy, rel_tol=1e-12)
+        assert o["landmark_y_m"] == (0.0 if t <= 10.0 else 30.0)
+
+
+def test_odd_steps_and_off_grid_stop_time(version, short_mission):
+    grid = run(version, short_mission, stop=20.0, step=0.5, outputs=["x_m", "y_m", "energy_j"])
+    gt = np.array([t for t, _ in grid])
+    gx = np.array([o["x_m"] for _, o in grid])
+    gy = np.array([o["y_m"] for _, o in grid])
+    ge = np.array([o["energy_j"] for _, o in grid])
+    res = simulate_fmu(str(fmu_path(version)), stop_time=13.37, output_interval=0.37,
+                       start_values={"mission_file": str(short_mission)},
+                       output=["x_m", "y_m", "energy_j"])
+    assert math.isclose(res["time"][-1], 13.37, abs_tol=1e-12)
+    # within a slot the UAV flies straight at constant speed and power: linear interpolation
+    assert np.allclose(res["x_m"], np.interp(res["time"], gt, gx), atol=1e-9)
+    assert np.allclose(res["y_m"], np.interp(res["time"], gt, gy), atol=1e-9)
+    assert np.allclose(res["energy_j"], np.interp(res["time"], gt, ge), rtol=1e-12, atol=1e-9)
+    # a hand-driven run with irregular steps ends where the grid run says
+    f = Fmu(version)
+    assert f.instantiate()
+    f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    t = 0.0
+    for h in [0.01, 0.73, 1.2, 0.5, 2.0, 0.333, 3.1, 0.127]:
+        f.step(h, t=t)
+        t += h
+        assert math.isclose(f.get("x_m"), np.interp(t, gt, gx), abs_tol=1e-9)
+    f.unload()
+
+
+def test_stop_time_after_the_horizon_is_refused(version, short_mission):
+    f = Fmu(version)
+    assert f.instantiate()
+    if version == "fmi2":
+        f.fmu.setupExperiment(startTime=0.0, stopTime=25.0)
+        f.set_string("mission_file", str(short_mission))
+        f.fmu.enterInitializationMode()
+    else:
+        f.set_string("mission_file", str(short_mission))
+        f.fmu.enterInitializationMode(startTime=0.0, stopTime=25.0)
+    assert status_of(f.fmu.exitInitializationMode) == 3
+    assert "after the end of the mission horizon" in f.messages()
+    f.unload()
+
+
+def test_step_past_the_horizon_stops_there(version, short_mission):
+    f = Fmu(version)
+    assert f.instantiate()
+    f.init(stop=None, start=2.0, strings={"mission_file": str(short_mission)})
+    f.step(19.5, t=2.0)
+    assert status_of(f.fmu.doStep, 21.5, 1.0) == 2  # Discard: stopped at 22 s
+    if version == "fmi2":
+        from fmpy.fmi2 import fmi2Terminated, fmi2LastSuccessfulTime
+        assert f.fmu.getBooleanStatus(fmi2Terminated)
+        assert f.fmu.getRealStatus(fmi2LastSuccessfulTime) == 22.0
+    grid = run(version, short_mission, stop=20.0, step=0.5, outputs=["x_m"])
+    assert f.get("x_m") == grid[-1][1]["x_m"]
+    f.unload()
+
+
+def drive(version, mission, stop, move=None, name="drive"):
+    """Steps the planner at 0.5 s; `move(t)` gives the landmark input at t (None: leave it).
+    Returns [(t, outputs)] and the final replan count."""
+    f = Fmu(version, name=name)
+    assert f.instantiate()
+    f.init(stop=stop, strings={"mission_file": str(mission)})
+    rows = [(0.0, f.outputs())]
+    n = int(round(stop / 0.5))
+    for k in range(n):
+        t = k * 0.5
+        if move is not None and (m := move(t)) is not None:
+            f.set(landmark_x_in_m=m[0], landmark_y_in_m=m[1])
+        f.step(0.5, t=t)
+        rows.append(((k + 1) * 0.5, f.outputs()))
+    replans = f.get("replan_count")
+    f.unload()
+    return rows, replans
+
+
+def test_moved_landmark_is_kept_in_view_from_the_next_window_on(version, short_mission):
+    moved = (40.0, 20.0)
+    # the input holds the moved landmark from t = 5 s on: the rest of window 1 and window 2
+    rows, replans = drive(version, short_mission, 20.0,
+                          move=lambda t: moved if t >= 5.0 else None)
+    assert replans >= 1
+    for t, o in rows:
+        if t > 5.0:
+            assert (o["landmark_x_m"], o["landmark_y_m"]) == moved, t
+        if t > 10.0:  # the next window on
+            assert o["in_view"], t
+
+
+def test_one_shot_move_changes_only_its_window(version, short_mission):
+    moved = (40.0, 20.0)
+    rows, replans = drive(version, short_mission, 20.0,
+                          move=lambda t: moved if t == 5.0 else (float("nan"),) * 2)
+    assert replans == 1
+    before, _ = drive(version, short_mission, 20.0)
+    for (t, o), (_, b) in zip(rows, before):
+        if t <= 5.0:
+            assert o == b, t  # the past is not rewritten before the move
+        elif t <= 10.0:
+            assert (o["landmark_x_m"], o["landmark_y_m"]) == moved
+        else:
+            assert (o["landmark_x_m"], o["landmark_y_m"]) == (0.0, 30.0)
+            assert o["in_view"], t
+
+
+def test_coupled_cosimulation_with_a_second_fmu(version, short_mission):
+    """Gauss-Seidel master: CellsarPlanner -> LandmarkMover -> CellsarPlanner. The mover shifts
+    the current landmark by (40, 20) m at t = 5 s for 5 s; the planner re-plans."""
+    p = Fmu(version, name="planner")
+    m = Fmu(version, "LandmarkMover", name="mover")
+    assert p.instantiate() and m.instantiate()
+    p.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    m.init(stop=20.0, params={"move_at_s": 5.0, "offset_x_m": 40.0, "offset_y_m": 20.0,
+                              "hold_s": 5.0})
+    h, t, seen_moved = 0.5, 0.0, False
+    rows = []
+    while t < 20.0 - 1e-9:
+        p.step(h, t=t)
+        m.set(landmark_x_m=p.get("landmark_x_m"), landmark_y_m=p.get("landmark_y_m"))
+        m.step(h, t=t)
+        seen_moved |= m.get("moved")
+        p.set(landmark_x_in_m=m.get("landmark_x_out_m"), landmark_y_in_m=m.get("landmark_y_out_m"))
+        t += h
+        rows.append((t, p.outputs()))
+    assert math.isclose(t, 20.0) and seen_moved
+    assert p.get("replan_count") == 1
+    for t, o in rows:
+        if 5.5 < t <= 10.0:
+            assert (o["landmark_x_m"], o["landmark_y_m"]) == (40.0, 20.0), t
+        if t > 10.0:
+            assert (o["landmark_x_m"], o["landmark_y_m"]) == (0.0, 30.0)
+            assert o["in_view"], t
+    p.fmu.terminate()
+    m.fmu.terminate()
+    p.unload()
+    m.unload()
+
+
+def test_outputs_fed_back_to_the_inputs_change_nothing(version, short_mission):
+    """Connecting landmark_*_m to landmark_*_in_m (no delay) is not a move, also at the window
+    boundary where the outputs still show the previous window's landmark."""
+    f = Fmu(version, name="loop")
+    assert f.instantiate()
+    f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    rows = [(0.0, f.outputs())]
+    for k in range(40):
+        f.set(landmark_x_in_m=f.get("landmark_x_m"), landmark_y_in_m=f.get("landmark_y_m"))
+        f.step(0.5, t=k * 0.5)
+        rows.append(((k + 1) * 0.5, f.outputs()))
+    assert f.get("replan_count") == 0
+    assert rows == run(version, short_mission, stop=20.0, step=0.5)
+    f.unload()
+
+
+def test_parameters_override_the_mission_file(version, tmp_path):
+    """[params] of the file over SPEC defaults; FMI parameters (other than their start values)
+    over the file; after initialisation the parameters read back the values in effect."""
+    mission = tmp_path / "m.toml"
+    mission.write_text(
+        "[params]\nhorizon_s = 10\naltitude_m = 1100\nmax_speed_mps = 40\n"
+        "[landmarks]\npoints = [ { x_m = 0, y_m = 0, from_s = 0, to_s = 10 } ]\n",
+        encoding="utf-8")
+    f = Fmu(version)
+    assert f.instantiate()
+    # altitude back to its start value (as importers do): the file's 1100 m stays;
+    # max speed to 45: overrides the file's 40
+    f.init(stop=10.0, params={"altitude_m": 1000.0, "max_speed_mps": 45.0},
+           strings={"mission_file": str(mission)})
+    assert f.get("altitude_m") == 1100.0
+    assert f.get("max_speed_mps") == 45.0
+    assert f.get("horizon_s") == 10.0
+    assert f.get("bandwidth_hz") == 150e6
+    # the sensing centre lies H tan(eta) = 1100 m from the UAV
+    f.step(0.5, t=0.0)
+    assert math.isclose(math.hypot(f.get("xc_m") - f.get("x_m"), f.get("yc_m") - f.get("y_m")),
+                        1100.0, rel_tol=1e-12)
+    f.unload()

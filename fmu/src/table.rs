@@ -1,0 +1,661 @@
+//! The variable tables: one row per model variable (name, value reference, type, causality,
+//! variability, length, unit, description). Each table drives both the C entry points (get/set by
+//! value reference, see [`crate::core`]) and the generated `modelDescription.xml`
+//! (see [`crate::xml`]), as in modelica's Reference-FMUs. Start values are not stored here: they
+//! are read from a freshly created model core, so the code that defines the defaults is the only
+//! source of them.
+
+/// The FMI type of a variable, as FMI 2 names it (FMI 3: `Float64`, `Int32`, `Boolean`, `String`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VarType {
+    /// FMI 2 `Real`, FMI 3 `Float64`.
+    Real,
+    /// FMI 2 `Integer`, FMI 3 `Int32`.
+    Integer,
+    /// `Boolean`.
+    Boolean,
+    /// `String`.
+    String,
+}
+
+impl VarType {
+    /// The element name in an FMI 3 model description.
+    pub fn fmi3_name(self) -> &'static str {
+        match self {
+            VarType::Real => "Float64",
+            VarType::Integer => "Int32",
+            VarType::Boolean => "Boolean",
+            VarType::String => "String",
+        }
+    }
+
+    /// The element name in an FMI 2 model description.
+    pub fn fmi2_name(self) -> &'static str {
+        match self {
+            VarType::Real => "Real",
+            VarType::Integer => "Integer",
+            VarType::Boolean => "Boolean",
+            VarType::String => "String",
+        }
+    }
+}
+
+/// FMI causality.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Causality {
+    /// A parameter, set before initialisation.
+    Parameter,
+    /// An input, set before each step.
+    Input,
+    /// An output.
+    Output,
+    /// A local variable (visible, not connectable).
+    Local,
+    /// The independent variable (time; FMI 3 only).
+    Independent,
+}
+
+impl Causality {
+    /// The attribute value in modelDescription.xml.
+    pub fn name(self) -> &'static str {
+        match self {
+            Causality::Parameter => "parameter",
+            Causality::Input => "input",
+            Causality::Output => "output",
+            Causality::Local => "local",
+            Causality::Independent => "independent",
+        }
+    }
+}
+
+/// FMI variability.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Variability {
+    /// Fixed after initialisation.
+    Fixed,
+    /// Changes only at communication points (or events).
+    Discrete,
+    /// May change at any time.
+    Continuous,
+}
+
+impl Variability {
+    /// The attribute value in modelDescription.xml.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variability::Fixed => "fixed",
+            Variability::Discrete => "discrete",
+            Variability::Continuous => "continuous",
+        }
+    }
+}
+
+/// One model variable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Var {
+    /// Name (FMI 3; FMI 2 flattens arrays to `name[1]`, `name[2]`, ...).
+    pub name: &'static str,
+    /// Value reference. An array of length n occupies `vr..vr+n` in FMI 2 (one per element) and
+    /// `vr` alone in FMI 3.
+    pub vr: u32,
+    /// Type.
+    pub ty: VarType,
+    /// Causality.
+    pub causality: Causality,
+    /// Variability.
+    pub variability: Variability,
+    /// Number of elements (1: scalar).
+    pub len: usize,
+    /// Unit (declared in `UnitDefinitions`), if any.
+    pub unit: Option<&'static str>,
+    /// Description.
+    pub description: &'static str,
+}
+
+impl Var {
+    /// True when this is the independent variable `time`, which only FMI 3 lists.
+    pub fn fmi3_only(&self) -> bool {
+        self.causality == Causality::Independent
+    }
+
+    /// True for outputs and locals, which the model computes ("calculated").
+    pub fn is_calculated(&self) -> bool {
+        matches!(self.causality, Causality::Output | Causality::Local)
+    }
+}
+
+/// A unit: name and SI base-unit exponents (kg, m, s, rad).
+#[derive(Debug, Clone, Copy)]
+pub struct Unit {
+    /// The unit's name as variables refer to it.
+    pub name: &'static str,
+    /// Exponent of kg.
+    pub kg: i32,
+    /// Exponent of m.
+    pub m: i32,
+    /// Exponent of s.
+    pub s: i32,
+    /// Exponent of rad.
+    pub rad: i32,
+}
+
+/// Every unit a table may use.
+pub const UNITS: &[Unit] = &[
+    Unit {
+        name: "Hz",
+        kg: 0,
+        m: 0,
+        s: -1,
+        rad: 0,
+    },
+    Unit {
+        name: "m",
+        kg: 0,
+        m: 1,
+        s: 0,
+        rad: 0,
+    },
+    Unit {
+        name: "s",
+        kg: 0,
+        m: 0,
+        s: 1,
+        rad: 0,
+    },
+    Unit {
+        name: "rad",
+        kg: 0,
+        m: 0,
+        s: 0,
+        rad: 1,
+    },
+    Unit {
+        name: "m/s",
+        kg: 0,
+        m: 1,
+        s: -1,
+        rad: 0,
+    },
+    Unit {
+        name: "W",
+        kg: 1,
+        m: 2,
+        s: -3,
+        rad: 0,
+    },
+    Unit {
+        name: "J",
+        kg: 1,
+        m: 2,
+        s: -2,
+        rad: 0,
+    },
+    Unit {
+        name: "kg",
+        kg: 1,
+        m: 0,
+        s: 0,
+        rad: 0,
+    },
+    Unit {
+        name: "m2",
+        kg: 0,
+        m: 2,
+        s: 0,
+        rad: 0,
+    },
+    Unit {
+        name: "kg/m3",
+        kg: 1,
+        m: -3,
+        s: 0,
+        rad: 0,
+    },
+];
+
+/// A log category the models use (declared in `LogCategories`).
+#[derive(Debug, Clone, Copy)]
+pub struct LogCategory {
+    /// Name passed to the logger.
+    pub name: &'static str,
+    /// What it reports.
+    pub description: &'static str,
+}
+
+/// The log categories. Errors and warnings are always reported; the others only with debug
+/// logging on (and the category enabled).
+pub const LOG_CATEGORIES: &[LogCategory] = &[
+    LogCategory {
+        name: "logStatusError",
+        description:
+            "Errors: bad calls, bad values, missions that cannot be flown (always reported).",
+    },
+    LogCategory {
+        name: "logStatusWarning",
+        description:
+            "Warnings, e.g. a re-plan that failed so the previous plan is kept (always reported).",
+    },
+    LogCategory {
+        name: "logEvents",
+        description: "Mission loading, planning and receding-horizon re-planning.",
+    },
+    LogCategory {
+        name: "logCalls",
+        description: "Every FMI call with its arguments.",
+    },
+];
+
+/// Index of a category in [`LOG_CATEGORIES`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Category {
+    /// `logStatusError`.
+    Error = 0,
+    /// `logStatusWarning`.
+    Warning = 1,
+    /// `logEvents`.
+    Events = 2,
+    /// `logCalls`.
+    Calls = 3,
+}
+
+impl Category {
+    /// The category's name.
+    pub fn name(self) -> &'static str {
+        LOG_CATEGORIES[self as usize].name
+    }
+}
+
+/// Value references of the planner model.
+pub mod planner_vr {
+    /// `time` (FMI 3 only).
+    pub const TIME: u32 = 0;
+    /// First scalar/array mission parameter.
+    pub const FIRST_PARAM: u32 = 1;
+    /// `start_m` (array of 2).
+    pub const START_M: u32 = 10;
+    /// `bs_m` (array of 2).
+    pub const BS_M: u32 = 12;
+    /// `mission_file`.
+    pub const MISSION_FILE: u32 = 100;
+    /// `landmark_x_in_m`.
+    pub const LANDMARK_X_IN: u32 = 200;
+    /// `landmark_y_in_m`.
+    pub const LANDMARK_Y_IN: u32 = 201;
+    /// `x_m`.
+    pub const X: u32 = 300;
+    /// `y_m`.
+    pub const Y: u32 = 301;
+    /// `speed_mps`.
+    pub const SPEED: u32 = 302;
+    /// `heading_rad`.
+    pub const HEADING: u32 = 303;
+    /// `power_w`.
+    pub const POWER: u32 = 304;
+    /// `energy_j`.
+    pub const ENERGY: u32 = 305;
+    /// `xc_m`.
+    pub const XC: u32 = 306;
+    /// `yc_m`.
+    pub const YC: u32 = 307;
+    /// `landmark_x_m`.
+    pub const LANDMARK_X: u32 = 308;
+    /// `landmark_y_m`.
+    pub const LANDMARK_Y: u32 = 309;
+    /// `in_view`.
+    pub const IN_VIEW: u32 = 310;
+    /// `range_resolution_m`.
+    pub const RANGE_RES: u32 = 311;
+    /// `azimuth_resolution_m`.
+    pub const AZIMUTH_RES: u32 = 312;
+    /// `range_resolution_paper_m`.
+    pub const RANGE_RES_PAPER: u32 = 313;
+    /// `azimuth_resolution_paper_m`.
+    pub const AZIMUTH_RES_PAPER: u32 = 314;
+    /// `worst_cell_width_m`.
+    pub const WORST_WIDTH: u32 = 315;
+    /// `replan_count`.
+    pub const REPLAN_COUNT: u32 = 316;
+    /// `plan_solve_time_s` (local).
+    pub const SOLVE_TIME: u32 = 400;
+    /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests: setting it to
+    /// [`crate::core::PANIC_IN_DO_STEP`] makes the next doStep panic inside the model core,
+    /// to prove that no panic crosses the C boundary.
+    pub const DEBUG_INJECT_PANIC: u32 = 0x7FFF_0001;
+}
+
+const fn param(
+    name: &'static str,
+    vr: u32,
+    unit: Option<&'static str>,
+    description: &'static str,
+) -> Var {
+    Var {
+        name,
+        vr,
+        ty: VarType::Real,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 1,
+        unit,
+        description,
+    }
+}
+
+const fn output(
+    name: &'static str,
+    vr: u32,
+    ty: VarType,
+    unit: Option<&'static str>,
+    description: &'static str,
+) -> Var {
+    Var {
+        name,
+        vr,
+        ty,
+        causality: Causality::Output,
+        variability: match ty {
+            VarType::Real => Variability::Continuous,
+            _ => Variability::Discrete,
+        },
+        len: 1,
+        unit,
+        description,
+    }
+}
+
+const fn time_var() -> Var {
+    Var {
+        name: "time",
+        vr: 0,
+        ty: VarType::Real,
+        causality: Causality::Independent,
+        variability: Variability::Continuous,
+        len: 1,
+        unit: Some("s"),
+        description: "Simulation time",
+    }
+}
+
+use planner_vr as pv;
+
+/// The planner model's variables. Every mission parameter has the name of its `[params]` entry in
+/// a mission file; `start_m` and `bs_m` are arrays of 2 (FMI 2: `start_m[1]`, `start_m[2]`).
+pub const PLANNER_VARS: &[Var] = &[
+    time_var(),
+    param("bandwidth_hz", pv::FIRST_PARAM, Some("Hz"), "BS transmit bandwidth B"),
+    param("wavelength_m", 2, Some("m"), "Carrier wavelength lambda_c"),
+    param("integration_time_s", 3, Some("s"), "Coherent SAR integration time T_d"),
+    param("observation_angle_rad", 4, Some("rad"), "Observation (look) angle eta from nadir, in (0, pi/2)"),
+    param("d_min_m", 5, Some("m"), "Required resolution d_min"),
+    param("altitude_m", 6, Some("m"), "UAV altitude H"),
+    param("max_speed_mps", 7, Some("m/s"), "Maximum UAV speed V_m"),
+    param("slot_s", 8, Some("s"), "Slot length delta"),
+    param("horizon_s", 9, Some("s"), "Mission horizon T (a whole number of slots)"),
+    Var {
+        name: "start_m",
+        vr: pv::START_M,
+        ty: VarType::Real,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 2,
+        unit: Some("m"),
+        description: "UAV start position q_0 (x, y)",
+    },
+    Var {
+        name: "bs_m",
+        vr: pv::BS_M,
+        ty: VarType::Real,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 2,
+        unit: Some("m"),
+        description: "Base-station ground position q_b (x, y)",
+    },
+    param("bs_height_m", 14, Some("m"), "Base-station antenna height H_b"),
+    param("sensing_radius_m", 15, Some("m"), "Radius r_s of the sensing area"),
+    param("blade_power_w", 16, Some("W"), "Blade-profile power in hover P_0"),
+    param("tip_speed_mps", 17, Some("m/s"), "Rotor blade tip speed U_tip"),
+    param("induced_power_w", 18, Some("W"), "Induced power in hover P_1"),
+    param("induced_velocity_mps", 19, Some("m/s"), "Mean rotor induced velocity in hover v_0"),
+    param("rotor_solidity", 20, None, "Rotor solidity s"),
+    param("rotor_disc_area_m2", 21, Some("m2"), "Rotor disc area A"),
+    param("air_density_kgpm3", 22, Some("kg/m3"), "Air density rho"),
+    param("fuselage_drag_ratio", 23, None, "Fuselage drag ratio d_f"),
+    param("uav_mass_kg", 24, Some("kg"), "UAV mass (informational)"),
+    Var {
+        name: "mission_file",
+        vr: pv::MISSION_FILE,
+        ty: VarType::String,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 1,
+        unit: None,
+        description: "Mission file (TOML or JSON); a relative path is looked up in the FMU's resources/ directory, then in the working directory. Its [params] are overridden by the parameters set through FMI.",
+    },
+    Var {
+        name: "landmark_x_in_m",
+        vr: pv::LANDMARK_X_IN,
+        ty: VarType::Real,
+        causality: Causality::Input,
+        variability: Variability::Continuous,
+        len: 1,
+        unit: Some("m"),
+        description: "Landmark of the current window, x (NaN: the plan's own). A finite value that differs from the plan's landmark moves it and re-plans the rest of the horizon.",
+    },
+    Var {
+        name: "landmark_y_in_m",
+        vr: pv::LANDMARK_Y_IN,
+        ty: VarType::Real,
+        causality: Causality::Input,
+        variability: Variability::Continuous,
+        len: 1,
+        unit: Some("m"),
+        description: "Landmark of the current window, y (NaN: the plan's own)",
+    },
+    output("x_m", pv::X, VarType::Real, Some("m"), "UAV position x (linear within a slot)"),
+    output("y_m", pv::Y, VarType::Real, Some("m"), "UAV position y (linear within a slot)"),
+    output("speed_mps", pv::SPEED, VarType::Real, Some("m/s"), "True speed of the current slot"),
+    output("heading_rad", pv::HEADING, VarType::Real, Some("rad"), "True heading of the current slot, in [0, 2 pi)"),
+    output("power_w", pv::POWER, VarType::Real, Some("W"), "Propulsion power of the current slot"),
+    output("energy_j", pv::ENERGY, VarType::Real, Some("J"), "Propulsion energy used since the start"),
+    output("xc_m", pv::XC, VarType::Real, Some("m"), "Sensing centre x (H tan eta right of the track)"),
+    output("yc_m", pv::YC, VarType::Real, Some("m"), "Sensing centre y"),
+    output("landmark_x_m", pv::LANDMARK_X, VarType::Real, Some("m"), "Landmark of the current slot, x (NaN: none)"),
+    output("landmark_y_m", pv::LANDMARK_Y, VarType::Real, Some("m"), "Landmark of the current slot, y (NaN: none)"),
+    output("in_view", pv::IN_VIEW, VarType::Boolean, None, "The slot's landmark lies within r_s of the sensing centre at the slot end (true without a landmark)"),
+    output("range_resolution_m", pv::RANGE_RES, VarType::Real, Some("m"), "General bistatic range resolution at the sensed point (SPEC 4.11)"),
+    output("azimuth_resolution_m", pv::AZIMUTH_RES, VarType::Real, Some("m"), "General azimuth (Doppler) resolution at the sensed point"),
+    output("range_resolution_paper_m", pv::RANGE_RES_PAPER, VarType::Real, Some("m"), "The paper's range resolution c/(B (sin eta + sin theta)) at the sensing centre"),
+    output("azimuth_resolution_paper_m", pv::AZIMUTH_RES_PAPER, VarType::Real, Some("m"), "The paper's azimuth resolution at the true speed"),
+    output("worst_cell_width_m", pv::WORST_WIDTH, VarType::Real, Some("m"), "Worst width of the resolution cell at the sensed point (SPEC 4.12)"),
+    output("replan_count", pv::REPLAN_COUNT, VarType::Integer, None, "Receding-horizon re-plans so far"),
+    Var {
+        name: "plan_solve_time_s",
+        vr: pv::SOLVE_TIME,
+        ty: VarType::Real,
+        causality: Causality::Local,
+        variability: Variability::Discrete,
+        len: 1,
+        unit: Some("s"),
+        description: "Wall time of the last plan or re-plan",
+    },
+];
+
+/// Value references of the landmark-mover model.
+pub mod mover_vr {
+    /// `time` (FMI 3 only).
+    pub const TIME: u32 = 0;
+    /// `move_at_s`.
+    pub const MOVE_AT: u32 = 1;
+    /// `offset_x_m`.
+    pub const OFFSET_X: u32 = 2;
+    /// `offset_y_m`.
+    pub const OFFSET_Y: u32 = 3;
+    /// `hold_s`.
+    pub const HOLD: u32 = 4;
+    /// `landmark_x_m` (input).
+    pub const IN_X: u32 = 10;
+    /// `landmark_y_m` (input).
+    pub const IN_Y: u32 = 11;
+    /// `landmark_x_out_m`.
+    pub const OUT_X: u32 = 20;
+    /// `landmark_y_out_m`.
+    pub const OUT_Y: u32 = 21;
+    /// `moved`.
+    pub const MOVED: u32 = 22;
+}
+
+/// The landmark-mover model's variables: a small partner FMU for coupled co-simulation. It reads
+/// the planner's current landmark and, from `move_at_s` on, outputs that landmark shifted by
+/// (`offset_x_m`, `offset_y_m`) for `hold_s` seconds (NaN otherwise: "no override").
+pub const MOVER_VARS: &[Var] = &[
+    time_var(),
+    param(
+        "move_at_s",
+        mover_vr::MOVE_AT,
+        Some("s"),
+        "Time of the move",
+    ),
+    param(
+        "offset_x_m",
+        mover_vr::OFFSET_X,
+        Some("m"),
+        "Shift of the landmark, x",
+    ),
+    param(
+        "offset_y_m",
+        mover_vr::OFFSET_Y,
+        Some("m"),
+        "Shift of the landmark, y",
+    ),
+    param(
+        "hold_s",
+        mover_vr::HOLD,
+        Some("s"),
+        "How long the moved landmark is output (0: until the end)",
+    ),
+    Var {
+        name: "landmark_x_m",
+        vr: mover_vr::IN_X,
+        ty: VarType::Real,
+        causality: Causality::Input,
+        variability: Variability::Continuous,
+        len: 1,
+        unit: Some("m"),
+        description: "The planner's current landmark, x",
+    },
+    Var {
+        name: "landmark_y_m",
+        vr: mover_vr::IN_Y,
+        ty: VarType::Real,
+        causality: Causality::Input,
+        variability: Variability::Continuous,
+        len: 1,
+        unit: Some("m"),
+        description: "The planner's current landmark, y",
+    },
+    output(
+        "landmark_x_out_m",
+        mover_vr::OUT_X,
+        VarType::Real,
+        Some("m"),
+        "Moved landmark x (NaN: no override)",
+    ),
+    output(
+        "landmark_y_out_m",
+        mover_vr::OUT_Y,
+        VarType::Real,
+        Some("m"),
+        "Moved landmark y (NaN: no override)",
+    ),
+    output(
+        "moved",
+        mover_vr::MOVED,
+        VarType::Boolean,
+        None,
+        "The moved landmark is being output",
+    ),
+];
+
+/// Finds the variable (and element) that a value reference addresses. FMI 2 addresses array
+/// elements one by one (`vr + i`); FMI 3 addresses a whole array by its `vr`.
+pub fn lookup(table: &'static [Var], vr: u32, fmi2: bool) -> Option<(&'static Var, usize)> {
+    table.iter().find_map(|v| {
+        if fmi2 {
+            if v.fmi3_only() {
+                return None;
+            }
+            let off = vr.checked_sub(v.vr)? as usize;
+            (off < v.len).then_some((v, off))
+        } else {
+            (v.vr == vr).then_some((v, 0))
+        }
+    })
+}
+
+/// The FMI 2 name of element `i` of `var` (`name[i+1]` for arrays).
+pub fn fmi2_name(var: &Var, i: usize) -> String {
+    if var.len == 1 {
+        var.name.to_string()
+    } else {
+        format!("{}[{}]", var.name, i + 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_table(table: &[Var]) {
+        let mut names = std::collections::HashSet::new();
+        let mut used = std::collections::HashSet::new();
+        for v in table {
+            assert!(names.insert(v.name), "duplicate name {}", v.name);
+            for i in 0..v.len as u32 {
+                assert!(
+                    used.insert(v.vr + i),
+                    "value reference {} used twice",
+                    v.vr + i
+                );
+            }
+            if let Some(u) = v.unit {
+                assert!(
+                    UNITS.iter().any(|x| x.name == u),
+                    "unit {u} of {} undeclared",
+                    v.name
+                );
+            }
+            assert!(!v.description.is_empty());
+        }
+    }
+
+    #[test]
+    fn tables_are_consistent() {
+        check_table(PLANNER_VARS);
+        check_table(MOVER_VARS);
+    }
+
+    #[test]
+    fn every_mission_parameter_is_a_variable() {
+        for name in planner::Params::scalar_names() {
+            let v = PLANNER_VARS
+                .iter()
+                .find(|v| v.name == name)
+                .unwrap_or_else(|| panic!("parameter {name} missing from the table"));
+            assert_eq!(v.causality, Causality::Parameter);
+        }
+        for name in ["start_m", "bs_m"] {
+            assert!(PLANNER_VARS.iter().any(|v| v.name == name && v.len == 2));
+        }
+    }
+
+    #[test]
+    fn lookup_by_version() {
+        let (v, i) = lookup(PLANNER_VARS, planner_vr::START_M + 1, true).unwrap();
+        assert_eq!((v.name, i), ("start_m", 1));
+        assert!(lookup(PLANNER_VARS, planner_vr::START_M + 1, false).is_none());
+        assert!(lookup(PLANNER_VARS, planner_vr::TIME, true).is_none());
+        assert_eq!(lookup(PLANNER_VARS, 0, false).unwrap().0.name, "time");
+        assert_eq!(fmi2_name(v, 1), "start_m[2]");
+    }
+}
