@@ -405,7 +405,10 @@ mod tests {
             pixels_per_cell: 1.0,
         };
         let map = ca_cfar(&img, nx, ny, &p);
-        assert!((0..ny).any(|y| map.hits[y * nx]), "the border exceeds the threshold");
+        assert!(
+            (0..ny).any(|y| map.hits[y * nx]),
+            "the border exceeds the threshold"
+        );
         let d = cluster(&img, &map, &grid, 2.0, 0);
         assert_eq!(d.len(), 1, "{d:?}");
         assert!((d[0].x_m - grid.x(15)).abs() < 0.5 && (d[0].y_m - grid.y(14)).abs() < 0.5);

@@ -251,6 +251,21 @@ pub fn cfar_geometry(
     (px(x), px(y), (area / (pixel_m * pixel_m)).max(1.0))
 }
 
+/// CFAR output of one aperture's multilook image.
+#[derive(Debug, Clone)]
+pub struct Detected {
+    /// Detections (non-maximum suppression within the cluster radius), strongest first.
+    pub detections: Vec<Detection>,
+    /// The CFAR exceedance map and noise estimates.
+    pub map: crate::cfar::CfarMap,
+    /// The CFAR settings used.
+    pub cfar: CfarParams,
+    /// Predicted resolution cell at the image centre, mid-aperture.
+    pub cell: pg::ResolutionCell,
+    /// Pixels per coherence area used by the CFAR.
+    pub pixels_per_cell: f64,
+}
+
 /// The processor of one setup.
 pub struct Processor {
     setup: RadarSetup,
@@ -677,7 +692,7 @@ impl Processor {
         let peak = self
             .exact_value(c, spectra, range.clone(), target_m)
             .norm_sqr();
-        if !(peak > 0.0) {
+        if peak.is_nan() || peak <= 0.0 {
             return Err(RadarError::Numerical {
                 stage: "cell measurement".into(),
                 reason: "no response at the target".into(),
@@ -760,6 +775,30 @@ impl Processor {
                 looks.push(img);
             }
         }
+        let det = self.detect(ap, pulses, &multilook)?;
+        self.score_aperture(
+            ap, pulses, multilook, looks, det, c.cancel, noise_var, objects,
+        )
+    }
+
+    /// CFAR detection and clustering on the multilook image of aperture `ap` (mean over its
+    /// looks of |I|² / per-look noise variance), with the guard and coherence area of the
+    /// predicted cell at the image centre, mid-aperture.
+    pub fn detect(
+        &self,
+        ap: &Aperture,
+        pulses: &[PulseMeta],
+        multilook: &[f32],
+    ) -> Result<Detected> {
+        let grid = self.setup.grid(ap);
+        if multilook.len() != grid.pixels() || pulses.is_empty() {
+            return Err(RadarError::Shape {
+                what: format!("aperture {} multilook image", ap.index),
+                expected: format!("{} pixels, ≥ 1 pulse", grid.pixels()),
+                found: format!("{} pixels, {} pulses", multilook.len(), pulses.len()),
+            });
+        }
+        let pc = &self.setup.scene.processing;
         // predicted cell at the image centre, mid-aperture
         let mid = &pulses[pulses.len() / 2];
         let (a, b) = (&pulses[0], &pulses[pulses.len() - 1]);
@@ -792,21 +831,52 @@ impl Processor {
             looks: ap.looks,
             pixels_per_cell: ppc,
         };
-        let map = ca_cfar(&multilook, grid.nx, grid.ny, &cfar);
+        let map = ca_cfar(multilook, grid.nx, grid.ny, &cfar);
         let d_min = self.setup.params.d_min_m;
-        let dets = cluster(
-            &multilook,
+        let detections = cluster(
+            multilook,
             &map,
             &grid,
             pc.cluster_radius_m.unwrap_or(d_min / 2.0),
             ap.index,
         );
+        Ok(Detected {
+            detections,
+            map,
+            cfar,
+            cell,
+            pixels_per_cell: ppc,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn score_aperture(
+        &self,
+        ap: &Aperture,
+        pulses: &[PulseMeta],
+        multilook: Vec<f32>,
+        looks: Vec<Vec<Complex32>>,
+        det: Detected,
+        cancel: CancelStats,
+        noise_var: f64,
+        objects: &[SceneObject],
+    ) -> Result<ApertureResult> {
+        let grid = self.setup.grid(ap);
+        let pc = &self.setup.scene.processing;
+        let ppl = ap.pulses_per_look;
+        let d_min = self.setup.params.d_min_m;
+        let Detected {
+            detections: dets,
+            map,
+            cfar,
+            cell,
+            pixels_per_cell: ppc,
+        } = det;
         let gate = pc.match_radius_m.unwrap_or(d_min / 2.0);
         // truth inside the grid (one pixel margin)
         let margin = grid.spacing_m;
         let half_x = (grid.nx as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
         let half_y = (grid.ny as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
-        let look0 = &pulses[..ppl];
         let truth: Vec<TruthInImage> = objects
             .iter()
             .filter(|o| {
@@ -821,7 +891,6 @@ impl Processor {
                     })
                     .sum::<f64>()
                     / ap.looks as f64;
-                let _ = look0;
                 TruthInImage {
                     id: o.id,
                     pos_m: o.pos_m(),
@@ -861,7 +930,7 @@ impl Processor {
             looks,
             detections: dets,
             score: sc,
-            cancel: c.cancel,
+            cancel,
             false_alarm_pixels: fa_px,
             clear_pixels: clear,
             cell,

@@ -209,11 +209,17 @@ impl PsfRegion {
         let mut pts = Vec::with_capacity(2 * self.directions_rad.len());
         for (k, a) in self.directions_rad.iter().enumerate() {
             let (s, co) = a.sin_cos();
-            pts.push([c[0] + self.radius_plus_m[k] * co, c[1] + self.radius_plus_m[k] * s]);
+            pts.push([
+                c[0] + self.radius_plus_m[k] * co,
+                c[1] + self.radius_plus_m[k] * s,
+            ]);
         }
         for (k, a) in self.directions_rad.iter().enumerate() {
             let (s, co) = a.sin_cos();
-            pts.push([c[0] - self.radius_minus_m[k] * co, c[1] - self.radius_minus_m[k] * s]);
+            pts.push([
+                c[0] - self.radius_minus_m[k] * co,
+                c[1] - self.radius_minus_m[k] * s,
+            ]);
         }
         pts
     }
@@ -317,7 +323,10 @@ impl CellReport {
         pts.sort_by(|a, b| a[1].atan2(a[0]).total_cmp(&b[1].atan2(b[0])));
         // predicted parallelogram: |ĝ·x| ≤ R/2, |d̂·x| ≤ A/2
         let [g, d] = self.axes;
-        let (r, a) = (self.range_width_pred_m / 2.0, self.along_track_width_pred_m / 2.0);
+        let (r, a) = (
+            self.range_width_pred_m / 2.0,
+            self.along_track_width_pred_m / 2.0,
+        );
         let det = g[0] * d[1] - g[1] * d[0];
         let corner = |sr: f64, sa: f64| -> [f64; 2] {
             // solve ĝ·x = sr r, d̂·x = sa a
@@ -430,8 +439,16 @@ mod tests {
             let rel = |x: f64, y: f64| (x / y - 1.0).abs();
             let ga = [a[0] / na, a[1] / na];
             let gb = [b[0] / nb, b[1] / nb];
-            assert!(rel(reg.caliper_m(ga), w / na) < 1e-4, "{}", reg.caliper_m(ga));
-            assert!(rel(reg.caliper_m(gb), w / nb) < 1e-4, "{}", reg.caliper_m(gb));
+            assert!(
+                rel(reg.caliper_m(ga), w / na) < 1e-4,
+                "{}",
+                reg.caliper_m(ga)
+            );
+            assert!(
+                rel(reg.caliper_m(gb), w / nb) < 1e-4,
+                "{}",
+                reg.caliper_m(gb)
+            );
             assert!(rel(reg.chord_m(vr), w / (na * sin_psi)) < 1e-6);
             assert!(rel(reg.chord_m(va), w / (nb * sin_psi)) < 1e-6);
             let (longest, _) = reg.longest_chord();
