@@ -146,9 +146,9 @@ fn detections(
         let rot = Complex64::from_polar(1.0, std::f64::consts::TAU * k as f64 / PHASES as f64);
         let rot = Complex32::new(rot.re as f32, rot.im as f32);
         let mut ml = vec![0f32; grid.pixels()];
-        for l in 0..ap.looks {
+        for ((a, b), n) in parts[0].iter().zip(&parts[1]).zip(&parts[2]) {
             for (i, o) in ml.iter_mut().enumerate() {
-                *o += (parts[0][l][i] + rot * parts[1][l][i] + parts[2][l][i]).norm_sqr() * scale;
+                *o += (a[i] + rot * b[i] + n[i]).norm_sqr() * scale;
             }
         }
         per_phase.push(count(&ml));
