@@ -22,6 +22,7 @@ pub mod error;
 pub mod io;
 pub mod linalg;
 pub mod pipeline;
+pub mod psf;
 pub mod resolution;
 pub mod run;
 pub mod scene;

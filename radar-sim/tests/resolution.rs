@@ -61,49 +61,23 @@ fn point_target_widths_match_general_predictions() {
 /// Issue 6: the principal −3 dB widths of the measured point response (its −3 dB region traced
 /// in 40 directions, not two cuts) agree with the predicted parallelogram cell within 10% away
 /// from blind geometry; within a few degrees of blind the measured cross-track width is large,
-/// as predicted.
+/// as predicted. (The same cases as `cellsar-radar-sim resolution`, at B = 150 MHz.)
 #[test]
 fn principal_widths_match_the_cell() {
-    // (target, heading, near blind)
-    let cases: [([f64; 2], f64, bool); 4] = [
-        ([0.0, 0.0], 180.0, false),
-        ([300.0, 500.0], 270.0, false),
-        ([-400.0, 200.0], 225.0, false),
-        ([0.0, 0.0], 94.0, true),
-    ];
     let params = planner::Params::default();
-    let mut scene = SceneFile::default();
-    scene.radar.thermal_noise = false;
-    scene.radar.direct_path = false;
-    scene.processing.canceller = radar_sim::config::CancellerKind::None;
-    let proc = common::processor(&params, &scene);
-    let setup = proc.setup().clone();
-    for (target, heading, near_blind) in cases {
+    for case in radar_sim::psf::default_cases() {
         let t = std::time::Instant::now();
-        let track = common::track_through(&params, target, heading, 20.0, 0.5);
-        let ap = common::aperture(&setup, target, 0.0, 1);
-        let pulses = common::pulses(&setup, &track, &ap);
-        let synth = setup
-            .synthesizer(vec![common::object(0, target, 10.0)])
-            .unwrap();
-        let iq = synth.synthesize_frame(&pulses, Components::ALL).unwrap();
-        let grid = setup.grid(&ap);
-        let c = proc
-            .compress(&grid, &pulses, &iq, ap.pulses_per_look, None, true)
-            .unwrap();
-        let r = proc
-            .measure_cell(&c, &pulses, 0..pulses.len(), target)
-            .unwrap();
+        let r = radar_sim::psf::measure_case(&params, &case).unwrap();
         let e = r.errors();
         println!(
-            "target {target:?} heading {heading}°: β = {:.1}°, ψ = {:.1}°; range {:.2} m (pred {:.2}), along-track {:.2} (pred {:.2}), cross-track {:.2} (pred {:.2}), iso-range {:.2} (pred {:.2}), worst {:.1} (pred {:.1}, planner {:.1}); paper δ_r {:.2}, δ_a {:.2}; {:.2} s",
-            r.bistatic_angle_deg, r.psi_deg, r.range_width_m, r.range_width_pred_m,
+            "{}: β = {:.1}°, ψ = {:.1}°; range {:.3} m (pred {:.3}), along-track {:.3} (pred {:.3}), cross-track {:.2} (pred {:.2}), iso-range {:.2} (pred {:.2}), worst {:.1} (pred {:.1}, planner {:.1}); errors {:+.4?}; paper δ_r {:.2}, δ_a {:.2}; {:.2} s",
+            case.label, r.bistatic_angle_deg, r.psi_deg, r.range_width_m, r.range_width_pred_m,
             r.along_track_width_m, r.along_track_width_pred_m, r.cross_track_width_m,
             r.cross_track_width_pred_m, r.iso_range_width_m, r.iso_range_width_pred_m,
-            r.worst_width_m, r.worst_width_pred_m, r.planner_worst_width_m, r.paper_range_m,
+            r.worst_width_m, r.worst_width_pred_m, r.planner_worst_width_m, e, r.paper_range_m,
             r.paper_azimuth_m, t.elapsed().as_secs_f64()
         );
-        if near_blind {
+        if case.near_blind {
             assert!(r.psi_deg < 8.0, "not near blind: ψ = {}", r.psi_deg);
             assert!(
                 r.cross_track_width_m > 5.0 * r.range_width_m
