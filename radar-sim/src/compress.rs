@@ -94,35 +94,12 @@ impl RangeCompressor {
     /// The profile at fractional delay `delay` (samples), evaluated exactly from `z`:
     /// `Σ_i z_i e^{j2π k_i Δ/N}` by phasor recurrence, eight subcarriers in SIMD lanes.
     pub fn evaluate(&self, z: &[Complex64], delay: f64) -> Complex64 {
-        const L: usize = 8;
-        let n = self.num.fft_size as f64;
-        let k0 = self.num.subcarrier_index(0) as f64;
-        let step = Complex64::from_polar(1.0, std::f64::consts::TAU * delay / n);
-        let mut ph = Complex64::from_polar(1.0, std::f64::consts::TAU * (k0 * delay / n).fract());
-        let mut pr = [0.0; L];
-        let mut pi = [0.0; L];
-        for l in 0..L {
-            (pr[l], pi[l]) = (ph.re, ph.im);
-            ph *= step;
-        }
-        let s8 = Complex64::from_polar(1.0, std::f64::consts::TAU * (L as f64 * delay / n).fract());
-        let mut sr = [0.0; L];
-        let mut si = [0.0; L];
-        let mut chunks = z.chunks_exact(L);
-        for c in &mut chunks {
-            for l in 0..L {
-                sr[l] += c[l].re * pr[l] - c[l].im * pi[l];
-                si[l] += c[l].re * pi[l] + c[l].im * pr[l];
-                let r = pr[l] * s8.re - pi[l] * s8.im;
-                pi[l] = pr[l] * s8.im + pi[l] * s8.re;
-                pr[l] = r;
-            }
-        }
-        for (l, c) in chunks.remainder().iter().enumerate() {
-            sr[l] += c.re * pr[l] - c.im * pi[l];
-            si[l] += c.re * pi[l] + c.im * pr[l];
-        }
-        Complex64::new(sr.iter().sum(), si.iter().sum())
+        crate::dsp::ramp_sum(
+            z,
+            self.num.subcarrier_index(0) as f64,
+            self.num.fft_size,
+            delay,
+        )
     }
 
     /// The upsampled profile window: samples j = j0 .. j0 + len at delays (j0 + j)/U (periodic).

@@ -18,6 +18,7 @@ pub mod cfar;
 pub mod compress;
 pub mod config;
 pub mod cputime;
+mod dsp;
 pub mod error;
 pub mod io;
 pub mod linalg;

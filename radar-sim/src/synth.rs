@@ -37,6 +37,7 @@ use rustfft::{Fft, FftPlanner};
 
 use crate::antenna::Antenna;
 use crate::config::{MotionModel, RadarConfig};
+use crate::dsp::{direct_sums, phase_ramp};
 use crate::error::{RadarError, Result};
 use crate::scene::SceneObject;
 use crate::track::{dist3, PulseMeta};
@@ -114,7 +115,13 @@ const LANES: usize = 8;
 /// i (k_i = k0 + i) and Taylor terms q (c_{q,j} = a_j f_{D,j}^q / q!), in f64: eight consecutive
 /// subcarriers in SIMD lanes, each path's phasors for them advanced by e^{−j2π 8Δ_j/N} per
 /// block. A copy for AVX-512 and one for AVX2+FMA are chosen at run time.
-fn path_sums(paths: &[&Path], terms: usize, k0: f64, n: usize, nsc: usize) -> Vec<Complex64> {
+pub(crate) fn path_sums(
+    paths: &[&Path],
+    terms: usize,
+    k0: f64,
+    n: usize,
+    nsc: usize,
+) -> Vec<Complex64> {
     let np = paths.len();
     let mut ph_re = vec![[0.0; LANES]; np];
     let mut ph_im = vec![[0.0; LANES]; np];
@@ -222,107 +229,6 @@ fn path_sums_kernel(k: &mut SumKernel<'_>) {
 #[target_feature(enable = "avx2,fma")]
 fn path_sums_avx2(k: &mut SumKernel<'_>) {
     path_sums_kernel(k)
-}
-
-/// `out[i] = e^{−j2π (k0 + i) d / N}` for i = 0..out.len(), from blocks of exact twiddles
-/// (one complex product per value, no long recurrence).
-fn phase_ramp(d: f64, k0: f64, n: usize, out: &mut [Complex64]) {
-    const B: usize = 64;
-    let cis = |x: f64| Complex64::from_polar(1.0, -std::f64::consts::TAU * (x - x.floor()));
-    let inner: Vec<Complex64> = (0..B).map(|r| cis(r as f64 * d / n as f64)).collect();
-    for (b, chunk) in out.chunks_mut(B).enumerate() {
-        let outer = cis((k0 + (b * B) as f64) * d / n as f64);
-        for (o, w) in chunk.iter_mut().zip(&inner) {
-            *o = outer * w;
-        }
-    }
-}
-
-/// `Σ_i z_i e^{j2π (k0 + i) k / N}` for each k in `ks`, eight k at a time in SIMD lanes.
-fn direct_sums(z: &[Complex64], k0: i64, n: usize, ks: std::ops::Range<usize>) -> Vec<Complex64> {
-    let ks: Vec<usize> = ks.collect();
-    let mut out = Vec::with_capacity(ks.len());
-    for chunk in ks.chunks(LANES) {
-        let mut ph_re = [0.0; LANES];
-        let mut ph_im = [0.0; LANES];
-        let mut st_re = [1.0; LANES];
-        let mut st_im = [0.0; LANES];
-        for (l, &k) in chunk.iter().enumerate() {
-            let r0 = (k0 * k as i64).rem_euclid(n as i64) as f64 / n as f64;
-            let p = Complex64::from_polar(1.0, std::f64::consts::TAU * r0);
-            let s = Complex64::from_polar(1.0, std::f64::consts::TAU * k as f64 / n as f64);
-            (ph_re[l], ph_im[l], st_re[l], st_im[l]) = (p.re, p.im, s.re, s.im);
-        }
-        let (sr, si) = lane_sums(z, ph_re, ph_im, st_re, st_im);
-        for l in 0..chunk.len() {
-            out.push(Complex64::new(sr[l], si[l]));
-        }
-    }
-    out
-}
-
-/// Σ_i z_i ph_l step_l^i for eight lanes l (dispatches to an AVX-512 or AVX2 copy).
-fn lane_sums(
-    z: &[Complex64],
-    ph_re: [f64; LANES],
-    ph_im: [f64; LANES],
-    st_re: [f64; LANES],
-    st_im: [f64; LANES],
-) -> ([f64; LANES], [f64; LANES]) {
-    #[inline(always)]
-    fn kernel(
-        z: &[Complex64],
-        mut ph_re: [f64; LANES],
-        mut ph_im: [f64; LANES],
-        st_re: [f64; LANES],
-        st_im: [f64; LANES],
-    ) -> ([f64; LANES], [f64; LANES]) {
-        let mut sr = [0.0; LANES];
-        let mut si = [0.0; LANES];
-        for zi in z {
-            for l in 0..LANES {
-                sr[l] += zi.re * ph_re[l] - zi.im * ph_im[l];
-                si[l] += zi.re * ph_im[l] + zi.im * ph_re[l];
-                let r = ph_re[l] * st_re[l] - ph_im[l] * st_im[l];
-                ph_im[l] = ph_re[l] * st_im[l] + ph_im[l] * st_re[l];
-                ph_re[l] = r;
-            }
-        }
-        (sr, si)
-    }
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx512f")]
-        fn k512(
-            z: &[Complex64],
-            a: [f64; LANES],
-            b: [f64; LANES],
-            c: [f64; LANES],
-            d: [f64; LANES],
-        ) -> ([f64; LANES], [f64; LANES]) {
-            kernel(z, a, b, c, d)
-        }
-        #[target_feature(enable = "avx2,fma")]
-        fn k256(
-            z: &[Complex64],
-            a: [f64; LANES],
-            b: [f64; LANES],
-            c: [f64; LANES],
-            d: [f64; LANES],
-        ) -> ([f64; LANES], [f64; LANES]) {
-            kernel(z, a, b, c, d)
-        }
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports AVX-512F (checked just above).
-            return unsafe { k512(z, ph_re, ph_im, st_re, st_im) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU supports AVX2 and FMA (checked just above).
-            return unsafe { k256(z, ph_re, ph_im, st_re, st_im) };
-        }
-    }
-    kernel(z, ph_re, ph_im, st_re, st_im)
 }
 
 impl Synthesizer {
