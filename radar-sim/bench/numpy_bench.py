@@ -9,8 +9,10 @@ Steps (each vectorised over the natural inner axis, a Python loop over pulses):
                   ramps over the subcarriers and one IFFT; paths beyond the CP split into
                   per-symbol pieces, one IFFT each; thermal noise; complex64 output.
   cancellation    per pulse: ECA with the reference's cyclic shifts (taps) by least squares
-                  (numpy.linalg.lstsq), then the reciprocal range filter and the x U upsampled
-                  profile by zero-padded IFFT, keeping the window that the image needs.
+                  (numpy.linalg.lstsq) and the canceller metrics the Rust processor reports
+                  (powers, direct-path matched filter before/after, test-target loss by the same
+                  projection), then the reciprocal range filter and the x U upsampled profile
+                  by zero-padded IFFT, keeping the window that the image needs.
   backprojection  per pulse: f64 bistatic range of every pixel, linear interpolation of the
                   upsampled profile, carrier phase, accumulate.
 Each output is also compared with Rust's (signal-to-error ratio, dB) to show equal work.
@@ -142,40 +144,66 @@ def bench_synthesis(cfg, d, tag, reps):
             "ser_db": ser_db(clean, ref)}
 
 
-def compress(cfg, iq, data, j0s, m):
+def compress(cfg, iq, data, j0s, m, delays):
+    """Per pulse, as the Rust processor: ECA (cyclic taps, least squares) with its metrics
+    (input/output power, matched-filter output at the direct path's delay before and after, the
+    power a unit test target at the landmark's delay keeps through the projection), then the
+    reciprocal filter and the upsampled profile window."""
     n, nsc, up = cfg["fft_size"], cfg["subcarriers"], cfg["upsample"]
     k = np.arange(nsc) - nsc // 2
     bins = k % n
     taps = np.arange(-cfg["taps_before"], cfg["taps_after"])
     out = np.empty((iq.shape[0], m), dtype=np.complex64)
     nu = n * up
+    met = dict(input_power=0.0, output_power=0.0, dp_mf_before=0.0, dp_mf_after=0.0,
+               target_before=0.0, target_after=0.0)
+
+    def mf(y, uk, d):
+        return np.sum(np.conj(uk) * y[bins] * np.exp(2j * np.pi * k * d / n)) / np.sum(np.abs(uk) ** 2)
+
     for i in range(iq.shape[0]):
         r = iq[i].astype(np.complex128)
         x = data[i]
+        uk = n * x / np.sqrt(nsc)
         spec = np.zeros(n, dtype=np.complex128)
         spec[bins] = x
         u = np.fft.ifft(spec) * n / np.sqrt(nsc)
+        y = np.fft.fft(r)
+        met["input_power"] += np.mean(np.abs(r) ** 2)
+        met["dp_mf_before"] += np.abs(mf(y, uk, delays[i, 0])) ** 2
         basis = np.stack([np.roll(u, t) for t in taps], axis=1)
         wts, *_ = np.linalg.lstsq(basis, r, rcond=None)
         r = r - basis @ wts
+        # unit test target at the landmark's delay through the same projection
+        st = np.zeros(n, dtype=np.complex128)
+        st[bins] = x * np.exp(-2j * np.pi * k * delays[i, 1] / n)
+        s_t = np.fft.ifft(st) * n / np.sqrt(nsc)
+        wt, *_ = np.linalg.lstsq(basis, s_t, rcond=None)
+        met["target_before"] += np.vdot(s_t, s_t).real
+        res = s_t - basis @ wt
+        met["target_after"] += np.vdot(res, res).real
         y = np.fft.fft(r)
+        met["output_power"] += np.mean(np.abs(r) ** 2)
+        met["dp_mf_after"] += np.abs(mf(y, uk, delays[i, 0])) ** 2
         z = y[bins] * np.conj(x) / np.abs(x) ** 2 * np.sqrt(nsc) / (n * nsc)
         full = np.zeros(nu, dtype=np.complex128)
         full[k % nu] = z
         prof = np.fft.ifft(full) * nu
         out[i] = prof[(int(j0s[i]) + np.arange(m)) % nu]
-    return out
+    met["target_loss_db"] = float(-10 * np.log10(met["target_after"] / met["target_before"]))
+    return out, met
 
 
 def bench_compress(cfg, d, reps):
     iq = np.load(f"{d}/cancel_iq.npy")
     data = np.load(f"{d}/incp_data.npy")[:, 2, :].astype(np.complex128)
     j0s = np.load(f"{d}/cancel_j0.npy")
+    delays = np.load(f"{d}/cancel_delays.npy")
     m = cfg["profile_m"]
-    w, c, load, prof = timed(reps, lambda: compress(cfg, iq, data, j0s, m))
+    w, c, load, (prof, met) = timed(reps, lambda: compress(cfg, iq, data, j0s, m, delays))
     ref = np.load(f"{d}/cancel_profiles.npy")
     return {"wall_s": w, "cpu_s": c, "load": load, "pulses": float(iq.shape[0]),
-            "ser_db": ser_db(prof, ref)}
+            "ser_db": ser_db(prof, ref), "metrics": {k: float(v) for k, v in met.items()}}
 
 
 def backproject(cfg, prof, pulses):

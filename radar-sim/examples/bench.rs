@@ -299,6 +299,27 @@ fn main() {
     write_c8(&d.join("cancel_iq.npy"), &[pulses.len(), num.fft_size], iq);
     let jm: Vec<f64> = comp.pulses.iter().map(|p| p.j0 as f64).collect();
     write_f8(&d.join("cancel_j0.npy"), &[pulses.len()], &jm);
+    // per pulse: the direct path's delay (metric) and the test target's (landmark) delay
+    let geom0 = setup.geometry();
+    let delays: Vec<f64> = pulses
+        .iter()
+        .flat_map(|p| {
+            [
+                dist3(p.pos_m, setup.bs_m) * num.sample_rate_hz() / radar_sim::waveform::C_MPS
+                    - p.window_delay_samples as f64,
+                geom0.delay_samples([0.0, 0.0], p.pos_m, p.window_delay_samples),
+            ]
+        })
+        .collect();
+    write_f8(&d.join("cancel_delays.npy"), &[pulses.len(), 2], &delays);
+    results.insert(
+        "compress_metrics".into(),
+        json!({
+            "input_power": comp.cancel.input_power, "output_power": comp.cancel.output_power,
+            "dp_mf_before": comp.cancel.dp_mf_before, "dp_mf_after": comp.cancel.dp_mf_after,
+            "target_loss_db": comp.cancel.target_loss_db(),
+        }),
+    );
     write_c8(
         &d.join("cancel_profiles.npy"),
         &[pulses.len(), comp.m],
@@ -441,8 +462,21 @@ fn main() {
     }
     let np_per = f("compress", "wall_s") / f("compress", "pulses");
     let rs_per = r("compress", "wall_s") / r("compress", "pulses");
+    let rel = |k: &str| {
+        let a = v["compress"]["metrics"][k].as_f64().unwrap_or(f64::NAN);
+        let b = results["compress_metrics"][k].as_f64().unwrap_or(f64::NAN);
+        (a / b - 1.0).abs()
+    };
     println!(
-        "  cancellation (ECA by lstsq) + reciprocal filter + ×{} profile: {:.1} µs per pulse (load {}); Rust {:.1}x wall, {:.1}x per CPU-second; NumPy vs Rust profiles SER {:.1} dB",
+        "  cancellation metrics, NumPy vs Rust (relative difference): input power {:.1e}, output power {:.1e}, direct path before {:.1e}; target loss {:.4} vs {:.4} dB",
+        rel("input_power"),
+        rel("output_power"),
+        rel("dp_mf_before"),
+        v["compress"]["metrics"]["target_loss_db"].as_f64().unwrap_or(f64::NAN),
+        results["compress_metrics"]["target_loss_db"].as_f64().unwrap_or(f64::NAN)
+    );
+    println!(
+        "  cancellation (ECA by lstsq, with its metrics) + reciprocal filter + ×{} profile: {:.1} µs per pulse (load {}); Rust {:.1}x wall, {:.1}x per CPU-second; NumPy vs Rust profiles SER {:.1} dB",
         geom.upsample,
         1e6 * np_per,
         v["compress"]["load"],

@@ -178,9 +178,10 @@ impl Canceller {
             ..Default::default()
         };
         let n = self.num.fft_size as f64;
-        for w in windows.iter() {
+        let us: Vec<Vec<Complex64>> = windows.iter().map(|w| self.u_of(&w.data)).collect();
+        for (w, u) in windows.iter().zip(&us) {
             st.input_power += w.spectrum.iter().map(|v| v.norm_sqr()).sum::<f64>() / (n * n);
-            st.dp_mf_before += self.mf_at(w, w.dp_delay_samples).norm_sqr();
+            st.dp_mf_before += self.mf_at(w, u, w.dp_delay_samples).norm_sqr();
         }
         if self.kind == CancellerKind::None || windows.is_empty() {
             st.output_power = st.input_power;
@@ -195,20 +196,19 @@ impl Canceller {
             return Ok(st);
         }
         if self.dopplers_hz.len() == 1 && !self.force_general {
-            self.cancel_fast(windows, target_delay, &mut st)?;
+            self.cancel_fast(windows, &us, target_delay, &mut st)?;
         } else {
             self.cancel_general(windows, target_delay, fft, ifft, &mut st)?;
         }
-        for w in windows.iter() {
+        for (w, u) in windows.iter().zip(&us) {
             st.output_power += w.spectrum.iter().map(|v| v.norm_sqr()).sum::<f64>() / (n * n);
-            st.dp_mf_after += self.mf_at(w, w.dp_delay_samples).norm_sqr();
+            st.dp_mf_after += self.mf_at(w, u, w.dp_delay_samples).norm_sqr();
         }
         Ok(st)
     }
 
     /// Matched-filter output (1/N) Σ U_k* Y_k e^{j2πkΔ/N} / ‖u‖² at fractional delay Δ.
-    fn mf_at(&self, w: &SymbolWindow, delay: f64) -> Complex64 {
-        let u = self.u_of(&w.data);
+    fn mf_at(&self, w: &SymbolWindow, u: &[Complex64], delay: f64) -> Complex64 {
         let mut e = 0.0;
         let x: Vec<Complex64> = u
             .iter()
@@ -259,20 +259,20 @@ impl Canceller {
     fn cancel_fast(
         &self,
         windows: &mut [SymbolWindow],
+        us: &[Vec<Complex64>],
         target_delay: Option<f64>,
         st: &mut CancelStats,
     ) -> Result<()> {
-        use crate::dsp::{int_lag_sums, phase_ramp};
+        use crate::dsp::{int_lag_sums3, phase_ramp};
         let num = &self.num;
         let n = num.fft_size as f64;
         let k = self.taps.len();
         let nsc = num.subcarriers;
         let k0 = num.subcarrier_index(0);
         let zero = Complex64::new(0.0, 0.0);
-        let us: Vec<Vec<Complex64>> = windows.iter().map(|w| self.u_of(&w.data)).collect();
         let mut p2 = vec![zero; nsc];
         let mut cy = vec![zero; nsc];
-        for (w, u) in windows.iter().zip(&us) {
+        for (w, u) in windows.iter().zip(us) {
             for ((ui, (p, c)), &b) in u
                 .iter()
                 .zip(p2.iter_mut().zip(cy.iter_mut()))
@@ -282,22 +282,33 @@ impl Canceller {
                 *c += ui.conj() * w.spectrum[b];
             }
         }
-        let kk = k as i64;
-        let deltas: Vec<i64> = (-(kk - 1)..kk).collect();
-        let gl: Vec<Complex64> = int_lag_sums(&p2, k0, &deltas, &self.tw)
-            .into_iter()
-            .map(|v| v / n)
-            .collect();
+        // one pass for the Gram lags g(0..K) (g(−δ) = conj g(δ): |U|² is real), the
+        // correlations c and the test target's c_t at the taps
+        let tgt: Vec<Complex64> = match target_delay {
+            Some(dt) => {
+                // unit target S_k = U_k e^{−j2πkΔ/N}: c_t[a] = (1/N) Σ |U_k|² e^{j2πk(t_a − Δ)/N}
+                let mut ramp = vec![zero; nsc];
+                phase_ramp(dt, k0 as f64, num.fft_size, &mut ramp);
+                ramp.iter().zip(&p2).map(|(r, p)| r * p.re).collect()
+            }
+            None => Vec::new(),
+        };
+        let lo = self.taps[0].min(0);
+        let hi = self.taps[k - 1].max(k as i64 - 1);
+        let lags: Vec<i64> = (lo..=hi).collect();
+        // (without a target delay the third slot repeats |U|², unused)
+        let third: &[Complex64] = if tgt.is_empty() { &p2 } else { &tgt };
+        let [gs, cs, ts] = int_lag_sums3([&p2, &cy, third], k0, &lags, &self.tw);
+        let at = |v: &[Complex64], s: i64| v.get((s - lo) as usize).map_or(zero, |x| x / n);
         let mut g = vec![zero; k * k];
         for a in 0..k {
             for b in 0..k {
-                g[a * k + b] = gl[(self.taps[a] - self.taps[b] + kk - 1) as usize];
+                let d = self.taps[a] - self.taps[b];
+                let v = at(&gs, d.abs());
+                g[a * k + b] = if d >= 0 { v } else { v.conj() };
             }
         }
-        let c: Vec<Complex64> = int_lag_sums(&cy, k0, &self.taps, &self.tw)
-            .into_iter()
-            .map(|v| v / n)
-            .collect();
+        let c: Vec<Complex64> = self.taps.iter().map(|&t| at(&cs, t)).collect();
         let mut gw = g.clone();
         let wts = self.loaded_solve(&mut gw, &c, "cancel (ECA, frequency domain)")?;
         // W_k = Σ_a w_a e^{−j2πk t_a/N}: the taps as paths of delay t_a and amplitude w_a
@@ -313,20 +324,13 @@ impl Canceller {
             .collect();
         let refs: Vec<&crate::synth::Path> = taps.iter().collect();
         let wk = crate::synth::path_sums(&refs, 1, k0 as f64, num.fft_size, nsc);
-        for (w, u) in windows.iter_mut().zip(&us) {
+        for (w, u) in windows.iter_mut().zip(us) {
             for ((ui, wi), &b) in u.iter().zip(&wk).zip(&self.bins) {
                 w.spectrum[b] -= ui * wi;
             }
         }
-        if let Some(dt) = target_delay {
-            // unit target S_k = U_k e^{−j2πkΔ/N}: c_t[a] = (1/N) Σ |U_k|² e^{j2πk(t_a − Δ)/N}
-            let mut ramp = vec![zero; nsc];
-            phase_ramp(dt, k0 as f64, num.fft_size, &mut ramp);
-            let x: Vec<Complex64> = ramp.iter().zip(&p2).map(|(r, p)| r * p.re).collect();
-            let ct: Vec<Complex64> = int_lag_sums(&x, k0, &self.taps, &self.tw)
-                .into_iter()
-                .map(|v| v / n)
-                .collect();
+        if target_delay.is_some() {
+            let ct: Vec<Complex64> = self.taps.iter().map(|&t| at(&ts, t)).collect();
             let et = p2.iter().map(|p| p.re).sum::<f64>() / n;
             let mut gt = g;
             let wt = self.loaded_solve(&mut gt, &ct, "cancel (target loss)")?;

@@ -16,6 +16,7 @@ pub(crate) fn twiddles(n: usize) -> Vec<Complex64> {
 
 /// `Σ_i x_i e^{j2π (k0 + i) s / N}` for each integer lag s in `lags` (`tw` = [`twiddles`] of
 /// N), eight lags at a time in SIMD lanes.
+#[cfg(test)]
 pub(crate) fn int_lag_sums(
     x: &[Complex64],
     k0: i64,
@@ -37,6 +38,99 @@ pub(crate) fn int_lag_sums(
         let (sr, si) = lane_sums(x, ph_re, ph_im, st_re, st_im);
         for l in 0..chunk.len() {
             out.push(Complex64::new(sr[l], si[l]));
+        }
+    }
+    out
+}
+
+/// [`int_lag_sums`] of up to three spectra at once (shared phasors): `out[v][l]` =
+/// `Σ_i xs[v]_i e^{j2π (k0 + i) lags[l] / N}`.
+pub(crate) fn int_lag_sums3(
+    xs: [&[Complex64]; 3],
+    k0: i64,
+    lags: &[i64],
+    tw: &[Complex64],
+) -> [Vec<Complex64>; 3] {
+    #[inline(always)]
+    fn kernel(
+        xs: [&[Complex64]; 3],
+        mut pr: [f64; LANES],
+        mut pi: [f64; LANES],
+        st_re: [f64; LANES],
+        st_im: [f64; LANES],
+    ) -> [[f64; 2 * LANES]; 3] {
+        let mut acc = [[0.0; 2 * LANES]; 3];
+        let len = xs.iter().map(|x| x.len()).min().unwrap_or(0); // equal lengths (callers)
+        for i in 0..len {
+            for (v, x) in xs.iter().enumerate() {
+                let z = x[i];
+                for l in 0..LANES {
+                    acc[v][l] += z.re * pr[l] - z.im * pi[l];
+                    acc[v][LANES + l] += z.re * pi[l] + z.im * pr[l];
+                }
+            }
+            for l in 0..LANES {
+                let r = pr[l] * st_re[l] - pi[l] * st_im[l];
+                pi[l] = pr[l] * st_im[l] + pi[l] * st_re[l];
+                pr[l] = r;
+            }
+        }
+        acc
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn k512(
+        xs: [&[Complex64]; 3],
+        a: [f64; LANES],
+        b: [f64; LANES],
+        c: [f64; LANES],
+        d: [f64; LANES],
+    ) -> [[f64; 2 * LANES]; 3] {
+        kernel(xs, a, b, c, d)
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn k256(
+        xs: [&[Complex64]; 3],
+        a: [f64; LANES],
+        b: [f64; LANES],
+        c: [f64; LANES],
+        d: [f64; LANES],
+    ) -> [[f64; 2 * LANES]; 3] {
+        kernel(xs, a, b, c, d)
+    }
+    let n = tw.len() as i64;
+    let mut out: [Vec<Complex64>; 3] = Default::default();
+    for chunk in lags.chunks(LANES) {
+        let mut ph_re = [0.0; LANES];
+        let mut ph_im = [0.0; LANES];
+        let mut st_re = [1.0; LANES];
+        let mut st_im = [0.0; LANES];
+        for (l, &s) in chunk.iter().enumerate() {
+            let p = tw[(k0 * s).rem_euclid(n) as usize];
+            let st = tw[s.rem_euclid(n) as usize];
+            (ph_re[l], ph_im[l], st_re[l], st_im[l]) = (p.re, p.im, st.re, st.im);
+        }
+        let acc = 'run: {
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::arch::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: the CPU supports AVX-512F (checked just above).
+                    break 'run unsafe { k512(xs, ph_re, ph_im, st_re, st_im) };
+                }
+                if std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("fma")
+                {
+                    // SAFETY: the CPU supports AVX2 and FMA (checked just above).
+                    break 'run unsafe { k256(xs, ph_re, ph_im, st_re, st_im) };
+                }
+            }
+            kernel(xs, ph_re, ph_im, st_re, st_im)
+        };
+        for (o, a) in out.iter_mut().zip(&acc) {
+            for l in 0..chunk.len() {
+                o.push(Complex64::new(a[l], a[LANES + l]));
+            }
         }
     }
     out
@@ -247,6 +341,18 @@ mod tests {
                 (g - w).norm() < 1e-10 * (1.0 + w.norm()),
                 "lag {s}: {g} vs {w}"
             );
+        }
+        let y: Vec<Complex64> = x.iter().map(|v| v * Complex64::new(0.3, -1.1)).collect();
+        let z: Vec<Complex64> = x.iter().rev().copied().collect();
+        let three = int_lag_sums3([&x, &y, &z], -101, &lags, &tw);
+        for (v, xv) in [&x, &y, &z].iter().enumerate() {
+            for (s, g) in lags.iter().zip(&three[v]) {
+                let w = brute(xv, -101.0, n, *s as f64);
+                assert!(
+                    (g - w).norm() < 1e-10 * (1.0 + w.norm()),
+                    "x{v} lag {s}: {g} vs {w}"
+                );
+            }
         }
         for d in [0.0, 3.25, -7.7, 1234.5] {
             let w = brute(&x, -101.0, n, d);
