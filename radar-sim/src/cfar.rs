@@ -217,7 +217,9 @@ pub struct Detection {
 /// Turns exceedances into detections: every exceeding pixel that is the maximum of the image
 /// within ±`merge_radius_m` (a box) is one detection (non-maximum suppression, so that two
 /// objects whose exceedance regions touch stay two detections), at its sub-pixel peak;
-/// `pixels` is the size of its 8-connected exceedance region.
+/// `pixels` is the size of its 8-connected exceedance region. A maximum on the image border is
+/// no detection: the response still rises towards the outside, so it belongs to an object
+/// beyond the grid (its own image has it), and its position would be clamped to the border.
 pub fn cluster(
     img: &[f32],
     map: &CfarMap,
@@ -276,7 +278,7 @@ pub fn cluster(
                 }
             }
         }
-        if !is_max {
+        if !is_max || x == 0 || y == 0 || x + 1 == nx as i64 || y + 1 == ny as i64 {
             continue;
         }
         let (xu, yu) = (x as usize, y as usize);
@@ -382,5 +384,33 @@ mod tests {
             d[0].x_m
         );
         assert!((d[0].y_m - grid.y(5)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn border_maxima_are_not_detections() {
+        let grid = Grid::square([0.0, 0.0], 10.0, 1.0);
+        let (nx, ny) = (grid.nx, grid.ny);
+        // a response rising towards the left border (an object beyond the grid) and one
+        // interior peak
+        let mut img: Vec<f32> = (0..nx * ny)
+            .map(|i| 1.0 + 400.0 * (-3.0 * (i % nx) as f32).exp())
+            .collect();
+        img[14 * nx + 15] = 300.0;
+        let p = CfarParams {
+            pfa: 1e-3,
+            guard_x_px: 1,
+            guard_y_px: 1,
+            train_px: 3,
+            looks: 1,
+            pixels_per_cell: 1.0,
+        };
+        let map = ca_cfar(&img, nx, ny, &p);
+        assert!(
+            (0..ny).any(|y| map.hits[y * nx]),
+            "the border exceeds the threshold"
+        );
+        let d = cluster(&img, &map, &grid, 2.0, 0);
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert!((d[0].x_m - grid.x(15)).abs() < 0.5 && (d[0].y_m - grid.y(14)).abs() < 0.5);
     }
 }

@@ -91,32 +91,37 @@ impl RangeCompressor {
         z
     }
 
-    /// The profile at fractional delay `delay` (samples), evaluated exactly from `z`.
+    /// The profile at fractional delay `delay` (samples), evaluated exactly from `z`:
+    /// `Σ_i z_i e^{j2π k_i Δ/N}` by phasor recurrence, eight subcarriers in SIMD lanes.
     pub fn evaluate(&self, z: &[Complex64], delay: f64) -> Complex64 {
-        let n = self.num.fft_size as f64;
-        let k0 = self.num.subcarrier_index(0) as f64;
-        let step = Complex64::from_polar(1.0, std::f64::consts::TAU * delay / n);
-        let mut ph = Complex64::from_polar(1.0, std::f64::consts::TAU * (k0 * delay / n).fract());
-        let mut acc = Complex64::new(0.0, 0.0);
-        for v in z {
-            acc += v * ph;
-            ph *= step;
-        }
-        acc
+        crate::dsp::ramp_sum(
+            z,
+            self.num.subcarrier_index(0) as f64,
+            self.num.fft_size,
+            delay,
+        )
     }
 
     /// The upsampled profile window: samples j = j0 .. j0 + len at delays (j0 + j)/U (periodic).
     pub fn profile_window(&self, z: &[Complex64], j0: i64, len: usize) -> Vec<Complex32> {
-        let nu = self.profile_len();
-        let mut buf = vec![Complex32::new(0.0, 0.0); nu];
-        for (i, v) in z.iter().enumerate() {
-            let k = self.num.subcarrier_index(i).rem_euclid(nu as i64) as usize;
-            buf[k] = Complex32::new(v.re as f32, v.im as f32);
+        thread_local! {
+            // the N·U buffer is large (256 KiB at the defaults): reuse it per thread instead of
+            // mapping fresh pages for every pulse
+            static BUF: std::cell::RefCell<Vec<Complex32>> = const { std::cell::RefCell::new(Vec::new()) };
         }
-        self.ifft_up.process(&mut buf);
-        (0..len)
-            .map(|j| buf[(j0 + j as i64).rem_euclid(nu as i64) as usize])
-            .collect()
+        let nu = self.profile_len();
+        BUF.with(|b| {
+            let mut buf = b.borrow_mut();
+            buf.clear();
+            buf.resize(nu, Complex32::new(0.0, 0.0));
+            for (i, v) in z.iter().enumerate() {
+                let k = self.num.subcarrier_index(i).rem_euclid(nu as i64) as usize;
+                buf[k] = Complex32::new(v.re as f32, v.im as f32);
+            }
+            self.ifft_up.process(&mut buf);
+            let start = j0.rem_euclid(nu as i64) as usize;
+            (0..len).map(|j| buf[(start + j) % nu]).collect()
+        })
     }
 }
 

@@ -251,6 +251,21 @@ pub fn cfar_geometry(
     (px(x), px(y), (area / (pixel_m * pixel_m)).max(1.0))
 }
 
+/// CFAR output of one aperture's multilook image.
+#[derive(Debug, Clone)]
+pub struct Detected {
+    /// Detections (non-maximum suppression within the cluster radius), strongest first.
+    pub detections: Vec<Detection>,
+    /// The CFAR exceedance map and noise estimates.
+    pub map: crate::cfar::CfarMap,
+    /// The CFAR settings used.
+    pub cfar: CfarParams,
+    /// Predicted resolution cell at the image centre, mid-aperture.
+    pub cell: pg::ResolutionCell,
+    /// Pixels per coherence area used by the CFAR.
+    pub pixels_per_cell: f64,
+}
+
 /// The processor of one setup.
 pub struct Processor {
     setup: RadarSetup,
@@ -600,6 +615,133 @@ impl Processor {
         })
     }
 
+    /// Exact (sinc-interpolated, f64) image value at `p` from the kept spectra of pulses
+    /// `range` of `c` (sequential; see [`Processor::image_points_exact`] for many points).
+    fn exact_value(
+        &self,
+        c: &Compressed,
+        spectra: &[Vec<Complex64>],
+        range: std::ops::Range<usize>,
+        p: [f64; 2],
+    ) -> Complex64 {
+        let geom = self.setup.geometry();
+        let mut acc = Complex64::new(0.0, 0.0);
+        for k in range {
+            let pl = &c.pulses[k];
+            let r = geom.bistatic_range_m(p, pl.pos_m);
+            let d = r * geom.fs_hz / C_MPS - pl.window_delay_samples as f64;
+            let cyc = r / geom.wavelength_m;
+            acc += self.compressor.evaluate(&spectra[k], d)
+                * Complex64::from_polar(
+                    pl.weight as f64,
+                    std::f64::consts::TAU * (cyc - cyc.floor()),
+                );
+        }
+        acc
+    }
+
+    /// Measures the −3 dB region of the point response of a target at `target_m` in the exact
+    /// image of pulses `range` (one look, noise-free data, `compress(.., keep_spectra = true)`)
+    /// in 36 directions plus the four principal ones (g, the Doppler gradient, the iso-Doppler
+    /// and the iso-range lines), and compares its principal widths with the predicted cell.
+    pub fn measure_cell(
+        &self,
+        c: &Compressed,
+        pulses: &[PulseMeta],
+        range: std::ops::Range<usize>,
+        target_m: [f64; 2],
+    ) -> Result<crate::resolution::CellReport> {
+        let spectra = c.spectra.as_ref().ok_or_else(|| RadarError::Numerical {
+            stage: "cell measurement".into(),
+            reason: "compress() was called without keep_spectra".into(),
+        })?;
+        let ps = &pulses[range.clone()];
+        let (first, last) = match (ps.first(), ps.last()) {
+            (Some(a), Some(b)) if ps.len() >= 2 => (a, b),
+            _ => {
+                return Err(RadarError::Mismatch(
+                    "cell measurement needs at least 2 pulses".into(),
+                ))
+            }
+        };
+        let uc = [
+            (first.pos_m[0] + last.pos_m[0]) / 2.0,
+            (first.pos_m[1] + last.pos_m[1]) / 2.0,
+        ];
+        let vel = v2::scale(
+            [
+                last.pos_m[0] - first.pos_m[0],
+                last.pos_m[1] - first.pos_m[1],
+            ],
+            1.0 / (last.t_s - first.t_s),
+        );
+        let mut params = self.setup.params.clone();
+        params.integration_time_s = ps.len() as f64 / self.setup.scene.radar.prf_hz;
+        params.bandwidth_hz = self.setup.num.bandwidth_hz();
+        let cell = pg::ResolutionCell::new(&params, uc, vel, target_m);
+        let g = pg::bistatic_range_gradient(&params, uc, target_m);
+        let d = pg::doppler_gradient(&params, uc, vel, target_m);
+        let (vr, va) = cut_directions(g, d).ok_or_else(|| {
+            RadarError::Mismatch("degenerate geometry: zero range or Doppler gradient".into())
+        })?;
+        let gh = v2::scale(g, 1.0 / v2::norm(g));
+        let dh = v2::scale(d, 1.0 / v2::norm(d));
+        let pc = &self.setup.scene.processing;
+        let fr = pc.range_weighting.mainlobe_factor();
+        let fa = pc.azimuth_weighting.mainlobe_factor();
+        let peak = self
+            .exact_value(c, spectra, range.clone(), target_m)
+            .norm_sqr();
+        if peak.is_nan() || peak <= 0.0 {
+            return Err(RadarError::Numerical {
+                stage: "cell measurement".into(),
+                reason: "no response at the target".into(),
+            });
+        }
+        let power = |p: [f64; 2]| self.exact_value(c, spectra, range.clone(), p).norm_sqr() / peak;
+        let smallest = (fr * cell.range_width_m).min(fa * cell.along_track_width_m);
+        let max_m = (50.0 * smallest).max(3000.0);
+        let region = crate::resolution::PsfRegion::measure(
+            &power,
+            target_m,
+            36,
+            &[gh, dh, vr, va],
+            0.05 * smallest,
+            max_m,
+        )
+        .ok_or_else(|| RadarError::Numerical {
+            stage: "cell measurement".into(),
+            reason: format!("the response does not fall by 3 dB within {max_m:.0} m"),
+        })?;
+        let cross = region.chord_m(vr);
+        let iso = region.chord_m(va);
+        let (longest, dir) = region.longest_chord();
+        Ok(crate::resolution::CellReport {
+            bandwidth_hz: params.bandwidth_hz,
+            bistatic_angle_deg: pg::bistatic_angle_rad(&params, uc, target_m).to_degrees(),
+            psi_deg: cell.psi_rad.to_degrees(),
+            range_width_m: region.caliper_m(gh),
+            range_width_pred_m: fr * cell.range_width_m,
+            along_track_width_m: region.caliper_m(dh),
+            along_track_width_pred_m: fa * cell.along_track_width_m,
+            cross_track_width_m: cross,
+            cross_track_width_pred_m: fr * cell.cross_track_width_m,
+            iso_range_width_m: iso,
+            iso_range_width_pred_m: fa * cell.iso_range_width_m,
+            worst_width_m: cross.max(iso),
+            worst_width_pred_m: (fr * cell.cross_track_width_m).max(fa * cell.iso_range_width_m),
+            longest_chord_m: longest,
+            longest_chord_deg: dir.to_degrees(),
+            chord_along_g_m: region.chord_m(gh),
+            paper_range_m: pg::range_resolution_paper_m(&params, target_m),
+            paper_azimuth_m: pg::azimuth_resolution_paper_m(&params, v2::norm(vel)),
+            planner_worst_width_m: cell.worst_width_m,
+            mainlobe_factors: [fr, fa],
+            region,
+            axes: [gh, dh],
+        })
+    }
+
     /// Processes one aperture: cancellation, compression, look images, multilook, CFAR,
     /// clustering, scoring against `objects` inside the grid.
     pub fn process_aperture(
@@ -633,6 +775,30 @@ impl Processor {
                 looks.push(img);
             }
         }
+        let det = self.detect(ap, pulses, &multilook)?;
+        self.score_aperture(
+            ap, pulses, multilook, looks, det, c.cancel, noise_var, objects,
+        )
+    }
+
+    /// CFAR detection and clustering on the multilook image of aperture `ap` (mean over its
+    /// looks of |I|² / per-look noise variance), with the guard and coherence area of the
+    /// predicted cell at the image centre, mid-aperture.
+    pub fn detect(
+        &self,
+        ap: &Aperture,
+        pulses: &[PulseMeta],
+        multilook: &[f32],
+    ) -> Result<Detected> {
+        let grid = self.setup.grid(ap);
+        if multilook.len() != grid.pixels() || pulses.is_empty() {
+            return Err(RadarError::Shape {
+                what: format!("aperture {} multilook image", ap.index),
+                expected: format!("{} pixels, ≥ 1 pulse", grid.pixels()),
+                found: format!("{} pixels, {} pulses", multilook.len(), pulses.len()),
+            });
+        }
+        let pc = &self.setup.scene.processing;
         // predicted cell at the image centre, mid-aperture
         let mid = &pulses[pulses.len() / 2];
         let (a, b) = (&pulses[0], &pulses[pulses.len() - 1]);
@@ -665,21 +831,52 @@ impl Processor {
             looks: ap.looks,
             pixels_per_cell: ppc,
         };
-        let map = ca_cfar(&multilook, grid.nx, grid.ny, &cfar);
+        let map = ca_cfar(multilook, grid.nx, grid.ny, &cfar);
         let d_min = self.setup.params.d_min_m;
-        let dets = cluster(
-            &multilook,
+        let detections = cluster(
+            multilook,
             &map,
             &grid,
             pc.cluster_radius_m.unwrap_or(d_min / 2.0),
             ap.index,
         );
+        Ok(Detected {
+            detections,
+            map,
+            cfar,
+            cell,
+            pixels_per_cell: ppc,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn score_aperture(
+        &self,
+        ap: &Aperture,
+        pulses: &[PulseMeta],
+        multilook: Vec<f32>,
+        looks: Vec<Vec<Complex32>>,
+        det: Detected,
+        cancel: CancelStats,
+        noise_var: f64,
+        objects: &[SceneObject],
+    ) -> Result<ApertureResult> {
+        let grid = self.setup.grid(ap);
+        let pc = &self.setup.scene.processing;
+        let ppl = ap.pulses_per_look;
+        let d_min = self.setup.params.d_min_m;
+        let Detected {
+            detections: dets,
+            map,
+            cfar,
+            cell,
+            pixels_per_cell: ppc,
+        } = det;
         let gate = pc.match_radius_m.unwrap_or(d_min / 2.0);
         // truth inside the grid (one pixel margin)
         let margin = grid.spacing_m;
         let half_x = (grid.nx as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
         let half_y = (grid.ny as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
-        let look0 = &pulses[..ppl];
         let truth: Vec<TruthInImage> = objects
             .iter()
             .filter(|o| {
@@ -694,7 +891,6 @@ impl Processor {
                     })
                     .sum::<f64>()
                     / ap.looks as f64;
-                let _ = look0;
                 TruthInImage {
                     id: o.id,
                     pos_m: o.pos_m(),
@@ -734,7 +930,7 @@ impl Processor {
             looks,
             detections: dets,
             score: sc,
-            cancel: c.cancel,
+            cancel,
             false_alarm_pixels: fa_px,
             clear_pixels: clear,
             cell,

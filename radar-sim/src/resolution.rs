@@ -80,6 +80,319 @@ impl ResolutionReport {
     }
 }
 
+/// Distance from `centre` along unit direction `u` at which `power` (normalised: 1 at the
+/// centre) first falls to one half: geometric steps out from `start_m` (×1.25) until the power
+/// is below one half, then bisection to a relative bracket of 1e-7. `None` if it stays above one
+/// half out to `max_m`.
+pub fn half_power_radius(
+    power: &dyn Fn([f64; 2]) -> f64,
+    centre: [f64; 2],
+    u: [f64; 2],
+    start_m: f64,
+    max_m: f64,
+) -> Option<f64> {
+    let at = |r: f64| power([centre[0] + r * u[0], centre[1] + r * u[1]]);
+    let mut lo = 0.0;
+    let mut hi = start_m.max(1e-6);
+    loop {
+        if at(hi) < 0.5 {
+            break;
+        }
+        lo = hi;
+        hi *= 1.25;
+        if hi > max_m {
+            return None;
+        }
+    }
+    while hi - lo > 1e-7 * hi {
+        let mid = 0.5 * (lo + hi);
+        if at(mid) < 0.5 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+/// The −3 dB region of a point response, measured in many directions through its peak (the
+/// region is star-shaped about the peak), and its principal widths (SPEC.md §4 item 12).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PsfRegion {
+    /// Peak position, m.
+    pub centre_m: [f64; 2],
+    /// Direction angles of the measured chords (from +x, counter-clockwise), rad in [0, π).
+    pub directions_rad: Vec<f64>,
+    /// Half-power distance along +direction, m.
+    pub radius_plus_m: Vec<f64>,
+    /// Half-power distance along −direction, m.
+    pub radius_minus_m: Vec<f64>,
+}
+
+impl PsfRegion {
+    /// Measures the region of `power` (normalised: 1 at `centre`) along `n_dirs` equally spaced
+    /// directions plus the `extra` directions (unit vectors, e.g. the principal axes).
+    /// `start_m`: initial step (a fraction of the smallest expected width); `max_m`: give up
+    /// beyond this distance. Directions are measured in parallel.
+    pub fn measure(
+        power: &(dyn Fn([f64; 2]) -> f64 + Sync),
+        centre: [f64; 2],
+        n_dirs: usize,
+        extra: &[[f64; 2]],
+        start_m: f64,
+        max_m: f64,
+    ) -> Option<Self> {
+        use rayon::prelude::*;
+        let mut dirs: Vec<f64> = (0..n_dirs)
+            .map(|k| std::f64::consts::PI * k as f64 / n_dirs as f64)
+            .collect();
+        for e in extra {
+            dirs.push(e[1].atan2(e[0]).rem_euclid(std::f64::consts::PI));
+        }
+        let radii: Vec<Option<(f64, f64)>> = dirs
+            .par_iter()
+            .map(|a| {
+                let u = [a.cos(), a.sin()];
+                let p = half_power_radius(power, centre, u, start_m, max_m)?;
+                let m = half_power_radius(power, centre, [-u[0], -u[1]], start_m, max_m)?;
+                Some((p, m))
+            })
+            .collect();
+        let mut order: Vec<usize> = (0..dirs.len()).collect();
+        order.sort_by(|a, b| dirs[*a].total_cmp(&dirs[*b]));
+        let mut out = Self {
+            centre_m: centre,
+            directions_rad: Vec::new(),
+            radius_plus_m: Vec::new(),
+            radius_minus_m: Vec::new(),
+        };
+        for k in order {
+            let (p, m) = radii[k]?;
+            out.directions_rad.push(dirs[k]);
+            out.radius_plus_m.push(p);
+            out.radius_minus_m.push(m);
+        }
+        Some(out)
+    }
+
+    /// The −3 dB chord through the peak along unit direction `u`, m (interpolated between the
+    /// measured directions if `u` is not one of them).
+    pub fn chord_m(&self, u: [f64; 2]) -> f64 {
+        let a = u[1].atan2(u[0]).rem_euclid(std::f64::consts::PI);
+        let n = self.directions_rad.len();
+        let chord = |k: usize| self.radius_plus_m[k] + self.radius_minus_m[k];
+        // exact match first
+        if let Some(k) = self
+            .directions_rad
+            .iter()
+            .position(|d| (d - a).abs() < 1e-12)
+        {
+            return chord(k);
+        }
+        let k1 = self.directions_rad.iter().position(|d| *d > a).unwrap_or(n);
+        let (ka, kb) = ((k1 + n - 1) % n, k1 % n);
+        let (da, mut db) = (self.directions_rad[ka], self.directions_rad[kb]);
+        if db < da {
+            db += std::f64::consts::PI;
+        }
+        let mut aa = a;
+        if aa < da {
+            aa += std::f64::consts::PI;
+        }
+        let t = if db > da { (aa - da) / (db - da) } else { 0.0 };
+        chord(ka) + t * (chord(kb) - chord(ka))
+    }
+
+    /// The boundary points of the region (both sides of every chord), m.
+    pub fn boundary_m(&self) -> Vec<[f64; 2]> {
+        let c = self.centre_m;
+        let mut pts = Vec::with_capacity(2 * self.directions_rad.len());
+        for (k, a) in self.directions_rad.iter().enumerate() {
+            let (s, co) = a.sin_cos();
+            pts.push([
+                c[0] + self.radius_plus_m[k] * co,
+                c[1] + self.radius_plus_m[k] * s,
+            ]);
+        }
+        for (k, a) in self.directions_rad.iter().enumerate() {
+            let (s, co) = a.sin_cos();
+            pts.push([
+                c[0] - self.radius_minus_m[k] * co,
+                c[1] - self.radius_minus_m[k] * s,
+            ]);
+        }
+        pts
+    }
+
+    /// The region's extent along unit vector `n` (the distance between its two supporting lines
+    /// perpendicular to `n`), m.
+    pub fn caliper_m(&self, n: [f64; 2]) -> f64 {
+        let proj: Vec<f64> = self
+            .boundary_m()
+            .iter()
+            .map(|p| p[0] * n[0] + p[1] * n[1])
+            .collect();
+        proj.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - proj.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+
+    /// The longest measured chord through the peak and its direction (rad).
+    pub fn longest_chord(&self) -> (f64, f64) {
+        self.directions_rad
+            .iter()
+            .enumerate()
+            .map(|(k, a)| (self.radius_plus_m[k] + self.radius_minus_m[k], *a))
+            .fold((0.0, 0.0), |b, x| if x.0 > b.0 { x } else { b })
+    }
+}
+
+/// Measured principal widths of a point response beside the predicted cell (SPEC.md §4 items
+/// 11 and 12); predictions include the main-lobe factor of the weighting used.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CellReport {
+    /// Occupied bandwidth, Hz.
+    pub bandwidth_hz: f64,
+    /// Bistatic angle between the ground directions BS → point and UAV → point, deg.
+    pub bistatic_angle_deg: f64,
+    /// Angle ψ between the range gradient g and the Doppler gradient (track), deg.
+    pub psi_deg: f64,
+    /// Extent of the −3 dB region along g (between its iso-range supporting lines), m.
+    pub range_width_m: f64,
+    /// Predicted: main-lobe factor × c/(B|g|), m.
+    pub range_width_pred_m: f64,
+    /// Extent along the Doppler gradient (along track at broadside), m.
+    pub along_track_width_m: f64,
+    /// Predicted: main-lobe factor × 1/(T|∇f_D|), m.
+    pub along_track_width_pred_m: f64,
+    /// −3 dB chord along the iso-Doppler line (across the track), m.
+    pub cross_track_width_m: f64,
+    /// Predicted: main-lobe factor × c/(B|g| sin ψ), m.
+    pub cross_track_width_pred_m: f64,
+    /// −3 dB chord along the iso-range line, m.
+    pub iso_range_width_m: f64,
+    /// Predicted: main-lobe factor × δ_a/sin ψ, m.
+    pub iso_range_width_pred_m: f64,
+    /// The worse of the two measured chords (cross-track, iso-range), m.
+    pub worst_width_m: f64,
+    /// Predicted worst width × main-lobe factor, m.
+    pub worst_width_pred_m: f64,
+    /// The longest −3 dB chord in any measured direction, m, and its direction, deg.
+    pub longest_chord_m: f64,
+    /// Direction of the longest chord, deg from +x.
+    pub longest_chord_deg: f64,
+    /// Chord along g itself, m (shorter than the range width unless g ⟂ track).
+    pub chord_along_g_m: f64,
+    /// The paper's δ_r (no main-lobe factor), m.
+    pub paper_range_m: f64,
+    /// The paper's δ_a (no main-lobe factor), m.
+    pub paper_azimuth_m: f64,
+    /// The planner's (unweighted) worst width, m: what `--resolution general` bounds by d_min.
+    pub planner_worst_width_m: f64,
+    /// Main-lobe factors used (range, azimuth).
+    pub mainlobe_factors: [f64; 2],
+    /// The measured region.
+    pub region: PsfRegion,
+    /// Unit range gradient direction ĝ and Doppler gradient direction d̂ (ground).
+    pub axes: [[f64; 2]; 2],
+}
+
+impl CellReport {
+    /// Relative errors (measured / predicted − 1) of range, along-track, cross-track and
+    /// iso-range widths.
+    pub fn errors(&self) -> [f64; 4] {
+        [
+            self.range_width_m / self.range_width_pred_m - 1.0,
+            self.along_track_width_m / self.along_track_width_pred_m - 1.0,
+            self.cross_track_width_m / self.cross_track_width_pred_m - 1.0,
+            self.iso_range_width_m / self.iso_range_width_pred_m - 1.0,
+        ]
+    }
+
+    /// An SVG drawing of the measured −3 dB region (filled) and the predicted −3 dB
+    /// parallelogram (outline) in local coordinates around the peak, with g and the track.
+    pub fn svg(&self, title: &str) -> String {
+        let c = self.region.centre_m;
+        let pts: Vec<[f64; 2]> = self
+            .region
+            .boundary_m()
+            .iter()
+            .map(|p| [p[0] - c[0], p[1] - c[1]])
+            .collect();
+        // order the boundary by angle
+        let mut pts = pts;
+        pts.sort_by(|a, b| a[1].atan2(a[0]).total_cmp(&b[1].atan2(b[0])));
+        // predicted parallelogram: |ĝ·x| ≤ R/2, |d̂·x| ≤ A/2
+        let [g, d] = self.axes;
+        let (r, a) = (
+            self.range_width_pred_m / 2.0,
+            self.along_track_width_pred_m / 2.0,
+        );
+        let det = g[0] * d[1] - g[1] * d[0];
+        let corner = |sr: f64, sa: f64| -> [f64; 2] {
+            // solve ĝ·x = sr r, d̂·x = sa a
+            let (b1, b2) = (sr * r, sa * a);
+            [(b1 * d[1] - b2 * g[1]) / det, (g[0] * b2 - d[0] * b1) / det]
+        };
+        let para = [
+            corner(1.0, 1.0),
+            corner(-1.0, 1.0),
+            corner(-1.0, -1.0),
+            corner(1.0, -1.0),
+        ];
+        let ext = pts
+            .iter()
+            .chain(para.iter())
+            .map(|p| p[0].abs().max(p[1].abs()))
+            .fold(1.0f64, f64::max)
+            * 1.15;
+        let size = 480.0;
+        let map = |p: [f64; 2]| -> (f64, f64) {
+            (
+                size / 2.0 + p[0] / ext * size / 2.0,
+                size / 2.0 - p[1] / ext * size / 2.0,
+            )
+        };
+        let poly = |ps: &[[f64; 2]]| -> String {
+            ps.iter()
+                .map(|p| {
+                    let (x, y) = map(*p);
+                    format!("{x:.2},{y:.2}")
+                })
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let arrow = |v: [f64; 2], colour: &str, label: &str| -> String {
+            let (x0, y0) = map([0.0, 0.0]);
+            let (x1, y1) = map([v[0] * ext * 0.8, v[1] * ext * 0.8]);
+            format!(
+                "<line x1=\"{x0:.1}\" y1=\"{y0:.1}\" x2=\"{x1:.1}\" y2=\"{y1:.1}\" stroke=\"{colour}\" stroke-dasharray=\"4 3\"/><text x=\"{x1:.1}\" y=\"{y1:.1}\" fill=\"{colour}\" font-size=\"12\">{label}</text>"
+            )
+        };
+        format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\">\
+<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\
+<text x=\"8\" y=\"16\" font-size=\"13\">{title}</text>\
+<text x=\"8\" y=\"32\" font-size=\"11\">β = {beta:.1}°, ψ = {psi:.1}°; half-width of the view {ext:.1} m</text>\
+<g transform=\"translate(0,40)\">\
+<polygon points=\"{region}\" fill=\"#4c72b0\" fill-opacity=\"0.45\" stroke=\"#4c72b0\"/>\
+<polygon points=\"{para}\" fill=\"none\" stroke=\"#c44e52\" stroke-width=\"1.5\"/>\
+{ga}{da}\
+</g>\
+<text x=\"8\" y=\"{ly}\" font-size=\"11\">filled: measured −3 dB region; red: predicted cell (× main-lobe factor)</text>\
+</svg>\n",
+            w = size,
+            h = size + 60.0,
+            ly = size + 54.0,
+            beta = self.bistatic_angle_deg,
+            psi = self.psi_deg,
+            region = poly(&pts),
+            para = poly(&para),
+            ga = arrow(g, "#2a7f2a", "g"),
+            da = arrow(d, "#7f2a7f", "track"),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -98,5 +411,51 @@ mod tests {
         let (vr, va) = cut_directions([0.3, 1.2], [-2.0, 0.5]).unwrap();
         assert!((vr[0] * -2.0 + vr[1] * 0.5).abs() < 1e-12);
         assert!((va[0] * 0.3 + va[1] * 1.2).abs() < 1e-12);
+    }
+
+    /// An analytic separable response sinc²(a·x) sinc²(b·x) (a, b: oblique gradients): the
+    /// measured region has the closed-form principal widths of SPEC §4 item 12.
+    #[test]
+    fn region_of_a_separable_response_has_the_closed_form_widths() {
+        use crate::antenna::sinc;
+        for (a, b) in [
+            ([0.5, 0.1], [0.02, 0.15]),
+            ([0.3, -0.4], [0.1, 0.1]),
+            ([0.0, 0.6], [0.01, 0.2]), // ψ ≈ 2.9°: near blind
+        ] {
+            let pw = move |p: [f64; 2]| {
+                (sinc(a[0] * p[0] + a[1] * p[1]) * sinc(b[0] * p[0] + b[1] * p[1])).powi(2)
+            };
+            let c = [3.0, -2.0];
+            let f = move |p: [f64; 2]| pw([p[0] - c[0], p[1] - c[1]]);
+            let na = a[0].hypot(a[1]);
+            let nb = b[0].hypot(b[1]);
+            let sin_psi = (a[0] * b[1] - a[1] * b[0]).abs() / (na * nb);
+            let w = 0.885_892_941_378_9;
+            // iso-b direction (only a changes) and iso-a direction
+            let vr = [-b[1] / nb, b[0] / nb];
+            let va = [-a[1] / na, a[0] / na];
+            let reg = PsfRegion::measure(&f, c, 90, &[vr, va], 0.05, 1e4).unwrap();
+            let rel = |x: f64, y: f64| (x / y - 1.0).abs();
+            let ga = [a[0] / na, a[1] / na];
+            let gb = [b[0] / nb, b[1] / nb];
+            assert!(
+                rel(reg.caliper_m(ga), w / na) < 1e-4,
+                "{}",
+                reg.caliper_m(ga)
+            );
+            assert!(
+                rel(reg.caliper_m(gb), w / nb) < 1e-4,
+                "{}",
+                reg.caliper_m(gb)
+            );
+            assert!(rel(reg.chord_m(vr), w / (na * sin_psi)) < 1e-6);
+            assert!(rel(reg.chord_m(va), w / (nb * sin_psi)) < 1e-6);
+            let (longest, _) = reg.longest_chord();
+            assert!(longest >= reg.chord_m(vr).max(reg.chord_m(va)) - 1e-9);
+        }
+        // a response that never falls by 3 dB within the search: None
+        let flat = |_: [f64; 2]| 1.0;
+        assert!(PsfRegion::measure(&flat, [0.0, 0.0], 8, &[], 0.1, 100.0).is_none());
     }
 }

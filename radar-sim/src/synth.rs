@@ -37,10 +37,14 @@ use rustfft::{Fft, FftPlanner};
 
 use crate::antenna::Antenna;
 use crate::config::{MotionModel, RadarConfig};
+use crate::dsp::{direct_sums, phase_ramp};
 use crate::error::{RadarError, Result};
 use crate::scene::SceneObject;
 use crate::track::{dist3, PulseMeta};
 use crate::waveform::{Numerology, C_MPS};
+
+#[cfg(target_arch = "x86_64")]
+mod avx512;
 
 /// Which parts of the received signal to synthesise.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -102,6 +106,129 @@ impl std::fmt::Debug for Synthesizer {
 fn cis_cycles(x: f64) -> Complex64 {
     let f = x - x.floor();
     Complex64::from_polar(1.0, -std::f64::consts::TAU * f)
+}
+
+/// Lanes of the SIMD kernels (f64: one AVX-512 register, two AVX2 registers).
+const LANES: usize = 8;
+
+/// The path sums `acc[q·N_sc + i] = Σ_j c_{q,j} e^{−j2π k_i Δ_j/N}` over occupied subcarriers
+/// i (k_i = k0 + i) and Taylor terms q (c_{q,j} = a_j f_{D,j}^q / q!), in f64: eight consecutive
+/// subcarriers in SIMD lanes, each path's phasors for them advanced by e^{−j2π 8Δ_j/N} per
+/// block. A copy for AVX-512 and one for AVX2+FMA are chosen at run time.
+pub(crate) fn path_sums(
+    paths: &[&Path],
+    terms: usize,
+    k0: f64,
+    n: usize,
+    nsc: usize,
+) -> Vec<Complex64> {
+    let np = paths.len();
+    let mut ph_re = vec![[0.0; LANES]; np];
+    let mut ph_im = vec![[0.0; LANES]; np];
+    let mut st = vec![Complex64::new(0.0, 0.0); np];
+    let mut co = vec![Complex64::new(0.0, 0.0); np * terms];
+    for (j, p) in paths.iter().enumerate() {
+        let step = Complex64::from_polar(1.0, -std::f64::consts::TAU * p.delay_samples / n as f64);
+        let mut e = Complex64::from_polar(
+            1.0,
+            -std::f64::consts::TAU * ((k0 * p.delay_samples / n as f64).fract()),
+        );
+        for l in 0..LANES {
+            ph_re[j][l] = e.re;
+            ph_im[j][l] = e.im;
+            e *= step;
+        }
+        st[j] = Complex64::from_polar(
+            1.0,
+            -std::f64::consts::TAU * ((LANES as f64 * p.delay_samples / n as f64).fract()),
+        );
+        let mut c = p.amp;
+        for q in 0..terms {
+            co[j * terms + q] = c;
+            c *= p.doppler_hz / (q + 1) as f64;
+        }
+    }
+    let mut acc = vec![Complex64::new(0.0, 0.0); nsc * terms];
+    let mut k = SumKernel {
+        ph_re: &mut ph_re,
+        ph_im: &mut ph_im,
+        st: &st,
+        co: &co,
+        terms,
+        nsc,
+        acc: &mut acc,
+    };
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above).
+            unsafe { avx512::path_sums(&mut k) };
+            return acc;
+        }
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports AVX2 and FMA (checked just above).
+            unsafe { path_sums_avx2(&mut k) };
+            return acc;
+        }
+    }
+    path_sums_kernel(&mut k);
+    acc
+}
+
+/// Buffers of [`path_sums_kernel`].
+struct SumKernel<'a> {
+    /// Per path: phasors of the current block's eight subcarriers.
+    ph_re: &'a mut [[f64; LANES]],
+    ph_im: &'a mut [[f64; LANES]],
+    /// Per path: advance by eight subcarriers.
+    st: &'a [Complex64],
+    /// Per path and term: coefficient c_{q,j} (path-major).
+    co: &'a [Complex64],
+    terms: usize,
+    nsc: usize,
+    acc: &'a mut [Complex64],
+}
+
+#[inline(always)]
+fn path_sums_kernel(k: &mut SumKernel<'_>) {
+    const MAX_TERMS: usize = 16;
+    let terms = k.terms.min(MAX_TERMS);
+    for i0 in (0..k.nsc).step_by(LANES) {
+        let mut sr = [[0.0f64; LANES]; MAX_TERMS];
+        let mut si = [[0.0f64; LANES]; MAX_TERMS];
+        for (((pr, pi), st), co) in k
+            .ph_re
+            .iter_mut()
+            .zip(k.ph_im.iter_mut())
+            .zip(k.st)
+            .zip(k.co.chunks_exact(k.terms))
+        {
+            for (q, c) in co.iter().enumerate().take(terms) {
+                for l in 0..LANES {
+                    sr[q][l] += c.re * pr[l] - c.im * pi[l];
+                    si[q][l] += c.re * pi[l] + c.im * pr[l];
+                }
+            }
+            for l in 0..LANES {
+                let r = pr[l] * st.re - pi[l] * st.im;
+                pi[l] = pr[l] * st.im + pi[l] * st.re;
+                pr[l] = r;
+            }
+        }
+        let len = LANES.min(k.nsc - i0);
+        for q in 0..terms {
+            for l in 0..len {
+                k.acc[q * k.nsc + i0 + l] = Complex64::new(sr[q][l], si[q][l]);
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn path_sums_avx2(k: &mut SumKernel<'_>) {
+    path_sums_kernel(k)
 }
 
 impl Synthesizer {
@@ -226,6 +353,18 @@ impl Synthesizer {
 
     /// Synthesises the window of symbol `m` (N samples) from `paths` into `out` (added).
     /// `data(m)` returns the QAM data of symbol m (None before the BS starts transmitting).
+    ///
+    /// Exact for every delay: window sample k of a path with delay Δ carries symbol
+    /// m + j(k), j(k) = ⌊(k − Δ + N_cp)/N_s⌋, whose useful part is
+    /// `u(x) = Σ_i Y^{(j)}_i e^{j2πk_i x/N}` at x = k − Δ (Y^{(j)} the data with the phase of
+    /// the j CPs in between). A path changes symbol at most once in a window, so the window
+    /// splits into segments between the paths' change points; within a segment the received
+    /// signal is the inverse DFT of one spectrum `Z_i = Σ_p a_p Y^{(j_p)}_i e^{−j2πk_iΔ_p/N}`.
+    /// Z starts from all paths' first pieces (summed by phasor recurrence, paths in SIMD lanes),
+    /// is updated path by path at each change point, and each segment is evaluated by an inverse
+    /// FFT (long segments) or by direct sums over the subcarriers (short ones). Paths inside
+    /// the CP never change symbol: then this is one IFFT of one spectrum. Doppler within the
+    /// window enters by a Taylor series in (k − N/2)/f_s (truncation < 1e-12 of the amplitude).
     pub fn synthesize_window(
         &self,
         m: i64,
@@ -233,145 +372,157 @@ impl Synthesizer {
         data: &mut dyn FnMut(i64) -> Option<Arc<Vec<Complex32>>>,
         out: &mut [Complex64],
     ) {
+        if paths.is_empty() {
+            return;
+        }
         let num = &self.num;
         let n = num.fft_size;
         let ncp = num.cp_samples as f64;
         let ns = num.symbol_samples() as f64;
         let nsc = num.subcarriers;
         let fs = num.sample_rate_hz();
-        let scale = 1.0 / (nsc as f64).sqrt();
-        let mut spec = vec![Complex64::new(0.0, 0.0); n];
         let centre = n as f64 / 2.0;
-        // --- in-CP paths: exact delays in the frequency domain, Taylor series in Doppler.
-        let cyc: Vec<&Path> = paths
+        let k0 = num.subcarrier_index(0);
+        // Taylor terms of the Doppler factor
+        let xmax = paths
             .iter()
-            .filter(|p| p.delay_samples > -1.0 && p.delay_samples <= ncp)
-            .collect();
-        if !cyc.is_empty() {
-            if let Some(x) = data(m) {
-                let xmax = cyc
-                    .iter()
-                    .map(|p| std::f64::consts::TAU * p.doppler_hz.abs() * centre / fs)
-                    .fold(0.0, f64::max);
-                let mut terms = 1usize;
-                let mut bound = 1.0;
-                while terms < 12 {
-                    bound *= xmax / terms as f64;
-                    if bound < 1e-10 {
-                        break;
+            .map(|p| std::f64::consts::TAU * p.doppler_hz.abs() * centre / fs)
+            .fold(0.0, f64::max);
+        let mut terms = 1usize;
+        let mut bound = 1.0;
+        while terms < 16 {
+            bound *= xmax / terms as f64;
+            if bound < 1e-12 {
+                break;
+            }
+            terms += 1;
+        }
+        // Y^{(j)}_i = X^{m+j}_i e^{−j2π k_i j N_cp / N} / √N_sc (zero before the first symbol)
+        let scale = 1.0 / (nsc as f64).sqrt();
+        let mut ys: Vec<(i64, Vec<Complex64>)> = Vec::new();
+        let mut y_of = |j: i64, ys: &mut Vec<(i64, Vec<Complex64>)>| -> usize {
+            if let Some(pos) = ys.iter().position(|(jj, _)| *jj == j) {
+                return pos;
+            }
+            let v = match data(m + j) {
+                Some(x) => {
+                    let mut w = vec![Complex64::new(scale, 0.0); nsc];
+                    if j != 0 {
+                        let cp = (j * num.cp_samples as i64).rem_euclid(n as i64);
+                        phase_ramp(cp as f64, k0 as f64, n, &mut w);
+                        w.iter_mut().for_each(|v| *v *= scale);
                     }
-                    terms += 1;
+                    x.iter()
+                        .zip(w)
+                        .map(|(xv, w)| Complex64::new(xv.re as f64, xv.im as f64) * w)
+                        .collect()
                 }
-                let np = cyc.len();
-                // SoA: phasor, step and per-term coefficients of each path.
-                let mut ph_re = vec![0.0; np];
-                let mut ph_im = vec![0.0; np];
-                let mut st_re = vec![0.0; np];
-                let mut st_im = vec![0.0; np];
-                let mut co_re = vec![0.0; np * terms];
-                let mut co_im = vec![0.0; np * terms];
-                let k0 = num.subcarrier_index(0) as f64;
-                for (j, p) in cyc.iter().enumerate() {
-                    let step = Complex64::from_polar(
-                        1.0,
-                        -std::f64::consts::TAU * p.delay_samples / n as f64,
-                    );
-                    let start = Complex64::from_polar(
-                        1.0,
-                        -std::f64::consts::TAU * ((k0 * p.delay_samples / n as f64).fract()),
-                    );
-                    ph_re[j] = start.re;
-                    ph_im[j] = start.im;
-                    st_re[j] = step.re;
-                    st_im[j] = step.im;
-                    let mut c = p.amp;
-                    for q in 0..terms {
-                        co_re[q * np + j] = c.re;
-                        co_im[q * np + j] = c.im;
-                        c *= p.doppler_hz / (q + 1) as f64;
-                    }
-                }
-                let mut acc = vec![Complex64::new(0.0, 0.0); nsc * terms];
-                for i in 0..nsc {
-                    for q in 0..terms {
-                        let (cr, ci) = (&co_re[q * np..(q + 1) * np], &co_im[q * np..(q + 1) * np]);
-                        let mut sr = 0.0;
-                        let mut si = 0.0;
-                        for j in 0..np {
-                            sr += cr[j] * ph_re[j] - ci[j] * ph_im[j];
-                            si += cr[j] * ph_im[j] + ci[j] * ph_re[j];
-                        }
-                        acc[q * nsc + i] = Complex64::new(sr, si);
-                    }
-                    for j in 0..np {
-                        let r = ph_re[j] * st_re[j] - ph_im[j] * st_im[j];
-                        let im = ph_re[j] * st_im[j] + ph_im[j] * st_re[j];
-                        ph_re[j] = r;
-                        ph_im[j] = im;
-                    }
-                }
-                for q in 0..terms {
-                    spec.fill(Complex64::new(0.0, 0.0));
-                    for i in 0..nsc {
-                        let xv = x[i];
-                        spec[num.bin(i)] =
-                            Complex64::new(xv.re as f64, xv.im as f64) * acc[q * nsc + i] * scale;
-                    }
-                    self.ifft.process(&mut spec);
-                    if q == 0 {
-                        for (o, s) in out.iter_mut().zip(&spec) {
-                            *o += *s;
-                        }
-                    } else {
-                        // (j 2π (n − N/2)/f_s)^q
-                        for (k, (o, s)) in out.iter_mut().zip(&spec).enumerate() {
-                            let t = std::f64::consts::TAU * (k as f64 - centre) / fs;
-                            let f = Complex64::new(0.0, t).powu(q as u32);
-                            *o += *s * f;
-                        }
-                    }
+                None => vec![Complex64::new(0.0, 0.0); nsc],
+            };
+            ys.push((j, v));
+            ys.len() - 1
+        };
+        // each path's first piece and its change point (if any)
+        let j_of = |k: f64, d: f64| ((k - d + ncp) / ns).floor() as i64;
+        let mut groups: Vec<(i64, Vec<&Path>)> = Vec::new();
+        let mut events: Vec<(usize, &Path, i64, i64)> = Vec::new(); // (first sample, path, j0, j1)
+        for p in paths {
+            let d = p.delay_samples;
+            let (j0, j1) = (j_of(0.0, d), j_of((n - 1) as f64, d));
+            match groups.iter_mut().find(|(j, _)| *j == j0) {
+                Some((_, g)) => g.push(p),
+                None => groups.push((j0, vec![p])),
+            }
+            if j1 != j0 {
+                let s = (d - ncp + j1 as f64 * ns).ceil().clamp(0.0, n as f64) as usize;
+                events.push((s, p, j0, j1));
+            }
+        }
+        events.sort_by_key(|e| e.0);
+        // initial spectra Z_q
+        let mut z = vec![Complex64::new(0.0, 0.0); nsc * terms];
+        for (j, g) in &groups {
+            let yi = y_of(*j, &mut ys);
+            let y = &ys[yi].1;
+            let acc = path_sums(g, terms, k0 as f64, n, nsc);
+            for q in 0..terms {
+                for ((zv, a), yv) in z[q * nsc..(q + 1) * nsc]
+                    .iter_mut()
+                    .zip(&acc[q * nsc..(q + 1) * nsc])
+                    .zip(y)
+                {
+                    *zv += a * yv;
                 }
             }
         }
-        // --- other paths: exact per-symbol pieces.
-        for p in paths
-            .iter()
-            .filter(|p| !(p.delay_samples > -1.0 && p.delay_samples <= ncp))
-        {
-            let dl = p.delay_samples;
-            let j_of = |k: f64| ((k - dl + ncp) / ns).floor() as i64;
-            let (j_first, j_last) = (j_of(0.0), j_of((n - 1) as f64));
-            for j in j_first..=j_last {
-                let lo = ((dl - ncp + j as f64 * ns).ceil().max(0.0)) as usize;
-                let hi = ((dl - ncp + (j + 1) as f64 * ns).ceil().min(n as f64)) as usize;
-                if lo >= hi {
-                    continue;
+        let mut spec = vec![Complex64::new(0.0, 0.0); n];
+        let mut ramp_buf = vec![Complex64::new(0.0, 0.0); nsc];
+        let mut lo = 0usize;
+        let mut ev = events.iter().peekable();
+        loop {
+            let hi = ev.peek().map_or(n, |e| e.0);
+            if hi > lo {
+                self.eval_segment(&z, terms, lo..hi, &mut spec, out);
+                lo = hi;
+            }
+            let Some(&(_, p, j0, j1)) = ev.next() else {
+                break;
+            };
+            // path p moves from symbol m + j0 to m + j1: Z_q += c_q (Y^{(j1)} − Y^{(j0)}) E_p
+            let (a, b) = (y_of(j1, &mut ys), y_of(j0, &mut ys));
+            phase_ramp(p.delay_samples, k0 as f64, n, &mut ramp_buf);
+            let mut c = p.amp;
+            for q in 0..terms {
+                for (((zv, e), y1), y0) in z[q * nsc..(q + 1) * nsc]
+                    .iter_mut()
+                    .zip(&ramp_buf)
+                    .zip(&ys[a].1)
+                    .zip(&ys[b].1)
+                {
+                    *zv += c * (y1 - y0) * e;
                 }
-                let Some(x) = data(m + j) else { continue };
-                let d = dl + j as f64 * ns;
-                let k0 = num.subcarrier_index(0) as f64;
-                let step = Complex64::from_polar(1.0, -std::f64::consts::TAU * d / n as f64);
-                let mut ph = Complex64::from_polar(
-                    1.0,
-                    -std::f64::consts::TAU * ((k0 * d / n as f64).fract()),
-                );
+                c *= p.doppler_hz / (q + 1) as f64;
+            }
+        }
+    }
+
+    /// Adds `Σ_q (j2π(k − N/2)/f_s)^q Σ_i Z_q(i) e^{j2πk_i k/N}` for k in `ks` to `out`.
+    fn eval_segment(
+        &self,
+        z: &[Complex64],
+        terms: usize,
+        ks: std::ops::Range<usize>,
+        spec: &mut [Complex64],
+        out: &mut [Complex64],
+    ) {
+        let num = &self.num;
+        let n = num.fft_size;
+        let nsc = num.subcarriers;
+        let fs = num.sample_rate_hz();
+        let centre = n as f64 / 2.0;
+        let len = ks.end - ks.start;
+        // direct sums cost len·N_sc per term, an inverse FFT about 2 N log2 N
+        let direct = len * nsc < 2 * n * (usize::BITS - n.leading_zeros()) as usize;
+        for q in 0..terms {
+            let zq = &z[q * nsc..(q + 1) * nsc];
+            let vals: Vec<Complex64> = if direct {
+                direct_sums(zq, num.subcarrier_index(0), n, ks.clone())
+            } else {
                 spec.fill(Complex64::new(0.0, 0.0));
-                for (i, xv) in x.iter().enumerate() {
-                    spec[num.bin(i)] = Complex64::new(xv.re as f64, xv.im as f64) * ph * scale;
-                    ph *= step;
+                for (i, v) in zq.iter().enumerate() {
+                    spec[num.bin(i)] = *v;
                 }
-                self.ifft.process(&mut spec);
-                for k in lo..hi {
-                    let dop = if p.doppler_hz != 0.0 {
-                        Complex64::from_polar(
-                            1.0,
-                            std::f64::consts::TAU * p.doppler_hz * (k as f64 - centre) / fs,
-                        )
-                    } else {
-                        Complex64::new(1.0, 0.0)
-                    };
-                    out[k] += p.amp * spec[k] * dop;
-                }
+                self.ifft.process(spec);
+                spec[ks.clone()].to_vec()
+            };
+            for (k, v) in ks.clone().zip(vals) {
+                let f = if q == 0 {
+                    Complex64::new(1.0, 0.0)
+                } else {
+                    Complex64::new(0.0, std::f64::consts::TAU * (k as f64 - centre) / fs)
+                        .powu(q as u32)
+                };
+                out[k] += v * f;
             }
         }
     }

@@ -25,6 +25,33 @@ pub struct LinearTrack {
     pub velocity_mps: [f64; 3],
 }
 
+impl LinearTrack {
+    /// A right-looking UAV at altitude H flying `heading_deg` (from +x, counter-clockwise) at
+    /// `speed_mps` whose sensing centre (H tan η right of the track) passes `target_m` at
+    /// time `t_mid_s`.
+    pub fn through(
+        params: &planner::Params,
+        target_m: [f64; 2],
+        heading_deg: f64,
+        speed_mps: f64,
+        t_mid_s: f64,
+    ) -> Self {
+        let a = heading_deg.to_radians();
+        let h = [a.cos(), a.sin()];
+        let right = [h[1], -h[0]];
+        let off = params.centre_offset_m();
+        let at_mid = [target_m[0] - off * right[0], target_m[1] - off * right[1]];
+        Self {
+            start_m: [
+                at_mid[0] - h[0] * speed_mps * t_mid_s,
+                at_mid[1] - h[1] * speed_mps * t_mid_s,
+                params.altitude_m,
+            ],
+            velocity_mps: [h[0] * speed_mps, h[1] * speed_mps, 0.0],
+        }
+    }
+}
+
 impl Track for LinearTrack {
     fn position_m(&self, t_s: f64) -> [f64; 3] {
         [

@@ -13,6 +13,15 @@ fn mean_power(x: &[rustfft::num_complex::Complex32]) -> f64 {
 }
 
 fn run(motion: MotionModel, kind: CancellerKind, doppler_bins: usize) -> (f64, f64, f64, f64) {
+    run_at(motion, kind, doppler_bins, 20.0)
+}
+
+fn run_at(
+    motion: MotionModel,
+    kind: CancellerKind,
+    doppler_bins: usize,
+    speed_mps: f64,
+) -> (f64, f64, f64, f64) {
     let params = planner::Params::default();
     let mut scene = SceneFile::default();
     scene.radar.motion = motion;
@@ -24,7 +33,7 @@ fn run(motion: MotionModel, kind: CancellerKind, doppler_bins: usize) -> (f64, f
     let proc = common::processor(&params, &scene);
     let setup = proc.setup().clone();
     let target = [0.0, 0.0];
-    let track = common::track_through(&params, target, 200.0, 20.0, 0.5);
+    let track = common::track_through(&params, target, 200.0, speed_mps, 0.5);
     let ap = common::aperture(&setup, target, 0.0, 1);
     let pulses = common::pulses(&setup, &track, &ap);
     let pulses = &pulses[..20];
@@ -80,4 +89,27 @@ fn intra_pulse_motion_needs_doppler_bins() {
     println!("intra-pulse ECA-B: DP/echo {dpi:.1} dB, residual/noise {res:.2} dB with 1 Doppler bin, {res0:.2} dB without");
     assert!(dpi >= 60.0);
     assert!(res <= 1.0, "residual {res:.2} dB above noise");
+}
+
+/// The non-batched ECA (one weight set per 20-pulse look) through the real processing chain:
+/// a hovering UAV sees a zero-Doppler direct path, which ECA brings to the noise floor; a moving
+/// UAV sees it drift in phase from pulse to pulse, which one weight set per look cannot follow
+/// (ECA-B, one weight set per pulse, can).
+#[test]
+fn eca_per_look_needs_zero_doppler() {
+    let (dpi, _, res, loss) = run_at(MotionModel::StopAndHop, CancellerKind::Eca, 0, 0.0);
+    println!(
+        "hovering, ECA: DP/echo {dpi:.1} dB, residual/noise {res:.2} dB, target loss {loss:.3} dB"
+    );
+    assert!(dpi >= 60.0);
+    assert!(res <= 1.0, "residual {res:.2} dB above noise");
+    assert!(loss < 0.5, "target loss {loss:.2} dB");
+    let (_, _, res_moving, _) = run_at(MotionModel::StopAndHop, CancellerKind::Eca, 0, 20.0);
+    let (_, _, res_b, _) = run_at(MotionModel::StopAndHop, CancellerKind::EcaB, 0, 20.0);
+    println!("moving at 20 m/s: ECA residual/noise {res_moving:.2} dB, ECA-B {res_b:.2} dB");
+    assert!(
+        res_moving > 10.0,
+        "ECA residual {res_moving:.2} dB: the moving direct path should remain"
+    );
+    assert!(res_b <= 1.0);
 }

@@ -14,19 +14,7 @@ pub fn track_through(
     speed: f64,
     t_mid: f64,
 ) -> LinearTrack {
-    let a = heading_deg.to_radians();
-    let h = [a.cos(), a.sin()];
-    let right = [h[1], -h[0]];
-    let off = params.centre_offset_m();
-    let at_mid = [target[0] - off * right[0], target[1] - off * right[1]];
-    LinearTrack {
-        start_m: [
-            at_mid[0] - h[0] * speed * t_mid,
-            at_mid[1] - h[1] * speed * t_mid,
-            params.altitude_m,
-        ],
-        velocity_mps: [h[0] * speed, h[1] * speed, 0.0],
-    }
+    LinearTrack::through(params, target, heading_deg, speed, t_mid)
 }
 
 pub fn object(id: usize, p: [f64; 2], rcs: f64) -> SceneObject {
