@@ -8,6 +8,31 @@ use std::time::{Duration, Instant};
 
 use crate::events::Events;
 
+/// Environment variable with the launcher's pid, set for every child.
+pub const PARENT_ENV: &str = "CELLSAR_LAUNCHER_PID";
+
+/// In a child of the launcher (`CELLSAR_LAUNCHER_PID` set): sets `stop` when the launcher is
+/// gone (killed without a chance to stop its children), so no service outlives its run.
+pub fn exit_with_launcher(stop: &std::sync::Arc<std::sync::atomic::AtomicBool>) {
+    let Some(launcher) = std::env::var(PARENT_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+    else {
+        return;
+    };
+    let stop = stop.clone();
+    let _ = std::thread::Builder::new()
+        .name("launcher-watch".into())
+        .spawn(move || loop {
+            if std::os::unix::process::parent_id() != launcher {
+                tracing::warn!(launcher, "the launcher is gone: stopping");
+                stop.store(true, std::sync::atomic::Ordering::Relaxed);
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(250));
+        });
+}
+
 /// Errors of the supervisor.
 #[derive(Debug, thiserror::Error)]
 pub enum SuperviseError {
@@ -124,6 +149,7 @@ impl Supervised {
         if let Some(l) = &self.spec.rust_log {
             cmd.env("RUST_LOG", l);
         }
+        cmd.env(PARENT_ENV, std::process::id().to_string());
         let child = cmd.spawn().map_err(|source| SuperviseError::Spawn {
             role: self.spec.role.clone(),
             exe: self.spec.exe.display().to_string(),

@@ -171,7 +171,51 @@ impl Message for PlanRequest {
     const SCHEMA_VERSION: u16 = 1;
 }
 
-/// A plan: the resolved mission, the planner's full result and its summary.
+/// Fields whose types need a self-describing format (the planner's adjacently tagged enums, NaN
+/// values): CBOR bytes inside bincode; the value itself in JSON.
+mod self_describing {
+    use serde::de::{DeserializeOwned, Error as _, Visitor};
+    use serde::ser::Error as _;
+    use serde::{Deserializer, Serialize, Serializer};
+
+    pub fn serialize<T: Serialize, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
+        if s.is_human_readable() {
+            v.serialize(s)
+        } else {
+            let mut buf = Vec::new();
+            ciborium::into_writer(v, &mut buf).map_err(S::Error::custom)?;
+            s.serialize_bytes(&buf)
+        }
+    }
+
+    struct Bytes;
+
+    impl<'de> Visitor<'de> for Bytes {
+        type Value = Vec<u8>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("CBOR bytes")
+        }
+        fn visit_bytes<E: serde::de::Error>(self, v: &[u8]) -> Result<Vec<u8>, E> {
+            Ok(v.to_vec())
+        }
+        fn visit_byte_buf<E: serde::de::Error>(self, v: Vec<u8>) -> Result<Vec<u8>, E> {
+            Ok(v)
+        }
+    }
+
+    pub fn deserialize<'de, T: DeserializeOwned, D: Deserializer<'de>>(d: D) -> Result<T, D::Error> {
+        if d.is_human_readable() {
+            T::deserialize(d)
+        } else {
+            let buf = d.deserialize_byte_buf(Bytes)?;
+            ciborium::from_reader(buf.as_slice()).map_err(D::Error::custom)
+        }
+    }
+}
+
+/// A plan: the resolved mission, the planner's full result and its summary. In the binary form
+/// `result` and `summary` travel as CBOR (their enums and NaN values need a self-describing
+/// format); in JSON they are plain values (NaN as `null`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
     /// The mission id ([`mission_id`] of `mission`).
@@ -181,8 +225,10 @@ pub struct Plan {
     /// The options it was planned with.
     pub options: PlanRequestOptions,
     /// The planner's result (trajectory, exact evaluation, histories).
+    #[serde(with = "self_describing")]
     pub result: PlanResult,
     /// The summary (as in `summary.json`).
+    #[serde(with = "self_describing")]
     pub summary: Summary,
     /// Instance of the planner that made it.
     pub planner: String,
@@ -226,6 +272,7 @@ pub struct PlanSummary {
     /// Number of landmark windows.
     pub windows: usize,
     /// The summary.
+    #[serde(with = "self_describing")]
     pub summary: Summary,
 }
 
@@ -804,5 +851,69 @@ fn plan_in_thread(
                 ))
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::NoObserver;
+
+    fn short_mission() -> MissionFile {
+        MissionFile::from_toml_str(
+            "name = \"short\"\n[params]\nhorizon_s = 20.0\n[landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }, { x_m = 0.0, y_m = 30.0, from_s = 10.0, to_s = 20.0 }]\n",
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn plans_round_trip_in_both_forms() {
+        let req = PlanRequest {
+            mission: short_mission(),
+            options: PlanRequestOptions::default(),
+        };
+        let plan = plan_request(&req, "t", &mut NoObserver).unwrap();
+        assert_eq!(plan.mission_id, mission_id(&plan.mission));
+        let meta = Meta::default();
+        let limits = DecodeLimits {
+            max_body_bytes: MAX_PLAN_BYTES,
+            verify_crc: true,
+        };
+        let bin = envelope::encode(&plan, meta).unwrap();
+        let back: Plan = envelope::decode(&bin, &limits).unwrap().message;
+        assert_eq!(back.result.trajectory, plan.result.trajectory);
+        assert_eq!(back.summary, plan.summary);
+        assert_eq!(
+            serde_json::to_string(&back).unwrap(),
+            serde_json::to_string(&plan).unwrap()
+        );
+        // JSON for tools without Rust: readable, with the trajectory as numbers
+        let json = envelope::encode_json(&plan, meta).unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&json).unwrap();
+        assert_eq!(v["kind_name"], "planner.plan");
+        assert!(v["body"]["result"]["trajectory"]["pos_m"].as_array().unwrap().len() > 10);
+        // the resolved mission plans to the same mission id
+        let again = Mission::from_file_struct(&plan.mission).unwrap();
+        assert_eq!(mission_id(&again.to_file_struct()), plan.mission_id);
+    }
+
+    #[test]
+    fn bad_requests_name_the_field() {
+        let mut req = PlanRequest {
+            mission: short_mission(),
+            options: PlanRequestOptions {
+                tolerance: Some(-1.0),
+                ..Default::default()
+            },
+        };
+        let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
+        assert!(e.to_string().contains("options.tolerance"), "{e}");
+        req.options = PlanRequestOptions::default();
+        req.mission.params.altitude_m = Some(-5.0);
+        let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
+        assert!(e.to_string().contains("altitude_m"), "{e}");
+        let e = serde_json::from_str::<PlanRequest>(r#"{"mission": {"landmarks": {}}, "optoins": {}}"#)
+            .unwrap_err();
+        assert!(e.to_string().contains("optoins"), "{e}");
     }
 }

@@ -65,6 +65,9 @@ fn main() -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(e.into()),
     };
+    if !matches!(cli.command, Command::Run(_)) {
+        pipeline::supervise::exit_with_launcher(&stop);
+    }
     let r: anyhow::Result<()> = match cli.command {
         Command::Run(args) => {
             return match launch::run(&args, stop) {

@@ -274,10 +274,18 @@ impl<'a> Echo<'a> {
             },
         )?;
         self.cache.insert(plan)?;
+        // the publisher exists from the plan on, so processors are connected before they ask
+        let spec = FrameServiceSpec::new(
+            &keys::mission(ctx.mission_id, "echo")?,
+            self.args.max_frame_bytes,
+        );
+        let publisher = self
+            .frames
+            .publisher(&spec, FramePublisherOptions::default())?;
         Ok(EchoMission {
             ctx,
             synth,
-            publisher: None,
+            publisher: Some(publisher),
             info,
         })
     }

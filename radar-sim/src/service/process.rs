@@ -603,6 +603,8 @@ struct Run {
     metrics: Option<MissionMetrics>,
     failures: HashMap<usize, u32>,
     failed: Option<String>,
+    subscribed: bool,
+    resolving: bool,
     last_frame: Instant,
     started: Instant,
 }
@@ -641,6 +643,7 @@ fn serve(
 ) -> ServiceResult<ProcessReport> {
     let (frame_tx, frame_rx) = mpsc::sync_channel::<RawFrame>(16);
     let (cmd_tx, cmd_rx) = mpsc::channel::<ReceiverCmd>();
+    let (watch_tx, watch_rx) = mpsc::channel::<MissionId>();
     let (req_tx, req_rx) = mpsc::channel::<RequestJob>();
     let (done_tx, done_rx) = mpsc::channel::<RequestDone>();
     let (job_tx, job_rx) = mpsc::channel::<Job>();
@@ -673,7 +676,7 @@ fn serve(
             .name("frames".into())
             .spawn_scoped(scope, move || match zenoh_frames {
                 Some(sub) => receive_zenoh(sub, frame_tx, recv_stop_ref, &l2, &d2),
-                None => receive_iox(env, args, cmd_rx, frame_tx, recv_stop_ref, &l2, &d2),
+                None => receive_iox(env, args, cmd_rx, watch_tx, frame_tx, recv_stop_ref, &l2, &d2),
             })
             .map_err(|e| ServiceError::Internal(format!("starting the frame receiver: {e}")))?;
         let requester = std::thread::Builder::new()
@@ -698,8 +701,9 @@ fn serve(
             job_tx,
             worker_busy: false,
             malformed: 0,
+            frames_over_zenoh: args.frames == FrameSource::Zenoh,
         };
-        let result = p.run(stop, &frame_rx, &done_rx, &res_rx, &lost, &dropped);
+        let result = p.run(stop, &frame_rx, &watch_rx, &done_rx, &res_rx, &lost, &dropped);
         recv_stop.store(true, Ordering::Relaxed);
         drop(p);
         let r1 = receiver
@@ -824,10 +828,12 @@ fn receive_zenoh(
     Ok(())
 }
 
+#[allow(clippy::too_many_arguments)]
 fn receive_iox(
     env: &bridge::IoxEnv,
     args: &ProcessArgs,
     cmds: Receiver<ReceiverCmd>,
+    watching: Sender<MissionId>,
     tx: SyncSender<RawFrame>,
     stop: &AtomicBool,
     lost: &std::sync::atomic::AtomicU64,
@@ -849,6 +855,7 @@ fn receive_iox(
             let spec = FrameServiceSpec::new(&keys::mission(id, "echo")?, args.max_frame_bytes);
             subs.push((id, frames.subscriber(&spec)?, 0));
             tracing::info!(mission = %id, service = %spec.name, "subscribed to frames");
+            let _ = watching.send(id);
         }
         let mut got = false;
         for (_, s, seen_lost) in &mut subs {
@@ -915,6 +922,7 @@ struct Proc<'a> {
     job_tx: Sender<Job>,
     worker_busy: bool,
     malformed: u64,
+    frames_over_zenoh: bool,
 }
 
 impl Proc<'_> {
@@ -922,6 +930,7 @@ impl Proc<'_> {
         &mut self,
         stop: &AtomicBool,
         frames: &Receiver<RawFrame>,
+        watching: &Receiver<MissionId>,
         requests_done: &Receiver<RequestDone>,
         results: &Receiver<JobResult>,
         lost: &std::sync::atomic::AtomicU64,
@@ -970,6 +979,11 @@ impl Proc<'_> {
                     for p in found {
                         self.add_plan(p);
                     }
+                }
+            }
+            while let Ok(id) = watching.try_recv() {
+                if let Some(i) = self.run_index(id) {
+                    self.runs[i].subscribed = true;
                 }
             }
             let mut idle = true;
@@ -1072,6 +1086,8 @@ impl Proc<'_> {
             metrics: None,
             failures: HashMap::new(),
             failed: None,
+            subscribed: self.frames_over_zenoh,
+            resolving: false,
             last_frame: Instant::now(),
             started: Instant::now(),
         };
@@ -1155,10 +1171,17 @@ impl Proc<'_> {
             },
         };
         let Some(a) = target else {
-            if run.outcomes.contains_key(&slot.aperture) {
+            let held = run.outcomes.contains_key(&slot.aperture)
+                || run.in_worker == Some(slot.aperture)
+                || run
+                    .ready
+                    .iter()
+                    .any(|j| matches!(j, Job::Aperture { k, .. } if *k == slot.aperture));
+            if held {
                 self.report.duplicates += 1;
             } else {
                 self.report.unsolicited += 1;
+                tracing::debug!(mission = %f.mission, seq = f.seq, aperture = slot.aperture, "frame of an aperture not asked for");
             }
             return;
         };
@@ -1189,6 +1212,7 @@ impl Proc<'_> {
         if let Some((k, a)) = &run.look {
             if *k == slot.aperture && a.complete() {
                 if let Some((k, a)) = run.look.take() {
+                    run.resolving = true;
                     run.ready.push_back(Job::Resolution {
                         ctx: run.ctx.clone(),
                         k,
@@ -1229,6 +1253,10 @@ impl Proc<'_> {
         else {
             return;
         };
+        if !self.runs[i].subscribed {
+            // ask for frames only once this process can receive them
+            return;
+        }
         let mut immediate = None;
         {
             let run = &mut self.runs[i];
@@ -1253,7 +1281,11 @@ impl Proc<'_> {
                     }
                     k += 1;
                 }
-            } else if run.look.is_none() && run.ready.is_empty() && run.in_worker.is_none() {
+            } else if run.look.is_none()
+                && !run.resolving
+                && run.ready.is_empty()
+                && run.in_worker.is_none()
+            {
                 // every aperture done: the metrics, with one look asked for again to measure
                 // the resolution (as `process` does on the strongest landmark)
                 let outcomes: Vec<&ApertureOutcome> = run.outcomes.values().collect();
