@@ -234,10 +234,11 @@ pub fn run(args: &RunArgs, stop: Arc<AtomicBool>) -> Result<Outcome> {
         }
     };
     events.emit(
-        "zenoh",
+        "network",
         &[
             ("launcher", json!(net.launcher.to_cli_args())),
             ("children", json!(net.child.to_cli_args())),
+            ("iox", json!(iox.to_cli_args())),
         ],
     );
     let node = open_with_retry(&net.launcher, &stop)?;
@@ -534,6 +535,7 @@ fn run_on(
             ("mission_id", id.to_string().into()),
             ("apertures", n.into()),
             ("frames", ctx.layout.total_frames().into()),
+            ("frame_pulses", ctx.layout.frame_pulses().into()),
             ("plan_s", plan_s.into()),
         ],
     );
@@ -727,8 +729,10 @@ fn run_on(
         "aperture_done_s": aperture_times,
         "restarts": restarts,
         "collector": {"duplicates": col.duplicates, "foreign": col.foreign, "resend_requests": resend_requests,
-            "detections": detections.counters().snapshot().to_string(),
-            "images": images.counters().snapshot().to_string()},
+            "detections": detections.counters().snapshot(),
+            "images": images.counters().snapshot(),
+            "metrics": metrics.counters().snapshot(),
+            "status": statuses.counters().snapshot()},
         "services": last_status,
         "events": events.all(),
     });
