@@ -132,6 +132,7 @@ fn frozen_processor_does_not_stall_the_echo() {
     l.wait_for("the first aperture", Duration::from_secs(120), |e| {
         e["event"] == "aperture" && e["done"] == 1
     });
+    wait_sees(&node, "echo");
     let proc = l.pid("processor");
     signal(proc, "STOP");
     let before = l.seen.len();
@@ -154,13 +155,7 @@ fn frozen_processor_does_not_stall_the_echo() {
                     ..QueryOptions::default()
                 },
             )
-            .unwrap_or_else(|e| {
-                let peers: Vec<String> = node.session().info().peers_zid().wait().map(|z| z.to_string()).collect();
-                eprintln!("after {:.1} s; test session peers: {peers:?}", t0.elapsed().as_secs_f64());
-                let log = l.log("echo");
-                let tail: Vec<&str> = log.lines().rev().take(30).collect();
-                panic!("{e}\necho log (last lines first):\n{}", tail.join("\n"))
-            });
+            .unwrap_or_else(|e| panic!("{e} after {:.1} s", t0.elapsed().as_secs_f64()));
         assert_eq!(ack.message.seqs.len(), 10);
     }
     // the echo sends all of them while the reader is frozen: it is not stalled
@@ -186,6 +181,22 @@ fn frozen_processor_does_not_stall_the_echo() {
         "{}",
         l.log("echo")
     );
+}
+
+/// Waits until `node` sees the liveliness token of `role` (its session is connected and routes
+/// to it).
+fn wait_sees(node: &ZenohNode, role: &str) {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let alive = node
+            .alive_now(&format!("cellsar/alive/{role}/*"), Duration::from_millis(500))
+            .unwrap_or_default();
+        if !alive.is_empty() {
+            return;
+        }
+        assert!(Instant::now() < deadline, "the test session never saw {role}");
+        std::thread::sleep(Duration::from_millis(100));
+    }
 }
 
 /// Zenoh args of a test session joining the launcher's network.
@@ -301,6 +312,9 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     let planned = l.event("planned", Duration::from_secs(120));
     let m = planned["mission_id"].as_str().unwrap().to_string();
     let node = ZenohNode::open(z.to_config().unwrap(), "tester", "flood").unwrap();
+    for role in ["planner", "processor", "launcher"] {
+        wait_sees(&node, role);
+    }
     let k = |s: &str| format!("cellsar/{m}/{s}");
     flood_get(&node, "cellsar/plan", 0x0101);
     flood_put(&node, &k("plan"), 0x0102);
@@ -322,6 +336,7 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     l.wait_for("the echo's status", Duration::from_secs(30), |e| {
         e["event"] == "status" && e["role"] == "echo"
     });
+    wait_sees(&node, "echo");
     flood_get(&node, &k("echo/request"), 0x0301);
     flood_put(&node, &k("plan"), 0x0102);
     flood_get(&node, &k("plan"), 0x0103);
