@@ -118,9 +118,22 @@ impl Launch {
     /// Starts `cellsar run MISSION --scene SCENE --out <dir>/out --horizon-s H --events-json
     /// --timeout-s 240 <extra>`.
     pub fn start(dir: &Path, horizon_s: f64, extra: &[&str]) -> Launch {
+        Launch::start_in(&[], dir, horizon_s, extra)
+    }
+
+    /// As [`Launch::start`], the command prefixed by `prefix` (e.g. `ip netns exec NS`).
+    pub fn start_in(prefix: &[&str], dir: &Path, horizon_s: f64, extra: &[&str]) -> Launch {
         let out = dir.join("out");
         let stderr = dir.join("launcher.err");
-        let mut child = Command::new(exe())
+        let mut cmd = match prefix.split_first() {
+            Some((p, rest)) => {
+                let mut c = Command::new(p);
+                c.args(rest).arg(exe());
+                c
+            }
+            None => Command::new(exe()),
+        };
+        let mut child = cmd
             .arg("run")
             .arg(mission())
             .arg("--scene")
@@ -281,9 +294,22 @@ pub struct Service {
 
 impl Service {
     pub fn start(name: &str, dir: &Path, args: &[String]) -> Service {
+        Service::start_in(&[], name, dir, args)
+    }
+
+    /// As [`Service::start`], the command prefixed by `prefix` (e.g. `ip netns exec NS`).
+    pub fn start_in(prefix: &[&str], name: &str, dir: &Path, args: &[String]) -> Service {
         let log = dir.join(format!("{name}.log"));
         let f = std::fs::File::create(&log).unwrap();
-        let child = Command::new(exe())
+        let mut cmd = match prefix.split_first() {
+            Some((p, rest)) => {
+                let mut c = Command::new(p);
+                c.args(rest).arg(exe());
+                c
+            }
+            None => Command::new(exe()),
+        };
+        let child = cmd
             .args(args)
             .env("RUST_LOG", "info")
             .stdout(Stdio::from(f.try_clone().unwrap()))
