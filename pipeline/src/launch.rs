@@ -204,7 +204,7 @@ pub fn run(args: &RunArgs, stop: Arc<AtomicBool>) -> Result<Outcome> {
     let net = if args.router {
         let port = free_port()?;
         let ep = format!("tcp/127.0.0.1:{port}");
-        let router = ZenohArgs::isolated(&[ep.clone()], &[]);
+        let router = ZenohArgs::isolated(std::slice::from_ref(&ep), &[]);
         let mut ra = vec!["router".to_string(), "--instance".into(), "router".into()];
         ra.extend(router.to_cli_args());
         children.push(Supervised::start(spec("router", ra), &events)?);
@@ -229,7 +229,7 @@ pub fn run(args: &RunArgs, stop: Arc<AtomicBool>) -> Result<Outcome> {
     } else {
         let hub = format!("tcp/127.0.0.1:{}", free_port()?);
         Net {
-            launcher: ZenohArgs::isolated(&[hub.clone()], &[]),
+            launcher: ZenohArgs::isolated(std::slice::from_ref(&hub), &[]),
             child: ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[hub]),
         }
     };

@@ -54,7 +54,10 @@ fn two_namespaces() -> Option<(Netns, String, String, String)> {
     if !o.status.success() {
         let err = String::from_utf8_lossy(&o.stderr).to_string();
         if err.contains("Permission denied") || err.contains("Operation not permitted") {
-            eprintln!("SKIPPED: `ip netns add` is not permitted here ({})", err.trim());
+            eprintln!(
+                "SKIPPED: `ip netns add` is not permitted here ({})",
+                err.trim()
+            );
             return None;
         }
         panic!("ip netns add {a}: {err}");
@@ -81,7 +84,10 @@ fn two_namespaces() -> Option<(Netns, String, String, String)> {
 /// A deployment config of `deploy/` with the router address replaced.
 fn config(dir: &Path, name: &str, router: &str) -> String {
     let text = std::fs::read_to_string(root().join("pipeline/deploy").join(name)).unwrap();
-    assert!(text.contains("192.168.1.10"), "{name} lost its example address");
+    assert!(
+        text.contains("192.168.1.10"),
+        "{name} lost its example address"
+    );
     let p = dir.join(name);
     std::fs::write(&p, text.replace("192.168.1.10", router)).unwrap();
     p.display().to_string()
@@ -125,7 +131,14 @@ fn processor_on_another_host_behind_a_router() {
         &in_a,
         dir.path(),
         H,
-        &["--transport", "zenoh", "--external", "processor", "-c", &client_cfg],
+        &[
+            "--transport",
+            "zenoh",
+            "--external",
+            "processor",
+            "-c",
+            &client_cfg,
+        ],
     );
     let st = l.finish(Duration::from_secs(240));
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
@@ -135,7 +148,13 @@ fn processor_on_another_host_behind_a_router() {
         .named("alive")
         .iter()
         .any(|e| e["role"] == "processor" && e["alive"] == true));
-    assert!(!l.named("child_started").iter().any(|e| e["role"] == "processor"));
+    assert!(!l
+        .named("child_started")
+        .iter()
+        .any(|e| e["role"] == "processor"));
     let bridge = l.log("bridge");
-    assert!(counter(&bridge, "route counters", "out_forwarded").unwrap() >= 30, "{bridge}");
+    assert!(
+        counter(&bridge, "route counters", "out_forwarded").unwrap() >= 30,
+        "{bridge}"
+    );
 }

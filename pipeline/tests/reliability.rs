@@ -14,8 +14,8 @@ use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::query::QueryTarget;
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohArgs, ZenohNode};
-use radar_sim::service::{ApertureRequest, RequestAck};
 use common::*;
+use radar_sim::service::{ApertureRequest, RequestAck};
 use serde_json::Value;
 
 /// 6 apertures of the small scene.
@@ -24,8 +24,13 @@ const H: f64 = 60.0;
 fn expect_exit(l: &mut Launch, reference: &std::path::Path) {
     let st = l.finish(Duration::from_secs(240));
     let report: Value =
-        serde_json::from_str(&std::fs::read_to_string(reference.join("report.json")).unwrap()).unwrap();
-    let want = if report["all_in_view_detected"] == true { 0 } else { 4 };
+        serde_json::from_str(&std::fs::read_to_string(reference.join("report.json")).unwrap())
+            .unwrap();
+    let want = if report["all_in_view_detected"] == true {
+        0
+    } else {
+        4
+    };
     assert_eq!(st.code(), Some(want), "{}", l.stderr_tail());
     assert_same_as_reference(&l.out, reference);
 }
@@ -49,12 +54,12 @@ fn kill_mid_mission(role: &str, extra: &[&str]) -> Launch {
     let others: Vec<(String, u32)> = ["planner", "echo", "processor", "bridge", "router"]
         .iter()
         .filter(|r| **r != role)
-        .filter_map(|r| {
+        .filter(|r| {
             l.seen
                 .iter()
-                .any(|e| e["event"] == "child_started" && e["role"] == *r)
-                .then(|| (r.to_string(), l.pid(r)))
+                .any(|e| e["event"] == "child_started" && e["role"] == **r)
         })
+        .map(|r| (r.to_string(), l.pid(r)))
         .collect();
     signal(victim, "KILL");
     l.wait_for("the liveliness loss", Duration::from_secs(60), |e| {
@@ -66,7 +71,10 @@ fn kill_mid_mission(role: &str, extra: &[&str]) -> Launch {
     // the others were not restarted: still the same processes
     for (r, pid) in &others {
         assert_eq!(l.pid(r), *pid, "{r} was restarted too");
-        assert!(running(*pid) || l.child.try_wait().unwrap().is_some(), "{r} died");
+        assert!(
+            running(*pid) || l.child.try_wait().unwrap().is_some(),
+            "{r} died"
+        );
     }
     expect_exit(&mut l, &reference);
     let exits: Vec<Value> = l.named("child_exited");
@@ -81,7 +89,11 @@ fn kill_mid_mission(role: &str, extra: &[&str]) -> Launch {
 fn kill9_planner() {
     let l = kill_mid_mission("planner", &[]);
     // the restarted planner has the plan from its state directory
-    assert!(l.log("planner").contains("plans restored"), "{}", l.log("planner"));
+    assert!(
+        l.log("planner").contains("plans restored"),
+        "{}",
+        l.log("planner")
+    );
 }
 
 #[test]
@@ -159,20 +171,29 @@ fn frozen_processor_does_not_stall_the_echo() {
         assert_eq!(ack.message.seqs.len(), 10);
     }
     // the echo sends all of them while the reader is frozen: it is not stalled
-    let done = l.wait_for("the echo to skip 30 deliveries", Duration::from_secs(60), |e| {
-        e["event"] == "status"
-            && e["role"] == "echo"
-            && e["counters"]["skipped_full"].as_u64().unwrap_or(0) >= 30
-    });
+    let done = l.wait_for(
+        "the echo to skip 30 deliveries",
+        Duration::from_secs(60),
+        |e| {
+            e["event"] == "status"
+                && e["role"] == "echo"
+                && e["counters"]["skipped_full"].as_u64().unwrap_or(0) >= 30
+        },
+    );
     let sent_s = t0.elapsed().as_secs_f64();
     let skipped = done["counters"]["skipped_full"].as_u64().unwrap();
-    assert!(skipped >= 30, "deliveries skipped while frozen: {skipped}\n{done}");
+    assert!(
+        skipped >= 30,
+        "deliveries skipped while frozen: {skipped}\n{done}"
+    );
     assert!(running(proc));
     let _ = before;
     signal(proc, "CONT");
     node.close().unwrap();
     expect_exit(&mut l, &reference);
-    eprintln!("echo sent 40 frames in {sent_s:.1} s to a frozen reader, {skipped} deliveries skipped");
+    eprintln!(
+        "echo sent 40 frames in {sent_s:.1} s to a frozen reader, {skipped} deliveries skipped"
+    );
     let p = l.pipeline_json();
     let echo = &p["services"]["echo"]["counters"];
     assert!(echo["skipped_full"].as_u64().unwrap() >= skipped, "{echo}");
@@ -189,12 +210,18 @@ fn wait_sees(node: &ZenohNode, role: &str) {
     let deadline = Instant::now() + Duration::from_secs(60);
     loop {
         let alive = node
-            .alive_now(&format!("cellsar/alive/{role}/*"), Duration::from_millis(500))
+            .alive_now(
+                &format!("cellsar/alive/{role}/*"),
+                Duration::from_millis(500),
+            )
             .unwrap_or_default();
         if !alive.is_empty() {
             return;
         }
-        assert!(Instant::now() < deadline, "the test session never saw {role}");
+        assert!(
+            Instant::now() < deadline,
+            "the test session never saw {role}"
+        );
         std::thread::sleep(Duration::from_millis(100));
     }
 }
@@ -233,7 +260,7 @@ fn bad_payload(i: usize, kind: u16) -> (Vec<u8>, Encoding) {
             .collect()
     };
     match i % 5 {
-        0 if i % 2500 == 0 => (vec![7u8; (16 << 20) + 4096], Encoding::APPLICATION_OCTET_STREAM),
+        0 if i.is_multiple_of(2500) => (vec![7u8; (16 << 20) + 4096], Encoding::APPLICATION_OCTET_STREAM),
         0 => (rnd(i % 300), Encoding::APPLICATION_OCTET_STREAM),
         1 => {
             // a header that claims the right kind, with a body that is garbage
@@ -307,7 +334,11 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     let reference = reference(30.0);
     let dir = tempfile::tempdir().unwrap();
     // no echo yet: the mission waits while the other services are flooded
-    let mut l = Launch::start(dir.path(), 30.0, &["--transport", "zenoh", "--external", "echo"]);
+    let mut l = Launch::start(
+        dir.path(),
+        30.0,
+        &["--transport", "zenoh", "--external", "echo"],
+    );
     let z = join(&mut l);
     let planned = l.event("planned", Duration::from_secs(120));
     let m = planned["mission_id"].as_str().unwrap().to_string();
@@ -327,8 +358,17 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     flood_put(&node, &k("status/processor"), 0x0110);
     // now the echo, flooded as soon as it is up (while the mission runs)
     let net = l.event("network", Duration::from_secs(1));
-    let mut ea: Vec<String> = vec!["echo".into(), "--scene".into(), scene().display().to_string()];
-    for v in net["children"].as_array().unwrap().iter().chain(net["iox"].as_array().unwrap()) {
+    let mut ea: Vec<String> = vec![
+        "echo".into(),
+        "--scene".into(),
+        scene().display().to_string(),
+    ];
+    for v in net["children"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .chain(net["iox"].as_array().unwrap())
+    {
         ea.push(v.as_str().unwrap().to_string());
     }
     let mut echo = Service::start("echo", dir.path(), &ea);
@@ -349,7 +389,12 @@ fn ten_thousand_malformed_payloads_on_every_key() {
         assert!(v >= n, "{key} = {v} < {n}");
     };
     let n = FLOOD as u64;
-    at_least(&l.log("planner"), "plan service stopping", "malformed", 2 * n);
+    at_least(
+        &l.log("planner"),
+        "plan service stopping",
+        "malformed",
+        2 * n,
+    );
     let p = l.log("processor");
     // (the second round on `plan` may outlast the mission, and the processor with it)
     at_least(&p, "processor stopping", "plans_malformed", n);
@@ -366,5 +411,8 @@ fn ten_thousand_malformed_payloads_on_every_key() {
         assert!(c["malformed"].as_u64().unwrap() >= n, "{s}: {c}");
     }
     // and they were logged (rate-limited WARN lines naming the key)
-    assert!(p.contains(&k("results")) && p.contains("WARN"), "nothing logged");
+    assert!(
+        p.contains(&k("results")) && p.contains("WARN"),
+        "nothing logged"
+    );
 }

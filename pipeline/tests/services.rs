@@ -47,7 +47,11 @@ impl World {
     fn start(&self, role: &str) -> Service {
         let mut a: Vec<String> = match role {
             "planner" => vec!["planner".into()],
-            "echo" => vec!["echo".into(), "--scene".into(), scene().display().to_string()],
+            "echo" => vec![
+                "echo".into(),
+                "--scene".into(),
+                scene().display().to_string(),
+            ],
             _ => vec![
                 "process".into(),
                 "--scene".into(),
@@ -81,7 +85,10 @@ impl Client {
         let deadline = Instant::now() + Duration::from_secs(60);
         while self
             .node
-            .alive_now(&format!("cellsar/alive/{role}/*"), Duration::from_millis(300))
+            .alive_now(
+                &format!("cellsar/alive/{role}/*"),
+                Duration::from_millis(300),
+            )
             .unwrap()
             .is_empty()
         {
@@ -139,7 +146,11 @@ fn collect_and_check(c: &Client, plan: &Plan, out: &Path, started: Vec<Service>)
     let deadline = Instant::now() + Duration::from_secs(180);
     let mut last_ask = Instant::now();
     while !col.complete() {
-        assert!(Instant::now() < deadline, "incomplete: missing {:?}", col.missing());
+        assert!(
+            Instant::now() < deadline,
+            "incomplete: missing {:?}",
+            col.missing()
+        );
         while let Some(d) = det.try_recv() {
             col.add_detections(d.message);
         }
@@ -179,7 +190,11 @@ fn collect_and_check(c: &Client, plan: &Plan, out: &Path, started: Vec<Service>)
         );
     }
     for mut s in started {
-        assert!(s.stop(Duration::from_secs(20)).success(), "{}", s.log_text());
+        assert!(
+            s.stop(Duration::from_secs(20)).success(),
+            "{}",
+            s.log_text()
+        );
         assert!(s.log_text().contains("final_counters=true"));
     }
 }
@@ -237,7 +252,10 @@ fn late_echo_and_a_json_client() {
         .unwrap();
     let reply = replies.recv().unwrap();
     let sample = reply.result().unwrap();
-    assert!(sample.encoding().to_string().starts_with(Encoding::APPLICATION_JSON.to_string().as_str()));
+    assert!(sample
+        .encoding()
+        .to_string()
+        .starts_with(Encoding::APPLICATION_JSON.to_string().as_str()));
     let v: serde_json::Value = serde_json::from_slice(&sample.payload().to_bytes()).unwrap();
     assert_eq!(v["kind_name"], "planner.plan");
     let id = v["body"]["mission_id"].as_str().unwrap().to_string();

@@ -25,12 +25,16 @@ fn run_over_iceoryx2_matches_closed_loop() {
     // liveliness of every role was seen, every child stopped cleanly at the end
     for role in ["planner", "echo", "processor"] {
         assert!(
-            l.named("alive").iter().any(|e| e["role"] == role && e["alive"] == true),
+            l.named("alive")
+                .iter()
+                .any(|e| e["role"] == role && e["alive"] == true),
             "{role} never announced itself"
         );
         let stopped: Vec<_> = l.named("child_stopped");
         assert!(
-            stopped.iter().any(|e| e["role"] == role && e["status"] == "exit code 0"),
+            stopped
+                .iter()
+                .any(|e| e["role"] == role && e["status"] == "exit code 0"),
             "{role} did not stop cleanly: {stopped:?}"
         );
         assert!(
@@ -42,7 +46,9 @@ fn run_over_iceoryx2_matches_closed_loop() {
     assert_eq!(p["apertures"], 3);
     assert_eq!(p["collector"]["duplicates"], 0);
     assert!(p["wall_s"].as_f64().unwrap() > 0.0);
-    assert!(std::fs::read_to_string(l.out.join("report.md")).unwrap().contains("every landmark in view detected: yes"));
+    assert!(std::fs::read_to_string(l.out.join("report.md"))
+        .unwrap()
+        .contains("every landmark in view detected: yes"));
     // the state directory is removed after a complete run
     assert!(!l.out.join(".state").exists());
 }
@@ -55,13 +61,23 @@ fn run_over_zenoh_through_the_bridge_matches_closed_loop() {
     let st = l.finish(Duration::from_secs(240));
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
     assert_same_as_reference(&l.out, &reference);
-    assert!(l.named("child_started").iter().any(|e| e["role"] == "bridge"));
+    assert!(l
+        .named("child_started")
+        .iter()
+        .any(|e| e["role"] == "bridge"));
     let bridge = l.log("bridge");
     let forwarded = counter(&bridge, "route counters", "out_forwarded").unwrap();
     // 3 apertures of 10 frames, plus the look asked for again for the resolution
-    assert!(forwarded >= 30, "bridge forwarded {forwarded} frames\n{bridge}");
+    assert!(
+        forwarded >= 30,
+        "bridge forwarded {forwarded} frames\n{bridge}"
+    );
     let proc = l.log("processor");
-    assert_eq!(counter(&proc, "processor stopping", "bad"), Some(0), "{proc}");
+    assert_eq!(
+        counter(&proc, "processor stopping", "bad"),
+        Some(0),
+        "{proc}"
+    );
 }
 
 #[test]
@@ -69,15 +85,25 @@ fn sigint_stops_every_child() {
     let dir = tempfile::tempdir().unwrap();
     let mut l = Launch::start(dir.path(), 200.0, &[]);
     l.event("planned", Duration::from_secs(120));
-    let pids: Vec<u32> = ["planner", "echo", "processor"].iter().map(|r| l.pid(r)).collect();
+    let pids: Vec<u32> = ["planner", "echo", "processor"]
+        .iter()
+        .map(|r| l.pid(r))
+        .collect();
     signal(l.child.id(), "INT");
     let st = l.finish(Duration::from_secs(60));
     assert_eq!(st.code(), Some(130), "{}", l.stderr_tail());
     for p in pids {
-        assert!(!running(p), "child {p} still running after the launcher stopped");
+        assert!(
+            !running(p),
+            "child {p} still running after the launcher stopped"
+        );
     }
     for role in ["planner", "echo", "processor"] {
-        assert!(l.log(role).contains("final_counters=true"), "{role}: {}", l.log(role));
+        assert!(
+            l.log(role).contains("final_counters=true"),
+            "{role}: {}",
+            l.log(role)
+        );
     }
     // what had arrived is written; the state is kept for a later run
     assert!(l.out.join("detections.csv").exists());
@@ -96,7 +122,10 @@ fn a_child_that_keeps_failing_stops_the_run() {
     let st = l.finish(Duration::from_secs(120));
     assert_eq!(st.code(), Some(1));
     let err = l.stderr_tail();
-    assert!(err.contains("failed 3 times") && err.contains("giving up"), "{err}");
+    assert!(
+        err.contains("failed 3 times") && err.contains("giving up"),
+        "{err}"
+    );
     let exits = l.named("child_exited");
     assert!(exits.len() >= 3, "{exits:?}");
     for e in l.named("child_started") {

@@ -203,7 +203,9 @@ mod self_describing {
         }
     }
 
-    pub fn deserialize<'de, T: DeserializeOwned, D: Deserializer<'de>>(d: D) -> Result<T, D::Error> {
+    pub fn deserialize<'de, T: DeserializeOwned, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<T, D::Error> {
         if d.is_human_readable() {
             T::deserialize(d)
         } else {
@@ -351,33 +353,32 @@ impl StatusBoard {
         let Ok(mut pubs) = self.pubs.lock() else {
             return;
         };
-        if !pubs.contains_key(&status.mission_id) {
-            let key = match keys::mission(status.mission_id, &format!("status/{}", self.role)) {
-                Ok(k) => k,
-                Err(e) => {
-                    tracing::warn!(error = %e, "status key");
-                    return;
-                }
-            };
-            let opts = PublishOptions {
-                mission_id: status.mission_id,
-                congestion_control: CongestionControl::Drop,
-                ..PublishOptions::json()
-            };
-            match node.publisher::<ServiceStatus>(&key, opts) {
-                Ok(p) => {
-                    pubs.insert(status.mission_id, p);
-                }
-                Err(e) => {
-                    tracing::warn!(error = %e, "status publisher");
-                    return;
+        let p = match pubs.entry(status.mission_id) {
+            std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
+            std::collections::hash_map::Entry::Vacant(v) => {
+                let made = keys::mission(status.mission_id, &format!("status/{}", self.role))
+                    .map_err(bridge::NetError::from)
+                    .and_then(|key| {
+                        node.publisher::<ServiceStatus>(
+                            &key,
+                            PublishOptions {
+                                mission_id: status.mission_id,
+                                congestion_control: CongestionControl::Drop,
+                                ..PublishOptions::json()
+                            },
+                        )
+                    });
+                match made {
+                    Ok(p) => v.insert(p),
+                    Err(e) => {
+                        tracing::warn!(error = %e, "status publisher");
+                        return;
+                    }
                 }
             }
-        }
-        if let Some(p) = pubs.get(&status.mission_id) {
-            if let Err(e) = p.put(status) {
-                tracing::debug!(error = %e, "status not published");
-            }
+        };
+        if let Err(e) = p.put(status) {
+            tracing::debug!(error = %e, "status not published");
         }
     }
 }
@@ -768,23 +769,26 @@ fn publish_plan(
     summary_pubs: &mut HashMap<MissionId, bridge::net::TypedPublisher<PlanSummary>>,
 ) -> Result<(), ServiceError> {
     let id = plan.mission_id;
-    if !plan_pubs.contains_key(&id) {
-        let opts = PublishOptions {
-            mission_id: id,
-            ..PublishOptions::default()
-        };
-        plan_pubs.insert(id, node.publisher::<Plan>(&plan.key()?, opts)?);
-        let opts = PublishOptions {
-            mission_id: id,
-            ..PublishOptions::json()
-        };
-        summary_pubs.insert(
-            id,
-            node.publisher::<PlanSummary>(&keys::mission(id, "plan/summary")?, opts)?,
-        );
-    }
-    if let Some(p) = plan_pubs.get(&id) {
-        p.put_with(plan, meta)?;
+    let key = plan.key()?;
+    let p = match plan_pubs.entry(id) {
+        std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
+        std::collections::hash_map::Entry::Vacant(v) => v.insert(node.publisher::<Plan>(
+            &key,
+            PublishOptions {
+                mission_id: id,
+                ..PublishOptions::default()
+            },
+        )?),
+    };
+    p.put_with(plan, meta)?;
+    if let std::collections::hash_map::Entry::Vacant(v) = summary_pubs.entry(id) {
+        v.insert(node.publisher::<PlanSummary>(
+            &keys::mission(id, "plan/summary")?,
+            PublishOptions {
+                mission_id: id,
+                ..PublishOptions::json()
+            },
+        )?);
     }
     if let Some(p) = summary_pubs.get(&id) {
         let s = PlanSummary {
@@ -891,7 +895,13 @@ mod tests {
         let json = envelope::encode_json(&plan, meta).unwrap();
         let v: serde_json::Value = serde_json::from_slice(&json).unwrap();
         assert_eq!(v["kind_name"], "planner.plan");
-        assert!(v["body"]["result"]["trajectory"]["pos_m"].as_array().unwrap().len() > 10);
+        assert!(
+            v["body"]["result"]["trajectory"]["pos_m"]
+                .as_array()
+                .unwrap()
+                .len()
+                > 10
+        );
         // the resolved mission plans to the same mission id
         let again = Mission::from_file_struct(&plan.mission).unwrap();
         assert_eq!(mission_id(&again.to_file_struct()), plan.mission_id);
@@ -912,8 +922,9 @@ mod tests {
         req.mission.params.altitude_m = Some(-5.0);
         let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
         assert!(e.to_string().contains("altitude_m"), "{e}");
-        let e = serde_json::from_str::<PlanRequest>(r#"{"mission": {"landmarks": {}}, "optoins": {}}"#)
-            .unwrap_err();
+        let e =
+            serde_json::from_str::<PlanRequest>(r#"{"mission": {"landmarks": {}}, "optoins": {}}"#)
+                .unwrap_err();
         assert!(e.to_string().contains("optoins"), "{e}");
     }
 }

@@ -51,9 +51,12 @@ pub fn reference(horizon_s: f64) -> PathBuf {
     planner::report::write_plan_dir(&out.join("plan"), &m, &result).unwrap();
     let (m2, traj) = planner::report::read_plan_dir(&out.join("plan")).unwrap();
     radar_sim::run::simulate(&m2, &traj, &scene, &out.join("recording"), &mut |_, _| {}).unwrap();
-    let metrics =
-        radar_sim::run::process(&out.join("recording"), &out.join("processed"), &mut |_, _| {})
-            .unwrap();
+    let metrics = radar_sim::run::process(
+        &out.join("recording"),
+        &out.join("processed"),
+        &mut |_, _| {},
+    )
+    .unwrap();
     let report = radar_sim::run::loop_report(&m2, &result.evaluation, metrics);
     radar_sim::io::write_json(&out.join("report.json"), &report).unwrap();
     c.insert(horizon_s.to_bits(), (dir, out.clone()));
@@ -88,7 +91,10 @@ pub fn assert_same_as_reference(out: &Path, reference: &Path) {
         if name.ends_with(".npy") || name.ends_with(".png") {
             let x = std::fs::read(out.join("images").join(&name))
                 .unwrap_or_else(|e| panic!("images/{name}: {e}"));
-            assert!(x == std::fs::read(e.path()).unwrap(), "images/{name} differs");
+            assert!(
+                x == std::fs::read(e.path()).unwrap(),
+                "images/{name} differs"
+            );
             n += 1;
         }
     }
@@ -100,7 +106,8 @@ pub fn rows_per_aperture(csv: &Path) -> HashMap<String, usize> {
     let text = std::fs::read_to_string(csv).unwrap();
     let mut m = HashMap::new();
     for l in text.lines().skip(1) {
-        *m.entry(l.split(',').next().unwrap().to_string()).or_insert(0) += 1;
+        *m.entry(l.split(',').next().unwrap().to_string())
+            .or_insert(0) += 1;
     }
     m
 }
@@ -179,7 +186,12 @@ impl Launch {
     }
 
     /// Waits for an event matching `pred` (also among those already seen after `from`).
-    pub fn wait_for(&mut self, what: &str, timeout: Duration, pred: impl Fn(&Value) -> bool) -> Value {
+    pub fn wait_for(
+        &mut self,
+        what: &str,
+        timeout: Duration,
+        pred: impl Fn(&Value) -> bool,
+    ) -> Value {
         let deadline = Instant::now() + timeout;
         let mut i = 0;
         loop {
@@ -193,7 +205,12 @@ impl Launch {
             assert!(
                 !left.is_zero(),
                 "timed out waiting for {what}; events:\n{}\nlauncher stderr:\n{}",
-                self.seen.iter().filter(|e| e["event"] != "status").map(|e| e.to_string()).collect::<Vec<_>>().join("\n"),
+                self.seen
+                    .iter()
+                    .filter(|e| e["event"] != "status")
+                    .map(|e| e.to_string())
+                    .collect::<Vec<_>>()
+                    .join("\n"),
                 self.stderr_tail()
             );
             self.pump(left.min(Duration::from_millis(200)));
@@ -242,15 +259,21 @@ impl Launch {
     }
 
     pub fn log(&self, role: &str) -> String {
-        std::fs::read_to_string(self.out.join("logs").join(format!("{role}.log"))).unwrap_or_default()
+        std::fs::read_to_string(self.out.join("logs").join(format!("{role}.log")))
+            .unwrap_or_default()
     }
 
     pub fn pipeline_json(&self) -> Value {
-        serde_json::from_str(&std::fs::read_to_string(self.out.join("pipeline.json")).unwrap()).unwrap()
+        serde_json::from_str(&std::fs::read_to_string(self.out.join("pipeline.json")).unwrap())
+            .unwrap()
     }
 
     pub fn named(&self, name: &str) -> Vec<Value> {
-        self.seen.iter().filter(|e| e["event"] == name).cloned().collect()
+        self.seen
+            .iter()
+            .filter(|e| e["event"] == name)
+            .cloned()
+            .collect()
     }
 }
 

@@ -228,8 +228,8 @@ mod tests {
                     prop_assert!(slot.pulses >= 1 && slot.pulses <= fp);
                     // within one look
                     prop_assert_eq!(slot.first_pulse / ppl, (slot.first_pulse + slot.pulses - 1) / ppl);
-                    for p in slot.first_pulse..slot.first_pulse + slot.pulses {
-                        covered[p] += 1;
+                    for c in covered.iter_mut().skip(slot.first_pulse).take(slot.pulses) {
+                        *c += 1;
                     }
                 }
                 prop_assert!(covered.iter().all(|c| *c == 1));

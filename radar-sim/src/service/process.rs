@@ -524,7 +524,7 @@ enum Job {
 }
 
 enum JobResult {
-    Aperture(MissionId, ServiceResult<ApertureOutcome>),
+    Aperture(MissionId, Box<ServiceResult<ApertureOutcome>>),
     Resolution(
         MissionId,
         ServiceResult<Option<(MeasuredResolution, MeasuredResolution)>>,
@@ -676,7 +676,16 @@ fn serve(
             .name("frames".into())
             .spawn_scoped(scope, move || match zenoh_frames {
                 Some(sub) => receive_zenoh(sub, frame_tx, recv_stop_ref, &l2, &d2),
-                None => receive_iox(env, args, cmd_rx, watch_tx, frame_tx, recv_stop_ref, &l2, &d2),
+                None => receive_iox(
+                    env,
+                    args,
+                    cmd_rx,
+                    watch_tx,
+                    frame_tx,
+                    recv_stop_ref,
+                    &l2,
+                    &d2,
+                ),
             })
             .map_err(|e| ServiceError::Internal(format!("starting the frame receiver: {e}")))?;
         let requester = std::thread::Builder::new()
@@ -703,7 +712,9 @@ fn serve(
             malformed: 0,
             frames_over_zenoh: args.frames == FrameSource::Zenoh,
         };
-        let result = p.run(stop, &frame_rx, &watch_rx, &done_rx, &res_rx, &lost, &dropped);
+        let result = p.run(
+            stop, &frame_rx, &watch_rx, &done_rx, &res_rx, &lost, &dropped,
+        );
         recv_stop.store(true, Ordering::Relaxed);
         drop(p);
         let r1 = receiver
@@ -719,7 +730,7 @@ fn worker(jobs: Receiver<Job>, results: Sender<JobResult>) {
     while let Ok(job) = jobs.recv() {
         let r = match job {
             Job::Aperture { ctx, k, iq } => {
-                JobResult::Aperture(ctx.base.mission_id, ctx.process(k, &iq))
+                JobResult::Aperture(ctx.base.mission_id, Box::new(ctx.process(k, &iq)))
             }
             Job::Resolution { ctx, k, look, iq } => {
                 JobResult::Resolution(ctx.base.mission_id, ctx.resolution(k, look, &iq), (k, look))
@@ -926,6 +937,7 @@ struct Proc<'a> {
 }
 
 impl Proc<'_> {
+    #[allow(clippy::too_many_arguments)]
     fn run(
         &mut self,
         stop: &AtomicBool,
@@ -1395,7 +1407,7 @@ impl Proc<'_> {
                 };
                 let run = &mut self.runs[i];
                 let k = run.in_worker.take();
-                match outcome {
+                match *outcome {
                     Ok(o) => {
                         let k = o.aperture;
                         if let Some(d) = &run.dir {
