@@ -41,7 +41,11 @@ impl World {
     }
 
     fn zenoh(&self) -> Vec<String> {
-        ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[self.hub.clone()]).to_cli_args()
+        ZenohArgs::isolated(
+            &["tcp/127.0.0.1:0".to_string()],
+            std::slice::from_ref(&self.hub),
+        )
+        .to_cli_args()
     }
 
     fn start(&self, role: &str) -> Service {
