@@ -233,7 +233,24 @@ pub fn plan_with_observer(
             if tr.pos_m.iter().flatten().any(|v| !v.is_finite()) {
                 return Err(PlanError::InvalidInit("non-finite position".into()));
             }
-            tr.clone()
+            // A given start that is infeasible (a warm start after the mission changed, say)
+            // is repaired and re-optimised on the coarse grid first, like the built-in start:
+            // large steps fix large violations in few iterations.
+            let objective = match options.scheme {
+                Scheme::BaselineExact => Some(ExactObjective::Distance),
+                Scheme::Exact => Some(ExactObjective::Energy),
+                Scheme::Paper | Scheme::Baseline => None,
+            };
+            match objective {
+                Some(obj)
+                    if options.coarse
+                        && !evaluate(mission, tr).is_feasible_for(options.resolution) =>
+                {
+                    coarse_start_from(mission, obj, true, options, Some(tr), 0)
+                        .unwrap_or_else(|| tr.clone())
+                }
+                _ => tr.clone(),
+            }
         }
         // The built-in start: the guidance law on a coarse grid made feasible there (phase I);
         // for the exact-geometry schemes also optimised there. The paper's schemes get the plain
@@ -330,23 +347,47 @@ pub fn plan_with_observer(
     Ok(out)
 }
 
-/// Target slot length of the coarse solve, s.
-const COARSE_SLOT_S: f64 = 2.0;
+/// Slot lengths of the coarse levels, finest first, s: the mission is first solved on slots of
+/// about 5 s, that solution starts a solve on slots of about 2.5 s, which starts the mission's
+/// own grid. (Both divide the paper's 10 s landmark windows.)
+const COARSE_LEVELS_S: [f64; 2] = [2.5, 5.0];
 
-/// Solves the mission on a coarser grid (slots about [`COARSE_SLOT_S`] long) and interpolates the
-/// result to the mission's slots. `None` when no suitable coarse grid exists or it fails.
+/// The factor k (n divisible by k, at least 12 coarse slots) whose slot length k δ is closest to
+/// `target_s`, within a factor 1.5 of it.
+fn coarse_factor(n: usize, delta: f64, target_s: f64) -> Option<usize> {
+    (2..=n / 12)
+        .filter(|&k| n.is_multiple_of(k))
+        .map(|k| (k, ((k as f64 * delta) / target_s).ln().abs()))
+        .filter(|(_, d)| *d <= 1.5f64.ln())
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k)
+}
+
+/// Solves the mission on coarser grids ([`COARSE_LEVELS_S`]) and interpolates the result to the
+/// mission's slots. `None` when no suitable coarse grid exists or it fails.
 fn coarse_start(
     mission: &Mission,
     objective: ExactObjective,
     optimise: bool,
     options: &PlanOptions,
 ) -> Option<Trajectory> {
+    coarse_start_from(mission, objective, optimise, options, None, 0)
+}
+
+/// [`coarse_start`] at coarse level `level`, from a given fine-grid trajectory (sampled at the
+/// coarse slot ends) or else from the next coarser level (or the guidance law).
+fn coarse_start_from(
+    mission: &Mission,
+    objective: ExactObjective,
+    optimise: bool,
+    options: &PlanOptions,
+    warm: Option<&Trajectory>,
+    level: usize,
+) -> Option<Trajectory> {
     let n = mission.slots();
     let delta = mission.params().slot_s;
-    let target = (COARSE_SLOT_S / delta).round() as usize;
-    let factor = (2..=target.max(2))
-        .rev()
-        .find(|&k| k <= target && n.is_multiple_of(k) && n / k >= 8)?;
+    let target = COARSE_LEVELS_S.get(level)?;
+    let factor = coarse_factor(n, delta, *target)?;
     let coarse = mission.coarsened(factor)?;
     let tuning = ExactTuning {
         whole_slot_sensing: true,
@@ -356,7 +397,15 @@ fn coarse_start(
     let mut solver = SocpSolver::new(options.socp);
     let (start, _) = make_feasible(
         &coarse,
-        guidance_start(&coarse, options.resolution),
+        match warm {
+            Some(w) => Trajectory {
+                slot_s: coarse.params().slot_s,
+                start_m: w.start_m,
+                pos_m: (1..=coarse.slots()).map(|k| w.q(k * factor)).collect(),
+            },
+            None => coarse_start_from(&coarse, objective, optimise, options, None, level + 1)
+                .unwrap_or_else(|| guidance_start(&coarse, options.resolution)),
+        },
         objective,
         &tuning,
         &mut solver,

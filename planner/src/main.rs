@@ -109,6 +109,20 @@ enum Command {
     },
 }
 
+/// `println!` that stops quietly when stdout is closed (e.g. piped into `head`) instead of
+/// panicking.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let mut stdout = std::io::stdout().lock();
+        if let Err(e) = writeln!(stdout, $($arg)*) {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(0);
+            }
+        }
+    }};
+}
+
 fn parse_resolution(s: &str) -> Result<ResolutionMode, String> {
     match s {
         "general" => Ok(ResolutionMode::General),
@@ -226,7 +240,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let files = report::write_plan_dir(&out, &m, &result)
                 .with_context(|| format!("writing {}", out.display()))?;
             let s = Summary::new(&m, &result);
-            println!(
+            out!(
                 "{}: scheme {}, true energy {:.1} J ({:+.2}% vs floor {:.1} J), own objective {}, {} iterations ({:?}), {:.3} s",
                 m.name(),
                 s.scheme,
@@ -241,7 +255,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 s.termination,
                 s.solve_seconds
             );
-            println!(
+            out!(
                 "exact geometry: feasible {}, sensing violation {:.3} m ({} slots out of view), azimuth speed shortfall {:.3} m/s, speeds {:.2}..{:.2} m/s",
                 s.feasible,
                 s.max_sensing_violation_m,
@@ -251,7 +265,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 s.max_speed_mps
             );
             for f in files {
-                println!("wrote {}", f.display());
+                out!("wrote {}", f.display());
             }
             Ok(())
         }
@@ -275,7 +289,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 "slots_unresolved_general": ev.slots_unresolved,
                 "slots_blind": ev.slots_blind,
             });
-            println!(
+            out!(
                 "{}",
                 serde_json::to_string_pretty(&json).context("encoding the evaluation")?
             );
@@ -286,7 +300,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 reproduce::FigureSet::parse(&only).map_err(|e| bad(anyhow::anyhow!(e)))?;
             let report = reproduce::reproduce(&out, quick, &figures)
                 .with_context(|| format!("reproducing into {}", out.display()))?;
-            println!("wrote {}", report.display());
+            out!("wrote {}", report.display());
             Ok(())
         }
         #[cfg(feature = "service")]
@@ -310,12 +324,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let printed = expected_dmin_m(radius_m, objects, CdfForm::AsPrinted).map_err(bad)?;
             let (mc, se) =
                 expected_dmin_monte_carlo_m(radius_m, objects, trials, seed).map_err(bad)?;
-            println!("R = {radius_m} m, N = {objects}");
-            println!("E[d_min] correct formula : {correct:.3} m");
-            println!(
-                "E[d_min] as printed      : {printed:.3} m  (the paper's eq. lacks a factor l)"
-            );
-            println!("E[d_min] Monte Carlo     : {mc:.3} ± {se:.3} m  ({trials} trials)");
+            out!("R = {radius_m} m, N = {objects}");
+            out!("E[d_min] correct formula : {correct:.3} m");
+            out!("E[d_min] as printed      : {printed:.3} m  (the paper's eq. lacks a factor l)");
+            out!("E[d_min] Monte Carlo     : {mc:.3} ± {se:.3} m  ({trials} trials)");
             Ok(())
         }
     }

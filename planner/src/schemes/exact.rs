@@ -25,6 +25,11 @@ use crate::{Mission, Trajectory};
 /// (‖D²u(v)[d, d]‖ ≤ (2/√3)‖d‖²/‖v‖²).
 pub const CENTRE_CURVATURE_BOUND: f64 = 0.577_350_269_189_625_8;
 
+/// Unit of the speed variables V, w = V², z = V³ in the cone programs: with V in m/s, z ≈ V³
+/// spans 10³–10⁵ next to auxiliaries of order 0.1, which Clarabel solves inaccurately and slowly;
+/// in units of 20 m/s all are of order 1.
+pub const SPEED_UNIT_MPS: f64 = 20.0;
+
 /// Safety margin on the sensing radius, m (solver tolerances stay inside it).
 pub const SENSING_MARGIN_M: f64 = 1e-3;
 /// Safety margin on the speed limits, m/s.
@@ -81,9 +86,10 @@ impl Default for ExactTuning {
 struct SlotVars {
     x: usize,
     y: usize,
-    /// Speed epigraph V_t ≥ ‖v_t‖/δ.
+    /// Speed epigraph V_t ≥ ‖v_t‖/δ, in units of [`SPEED_UNIT_MPS`].
     v: usize,
-    /// Energy only: induced auxiliary a_t, its helper s_t (s a ≥ 1, s² ≤ L), w_t ≥ V², z_t ≥ V³.
+    /// Energy only: induced auxiliary a_t, its helper s_t (s a ≥ 1, s² ≤ L), w_t ≥ V², z_t ≥ V³
+    /// (w, z in units of SPEED_UNIT_MPS², SPEED_UNIT_MPS³).
     energy: Option<[usize; 4]>,
     /// Landmark slots: centre-error budget e_t.
     e: Option<usize>,
@@ -188,12 +194,17 @@ impl ExactSubproblem {
         };
         for sv in &vars {
             match (objective, sv.energy) {
-                (ExactObjective::Distance, _) => b.add_linear_cost(sv.v, delta * objective_scale),
+                (ExactObjective::Distance, _) => {
+                    b.add_linear_cost(sv.v, SPEED_UNIT_MPS * delta * objective_scale)
+                }
                 (_, Some([a, _s, _w, z])) => {
                     let c = delta * objective_scale;
-                    b.add_square_cost(sv.v, c * model.blade_quadratic_coeff());
+                    b.add_square_cost(
+                        sv.v,
+                        c * model.blade_quadratic_coeff() * SPEED_UNIT_MPS.powi(2),
+                    );
                     b.add_linear_cost(a, c * model.induced_power_w);
-                    b.add_linear_cost(z, c * model.parasite_coeff);
+                    b.add_linear_cost(z, c * model.parasite_coeff * SPEED_UNIT_MPS.powi(3));
                 }
                 _ => {}
             }
@@ -209,8 +220,11 @@ impl ExactSubproblem {
             // v_t = q_t − q_{t−1} as affine expressions
             let (vx, vy) = step_exprs(&vars, t, prev.start_m);
             // speed epigraph: δ V ≥ ‖v‖ ; V ≤ V_m
-            b.soc(Lin::var(sv.v, delta), &[vx.clone(), vy.clone()]);
-            b.nonneg(Lin::var(sv.v, -1.0).plus_const(v_max));
+            b.soc(
+                Lin::var(sv.v, delta * SPEED_UNIT_MPS),
+                &[vx.clone(), vy.clone()],
+            );
+            b.nonneg(Lin::var(sv.v, -SPEED_UNIT_MPS).plus_const(v_max));
 
             if let Some([a, s, w, z]) = sv.energy {
                 // L = 2 a0 a − a0² + (2 u·v − ‖u‖²)/(δ² v0²)  (tangent of a² + ‖v‖²/(δ² v0²))

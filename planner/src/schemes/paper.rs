@@ -13,6 +13,7 @@
 
 use crate::geometry::v2;
 use crate::power::PowerModel;
+use crate::schemes::exact::SPEED_UNIT_MPS as VU;
 use crate::socp::{Lin, ProblemBuilder, SocpSolver, SolveError};
 use crate::{Mission, Trajectory};
 
@@ -118,20 +119,20 @@ impl PaperState {
                 )
             };
             // (p2.3) ‖q_t − q_{t−1}‖ ≤ δ V_t ; (p2.4) 0 ≤ V_t ≤ V_m
-            b.soc(Lin::var(vv, delta), &[dx.clone(), dy.clone()]);
-            b.nonneg(Lin::var(vv, -1.0).plus_const(p.max_speed_mps));
+            b.soc(Lin::var(vv, delta * VU), &[dx.clone(), dy.clone()]);
+            b.nonneg(Lin::var(vv, -VU).plus_const(p.max_speed_mps));
             match objective {
                 PaperObjective::Energy => {
                     let (qa, s, w2, z) = (idx(t, 3), idx(t, 4), idx(t, 5), idx(t, 6));
                     let c = delta * scale;
-                    b.add_square_cost(vv, c * model.blade_quadratic_coeff());
+                    b.add_square_cost(vv, c * model.blade_quadratic_coeff() * VU * VU);
                     b.add_linear_cost(qa, c * model.induced_power_w);
-                    b.add_linear_cost(z, c * model.parasite_coeff);
+                    b.add_linear_cost(z, c * model.parasite_coeff * VU.powi(3));
                     // (p42): 1/q² ≤ q0² + V0²/v0² + 2 q0 (q − q0) + 2 V0/v0² (V − V0)
                     let (q0, vk) = (self.aux[t - 1], self.speed_mps[t - 1]);
                     let k = 1.0 / (v0 * v0);
                     let l = Lin::var(qa, 2.0 * q0)
-                        .plus(vv, 2.0 * vk * k)
+                        .plus(vv, 2.0 * vk * k * VU)
                         .plus_const(-q0 * q0 - vk * vk * k);
                     b.rotated_soc(
                         Lin::var(s, 1.0),
@@ -157,10 +158,10 @@ impl PaperState {
             };
             let (w, u) = (self.w[t - 1], self.u[t - 1]);
             // (p2.2) V_t ≥ λ_c H/(T_d d_min cos η)
-            b.nonneg(Lin::var(vv, 1.0).plus_const(-v_min));
+            b.nonneg(Lin::var(vv, VU).plus_const(-v_min));
             // (p52) w δ V ≤ y_t − y_{t−1} ; (p53) x_t − x_{t−1} ≤ u δ V
-            b.nonneg(dy.clone().plus(vv, -w * delta));
-            b.nonneg(Lin::var(vv, u * delta).minus_lin(&dx));
+            b.nonneg(dy.clone().plus(vv, -w * delta * VU));
+            b.nonneg(Lin::var(vv, u * delta * VU).minus_lin(&dx));
             // sensing disc with the modelled centre (x + w D, y − u D)
             b.soc(
                 Lin::constant_only(r),
@@ -184,7 +185,7 @@ impl PaperState {
         let sol = solver.solve(&b)?;
         for t in 1..=n {
             self.pos_m[t - 1] = [sol.x[idx(t, 0)], sol.x[idx(t, 1)]];
-            self.speed_mps[t - 1] = sol.x[idx(t, 2)];
+            self.speed_mps[t - 1] = VU * sol.x[idx(t, 2)];
             if objective == PaperObjective::Energy {
                 self.aux[t - 1] = sol.x[idx(t, 3)];
             }

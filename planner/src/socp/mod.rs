@@ -112,11 +112,23 @@ impl ProblemBuilder {
 
     /// Largest violation of any cone at `x`, using s = row expressions evaluated at `x`.
     pub fn max_cone_violation(&self, x: &[f64]) -> f64 {
-        let mut worst: f64 = 0.0;
+        self.cone_violations(x).fold(0.0, |m, (v, _)| m.max(v))
+    }
+
+    /// Largest violation of any cone at `x`, each relative to 1 + the largest constant of its
+    /// rows (the scale at which the solver's relative tolerances act on that cone).
+    pub fn max_relative_cone_violation(&self, x: &[f64]) -> f64 {
+        self.cone_violations(x)
+            .fold(0.0, |m, (v, scale)| m.max(v / scale))
+    }
+
+    fn cone_violations<'a>(&'a self, x: &'a [f64]) -> impl Iterator<Item = (f64, f64)> + 'a {
         let mut r = 0;
-        for &(cone, dim) in &self.cones {
-            let s: Vec<f64> = self.rows[r..r + dim].iter().map(|e| e.eval(x)).collect();
+        self.cones.iter().map(move |&(cone, dim)| {
+            let rows = &self.rows[r..r + dim];
             r += dim;
+            let s: Vec<f64> = rows.iter().map(|e| e.eval(x)).collect();
+            let scale = 1.0 + rows.iter().fold(0.0f64, |m, e| m.max(e.constant().abs()));
             let v = match cone {
                 Cone::Zero => s.iter().fold(0.0f64, |m, v| m.max(v.abs())),
                 Cone::NonNeg => (-s[0]).max(0.0),
@@ -125,9 +137,8 @@ impl ProblemBuilder {
                     (tail - s[0]).max(0.0)
                 }
             };
-            worst = worst.max(v);
-        }
-        worst
+            (v, scale)
+        })
     }
 
     /// Objective value at `x`.
@@ -239,7 +250,8 @@ pub struct SocpSettings {
     pub tol_feas: f64,
     /// Relative duality-gap tolerance passed to Clarabel.
     pub tol_gap_rel: f64,
-    /// Largest cone violation (scaled by 1 + |row constant|) accepted for `AlmostSolved`.
+    /// Largest cone violation, relative to 1 + the largest constant of the cone's rows,
+    /// accepted for `AlmostSolved` (and 1e-6 for `Solved`).
     pub almost_solved_violation: f64,
     /// Reuse the pattern and update values in place (true), or build a new solver each time.
     pub reuse: bool,
@@ -255,7 +267,7 @@ impl Default for SocpSettings {
             max_iter: 200,
             tol_feas: 1e-8,
             tol_gap_rel: 1e-8,
-            almost_solved_violation: 1e-5,
+            almost_solved_violation: 1e-4,
             reuse: true,
             refine_max_iter: 10,
             refine_reltol: 1e-13,
@@ -373,8 +385,8 @@ impl SocpSolver {
         let x = sol.x.clone();
         let iterations = sol.iterations;
         let seconds = start.elapsed().as_secs_f64();
-        let scale = 1.0 + b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let violation = prob.max_cone_violation(&x);
+        let relative = prob.max_relative_cone_violation(&x);
         let finite = x.iter().all(|v| v.is_finite());
         let accept = |ok: bool| -> Result<Solution, SolveError> {
             if ok && finite {
@@ -391,7 +403,7 @@ impl SocpSolver {
             }
         };
         match status {
-            SolverStatus::Solved => accept(violation <= 1e-6 * scale),
+            SolverStatus::Solved => accept(relative <= 1e-6),
             SolverStatus::AlmostSolved
             | SolverStatus::MaxIterations
             | SolverStatus::MaxTime
@@ -400,7 +412,7 @@ impl SocpSolver {
                 // accepted only after our own residual check (the scheme then re-checks the
                 // trajectory on the exact geometry)
                 let ok = matches!(status, SolverStatus::AlmostSolved)
-                    && violation <= self.settings.almost_solved_violation * scale;
+                    && relative <= self.settings.almost_solved_violation;
                 accept(ok)
             }
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
