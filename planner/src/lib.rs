@@ -22,6 +22,8 @@ pub mod params;
 pub mod power;
 pub mod report;
 pub mod schemes;
+#[cfg(feature = "service")]
+pub mod service;
 pub mod socp;
 pub mod trajectory;
 

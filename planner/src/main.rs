@@ -85,6 +85,13 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         only: Vec<String>,
     },
+    /// Serve plan requests over Zenoh (`cellsar/plan`), publish each plan on
+    /// `cellsar/<mission>/plan`; stops on SIGINT/SIGTERM.
+    #[cfg(feature = "service")]
+    Serve {
+        #[command(flatten)]
+        args: planner::service::ServeArgs,
+    },
     /// Expected least object distance E[d_min] in a disk: correct formula, as printed, Monte Carlo.
     Dmin {
         /// Disk radius R, m.
@@ -294,6 +301,17 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let report = reproduce::reproduce(&out, quick, &figures)
                 .with_context(|| format!("reproducing into {}", out.display()))?;
             out!("wrote {}", report.display());
+            Ok(())
+        }
+        #[cfg(feature = "service")]
+        Command::Serve { args } => {
+            let stop =
+                planner::service::stop_on_signals().map_err(|e| Failure::Internal(e.into()))?;
+            let report = planner::service::serve(&args, &stop).map_err(|e| match e {
+                planner::service::ServiceError::Config(_) => Failure::BadInput(e.into()),
+                _ => Failure::Internal(e.into()),
+            })?;
+            tracing::info!(?report, "plan service stopped");
             Ok(())
         }
         Command::Dmin {

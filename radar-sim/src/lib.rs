@@ -28,6 +28,8 @@ pub mod resolution;
 pub mod run;
 pub mod scene;
 pub mod scoring;
+#[cfg(feature = "service")]
+pub mod service;
 pub mod synth;
 pub mod track;
 pub mod waveform;

@@ -68,6 +68,20 @@ enum Cmd {
         #[arg(long, value_delimiter = ',', default_values_t = [50.0, 100.0, 150.0])]
         bandwidths_mhz: Vec<f64>,
     },
+    /// Service: synthesise the apertures processors ask for along each plan heard on Zenoh and
+    /// publish them as IQ frames on iceoryx2 (`cellsar/<mission>/echo`); stops on SIGINT/SIGTERM.
+    #[cfg(feature = "service")]
+    Echo {
+        #[command(flatten)]
+        args: radar_sim::service::EchoArgs,
+    },
+    /// Service: pull each planned mission's apertures from the echo (iceoryx2, or Zenoh via
+    /// cellsar-bridge), process them and publish detections, images and metrics on Zenoh.
+    #[cfg(feature = "service")]
+    ProcessService {
+        #[command(flatten)]
+        args: radar_sim::service::ProcessArgs,
+    },
 }
 
 fn bar(len: u64, what: &str) -> ProgressBar {
@@ -220,6 +234,8 @@ fn main() -> Result<()> {
         )
         .with_writer(std::io::stderr)
         .init();
+    #[cfg(feature = "service")]
+    bridge::iox::init_iceoryx_logging();
     match Cli::parse().cmd {
         Cmd::Simulate { plan, scene, out } => simulate(&plan, &scene, &out),
         Cmd::Process { input, out } => process(&input, &out).map(|_| ()),
@@ -238,5 +254,19 @@ fn main() -> Result<()> {
             out,
             bandwidths_mhz,
         } => resolution(&out, &bandwidths_mhz),
+        #[cfg(feature = "service")]
+        Cmd::Echo { args } => {
+            let stop = planner::service::stop_on_signals()?;
+            let report = radar_sim::service::run_echo(&args, &stop)?;
+            tracing::info!(?report, "echo stopped");
+            Ok(())
+        }
+        #[cfg(feature = "service")]
+        Cmd::ProcessService { args } => {
+            let stop = planner::service::stop_on_signals()?;
+            let report = radar_sim::service::run_processor(&args, &stop)?;
+            tracing::info!(?report, "processor stopped");
+            Ok(())
+        }
     }
 }

@@ -1,0 +1,211 @@
+//! What the launcher collects from the processor (detections, images, metrics), de-duplicated
+//! by mission and aperture, and the output files it writes from them: the same files, with
+//! the same numbers, as `cellsar-radar-sim closed-loop`.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use bridge::MissionId;
+use radar_sim::io::{write_csv, write_json, write_png_db, NpyType, NpyWriter};
+use radar_sim::run::{DetectionRow, Metrics};
+use radar_sim::service::{ApertureDetections, ApertureImage, MissionMetrics};
+
+/// Results of one mission as they arrive.
+#[derive(Debug)]
+pub struct Collector {
+    /// Mission id.
+    pub mission_id: MissionId,
+    /// Apertures in the mission.
+    pub apertures: usize,
+    out: PathBuf,
+    detections: BTreeMap<u32, ApertureDetections>,
+    images: BTreeMap<u32, ()>,
+    metrics: Option<Metrics>,
+    /// Messages received again (at-least-once delivery), dropped.
+    pub duplicates: u64,
+    /// Messages of other missions or apertures out of range, ignored.
+    pub foreign: u64,
+}
+
+/// What a message added.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Added {
+    /// Something new.
+    New,
+    /// Already held.
+    Duplicate,
+    /// Not for this mission.
+    Foreign,
+}
+
+impl Collector {
+    /// A collector writing images into `out/images`.
+    pub fn new(mission_id: MissionId, apertures: usize, out: &Path) -> Result<Self> {
+        let images = out.join("images");
+        std::fs::create_dir_all(&images)
+            .with_context(|| format!("creating {}", images.display()))?;
+        Ok(Collector {
+            mission_id,
+            apertures,
+            out: out.to_path_buf(),
+            detections: BTreeMap::new(),
+            images: BTreeMap::new(),
+            metrics: None,
+            duplicates: 0,
+            foreign: 0,
+        })
+    }
+
+    fn check(&mut self, id: MissionId, aperture: Option<u32>) -> Option<Added> {
+        if id != self.mission_id || aperture.is_some_and(|a| a as usize >= self.apertures) {
+            self.foreign += 1;
+            return Some(Added::Foreign);
+        }
+        None
+    }
+
+    /// Adds the detections of one aperture.
+    pub fn add_detections(&mut self, d: ApertureDetections) -> Added {
+        if let Some(a) = self.check(d.mission_id, Some(d.aperture)) {
+            return a;
+        }
+        if self.detections.contains_key(&d.aperture) {
+            self.duplicates += 1;
+            return Added::Duplicate;
+        }
+        self.detections.insert(d.aperture, d);
+        Added::New
+    }
+
+    /// Adds (and writes) the image of one aperture.
+    pub fn add_image(&mut self, img: &ApertureImage) -> Result<Added> {
+        if let Some(a) = self.check(img.mission_id, Some(img.aperture)) {
+            return Ok(a);
+        }
+        if self.images.contains_key(&img.aperture) {
+            self.duplicates += 1;
+            return Ok(Added::Duplicate);
+        }
+        write_image(&self.out.join("images"), img)?;
+        self.images.insert(img.aperture, ());
+        Ok(Added::New)
+    }
+
+    /// Adds the mission's metrics.
+    pub fn add_metrics(&mut self, m: MissionMetrics) -> Added {
+        if let Some(a) = self.check(m.mission_id, None) {
+            return a;
+        }
+        if self.metrics.is_some() {
+            self.duplicates += 1;
+            return Added::Duplicate;
+        }
+        self.metrics = Some(m.metrics);
+        Added::New
+    }
+
+    /// Apertures with both detections and image.
+    pub fn done(&self) -> usize {
+        self.detections
+            .keys()
+            .filter(|k| self.images.contains_key(k))
+            .count()
+    }
+
+    /// Apertures that lack detections or image.
+    pub fn missing(&self) -> Vec<u32> {
+        (0..self.apertures as u32)
+            .filter(|k| !(self.detections.contains_key(k) && self.images.contains_key(k)))
+            .collect()
+    }
+
+    /// Whether every aperture and the metrics are in.
+    pub fn complete(&self) -> bool {
+        self.done() == self.apertures && self.metrics.is_some()
+    }
+
+    /// Whether the metrics are in.
+    pub fn has_metrics(&self) -> bool {
+        self.metrics.is_some()
+    }
+
+    /// The detections of aperture `k`.
+    pub fn detections(&self, k: u32) -> Option<&ApertureDetections> {
+        self.detections.get(&k)
+    }
+
+    /// The metrics.
+    pub fn metrics(&self) -> Option<&Metrics> {
+        self.metrics.as_ref()
+    }
+
+    /// Every detection row, in aperture order.
+    pub fn rows(&self) -> Vec<DetectionRow> {
+        self.detections
+            .values()
+            .flat_map(|d| d.detections.iter().map(DetectionRow::from))
+            .collect()
+    }
+
+    /// Writes `detections.csv`, `detections.json` and `metrics.json` (formats of
+    /// `cellsar-radar-sim process`).
+    pub fn write(&self) -> Result<()> {
+        let rows = self.rows();
+        write_detections(&self.out, &rows)?;
+        if let Some(m) = &self.metrics {
+            write_json(&self.out.join("metrics.json"), m)?;
+        }
+        Ok(())
+    }
+}
+
+/// Writes `aperture_NNN.npy` (f32 multilook) and `.png` (dB, 40 dB range, detections marked).
+pub fn write_image(dir: &Path, img: &ApertureImage) -> Result<()> {
+    let (nx, ny) = (img.nx as usize, img.ny as usize);
+    let stem = format!("aperture_{:03}", img.aperture);
+    let mut w = NpyWriter::create(&dir.join(format!("{stem}.npy")), NpyType::F4, &[ny, nx])?;
+    w.write_f4(&img.multilook)?;
+    w.finish()?;
+    let markers: Vec<(usize, usize)> = img
+        .markers
+        .iter()
+        .map(|(x, y)| (*x as usize, *y as usize))
+        .collect();
+    write_png_db(
+        &dir.join(format!("{stem}.png")),
+        &img.multilook,
+        nx,
+        ny,
+        40.0,
+        &markers,
+    )?;
+    Ok(())
+}
+
+/// Writes `detections.csv` and `detections.json`.
+pub fn write_detections(out: &Path, rows: &[DetectionRow]) -> Result<()> {
+    let csv: Vec<Vec<String>> = rows
+        .iter()
+        .map(|d| {
+            vec![
+                d.aperture.to_string(),
+                format!("{:.3}", d.x_m),
+                format!("{:.3}", d.y_m),
+                format!("{:.2}", d.snr_db),
+                d.pixels.to_string(),
+                d.truth_id.map(|v| v.to_string()).unwrap_or_default(),
+                d.error_m.map(|v| format!("{v:.3}")).unwrap_or_default(),
+            ]
+        })
+        .collect();
+    write_csv(
+        &out.join("detections.csv"),
+        &[
+            "aperture", "x_m", "y_m", "snr_db", "pixels", "truth_id", "error_m",
+        ],
+        &csv,
+    )?;
+    write_json(&out.join("detections.json"), &rows)?;
+    Ok(())
+}

@@ -1,0 +1,860 @@
+//! `cellsar run`: the whole pipeline as supervised child processes.
+//!
+//! 1. Checks the inputs (mission, scene) before anything starts.
+//! 2. Chooses the Zenoh network: by default an isolated mesh on loopback (the launcher listens on
+//!    a free port, every child connects to it; no multicast, no router); with `--router` a
+//!    router child and every process its client; with Zenoh flags, those flags for everyone.
+//! 3. Starts the planner, echo and processor (and the bridge for `--transport zenoh` or
+//!    `--bridge`), watches their liveliness tokens, restarts a child that dies (at most
+//!    `--max-restarts` times each).
+//! 4. Asks the planner for the plan, writes `plan/`, collects every aperture's detections and
+//!    image and the metrics (asking the processor again for what it missed), and writes the
+//!    same files as `cellsar-radar-sim closed-loop`, plus `pipeline.json` and `report.md`.
+//! 5. Stops every child (SIGTERM, then SIGKILL after a grace period) at the end, on SIGINT or
+//!    SIGTERM, or when a child keeps failing.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context, Result};
+use bridge::envelope::DecodeLimits;
+use bridge::net::{QueryOptions, SubscribeOptions, WireFormat};
+use bridge::zconfig::Mode;
+use bridge::{keys, IoxArgs, NetError, ZenohArgs, ZenohNode};
+use indicatif::{ProgressBar, ProgressStyle};
+use planner::service::{
+    Plan, PlanRequest, PlanRequestOptions, ServiceStatus, MAX_PLAN_BYTES, PLAN_KEY,
+};
+use radar_sim::config::SceneFile;
+use radar_sim::service::{
+    ApertureDetections, ApertureImage, MissionContext, MissionMetrics, ResultAck, ResultRequest,
+    DEFAULT_MAX_FRAME_BYTES,
+};
+use serde_json::{json, Value};
+
+use crate::collect::{Added, Collector};
+use crate::events::Events;
+use crate::supervise::{stop_all, ChildSpec, Supervised};
+
+/// How IQ frames reach the processor.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transport {
+    /// iceoryx2 shared memory (echo and processor on this host).
+    Iox,
+    /// Zenoh: the bridge forwards the echo's iceoryx2 frames, the processor subscribes on Zenoh
+    /// (what a processor on another host does).
+    Zenoh,
+}
+
+/// Flags of `cellsar run`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RunArgs {
+    /// Mission file (TOML or JSON).
+    pub mission: PathBuf,
+    /// Scene file (TOML).
+    #[arg(long)]
+    pub scene: PathBuf,
+    /// Output directory (plan/, images/, detections.csv, metrics.json, report.json, report.md,
+    /// pipeline.json, logs/).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Keep only the landmark windows that end within this horizon, s.
+    #[arg(long)]
+    pub horizon_s: Option<f64>,
+    /// How IQ frames reach the processor.
+    #[arg(long, value_enum, default_value_t = Transport::Iox)]
+    pub transport: Transport,
+    /// Start the bridge (iceoryx2 -> Zenoh) even with `--transport iox`.
+    #[arg(long)]
+    pub bridge: bool,
+    /// Start a Zenoh router child; every process is its client.
+    #[arg(long)]
+    pub router: bool,
+    /// Do not start this role (planner, echo, processor, bridge): it runs elsewhere (another
+    /// host, a container) and is found on the Zenoh network. Repeatable.
+    #[arg(long = "external", value_name = "ROLE", value_parser = ["planner", "echo", "processor", "bridge"])]
+    pub external: Vec<String>,
+    /// Restarts allowed per child before the run is given up.
+    #[arg(long, default_value_t = 5)]
+    pub max_restarts: u32,
+    /// Largest IQ frame payload, bytes (sizes the iceoryx2 service and the frames).
+    #[arg(long, default_value_t = DEFAULT_MAX_FRAME_BYTES)]
+    pub max_frame_bytes: usize,
+    /// Apertures the processor asks for at once.
+    #[arg(long, default_value_t = 2)]
+    pub window: usize,
+    /// The processor asks again for an aperture after this many seconds without frames.
+    #[arg(long, default_value_t = 10.0)]
+    pub resend_after_s: f64,
+    /// Give up after this many seconds (default: no limit).
+    #[arg(long)]
+    pub timeout_s: Option<f64>,
+    /// Longest wait for the plan, s.
+    #[arg(long, default_value_t = 900.0)]
+    pub plan_timeout_s: f64,
+    /// Print events (children started/exited, liveliness, apertures) as JSON lines on stdout.
+    #[arg(long)]
+    pub events_json: bool,
+    /// Keep the services' state directory (`.state/`) after a successful run.
+    #[arg(long)]
+    pub keep_state: bool,
+    /// `RUST_LOG` of the children (their logs go to `<out>/logs/`).
+    #[arg(long, default_value = "info")]
+    pub child_log: String,
+    /// Zenoh flags (used by the launcher and passed to every child).
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
+    /// iceoryx2 flags (default: an isolated environment under `<out>/.state/iox`).
+    #[command(flatten)]
+    pub iox: IoxArgs,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Complete; every landmark in view detected.
+    Complete,
+    /// Complete, but a landmark in view was not detected (as `closed-loop` reports).
+    MissedLandmark,
+    /// Stopped by SIGINT/SIGTERM.
+    Interrupted,
+}
+
+struct Net {
+    launcher: ZenohArgs,
+    child: ZenohArgs,
+}
+
+fn free_port() -> Result<u16> {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").context("finding a free port")?;
+    Ok(l.local_addr().context("finding a free port")?.port())
+}
+
+fn user_gave_zenoh(z: &ZenohArgs) -> bool {
+    z.config.is_some() || z.mode.is_some() || !z.connect.is_empty() || !z.listen.is_empty()
+}
+
+fn absolute(p: &Path) -> Result<PathBuf> {
+    if p.is_absolute() {
+        Ok(p.to_path_buf())
+    } else {
+        Ok(std::env::current_dir()
+            .context("current directory")?
+            .join(p))
+    }
+}
+
+/// Runs the pipeline; returns how it ended.
+pub fn run(args: &RunArgs, stop: Arc<AtomicBool>) -> Result<Outcome> {
+    let wall = Instant::now();
+    // 1. inputs, checked before anything starts
+    let mut mission = planner::Mission::from_path(&args.mission)
+        .with_context(|| format!("mission {}", args.mission.display()))?;
+    if let Some(h) = args.horizon_s {
+        mission =
+            radar_sim::run::shorten(&mission, h).with_context(|| format!("--horizon-s {h}"))?;
+    }
+    let scene = SceneFile::from_path(&args.scene)?;
+    radar_sim::pipeline::RadarSetup::new(mission.params(), &scene).with_context(|| {
+        format!(
+            "scene {} with mission {}",
+            args.scene.display(),
+            args.mission.display()
+        )
+    })?;
+    for (flag, v) in [
+        ("--resend-after-s", args.resend_after_s),
+        ("--plan-timeout-s", args.plan_timeout_s),
+    ] {
+        if !(v > 0.0 && v.is_finite()) {
+            bail!("{flag} {v} must be a positive number");
+        }
+    }
+    let out = absolute(&args.out)?;
+    let state = out.join(".state");
+    let logs = out.join("logs");
+    for d in [&out, &state, &logs] {
+        std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
+    }
+    let scene_path = absolute(&args.scene)?;
+    let events = Arc::new(Events::new(args.events_json));
+    let exe = std::env::current_exe().context("locating the cellsar executable")?;
+
+    // 2. iceoryx2 environment and Zenoh network
+    let iox = if args.iox.root.is_none() && args.iox.prefix.is_none() && args.iox.config.is_none() {
+        IoxArgs {
+            root: Some(state.join("iox")),
+            prefix: Some(format!("cs{}_", std::process::id())),
+            config: None,
+        }
+    } else {
+        args.iox.clone()
+    };
+    let mut children: Vec<Supervised> = Vec::new();
+    let spec = |role: &str, a: Vec<String>| ChildSpec {
+        role: role.to_string(),
+        exe: exe.clone(),
+        args: a,
+        log: logs.join(format!("{role}.log")),
+        rust_log: Some(args.child_log.clone()),
+    };
+    let net = if args.router {
+        let port = free_port()?;
+        let ep = format!("tcp/127.0.0.1:{port}");
+        let router = ZenohArgs::isolated(std::slice::from_ref(&ep), &[]);
+        let mut ra = vec!["router".to_string(), "--instance".into(), "router".into()];
+        ra.extend(router.to_cli_args());
+        children.push(Supervised::start(spec("router", ra), &events)?);
+        let client = ZenohArgs {
+            config: None,
+            mode: Some(Mode::Client),
+            connect: vec![ep],
+            listen: Vec::new(),
+            no_multicast_scouting: true,
+        };
+        Net {
+            launcher: client.clone(),
+            child: client,
+        }
+    } else if user_gave_zenoh(&args.zenoh) {
+        let mut child = args.zenoh.clone();
+        child.listen.clear();
+        Net {
+            launcher: args.zenoh.clone(),
+            child,
+        }
+    } else {
+        let hub = format!("tcp/127.0.0.1:{}", free_port()?);
+        Net {
+            launcher: ZenohArgs::isolated(std::slice::from_ref(&hub), &[]),
+            child: ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[hub]),
+        }
+    };
+    events.emit(
+        "network",
+        &[
+            ("launcher", json!(net.launcher.to_cli_args())),
+            ("children", json!(net.child.to_cli_args())),
+            ("iox", json!(iox.to_cli_args())),
+        ],
+    );
+    let node = open_with_retry(&net.launcher, &stop)?;
+    let result = run_on(
+        args,
+        &mission,
+        &scene_path,
+        &out,
+        &state,
+        &node,
+        &net,
+        &iox,
+        &events,
+        &stop,
+        &mut children,
+        &spec,
+        wall,
+    );
+    stop_all(&mut children, Duration::from_secs(10), &events);
+    if let Err(e) = node.close() {
+        tracing::debug!(error = %e, "closing the launcher's session");
+    }
+    remove_shm(&iox);
+    if let Ok(o) = &result {
+        if *o != Outcome::Interrupted && !args.keep_state {
+            let _ = std::fs::remove_dir_all(&state);
+        }
+    }
+    result
+}
+
+fn open_with_retry(z: &ZenohArgs, stop: &AtomicBool) -> Result<ZenohNode> {
+    let config = z.to_config()?;
+    let instance = format!("launcher-{}", std::process::id());
+    let deadline = Instant::now() + Duration::from_secs(15);
+    loop {
+        match ZenohNode::open(config.clone(), "launcher", &instance) {
+            Ok(n) => return Ok(n),
+            Err(e) if Instant::now() < deadline && !stop.load(Ordering::Relaxed) => {
+                tracing::debug!(error = %e, "opening the Zenoh session; retrying");
+                std::thread::sleep(Duration::from_millis(200));
+            }
+            Err(e) => return Err(e).context("opening the launcher's Zenoh session"),
+        }
+    }
+}
+
+fn remove_shm(iox: &IoxArgs) {
+    let Some(prefix) = &iox.prefix else { return };
+    if let Ok(rd) = std::fs::read_dir("/dev/shm") {
+        for e in rd.flatten() {
+            if e.file_name().to_string_lossy().starts_with(prefix.as_str()) {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_on(
+    args: &RunArgs,
+    mission: &planner::Mission,
+    scene_path: &Path,
+    out: &Path,
+    state: &Path,
+    node: &ZenohNode,
+    net: &Net,
+    iox: &IoxArgs,
+    events: &Arc<Events>,
+    stop: &AtomicBool,
+    children: &mut Vec<Supervised>,
+    spec: &dyn Fn(&str, Vec<String>) -> ChildSpec,
+    wall: Instant,
+) -> Result<Outcome> {
+    let alive = node.watch_liveliness(keys::ALIVE_ALL)?;
+    let limits = DecodeLimits::default();
+    let detections = node.subscriber::<ApertureDetections>(
+        "cellsar/*/detections",
+        SubscribeOptions {
+            capacity: 1024,
+            ..SubscribeOptions::default()
+        },
+    )?;
+    let images = node.subscriber::<ApertureImage>(
+        "cellsar/*/image/*",
+        SubscribeOptions {
+            capacity: 256,
+            limits,
+            ..SubscribeOptions::default()
+        },
+    )?;
+    let metrics =
+        node.subscriber::<MissionMetrics>("cellsar/*/metrics", SubscribeOptions::default())?;
+    let statuses = node.subscriber::<ServiceStatus>(
+        "cellsar/*/status/*",
+        SubscribeOptions {
+            capacity: 1024,
+            ..SubscribeOptions::default()
+        },
+    )?;
+
+    // 3. children
+    let zc = net.child.to_cli_args();
+    let frames = args.max_frame_bytes.to_string();
+    let mut pa = vec![
+        "planner".to_string(),
+        "--state-dir".into(),
+        state.join("planner").display().to_string(),
+    ];
+    pa.extend(zc.clone());
+    let local = |role: &str| !args.external.iter().any(|r| r == role);
+    if local("planner") {
+        children.push(Supervised::start(spec("planner", pa), events)?);
+    }
+    let mut ea = vec![
+        "echo".to_string(),
+        "--scene".into(),
+        scene_path.display().to_string(),
+        "--max-frame-bytes".into(),
+        frames.clone(),
+    ];
+    ea.extend(zc.clone());
+    ea.extend(iox.to_cli_args());
+    if local("echo") {
+        children.push(Supervised::start(spec("echo", ea), events)?);
+    }
+    let mut xa = vec![
+        "process".to_string(),
+        "--scene".into(),
+        scene_path.display().to_string(),
+        "--max-frame-bytes".into(),
+        frames.clone(),
+        "--frames".into(),
+        match args.transport {
+            Transport::Iox => "iox".into(),
+            Transport::Zenoh => "zenoh".into(),
+        },
+        "--window".into(),
+        args.window.to_string(),
+        "--resend-after-s".into(),
+        args.resend_after_s.to_string(),
+        "--state-dir".into(),
+        state.join("processor").display().to_string(),
+    ];
+    xa.extend(zc.clone());
+    xa.extend(iox.to_cli_args());
+    if local("processor") {
+        children.push(Supervised::start(spec("processor", xa), events)?);
+    }
+
+    let deadline = args.timeout_s.map(|t| wall + Duration::from_secs_f64(t));
+    let backoff = Duration::from_millis(500);
+    let supervise = |children: &mut Vec<Supervised>| -> Result<()> {
+        for c in children.iter_mut() {
+            c.poll(events, args.max_restarts, backoff)?;
+        }
+        Ok(())
+    };
+    let alive_log = |events: &Events| {
+        while let Some(e) = alive.next_event(Duration::ZERO) {
+            if let Some((role, instance)) = keys::parse_alive(&e.key) {
+                if !e.alive {
+                    tracing::warn!(role, instance, "liveliness lost");
+                }
+                events.emit(
+                    "alive",
+                    &[
+                        ("role", role.into()),
+                        ("instance", instance.into()),
+                        ("alive", e.alive.into()),
+                    ],
+                );
+            }
+        }
+    };
+    let check_time = |what: &str| -> Result<()> {
+        if let Some(d) = deadline {
+            if Instant::now() >= d {
+                bail!(
+                    "timed out after {:.0} s while {what}",
+                    wall.elapsed().as_secs_f64()
+                );
+            }
+        }
+        Ok(())
+    };
+
+    // 4a. the plan
+    let spinner = ProgressBar::new_spinner();
+    if let Ok(s) = ProgressStyle::with_template("{spinner} {prefix:>9} {msg} [{elapsed}]") {
+        spinner.set_style(s);
+    }
+    spinner.set_prefix("planning");
+    spinner.enable_steady_tick(Duration::from_millis(200));
+    let request = PlanRequest {
+        mission: mission.to_file_struct(),
+        options: PlanRequestOptions::default(),
+    };
+    let plan_started = Instant::now();
+    let planner_alive = || {
+        alive
+            .alive()
+            .iter()
+            .any(|k| keys::parse_alive(k).is_some_and(|(role, _)| role == "planner"))
+    };
+    let plan: Plan = std::thread::scope(|scope| -> Result<Plan> {
+        let mut attempt = 0u32;
+        loop {
+            attempt += 1;
+            // wait for the planner's token
+            while !planner_alive() {
+                if stop.load(Ordering::Relaxed) {
+                    bail!("interrupted");
+                }
+                check_time("waiting for the planner")?;
+                supervise(children)?;
+                alive_log(events);
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            let req = request.clone();
+            let timeout = Duration::from_secs_f64(args.plan_timeout_s);
+            let q = scope.spawn(move || {
+                node.query_one::<PlanRequest, Plan>(
+                    PLAN_KEY,
+                    &req,
+                    &QueryOptions {
+                        timeout,
+                        format: WireFormat::Bincode,
+                        limits: DecodeLimits {
+                            max_body_bytes: MAX_PLAN_BYTES,
+                            verify_crc: true,
+                        },
+                        ..QueryOptions::default()
+                    },
+                )
+            });
+            while !q.is_finished() {
+                if stop.load(Ordering::Relaxed) {
+                    bail!("interrupted");
+                }
+                check_time("planning")?;
+                supervise(children)?;
+                alive_log(events);
+                while let Some(s) = statuses.try_recv() {
+                    if s.message.role == "planner" {
+                        spinner.set_message(s.message.message.clone());
+                    }
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            match q
+                .join()
+                .map_err(|_| anyhow!("the plan query thread panicked"))?
+            {
+                Ok(r) => return Ok(r.message),
+                Err(NetError::Remote { message, .. })
+                    if !message.contains("stopped while planning") =>
+                {
+                    bail!("the planner refused the mission: {message}")
+                }
+                Err(e) if attempt < 1 + args.max_restarts => {
+                    tracing::warn!(error = %e, attempt, "no plan; asking again");
+                    events.emit(
+                        "plan_retry",
+                        &[("attempt", attempt.into()), ("error", e.to_string().into())],
+                    );
+                    std::thread::sleep(Duration::from_millis(200));
+                }
+                Err(e) => return Err(e).context("asking the planner for the plan"),
+            }
+        }
+    })?;
+    let plan_s = plan_started.elapsed().as_secs_f64();
+    spinner.finish_and_clear();
+    let id = plan.mission_id;
+    let resolved = plan.mission()?;
+    let plan_dir = out.join("plan");
+    planner::report::write_plan_dir(&plan_dir, &resolved, &plan.result)
+        .with_context(|| format!("writing {}", plan_dir.display()))?;
+    let scene = SceneFile::from_path(scene_path)?;
+    let ctx = MissionContext::new(&Arc::new(plan.clone()), &scene, args.max_frame_bytes)?;
+    let n = ctx.apertures.len();
+    println_human(args, &format!(
+        "planned {} slots in {plan_s:.1} s: energy {:.0} J, feasible {}; mission {id}, {n} apertures, {} frames of {} pulses",
+        resolved.slots(),
+        plan.summary.energy_j,
+        plan.summary.feasible,
+        ctx.layout.total_frames(),
+        ctx.layout.frame_pulses()
+    ));
+    events.emit(
+        "planned",
+        &[
+            ("mission_id", id.to_string().into()),
+            ("apertures", n.into()),
+            ("frames", ctx.layout.total_frames().into()),
+            ("frame_pulses", ctx.layout.frame_pulses().into()),
+            ("plan_s", plan_s.into()),
+        ],
+    );
+    if (args.transport == Transport::Zenoh || args.bridge) && local("bridge") {
+        let mut ba = vec![
+            "bridge".to_string(),
+            "--service".into(),
+            format!("{}@out", keys::mission(id, "echo")?),
+            "--max-frame-bytes".into(),
+            frames,
+        ];
+        ba.extend(zc);
+        ba.extend(iox.to_cli_args());
+        children.push(Supervised::start(spec("bridge", ba), events)?);
+    }
+
+    // 4b. collect
+    let mut col = Collector::new(id, n, out)?;
+    let bar = ProgressBar::new(n as u64);
+    if let Ok(s) = ProgressStyle::with_template(
+        "{prefix:>9} [{bar:40}] {pos}/{len} apertures ({elapsed}, eta {eta}) {msg}",
+    ) {
+        bar.set_style(s.progress_chars("=> "));
+    }
+    bar.set_prefix("imaging");
+    let started = Instant::now();
+    let mut last_status: BTreeMap<String, ServiceStatus> = BTreeMap::new();
+    let mut last_resend = Instant::now();
+    let mut resend_requests = 0u64;
+    let mut first_seen_done: BTreeMap<u32, Instant> = BTreeMap::new();
+    let mut aperture_times: Vec<f64> = Vec::new();
+    let interrupted = loop {
+        if stop.load(Ordering::Relaxed) {
+            break true;
+        }
+        check_time("collecting results")?;
+        supervise(children)?;
+        alive_log(events);
+        let mut progressed = false;
+        while let Some(d) = detections.try_recv() {
+            let k = d.message.aperture;
+            if col.add_detections(d.message) == Added::New {
+                progressed = true;
+                if let Some(dm) = col.detections(k) {
+                    bar.set_message(format!(
+                        "aperture {k}: {} detections, landmark {}",
+                        dm.detections.len(),
+                        match dm.landmark_detected {
+                            Some(true) => "detected",
+                            Some(false) => "missed",
+                            None => "-",
+                        }
+                    ));
+                    events.emit(
+                        "detections",
+                        &[
+                            ("aperture", k.into()),
+                            ("count", dm.detections.len().into()),
+                        ],
+                    );
+                }
+            }
+        }
+        while let Some(img) = images.try_recv() {
+            if col.add_image(&img.message)? == Added::New {
+                progressed = true;
+            }
+        }
+        while let Some(m) = metrics.try_recv() {
+            if col.add_metrics(m.message) == Added::New {
+                events.emit("metrics", &[]);
+            }
+        }
+        while let Some(s) = statuses.try_recv() {
+            if s.message.mission_id != id {
+                continue;
+            }
+            if s.message.role == "processor" && s.message.state == "failed" {
+                bail!("the processor gave up the mission: {}", s.message.message);
+            }
+            events.emit(
+                "status",
+                &[
+                    ("role", s.message.role.clone().into()),
+                    ("state", s.message.state.clone().into()),
+                    ("done", s.message.done.into()),
+                    ("counters", json!(s.message.counters)),
+                ],
+            );
+            if s.message.role == "processor" {
+                for k in &s.message.done_items {
+                    first_seen_done
+                        .entry(*k as u32)
+                        .or_insert_with(Instant::now);
+                }
+            }
+            last_status.insert(s.message.role.clone(), s.message);
+        }
+        if progressed {
+            let done = col.done();
+            if done as u64 > bar.position() {
+                aperture_times.push(started.elapsed().as_secs_f64());
+                events.emit("aperture", &[("done", done.into()), ("total", n.into())]);
+            }
+            bar.set_position(done as u64);
+        }
+        if col.complete() {
+            break false;
+        }
+        // ask the processor again for results it has but that did not arrive here
+        if last_resend.elapsed() >= Duration::from_secs(2) {
+            last_resend = Instant::now();
+            let stale: Vec<u32> = col
+                .missing()
+                .into_iter()
+                .filter(|k| {
+                    first_seen_done
+                        .get(k)
+                        .is_some_and(|t| t.elapsed() >= Duration::from_secs(2))
+                })
+                .collect();
+            let want_metrics = !col.has_metrics()
+                && col.done() == n
+                && last_status
+                    .get("processor")
+                    .is_some_and(|s| s.state == "done");
+            if !stale.is_empty() || want_metrics {
+                resend_requests += 1;
+                events.emit(
+                    "resend_request",
+                    &[
+                        ("apertures", json!(stale)),
+                        ("metrics", want_metrics.into()),
+                    ],
+                );
+                let req = ResultRequest {
+                    mission_id: id,
+                    apertures: stale,
+                    metrics: want_metrics,
+                };
+                match node.query_one::<ResultRequest, ResultAck>(
+                    &keys::mission(id, "results")?,
+                    &req,
+                    &QueryOptions {
+                        timeout: Duration::from_secs(2),
+                        ..QueryOptions::default()
+                    },
+                ) {
+                    Ok(a) => {
+                        tracing::info!(republished = ?a.message.republished, missing = ?a.message.missing, "results asked again")
+                    }
+                    Err(e) => tracing::debug!(error = %e, "asking for results again"),
+                }
+            }
+        }
+        if !progressed {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    };
+    bar.finish_and_clear();
+    if interrupted {
+        events.emit("interrupted", &[]);
+        col.write()?;
+        return Ok(Outcome::Interrupted);
+    }
+
+    // 5. outputs
+    col.write()?;
+    let m = col
+        .metrics()
+        .cloned()
+        .ok_or_else(|| anyhow!("no metrics"))?;
+    let report = radar_sim::run::loop_report(&resolved, &plan.result.evaluation, m);
+    radar_sim::io::write_json(&out.join("report.json"), &report)?;
+    let wall_s = wall.elapsed().as_secs_f64();
+    let restarts: BTreeMap<String, u32> = children
+        .iter()
+        .map(|c| (c.spec.role.clone(), c.restarts))
+        .collect();
+    let pipeline = json!({
+        "mission": resolved.name(),
+        "mission_id": id.to_string(),
+        "apertures": n,
+        "frames": ctx.layout.total_frames(),
+        "frame_pulses": ctx.layout.frame_pulses(),
+        "transport": format!("{:?}", args.transport).to_lowercase(),
+        "router": args.router,
+        "wall_s": wall_s,
+        "plan_s": plan_s,
+        "imaging_s": started.elapsed().as_secs_f64(),
+        "aperture_done_s": aperture_times,
+        "restarts": restarts,
+        "collector": {"duplicates": col.duplicates, "foreign": col.foreign, "resend_requests": resend_requests,
+            "detections": detections.counters().snapshot(),
+            "images": images.counters().snapshot(),
+            "metrics": metrics.counters().snapshot(),
+            "status": statuses.counters().snapshot()},
+        "services": last_status,
+        "events": events.all(),
+    });
+    std::fs::write(
+        out.join("pipeline.json"),
+        serde_json::to_string_pretty(&pipeline)?,
+    )
+    .with_context(|| format!("writing {}", out.join("pipeline.json").display()))?;
+    write_report_md(out, &resolved, &plan, &report, &pipeline, n)?;
+    println_human(args, "aperture landmark  in-view  detected  SNR/dB");
+    for r in &report.rows {
+        println_human(
+            args,
+            &format!(
+                "{:>8} {:>8} {:>8.2} {:>9} {:>7.1}",
+                r.aperture,
+                r.landmark.map(|l| l.to_string()).unwrap_or_default(),
+                r.in_view_fraction,
+                r.detected,
+                r.snr_db.unwrap_or(f64::NAN)
+            ),
+        );
+    }
+    println_human(
+        args,
+        &format!(
+            "every landmark in view detected: {}",
+            if report.all_in_view_detected {
+                "yes"
+            } else {
+                "NO"
+            }
+        ),
+    );
+    println_human(
+        args,
+        &format!("wall time {wall_s:.1} s; outputs in {}", out.display()),
+    );
+    events.emit(
+        "done",
+        &[
+            ("wall_s", wall_s.into()),
+            ("all_in_view_detected", report.all_in_view_detected.into()),
+        ],
+    );
+    Ok(if report.all_in_view_detected {
+        Outcome::Complete
+    } else {
+        Outcome::MissedLandmark
+    })
+}
+
+fn println_human(args: &RunArgs, line: &str) {
+    if args.events_json {
+        tracing::info!("{line}");
+    } else {
+        println!("{line}");
+    }
+}
+
+fn write_report_md(
+    out: &Path,
+    mission: &planner::Mission,
+    plan: &Plan,
+    report: &radar_sim::run::LoopReport,
+    pipeline: &Value,
+    n: usize,
+) -> Result<()> {
+    use std::fmt::Write as _;
+    let m = &report.metrics;
+    let mut s = String::new();
+    let _ = writeln!(s, "# cellsar run: {}\n", mission.name());
+    let _ = writeln!(
+        s,
+        "- plan: {} slots, energy {:.0} J (feasible {}), planned in {:.1} s",
+        mission.slots(),
+        plan.summary.energy_j,
+        plan.summary.feasible,
+        pipeline["plan_s"].as_f64().unwrap_or(f64::NAN)
+    );
+    let _ = writeln!(
+        s,
+        "- imaging: {n} apertures in {:.1} s; wall time {:.1} s",
+        pipeline["imaging_s"].as_f64().unwrap_or(f64::NAN),
+        pipeline["wall_s"].as_f64().unwrap_or(f64::NAN)
+    );
+    let _ = writeln!(
+        s,
+        "- detection: Pd {:.3} over {} objects ≥ 13 dB, {} false alarms (design {:.2}), mean position error {:.2} m",
+        m.pd, m.strong_objects, m.false_alarms, m.design_false_alarms, m.mean_position_error_m
+    );
+    let _ = writeln!(
+        s,
+        "- canceller: direct-path reduction {:.1} dB, residual {:.2} dB over noise",
+        m.dpi_reduction_db, m.residual_to_noise_db
+    );
+    let _ = writeln!(
+        s,
+        "- every landmark in view detected: {}",
+        if report.all_in_view_detected {
+            "yes"
+        } else {
+            "NO"
+        }
+    );
+    let _ = writeln!(s, "- restarts: {}", pipeline["restarts"]);
+    let _ = writeln!(
+        s,
+        "\n| aperture | landmark | in view | detected | SNR/dB |\n|---:|---:|---:|:---:|---:|"
+    );
+    for r in &report.rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2} | {} | {:.1} |",
+            r.aperture,
+            r.landmark.map(|l| l.to_string()).unwrap_or_default(),
+            r.in_view_fraction,
+            if r.detected { "yes" } else { "no" },
+            r.snr_db.unwrap_or(f64::NAN)
+        );
+    }
+    let _ = writeln!(s, "\nFiles: plan/, images/aperture_NNN.{{npy,png}}, detections.csv, detections.json, metrics.json, report.json, pipeline.json (timings, counters, events), logs/.");
+    std::fs::write(out.join("report.md"), s)
+        .with_context(|| format!("writing {}", out.join("report.md").display()))
+}

@@ -1,0 +1,325 @@
+//! Child processes: start, watch, restart within a bound, stop (SIGTERM, then SIGKILL after a
+//! grace period), always reaped.
+
+use std::fs::OpenOptions;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::events::Events;
+
+/// Environment variable with the launcher's pid, set for every child.
+pub const PARENT_ENV: &str = "CELLSAR_LAUNCHER_PID";
+
+/// In a child of the launcher (`CELLSAR_LAUNCHER_PID` set): sets `stop` when the launcher is
+/// gone (killed without a chance to stop its children), so no service outlives its run.
+pub fn exit_with_launcher(stop: &std::sync::Arc<std::sync::atomic::AtomicBool>) {
+    let Some(launcher) = std::env::var(PARENT_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+    else {
+        return;
+    };
+    let stop = stop.clone();
+    let _ = std::thread::Builder::new()
+        .name("launcher-watch".into())
+        .spawn(move || loop {
+            if std::os::unix::process::parent_id() != launcher {
+                tracing::warn!(launcher, "the launcher is gone: stopping");
+                stop.store(true, std::sync::atomic::Ordering::Relaxed);
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(250));
+        });
+}
+
+/// Errors of the supervisor.
+#[derive(Debug, thiserror::Error)]
+pub enum SuperviseError {
+    /// A child could not be started.
+    #[error("starting {role} ({exe}): {source}")]
+    Spawn {
+        /// Role of the child.
+        role: String,
+        /// Executable.
+        exe: String,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The log file of a child could not be opened.
+    #[error("log file {path}: {source}")]
+    Log {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A child kept failing.
+    #[error("{role} failed {failures} times (last: {last}); giving up (see {log})")]
+    KeepsFailing {
+        /// Role.
+        role: String,
+        /// Failures.
+        failures: u32,
+        /// Last exit status.
+        last: String,
+        /// Its log file.
+        log: String,
+    },
+}
+
+/// What to start.
+#[derive(Debug, Clone)]
+pub struct ChildSpec {
+    /// Role (planner, echo, processor, bridge, router).
+    pub role: String,
+    /// Executable.
+    pub exe: PathBuf,
+    /// Arguments.
+    pub args: Vec<String>,
+    /// Log file (stdout and stderr, appended across restarts).
+    pub log: PathBuf,
+    /// `RUST_LOG` for the child (None: inherit).
+    pub rust_log: Option<String>,
+}
+
+/// One supervised child.
+#[derive(Debug)]
+pub struct Supervised {
+    /// What it is.
+    pub spec: ChildSpec,
+    child: Option<Child>,
+    /// Restarts so far.
+    pub restarts: u32,
+    /// Unexpected exits so far.
+    pub failures: u32,
+    restart_at: Option<Instant>,
+    last_exit: Option<String>,
+}
+
+/// What happened to a child during a poll.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ChildEvent {
+    /// It exited; it will be restarted.
+    Exited {
+        /// Role.
+        role: String,
+        /// Exit status.
+        status: String,
+    },
+    /// It was started again.
+    Restarted {
+        /// Role.
+        role: String,
+        /// New pid.
+        pid: u32,
+        /// Restart count.
+        restarts: u32,
+    },
+}
+
+impl Supervised {
+    /// Starts `spec`.
+    pub fn start(spec: ChildSpec, events: &Events) -> Result<Supervised, SuperviseError> {
+        let mut s = Supervised {
+            spec,
+            child: None,
+            restarts: 0,
+            failures: 0,
+            restart_at: None,
+            last_exit: None,
+        };
+        s.spawn(events)?;
+        Ok(s)
+    }
+
+    fn spawn(&mut self, events: &Events) -> Result<u32, SuperviseError> {
+        let log = open_log(&self.spec.log)?;
+        let log2 = log.try_clone().map_err(|source| SuperviseError::Log {
+            path: self.spec.log.clone(),
+            source,
+        })?;
+        let mut cmd = Command::new(&self.spec.exe);
+        cmd.args(&self.spec.args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::from(log))
+            .stderr(Stdio::from(log2));
+        if let Some(l) = &self.spec.rust_log {
+            cmd.env("RUST_LOG", l);
+        }
+        cmd.env(PARENT_ENV, std::process::id().to_string());
+        let child = cmd.spawn().map_err(|source| SuperviseError::Spawn {
+            role: self.spec.role.clone(),
+            exe: self.spec.exe.display().to_string(),
+            source,
+        })?;
+        let pid = child.id();
+        events.emit(
+            "child_started",
+            &[
+                ("role", self.spec.role.clone().into()),
+                ("pid", pid.into()),
+                ("restarts", self.restarts.into()),
+            ],
+        );
+        tracing::info!(role = %self.spec.role, pid, "started");
+        self.child = Some(child);
+        Ok(pid)
+    }
+
+    /// The pid of the running child.
+    pub fn pid(&self) -> Option<u32> {
+        self.child.as_ref().map(Child::id)
+    }
+
+    /// Checks the child; restarts it (after `backoff`) if it exited, unless it has failed
+    /// more than `max_restarts` times.
+    pub fn poll(
+        &mut self,
+        events: &Events,
+        max_restarts: u32,
+        backoff: Duration,
+    ) -> Result<Option<ChildEvent>, SuperviseError> {
+        if let Some(c) = self.child.as_mut() {
+            match c.try_wait() {
+                Ok(None) => return Ok(None),
+                Ok(Some(status)) => {
+                    self.child = None;
+                    self.failures += 1;
+                    let st = describe(status);
+                    tracing::warn!(role = %self.spec.role, status = %st, "child exited");
+                    events.emit(
+                        "child_exited",
+                        &[
+                            ("role", self.spec.role.clone().into()),
+                            ("status", st.clone().into()),
+                        ],
+                    );
+                    self.last_exit = Some(st.clone());
+                    if self.failures > max_restarts {
+                        return Err(SuperviseError::KeepsFailing {
+                            role: self.spec.role.clone(),
+                            failures: self.failures,
+                            last: st,
+                            log: self.spec.log.display().to_string(),
+                        });
+                    }
+                    self.restart_at = Some(Instant::now() + backoff);
+                    return Ok(Some(ChildEvent::Exited {
+                        role: self.spec.role.clone(),
+                        status: st,
+                    }));
+                }
+                Err(e) => {
+                    tracing::warn!(role = %self.spec.role, error = %e, "try_wait");
+                    return Ok(None);
+                }
+            }
+        }
+        if let Some(t) = self.restart_at {
+            if Instant::now() >= t {
+                self.restart_at = None;
+                self.restarts += 1;
+                let pid = self.spawn(events)?;
+                events.emit(
+                    "child_restarted",
+                    &[
+                        ("role", self.spec.role.clone().into()),
+                        ("pid", pid.into()),
+                        ("restarts", self.restarts.into()),
+                    ],
+                );
+                return Ok(Some(ChildEvent::Restarted {
+                    role: self.spec.role.clone(),
+                    pid,
+                    restarts: self.restarts,
+                }));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Sends SIGTERM (if running).
+    pub fn terminate(&self) {
+        if let Some(pid) = self.pid() {
+            signal(pid, "TERM");
+        }
+    }
+
+    /// Waits for the child to exit until `deadline`, then kills it; always reaps it.
+    pub fn reap(&mut self, deadline: Instant) -> Option<String> {
+        let mut c = self.child.take()?;
+        loop {
+            match c.try_wait() {
+                Ok(Some(s)) => return Some(describe(s)),
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(20))
+                }
+                _ => {
+                    tracing::warn!(role = %self.spec.role, "did not stop in time: killed");
+                    let _ = c.kill();
+                    return c.wait().ok().map(|s| format!("{} (killed)", describe(s)));
+                }
+            }
+        }
+    }
+}
+
+impl Drop for Supervised {
+    fn drop(&mut self) {
+        if let Some(c) = self.child.as_mut() {
+            if let Ok(None) = c.try_wait() {
+                signal(c.id(), "CONT");
+                let _ = c.kill();
+            }
+            let _ = c.wait();
+        }
+    }
+}
+
+/// Stops every child: SIGTERM to all, then waits up to `grace` for each, then SIGKILL.
+pub fn stop_all(children: &mut [Supervised], grace: Duration, events: &Events) {
+    for c in children.iter() {
+        c.terminate();
+    }
+    let deadline = Instant::now() + grace;
+    for c in children.iter_mut() {
+        if let Some(st) = c.reap(deadline) {
+            events.emit(
+                "child_stopped",
+                &[("role", c.spec.role.clone().into()), ("status", st.into())],
+            );
+        }
+    }
+}
+
+fn open_log(path: &Path) -> Result<std::fs::File, SuperviseError> {
+    OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .map_err(|source| SuperviseError::Log {
+            path: path.to_path_buf(),
+            source,
+        })
+}
+
+fn describe(s: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (s.code(), s.signal()) {
+        (Some(c), _) => format!("exit code {c}"),
+        (None, Some(sig)) => format!("killed by signal {sig}"),
+        _ => s.to_string(),
+    }
+}
+
+/// Sends `kill -<sig> <pid>` (no error if the process is gone).
+pub fn signal(pid: u32, sig: &str) {
+    let _ = Command::new("kill")
+        .args([format!("-{sig}"), pid.to_string()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status();
+}

@@ -1,0 +1,396 @@
+//! Helpers of the pipeline's system tests: the `cellsar` binary with its event stream, the
+//! in-process closed-loop reference, output comparison, bounded waits, reaped children.
+#![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
+
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::mpsc;
+use std::sync::{Mutex, OnceLock};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+pub fn exe() -> &'static str {
+    env!("CARGO_BIN_EXE_cellsar")
+}
+
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+/// The shortened paper mission of radar-sim (30 landmarks, 10 s each; cut with --horizon-s).
+pub fn mission() -> PathBuf {
+    root().join("radar-sim/missions/default.toml")
+}
+
+/// The small test scene.
+pub fn scene() -> PathBuf {
+    root().join("pipeline/tests/data/small-scene.toml")
+}
+
+/// `cellsar-radar-sim closed-loop` on the same inputs, in this process (same library calls),
+/// cached per horizon: `<dir>/processed/{detections.csv,metrics.json,...}`, `<dir>/report.json`.
+pub fn reference(horizon_s: f64) -> PathBuf {
+    static CACHE: OnceLock<Mutex<HashMap<u64, (tempfile::TempDir, PathBuf)>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    let mut c = cache.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, p)) = c.get(&horizon_s.to_bits()) {
+        return p.clone();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("closed-loop");
+    let m = planner::Mission::from_path(&mission()).unwrap();
+    let m = radar_sim::run::shorten(&m, horizon_s).unwrap();
+    let scene = radar_sim::config::SceneFile::from_path(&scene()).unwrap();
+    let result = planner::plan(&m, &planner::PlanOptions::default()).unwrap();
+    planner::report::write_plan_dir(&out.join("plan"), &m, &result).unwrap();
+    let (m2, traj) = planner::report::read_plan_dir(&out.join("plan")).unwrap();
+    radar_sim::run::simulate(&m2, &traj, &scene, &out.join("recording"), &mut |_, _| {}).unwrap();
+    let metrics = radar_sim::run::process(
+        &out.join("recording"),
+        &out.join("processed"),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let report = radar_sim::run::loop_report(&m2, &result.evaluation, metrics);
+    radar_sim::io::write_json(&out.join("report.json"), &report).unwrap();
+    c.insert(horizon_s.to_bits(), (dir, out.clone()));
+    out
+}
+
+/// Asserts that the launcher's outputs in `out` are those of the closed loop in `reference`:
+/// the same bytes in detections.csv/.json, metrics.json, report.json and every image.
+pub fn assert_same_as_reference(out: &Path, reference: &Path) {
+    let pairs = [
+        ("detections.csv", "processed/detections.csv"),
+        ("detections.json", "processed/detections.json"),
+        ("metrics.json", "processed/metrics.json"),
+        ("report.json", "report.json"),
+        ("plan/trajectory.csv", "plan/trajectory.csv"),
+        ("plan/mission.toml", "plan/mission.toml"),
+    ];
+    for (a, b) in pairs {
+        let x = std::fs::read(out.join(a)).unwrap_or_else(|e| panic!("{a}: {e}"));
+        let y = std::fs::read(reference.join(b)).unwrap();
+        assert!(
+            x == y,
+            "{a} differs from closed-loop's {b}:\n--- pipeline\n{}\n--- closed-loop\n{}",
+            String::from_utf8_lossy(&x),
+            String::from_utf8_lossy(&y)
+        );
+    }
+    let imgs = reference.join("processed/images");
+    let mut n = 0;
+    for e in std::fs::read_dir(&imgs).unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        if name.ends_with(".npy") || name.ends_with(".png") {
+            let x = std::fs::read(out.join("images").join(&name))
+                .unwrap_or_else(|e| panic!("images/{name}: {e}"));
+            assert!(
+                x == std::fs::read(e.path()).unwrap(),
+                "images/{name} differs"
+            );
+            n += 1;
+        }
+    }
+    assert!(n >= 2, "no images compared");
+}
+
+/// Detections per aperture in a detections.csv.
+pub fn rows_per_aperture(csv: &Path) -> HashMap<String, usize> {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut m = HashMap::new();
+    for l in text.lines().skip(1) {
+        *m.entry(l.split(',').next().unwrap().to_string())
+            .or_insert(0) += 1;
+    }
+    m
+}
+
+/// A `cellsar run` with `--events-json`; killed and reaped (children included) on drop.
+pub struct Launch {
+    pub child: Child,
+    pub out: PathBuf,
+    events: mpsc::Receiver<Value>,
+    pub seen: Vec<Value>,
+    stderr: PathBuf,
+}
+
+impl Launch {
+    /// Starts `cellsar run MISSION --scene SCENE --out <dir>/out --horizon-s H --events-json
+    /// --timeout-s 240 <extra>`.
+    pub fn start(dir: &Path, horizon_s: f64, extra: &[&str]) -> Launch {
+        Launch::start_in(&[], dir, horizon_s, extra)
+    }
+
+    /// As [`Launch::start`], the command prefixed by `prefix` (e.g. `ip netns exec NS`).
+    pub fn start_in(prefix: &[&str], dir: &Path, horizon_s: f64, extra: &[&str]) -> Launch {
+        let out = dir.join("out");
+        let stderr = dir.join("launcher.err");
+        let mut cmd = match prefix.split_first() {
+            Some((p, rest)) => {
+                let mut c = Command::new(p);
+                c.args(rest).arg(exe());
+                c
+            }
+            None => Command::new(exe()),
+        };
+        let mut child = cmd
+            .arg("run")
+            .arg(mission())
+            .arg("--scene")
+            .arg(scene())
+            .arg("--out")
+            .arg(&out)
+            .args(["--horizon-s", &horizon_s.to_string(), "--events-json"])
+            .args(["--timeout-s", "240", "--resend-after-s", "2"])
+            .args(extra)
+            .env("RUST_LOG", "info")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::from(std::fs::File::create(&stderr).unwrap()))
+            .spawn()
+            .unwrap();
+        let stdout = child.stdout.take().unwrap();
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                if let Ok(v) = serde_json::from_str::<Value>(&line) {
+                    if tx.send(v).is_err() {
+                        break;
+                    }
+                }
+            }
+        });
+        Launch {
+            child,
+            out,
+            events: rx,
+            seen: Vec::new(),
+            stderr,
+        }
+    }
+
+    fn pump(&mut self, timeout: Duration) -> bool {
+        match self.events.recv_timeout(timeout) {
+            Ok(v) => {
+                self.seen.push(v);
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// Waits for an event matching `pred` (also among those already seen after `from`).
+    pub fn wait_for(
+        &mut self,
+        what: &str,
+        timeout: Duration,
+        pred: impl Fn(&Value) -> bool,
+    ) -> Value {
+        let deadline = Instant::now() + timeout;
+        let mut i = 0;
+        loop {
+            while i < self.seen.len() {
+                if pred(&self.seen[i]) {
+                    return self.seen[i].clone();
+                }
+                i += 1;
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            assert!(
+                !left.is_zero(),
+                "timed out waiting for {what}; events:\n{}\nlauncher stderr:\n{}",
+                self.seen
+                    .iter()
+                    .filter(|e| e["event"] != "status")
+                    .map(|e| e.to_string())
+                    .collect::<Vec<_>>()
+                    .join("\n"),
+                self.stderr_tail()
+            );
+            self.pump(left.min(Duration::from_millis(200)));
+        }
+    }
+
+    pub fn event(&mut self, name: &str, timeout: Duration) -> Value {
+        let n = name.to_string();
+        self.wait_for(name, timeout, move |e| e["event"] == n.as_str())
+    }
+
+    /// The current pid of the child with `role`.
+    pub fn pid(&self, role: &str) -> u32 {
+        self.seen
+            .iter()
+            .rev()
+            .find(|e| {
+                (e["event"] == "child_started" || e["event"] == "child_restarted")
+                    && e["role"] == role
+            })
+            .and_then(|e| e["pid"].as_u64())
+            .unwrap_or_else(|| panic!("no pid for {role}")) as u32
+    }
+
+    /// Waits for the launcher to exit (draining events).
+    pub fn finish(&mut self, timeout: Duration) -> ExitStatus {
+        let deadline = Instant::now() + timeout;
+        loop {
+            while self.pump(Duration::from_millis(10)) {}
+            if let Some(s) = self.child.try_wait().unwrap() {
+                while self.pump(Duration::from_millis(50)) {}
+                return s;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "launcher did not finish within {timeout:?}; stderr:\n{}",
+                self.stderr_tail()
+            );
+        }
+    }
+
+    pub fn stderr_tail(&self) -> String {
+        let s = std::fs::read_to_string(&self.stderr).unwrap_or_default();
+        let l: Vec<&str> = s.lines().collect();
+        l[l.len().saturating_sub(40)..].join("\n")
+    }
+
+    pub fn log(&self, role: &str) -> String {
+        std::fs::read_to_string(self.out.join("logs").join(format!("{role}.log")))
+            .unwrap_or_default()
+    }
+
+    pub fn pipeline_json(&self) -> Value {
+        serde_json::from_str(&std::fs::read_to_string(self.out.join("pipeline.json")).unwrap())
+            .unwrap()
+    }
+
+    pub fn named(&self, name: &str) -> Vec<Value> {
+        self.seen
+            .iter()
+            .filter(|e| e["event"] == name)
+            .cloned()
+            .collect()
+    }
+}
+
+impl Drop for Launch {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            signal(self.child.id(), "TERM");
+            let deadline = Instant::now() + Duration::from_secs(20);
+            while Instant::now() < deadline {
+                if let Ok(Some(_)) = self.child.try_wait() {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            let _ = self.child.kill();
+        }
+        let _ = self.child.wait();
+    }
+}
+
+pub fn signal(pid: u32, sig: &str) {
+    let _ = Command::new("kill")
+        .args([format!("-{sig}"), pid.to_string()])
+        .stderr(Stdio::null())
+        .status();
+}
+
+/// Whether a process with this pid exists (and is not a zombie).
+pub fn running(pid: u32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat"))
+        .map(|s| !s.contains(") Z "))
+        .unwrap_or(false)
+}
+
+/// A service started directly (not by the launcher), killed and reaped on drop.
+pub struct Service {
+    pub name: String,
+    pub child: Child,
+    pub log: PathBuf,
+}
+
+impl Service {
+    pub fn start(name: &str, dir: &Path, args: &[String]) -> Service {
+        Service::start_in(&[], name, dir, args)
+    }
+
+    /// As [`Service::start`], the command prefixed by `prefix` (e.g. `ip netns exec NS`).
+    pub fn start_in(prefix: &[&str], name: &str, dir: &Path, args: &[String]) -> Service {
+        let log = dir.join(format!("{name}.log"));
+        let f = std::fs::File::create(&log).unwrap();
+        let mut cmd = match prefix.split_first() {
+            Some((p, rest)) => {
+                let mut c = Command::new(p);
+                c.args(rest).arg(exe());
+                c
+            }
+            None => Command::new(exe()),
+        };
+        let child = cmd
+            .args(args)
+            .env("RUST_LOG", "info")
+            .stdout(Stdio::from(f.try_clone().unwrap()))
+            .stderr(Stdio::from(f))
+            .spawn()
+            .unwrap();
+        Service {
+            name: name.to_string(),
+            child,
+            log,
+        }
+    }
+
+    pub fn stop(&mut self, timeout: Duration) -> ExitStatus {
+        signal(self.child.id(), "TERM");
+        let deadline = Instant::now() + timeout;
+        loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                return s;
+            }
+            assert!(Instant::now() < deadline, "{} did not stop", self.name);
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    pub fn log_text(&self) -> String {
+        std::fs::read_to_string(&self.log).unwrap_or_default()
+    }
+}
+
+impl Drop for Service {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            signal(self.child.id(), "CONT");
+            let _ = self.child.kill();
+        }
+        let _ = self.child.wait();
+    }
+}
+
+/// A free TCP port on loopback.
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// The value of `key=<n>` in the last line of `log` that contains `marker`.
+pub fn counter(log: &str, marker: &str, key: &str) -> Option<u64> {
+    let line = log.lines().rev().find(|l| l.contains(marker))?;
+    let pat = format!("{key}=");
+    let i = line.find(&pat)? + pat.len();
+    line[i..]
+        .chars()
+        .take_while(|c| c.is_ascii_digit())
+        .collect::<String>()
+        .parse()
+        .ok()
+}

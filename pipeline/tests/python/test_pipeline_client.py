@@ -1,0 +1,190 @@
+"""A Python eclipse-zenoh client runs a mission through the cellsar services.
+
+Starts the real services (`cellsar planner`, `cellsar echo`, `cellsar process`: the same code
+as `cellsar-planner serve`, `cellsar-radar-sim echo`, `cellsar-radar-sim process-service`),
+each a Zenoh peer connected to this client (free loopback port, no multicast, isolated
+iceoryx2 root). Then, with nothing but `eclipse-zenoh` and JSON:
+
+- waits for their liveliness tokens `cellsar/alive/<role>/<instance>`;
+- asks `cellsar/plan` for a plan with a JSON request (a mission as in a mission file) and
+  reads the JSON reply; a bad mission gets an error reply naming the field;
+- reads the plan summary `cellsar/<mission>/plan/summary`, every aperture's detections
+  `cellsar/<mission>/detections` and the services' status `cellsar/<mission>/status/<role>`
+  as JSON (asking `cellsar/<mission>/results` again for anything published before it
+  subscribed is not needed: it subscribes before asking for the plan).
+
+Run:  cargo build -p pipeline && python3 -m pytest pipeline/tests/python
+      (CELLSAR_BIN overrides target/debug/cellsar). Needs: pip install eclipse-zenoh==1.10.2
+"""
+
+import json
+import os
+import pathlib
+import socket
+import subprocess
+import tempfile
+import threading
+import time
+import unittest
+
+import zenoh
+
+REPO = pathlib.Path(__file__).resolve().parents[3]
+CELLSAR = os.environ.get("CELLSAR_BIN", str(REPO / "target" / "debug" / "cellsar"))
+SCENE = str(REPO / "pipeline" / "tests" / "data" / "small-scene.toml")
+TIMEOUT_S = 120.0
+
+MISSION = {
+    "name": "python client",
+    "params": {"horizon_s": 20.0},
+    "landmarks": {
+        "points": [
+            {"x_m": 0.0, "y_m": 0.0, "from_s": 0.0, "to_s": 10.0},
+            {"x_m": 0.0, "y_m": 30.0, "from_s": 10.0, "to_s": 20.0},
+        ]
+    },
+}
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for(cond, what, timeout_s=TIMEOUT_S):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        v = cond()
+        if v:
+            return v
+        time.sleep(0.05)
+    raise AssertionError("timed out waiting for " + what)
+
+
+def envelope(kind, body):
+    return json.dumps({"kind": kind, "schema_version": 1, "mission_id": "0000000000000000",
+                       "seq": 0, "time_unix_ns": 0, "body": body})
+
+
+class PipelineClientTest(unittest.TestCase):
+    def setUp(self):
+        self.assertTrue(os.path.exists(CELLSAR), "build it first: cargo build -p pipeline (%s)" % CELLSAR)
+        self.tmp = tempfile.TemporaryDirectory()
+        self.port = free_port()
+        self.prefix = "cpp%d_" % os.getpid()
+        hub = "tcp/127.0.0.1:%d" % self.port
+        conf = zenoh.Config()
+        conf.insert_json5("mode", '"peer"')
+        conf.insert_json5("listen/endpoints", json.dumps([hub]))
+        conf.insert_json5("scouting/multicast/enabled", "false")
+        self.session = zenoh.open(conf)
+        common = ["--no-multicast-scouting", "-l", "tcp/127.0.0.1:0", "-e", hub]
+        iox = ["--iox-root", os.path.join(self.tmp.name, "iox"), "--iox-prefix", self.prefix]
+        self.procs = []
+        for role, args in [
+            ("planner", ["planner"]),
+            ("echo", ["echo", "--scene", SCENE] + iox),
+            ("processor", ["process", "--scene", SCENE, "--resend-after-s", "2"] + iox),
+        ]:
+            log = open(os.path.join(self.tmp.name, role + ".log"), "w")
+            self.procs.append((role, log, subprocess.Popen([CELLSAR] + args + common,
+                                                           stdout=log, stderr=log)))
+
+    def tearDown(self):
+        self.session.close()
+        for _, log, p in self.procs:
+            if p.poll() is None:
+                p.terminate()
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+            log.close()
+        for f in os.listdir("/dev/shm"):
+            if f.startswith(self.prefix):
+                os.remove(os.path.join("/dev/shm", f))
+        self.tmp.cleanup()
+
+    def alive(self):
+        rs = self.session.liveliness().get("cellsar/alive/**", timeout=1.0)
+        return {str(r.ok.key_expr) for r in rs if r.ok is not None}
+
+    def test_mission_over_json(self):
+        for key in ("cellsar/alive/planner/planner", "cellsar/alive/echo/echo",
+                    "cellsar/alive/processor/processor"):
+            wait_for(lambda: key in self.alive(), key)
+
+        lock = threading.Lock()
+        detections, summaries, statuses = {}, [], {}
+
+        def on_detections(sample):
+            self.assertTrue(str(sample.encoding).startswith("application/json"))
+            msg = json.loads(sample.payload.to_bytes())
+            with lock:
+                detections[msg["body"]["aperture"]] = msg
+
+        def on_summary(sample):
+            with lock:
+                summaries.append(json.loads(sample.payload.to_bytes()))
+
+        def on_status(sample):
+            msg = json.loads(sample.payload.to_bytes())
+            with lock:
+                statuses[msg["body"]["role"]] = msg["body"]
+
+        subs = [self.session.declare_subscriber("cellsar/*/detections", on_detections),
+                self.session.declare_subscriber("cellsar/*/plan/summary", on_summary),
+                self.session.declare_subscriber("cellsar/*/status/*", on_status)]
+
+        # a bad mission: an error reply that names the field
+        bad = dict(MISSION, params={"horizon_s": 20.0, "altitude_m": -1.0})
+        replies = list(self.session.get("cellsar/plan", payload=envelope(0x0101, {"mission": bad}),
+                                        encoding="application/json;cellsar/planner.plan_request/v1",
+                                        timeout=60.0))
+        self.assertEqual(len(replies), 1)
+        self.assertIsNone(replies[0].ok)
+        self.assertIn("altitude_m", replies[0].err.payload.to_string())
+
+        # the plan, as JSON
+        replies = list(self.session.get("cellsar/plan", payload=envelope(0x0101, {"mission": MISSION}),
+                                        encoding="application/json;cellsar/planner.plan_request/v1",
+                                        timeout=TIMEOUT_S))
+        self.assertEqual(len(replies), 1)
+        sample = replies[0].ok
+        self.assertIsNotNone(sample, replies[0].err and replies[0].err.payload.to_string())
+        self.assertTrue(str(sample.encoding).startswith("application/json"), str(sample.encoding))
+        plan = json.loads(sample.payload.to_bytes())
+        self.assertEqual(plan["kind_name"], "planner.plan")
+        body = plan["body"]
+        mission_id = body["mission_id"]
+        self.assertEqual(len(mission_id), 16)
+        self.assertEqual(body["mission"]["name"], "python client")
+        self.assertEqual(len(body["result"]["trajectory"]["pos_m"]), 40)  # 20 s of 0.5-s slots
+        self.assertTrue(body["summary"]["feasible"])
+
+        wait_for(lambda: len(detections) == 2, "the detections of both apertures")
+        with lock:
+            for ap, msg in detections.items():
+                self.assertEqual(msg["kind_name"], "radar.aperture_detections")
+                self.assertEqual(msg["body"]["mission_id"], mission_id)
+                self.assertEqual(msg["body"]["apertures"], 2)
+            # each landmark is detected at its place
+            for ap, y in ((0, 0.0), (1, 30.0)):
+                d = detections[ap]["body"]
+                self.assertTrue(d["landmark_detected"])
+                best = max(d["detections"], key=lambda r: r["snr_db"])
+                self.assertLess(abs(best["x_m"]) + abs(best["y_m"] - y), 1.0, best)
+            self.assertEqual(summaries[0]["body"]["mission_id"], mission_id)
+        wait_for(lambda: statuses.get("processor", {}).get("state") == "done", "the processor's status 'done'")
+        with lock:
+            self.assertEqual(statuses["processor"]["done"], 2)
+            self.assertEqual(statuses["processor"]["counters"]["malformed"], 0)
+            self.assertGreaterEqual(statuses["echo"]["counters"]["frames"], 20)
+        for s in subs:
+            s.undeclare()
+
+
+if __name__ == "__main__":
+    unittest.main()

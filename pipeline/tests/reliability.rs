@@ -1,0 +1,418 @@
+//! Reliability with the real processes: kill -9 of each process mid-mission, a frozen
+//! subscriber, 10,000 malformed or oversized payloads on every subscribed key. Each run must
+//! end with exactly the outputs of the closed loop (no aperture lost or duplicated).
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use bridge::net::QueryOptions;
+use bridge::zenoh::bytes::Encoding;
+use bridge::zenoh::qos::CongestionControl;
+use bridge::zenoh::query::QueryTarget;
+use bridge::zenoh::Wait;
+use bridge::{MissionId, ZenohArgs, ZenohNode};
+use common::*;
+use radar_sim::service::{ApertureRequest, RequestAck};
+use serde_json::Value;
+
+/// 6 apertures of the small scene.
+const H: f64 = 60.0;
+
+fn expect_exit(l: &mut Launch, reference: &std::path::Path) {
+    let st = l.finish(Duration::from_secs(240));
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(reference.join("report.json")).unwrap())
+            .unwrap();
+    let want = if report["all_in_view_detected"] == true {
+        0
+    } else {
+        4
+    };
+    assert_eq!(st.code(), Some(want), "{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, reference);
+}
+
+/// Kills `role` with SIGKILL once the first aperture is in, checks that the others kept
+/// running, that liveliness reported the loss, that the role was restarted and that the run
+/// completes with the closed loop's outputs.
+fn kill_mid_mission(role: &str, extra: &[&str]) -> Launch {
+    let reference = reference(H);
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec!["--window", "1"];
+    args.extend_from_slice(extra);
+    let mut l = Launch::start(dir.path(), H, &args);
+    l.event("planned", Duration::from_secs(120));
+    if role != "planner" {
+        l.wait_for("the first aperture", Duration::from_secs(120), |e| {
+            e["event"] == "aperture" && e["done"] == 1
+        });
+    }
+    let victim = l.pid(role);
+    let others: Vec<(String, u32)> = ["planner", "echo", "processor", "bridge", "router"]
+        .iter()
+        .filter(|r| **r != role)
+        .filter(|r| {
+            l.seen
+                .iter()
+                .any(|e| e["event"] == "child_started" && e["role"] == **r)
+        })
+        .map(|r| (r.to_string(), l.pid(r)))
+        .collect();
+    signal(victim, "KILL");
+    l.wait_for("the liveliness loss", Duration::from_secs(60), |e| {
+        e["event"] == "alive" && e["role"] == role && e["alive"] == false
+    });
+    l.wait_for("the restart", Duration::from_secs(60), |e| {
+        e["event"] == "child_restarted" && e["role"] == role
+    });
+    // the others were not restarted: still the same processes
+    for (r, pid) in &others {
+        assert_eq!(l.pid(r), *pid, "{r} was restarted too");
+        assert!(
+            running(*pid) || l.child.try_wait().unwrap().is_some(),
+            "{r} died"
+        );
+    }
+    expect_exit(&mut l, &reference);
+    let exits: Vec<Value> = l.named("child_exited");
+    assert_eq!(exits.len(), 1, "{exits:?}");
+    assert!(exits[0]["status"].as_str().unwrap().contains("signal 9"));
+    // keep the directory alive for the caller's checks
+    std::mem::forget(dir);
+    l
+}
+
+#[test]
+fn kill9_planner() {
+    let l = kill_mid_mission("planner", &[]);
+    // the restarted planner has the plan from its state directory
+    assert!(
+        l.log("planner").contains("plans restored"),
+        "{}",
+        l.log("planner")
+    );
+}
+
+#[test]
+fn kill9_echo() {
+    let l = kill_mid_mission("echo", &[]);
+    let p = l.pipeline_json();
+    let c = &p["services"]["processor"]["counters"];
+    assert!(c["resends"].as_u64().unwrap() >= 1, "{c}");
+}
+
+#[test]
+fn kill9_processor() {
+    let l = kill_mid_mission("processor", &[]);
+    let p = l.pipeline_json();
+    let c = &p["services"]["processor"]["counters"];
+    // the restarted processor resumed from its state directory
+    assert!(c["restored"].as_u64().unwrap() >= 1, "{c}");
+    assert!(c["apertures"].as_u64().unwrap() <= 5, "{c}");
+}
+
+#[test]
+fn kill9_bridge() {
+    let l = kill_mid_mission("bridge", &["--transport", "zenoh"]);
+    let p = l.pipeline_json();
+    assert_eq!(p["restarts"]["bridge"], 1);
+}
+
+#[test]
+fn kill9_router() {
+    let l = kill_mid_mission("router", &["--router", "--transport", "zenoh"]);
+    let p = l.pipeline_json();
+    assert_eq!(p["restarts"]["router"], 1);
+    assert_eq!(p["router"], true);
+}
+
+#[test]
+fn frozen_processor_does_not_stall_the_echo() {
+    let reference = reference(H);
+    let dir = tempfile::tempdir().unwrap();
+    // through a router: the test's session reaches the echo whatever the state of the others
+    let mut l = Launch::start(dir.path(), H, &["--router"]);
+    let z = join(&mut l);
+    let node = ZenohNode::open(z.to_config().unwrap(), "tester", "freeze").unwrap();
+    let planned = l.event("planned", Duration::from_secs(120));
+    let m = MissionId::parse_hex(planned["mission_id"].as_str().unwrap()).unwrap();
+    let fp = planned["frame_pulses"].as_u64().unwrap() as u32;
+    // the processor is subscribed once it has finished an aperture
+    l.wait_for("the first aperture", Duration::from_secs(120), |e| {
+        e["event"] == "aperture" && e["done"] == 1
+    });
+    wait_sees(&node, "echo");
+    let proc = l.pid("processor");
+    signal(proc, "STOP");
+    let before = l.seen.len();
+    // make the echo publish 4 apertures (40 frames) into the frozen reader's full buffer
+    let t0 = Instant::now();
+    for ap in 0..4 {
+        let req = ApertureRequest {
+            mission_id: m,
+            aperture: ap,
+            look: None,
+            frame_pulses: fp,
+            requester: "test".into(),
+        };
+        let ack = node
+            .query_one::<ApertureRequest, RequestAck>(
+                &format!("cellsar/{m}/echo/request"),
+                &req,
+                &QueryOptions {
+                    timeout: Duration::from_secs(30),
+                    ..QueryOptions::default()
+                },
+            )
+            .unwrap_or_else(|e| panic!("{e} after {:.1} s", t0.elapsed().as_secs_f64()));
+        assert_eq!(ack.message.seqs.len(), 10);
+    }
+    // the echo sends all of them while the reader is frozen: it is not stalled
+    let done = l.wait_for(
+        "the echo to skip 30 deliveries",
+        Duration::from_secs(60),
+        |e| {
+            e["event"] == "status"
+                && e["role"] == "echo"
+                && e["counters"]["skipped_full"].as_u64().unwrap_or(0) >= 30
+        },
+    );
+    let sent_s = t0.elapsed().as_secs_f64();
+    let skipped = done["counters"]["skipped_full"].as_u64().unwrap();
+    assert!(
+        skipped >= 30,
+        "deliveries skipped while frozen: {skipped}\n{done}"
+    );
+    assert!(running(proc));
+    let _ = before;
+    signal(proc, "CONT");
+    node.close().unwrap();
+    expect_exit(&mut l, &reference);
+    eprintln!(
+        "echo sent 40 frames in {sent_s:.1} s to a frozen reader, {skipped} deliveries skipped"
+    );
+    let p = l.pipeline_json();
+    let echo = &p["services"]["echo"]["counters"];
+    assert!(echo["skipped_full"].as_u64().unwrap() >= skipped, "{echo}");
+    assert!(
+        counter(&l.log("echo"), "echo stopping", "skipped_full").unwrap() >= skipped,
+        "{}",
+        l.log("echo")
+    );
+}
+
+/// Waits until `node` sees the liveliness token of `role` (its session is connected and routes
+/// to it).
+fn wait_sees(node: &ZenohNode, role: &str) {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let alive = node
+            .alive_now(
+                &format!("cellsar/alive/{role}/*"),
+                Duration::from_millis(500),
+            )
+            .unwrap_or_default();
+        if !alive.is_empty() {
+            return;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the test session never saw {role}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// Zenoh args of a test session joining the launcher's network.
+fn join(l: &mut Launch) -> ZenohArgs {
+    let net = l.event("network", Duration::from_secs(10));
+    let a: Vec<String> = net["children"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_string())
+        .collect();
+    let connect: Vec<String> = a
+        .windows(2)
+        .filter(|w| w[0] == "--connect")
+        .map(|w| w[1].clone())
+        .collect();
+    ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &connect)
+}
+
+const FLOOD: usize = 10_000;
+
+/// Payload `i` of a flood: random bytes, a truncated or forged envelope, JSON garbage, or (a
+/// few) an oversized payload.
+fn bad_payload(i: usize, kind: u16) -> (Vec<u8>, Encoding) {
+    let mut x = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xDEAD_BEEF;
+    let mut rnd = |n: usize| -> Vec<u8> {
+        (0..n)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                x as u8
+            })
+            .collect()
+    };
+    match i % 5 {
+        0 if i.is_multiple_of(2500) => (vec![7u8; (16 << 20) + 4096], Encoding::APPLICATION_OCTET_STREAM),
+        0 => (rnd(i % 300), Encoding::APPLICATION_OCTET_STREAM),
+        1 => {
+            // a header that claims the right kind, with a body that is garbage
+            let mut h = b"CSAR".to_vec();
+            h.push(1);
+            h.push(0);
+            h.extend_from_slice(&kind.to_le_bytes());
+            h.extend_from_slice(&1u16.to_le_bytes());
+            h.extend(rnd(40 + i % 50));
+            (h, Encoding::APPLICATION_OCTET_STREAM)
+        }
+        2 => {
+            let mut h = b"CSAR".to_vec();
+            h.push(1);
+            h.extend(rnd(i % 47));
+            (h, Encoding::APPLICATION_OCTET_STREAM)
+        }
+        3 => (
+            format!("{{\"kind\": {kind}, \"body\": [{i}").into_bytes(),
+            Encoding::APPLICATION_JSON,
+        ),
+        _ => (
+            format!("{{\"kind\": {}, \"schema_version\": 1, \"mission_id\": \"zz\", \"seq\": 1, \"time_unix_ns\": 0, \"body\": {{}}}}", kind ^ 1)
+                .into_bytes(),
+            Encoding::APPLICATION_JSON,
+        ),
+    }
+}
+
+fn flood_put(node: &ZenohNode, key: &str, kind: u16) {
+    let p = node
+        .session()
+        .declare_publisher(key.to_string())
+        .congestion_control(CongestionControl::Block)
+        .wait()
+        .unwrap();
+    for i in 0..FLOOD {
+        let (b, enc) = bad_payload(i, kind);
+        p.put(b).encoding(enc).wait().unwrap();
+    }
+}
+
+fn flood_get(node: &ZenohNode, key: &str, kind: u16) {
+    let mut pending = Vec::new();
+    for i in 0..FLOOD {
+        let (b, enc) = bad_payload(i, kind);
+        let r = node
+            .session()
+            .get(key.to_string())
+            .payload(b)
+            .encoding(enc)
+            .target(QueryTarget::All)
+            .congestion_control(CongestionControl::Block)
+            .timeout(Duration::from_secs(20))
+            .wait()
+            .unwrap();
+        pending.push(r);
+        if pending.len() >= 200 {
+            for r in pending.drain(..) {
+                while r.recv().is_ok() {}
+            }
+        }
+    }
+    for r in pending.drain(..) {
+        while r.recv().is_ok() {}
+    }
+}
+
+#[test]
+fn ten_thousand_malformed_payloads_on_every_key() {
+    let reference = reference(30.0);
+    let dir = tempfile::tempdir().unwrap();
+    // no echo yet: the mission waits while the other services are flooded
+    let mut l = Launch::start(
+        dir.path(),
+        30.0,
+        &["--transport", "zenoh", "--external", "echo"],
+    );
+    let z = join(&mut l);
+    let planned = l.event("planned", Duration::from_secs(120));
+    let m = planned["mission_id"].as_str().unwrap().to_string();
+    let node = ZenohNode::open(z.to_config().unwrap(), "tester", "flood").unwrap();
+    for role in ["planner", "processor", "launcher"] {
+        wait_sees(&node, role);
+    }
+    let k = |s: &str| format!("cellsar/{m}/{s}");
+    flood_get(&node, "cellsar/plan", 0x0101);
+    flood_put(&node, &k("plan"), 0x0102);
+    flood_get(&node, &k("plan"), 0x0103);
+    flood_get(&node, &k("results"), 0x0307);
+    flood_put(&node, &k("echo"), 0x0200);
+    flood_put(&node, &k("detections"), 0x0304);
+    flood_put(&node, &k("image/0"), 0x0305);
+    flood_put(&node, &k("metrics"), 0x0306);
+    flood_put(&node, &k("status/processor"), 0x0110);
+    // now the echo, flooded as soon as it is up (while the mission runs)
+    let net = l.event("network", Duration::from_secs(1));
+    let mut ea: Vec<String> = vec![
+        "echo".into(),
+        "--scene".into(),
+        scene().display().to_string(),
+    ];
+    for v in net["children"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .chain(net["iox"].as_array().unwrap())
+    {
+        ea.push(v.as_str().unwrap().to_string());
+    }
+    let mut echo = Service::start("echo", dir.path(), &ea);
+    // its first status: its loop runs, every endpoint is declared
+    l.wait_for("the echo's status", Duration::from_secs(30), |e| {
+        e["event"] == "status" && e["role"] == "echo"
+    });
+    wait_sees(&node, "echo");
+    flood_get(&node, &k("echo/request"), 0x0301);
+    flood_put(&node, &k("plan"), 0x0102);
+    flood_get(&node, &k("plan"), 0x0103);
+    expect_exit(&mut l, &reference);
+    assert!(echo.stop(Duration::from_secs(20)).success());
+    node.close().unwrap();
+
+    let at_least = |log: &str, marker: &str, key: &str, n: u64| {
+        let v = counter(log, marker, key).unwrap_or_else(|| panic!("no {key} in\n{log}"));
+        assert!(v >= n, "{key} = {v} < {n}");
+    };
+    let n = FLOOD as u64;
+    at_least(
+        &l.log("planner"),
+        "plan service stopping",
+        "malformed",
+        2 * n,
+    );
+    let p = l.log("processor");
+    // (the second round on `plan` may outlast the mission, and the processor with it)
+    at_least(&p, "processor stopping", "plans_malformed", n);
+    at_least(&p, "processor stopping", "result_requests_malformed", n);
+    at_least(&p, "processor stopping", "lookups_malformed", n);
+    at_least(&p, "processor stopping", "transport_lost", n);
+    let e = echo.log_text();
+    at_least(&e, "echo stopping", "requests_malformed", n);
+    at_least(&e, "echo stopping", "plans_malformed", n);
+    at_least(&e, "echo stopping", "lookups_malformed", n);
+    let pj = l.pipeline_json();
+    for s in ["detections", "images", "metrics", "status"] {
+        let c = &pj["collector"][s];
+        assert!(c["malformed"].as_u64().unwrap() >= n, "{s}: {c}");
+    }
+    // and they were logged (rate-limited WARN lines naming the key)
+    assert!(
+        p.contains(&k("results")) && p.contains("WARN"),
+        "nothing logged"
+    );
+}

@@ -1,0 +1,930 @@
+//! The planner as a Zenoh service (`cellsar-planner serve`), and the control-plane messages that
+//! every cellsar service shares.
+//!
+//! ```text
+//! cellsar/plan                       queryable: PlanRequest -> Plan (or an error naming the field)
+//! cellsar/<mission>/plan             each plan, published (bincode); also answered to queries
+//!                                    (PlanLookup) from the cache of every process that holds it
+//! cellsar/<mission>/plan/summary     the plan's summary (JSON, for tools without Rust)
+//! cellsar/<mission>/status/<role>    ServiceStatus of each service (JSON)
+//! cellsar/alive/planner/<instance>   liveliness token
+//! ```
+//!
+//! Message kinds of this crate: `0x0100..=0x01ff`. The mission id of a plan is derived from the
+//! resolved mission ([`mission_id`]), so every process agrees on it without coordination and a
+//! changed mission never shares an id with an old one.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use bridge::envelope::{self, DecodeLimits, Meta};
+use bridge::net::{PublishOptions, QueryOptions, SubscribeOptions, WireFormat};
+use bridge::zenoh::key_expr::KeyExpr;
+use bridge::zenoh::qos::CongestionControl;
+use bridge::zenoh::query::{Query, QueryTarget};
+use bridge::zenoh::Wait;
+use bridge::{keys, Message, MissionId, ZenohArgs, ZenohNode};
+use serde::{Deserialize, Serialize};
+
+use crate::driver::{plan_with_observer, IterationRecord, Observer, PlanOptions, PlanResult};
+use crate::evaluate::ResolutionMode;
+use crate::report::Summary;
+use crate::{Mission, MissionFile, Scheme};
+
+/// Key of the plan queryable.
+pub const PLAN_KEY: &str = "cellsar/plan";
+/// Selector of every mission's plan (plan lookups by late joiners).
+pub const ALL_PLANS: &str = "cellsar/*/plan";
+/// Largest plan message accepted (a plan of a long mission with its iteration records).
+pub const MAX_PLAN_BYTES: usize = 64 << 20;
+
+/// Errors of the planner service; each names what failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ServiceError {
+    /// Zenoh failed.
+    #[error(transparent)]
+    Net(#[from] bridge::NetError),
+    /// The Zenoh flags or configuration file are invalid.
+    #[error(transparent)]
+    Config(#[from] bridge::zconfig::ConfigError),
+    /// A key could not be built.
+    #[error(transparent)]
+    Key(#[from] bridge::keys::KeyError),
+    /// A file of the state directory could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: String,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A message could not be encoded.
+    #[error("{what}: {source}")]
+    Codec {
+        /// What was being encoded.
+        what: String,
+        /// The codec error.
+        source: bridge::CodecError,
+    },
+    /// The signal handlers could not be installed.
+    #[error("installing the handler of signal {signal}: {source}")]
+    Signal {
+        /// Signal number.
+        signal: i32,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A request was invalid (the message names the field).
+    #[error("{0}")]
+    BadRequest(String),
+    /// A worker thread failed.
+    #[error("{0}")]
+    Internal(String),
+}
+
+fn io_err(path: &Path, source: std::io::Error) -> ServiceError {
+    ServiceError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+/// Installs SIGINT and SIGTERM handlers that set the returned flag (services poll it and stop
+/// cleanly: liveliness token withdrawn, final counters logged, exit 0).
+pub fn stop_on_signals() -> Result<Arc<AtomicBool>, ServiceError> {
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(signal, stop.clone())
+            .map_err(|source| ServiceError::Signal { signal, source })?;
+    }
+    Ok(stop)
+}
+
+/// Options of a plan request; every field optional (defaults: [`PlanOptions::default`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanRequestOptions {
+    /// `exact` (default), `paper`, `baseline` or `baseline-exact`.
+    #[serde(default)]
+    pub scheme: Option<Scheme>,
+    /// Largest number of SCA/BCD iterations (≥ 1).
+    #[serde(default)]
+    pub max_iterations: Option<usize>,
+    /// Relative objective change that stops the iterations (finite, > 0).
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+    /// `paper` (default) or `general`.
+    #[serde(default)]
+    pub resolution: Option<ResolutionMode>,
+}
+
+impl PlanRequestOptions {
+    /// The planner options, checked; errors name the field (`options.tolerance`, ...).
+    pub fn to_plan_options(&self) -> Result<PlanOptions, ServiceError> {
+        let mut o = PlanOptions::default();
+        if let Some(s) = self.scheme {
+            o.scheme = s;
+        }
+        if let Some(n) = self.max_iterations {
+            if n == 0 {
+                return Err(ServiceError::BadRequest(
+                    "options.max_iterations: must be at least 1".into(),
+                ));
+            }
+            o.max_iterations = n;
+        }
+        if let Some(t) = self.tolerance {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(ServiceError::BadRequest(format!(
+                    "options.tolerance: {t} must be a finite number > 0"
+                )));
+            }
+            o.tolerance = t;
+        }
+        if let Some(r) = self.resolution {
+            o.resolution = r;
+        }
+        Ok(o)
+    }
+}
+
+/// A request to plan a mission (`cellsar/plan`). As JSON:
+/// `{"mission": {"name": ..., "params": {...}, "landmarks": {...}}, "options": {...}}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanRequest {
+    /// The mission, as in a mission file.
+    pub mission: MissionFile,
+    /// Planner options.
+    #[serde(default)]
+    pub options: PlanRequestOptions,
+}
+
+impl Message for PlanRequest {
+    const KIND: u16 = 0x0101;
+    const NAME: &'static str = "planner.plan_request";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+/// Fields whose types need a self-describing format (the planner's adjacently tagged enums, NaN
+/// values): CBOR bytes inside bincode; the value itself in JSON.
+mod self_describing {
+    use serde::de::{DeserializeOwned, Error as _, Visitor};
+    use serde::ser::Error as _;
+    use serde::{Deserializer, Serialize, Serializer};
+
+    pub fn serialize<T: Serialize, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
+        if s.is_human_readable() {
+            v.serialize(s)
+        } else {
+            let mut buf = Vec::new();
+            ciborium::into_writer(v, &mut buf).map_err(S::Error::custom)?;
+            s.serialize_bytes(&buf)
+        }
+    }
+
+    struct Bytes;
+
+    impl<'de> Visitor<'de> for Bytes {
+        type Value = Vec<u8>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("CBOR bytes")
+        }
+        fn visit_bytes<E: serde::de::Error>(self, v: &[u8]) -> Result<Vec<u8>, E> {
+            Ok(v.to_vec())
+        }
+        fn visit_byte_buf<E: serde::de::Error>(self, v: Vec<u8>) -> Result<Vec<u8>, E> {
+            Ok(v)
+        }
+    }
+
+    pub fn deserialize<'de, T: DeserializeOwned, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<T, D::Error> {
+        if d.is_human_readable() {
+            T::deserialize(d)
+        } else {
+            let buf = d.deserialize_byte_buf(Bytes)?;
+            ciborium::from_reader(buf.as_slice()).map_err(D::Error::custom)
+        }
+    }
+}
+
+/// A plan: the resolved mission, the planner's full result and its summary. In the binary form
+/// `result` and `summary` travel as CBOR (their enums and NaN values need a self-describing
+/// format); in JSON they are plain values (NaN as `null`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// The mission id ([`mission_id`] of `mission`).
+    pub mission_id: MissionId,
+    /// The resolved mission (explicit landmark windows): `Mission::from_file_struct` gives it back.
+    pub mission: MissionFile,
+    /// The options it was planned with.
+    pub options: PlanRequestOptions,
+    /// The planner's result (trajectory, exact evaluation, histories).
+    #[serde(with = "self_describing")]
+    pub result: PlanResult,
+    /// The summary (as in `summary.json`).
+    #[serde(with = "self_describing")]
+    pub summary: Summary,
+    /// Instance of the planner that made it.
+    pub planner: String,
+}
+
+impl Message for Plan {
+    const KIND: u16 = 0x0102;
+    const NAME: &'static str = "planner.plan";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+impl Plan {
+    /// The validated mission.
+    pub fn mission(&self) -> Result<Mission, crate::MissionError> {
+        Mission::from_file_struct(&self.mission)
+    }
+
+    /// The key the plan is published on: `cellsar/<mission>/plan`.
+    pub fn key(&self) -> Result<String, ServiceError> {
+        Ok(keys::mission(self.mission_id, "plan")?)
+    }
+}
+
+/// A request for known plans (sent to `cellsar/<mission>/plan` or [`ALL_PLANS`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PlanLookup {}
+
+impl Message for PlanLookup {
+    const KIND: u16 = 0x0103;
+    const NAME: &'static str = "planner.plan_lookup";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+/// The summary of a published plan (`cellsar/<mission>/plan/summary`, JSON).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanSummary {
+    /// Mission id.
+    pub mission_id: MissionId,
+    /// Mission name.
+    pub mission: String,
+    /// Number of landmark windows.
+    pub windows: usize,
+    /// The summary.
+    #[serde(with = "self_describing")]
+    pub summary: Summary,
+}
+
+impl Message for PlanSummary {
+    const KIND: u16 = 0x0104;
+    const NAME: &'static str = "planner.plan_summary";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+/// Progress and counters of one service for one mission (`cellsar/<mission>/status/<role>`,
+/// JSON). Shared by every cellsar service.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ServiceStatus {
+    /// Role (planner, echo, processor, ...).
+    pub role: String,
+    /// Instance name.
+    pub instance: String,
+    /// Mission id.
+    pub mission_id: MissionId,
+    /// State (`planning`, `planned`, `running`, `done`, `failed`, `stopping`).
+    pub state: String,
+    /// Units done (apertures, frames, iterations).
+    pub done: u64,
+    /// Units in total (0 if unknown).
+    pub total: u64,
+    /// The items done (e.g. aperture indices), when the role has them.
+    pub done_items: Vec<u64>,
+    /// Named counters (frames sent, dropped, duplicates, malformed, ...).
+    pub counters: BTreeMap<String, u64>,
+    /// A line for people.
+    pub message: String,
+    /// Seconds since the process started.
+    pub uptime_s: f64,
+}
+
+impl Message for ServiceStatus {
+    const KIND: u16 = 0x0110;
+    const NAME: &'static str = "cellsar.service_status";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+/// Publishes [`ServiceStatus`] per mission (JSON, congestion control `Drop`: a frozen reader
+/// never stalls a service).
+pub struct StatusBoard {
+    role: String,
+    instance: String,
+    started: Instant,
+    pubs: Mutex<HashMap<MissionId, bridge::net::TypedPublisher<ServiceStatus>>>,
+}
+
+impl StatusBoard {
+    /// A board for `role`/`instance`.
+    pub fn new(role: &str, instance: &str) -> Self {
+        StatusBoard {
+            role: role.to_string(),
+            instance: instance.to_string(),
+            started: Instant::now(),
+            pubs: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// A status with role, instance, mission and uptime filled in.
+    pub fn status(&self, mission_id: MissionId, state: &str) -> ServiceStatus {
+        ServiceStatus {
+            role: self.role.clone(),
+            instance: self.instance.clone(),
+            mission_id,
+            state: state.to_string(),
+            uptime_s: self.started.elapsed().as_secs_f64(),
+            ..Default::default()
+        }
+    }
+
+    /// Publishes `status` on `cellsar/<mission>/status/<role>`; failures are logged, not fatal.
+    pub fn publish(&self, node: &ZenohNode, status: &ServiceStatus) {
+        let Ok(mut pubs) = self.pubs.lock() else {
+            return;
+        };
+        let p = match pubs.entry(status.mission_id) {
+            std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
+            std::collections::hash_map::Entry::Vacant(v) => {
+                let made = keys::mission(status.mission_id, &format!("status/{}", self.role))
+                    .map_err(bridge::NetError::from)
+                    .and_then(|key| {
+                        node.publisher::<ServiceStatus>(
+                            &key,
+                            PublishOptions {
+                                mission_id: status.mission_id,
+                                congestion_control: CongestionControl::Drop,
+                                ..PublishOptions::json()
+                            },
+                        )
+                    });
+                match made {
+                    Ok(p) => v.insert(p),
+                    Err(e) => {
+                        tracing::warn!(error = %e, "status publisher");
+                        return;
+                    }
+                }
+            }
+        };
+        if let Err(e) = p.put(status) {
+            tracing::debug!(error = %e, "status not published");
+        }
+    }
+}
+
+/// The mission id of a (resolved) mission file: FNV-1a of its JSON form, so equal missions get
+/// equal ids in every process and a changed mission gets a new one.
+pub fn mission_id(file: &MissionFile) -> MissionId {
+    let text =
+        serde_json::to_string(file).unwrap_or_else(|_| file.name.clone().unwrap_or_default());
+    MissionId::from_name(&text)
+}
+
+/// Plans held by a process, answered to `cellsar/*/plan` lookups (so a process that joins late
+/// or restarts gets the plans without re-planning), optionally persisted in a directory.
+pub struct PlanCache {
+    plans: Arc<Mutex<BTreeMap<MissionId, Arc<Plan>>>>,
+    dir: Option<PathBuf>,
+    malformed: Arc<std::sync::atomic::AtomicU64>,
+    _queryable: bridge::zenoh::query::Queryable<()>,
+}
+
+impl PlanCache {
+    /// Declares the lookup queryable on `cellsar/*/plan`; with `dir`, loads the plans stored
+    /// there (unreadable files are logged and skipped) and stores new ones.
+    pub fn new(node: &ZenohNode, dir: Option<&Path>) -> Result<Self, ServiceError> {
+        let plans: Arc<Mutex<BTreeMap<MissionId, Arc<Plan>>>> = Arc::default();
+        if let Some(d) = dir {
+            std::fs::create_dir_all(d).map_err(|e| io_err(d, e))?;
+            let mut loaded = BTreeMap::new();
+            for entry in std::fs::read_dir(d).map_err(|e| io_err(d, e))?.flatten() {
+                let path = entry.path();
+                if path.extension().and_then(|e| e.to_str()) != Some("plan") {
+                    continue;
+                }
+                match load_plan(&path) {
+                    Ok(p) => {
+                        loaded.insert(p.mission_id, Arc::new(p));
+                    }
+                    Err(e) => {
+                        tracing::warn!(file = %path.display(), error = %e, "stored plan skipped")
+                    }
+                }
+            }
+            if !loaded.is_empty() {
+                tracing::info!(plans = loaded.len(), dir = %d.display(), "plans restored");
+            }
+            if let Ok(mut p) = plans.lock() {
+                *p = loaded;
+            }
+        }
+        let p = plans.clone();
+        let malformed = Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let m = malformed.clone();
+        let log = Arc::new(bridge::counters::BadPayloadLog::default());
+        let queryable = node
+            .session()
+            .declare_queryable(ALL_PLANS)
+            .callback(move |query: Query| answer_lookup(&p, &query, &m, &log))
+            .wait()
+            .map_err(|e| bridge::NetError::Zenoh {
+                op: "declare queryable",
+                key: ALL_PLANS.into(),
+                reason: e.to_string(),
+            })?;
+        Ok(PlanCache {
+            plans,
+            dir: dir.map(Path::to_path_buf),
+            malformed,
+            _queryable: queryable,
+        })
+    }
+
+    /// Lookups whose payload was not a [`PlanLookup`] (answered with an error, counted, logged).
+    pub fn malformed(&self) -> u64 {
+        self.malformed.load(Ordering::Relaxed)
+    }
+
+    /// Adds (or replaces) a plan; stores it when the cache has a directory.
+    pub fn insert(&self, plan: Arc<Plan>) -> Result<(), ServiceError> {
+        if let Some(d) = &self.dir {
+            let bytes = envelope::encode(
+                plan.as_ref(),
+                Meta {
+                    mission_id: plan.mission_id,
+                    ..Meta::default()
+                },
+            )
+            .map_err(|source| ServiceError::Codec {
+                what: format!("plan {}", plan.mission_id),
+                source,
+            })?;
+            let path = d.join(format!("{}.plan", plan.mission_id));
+            write_atomic(&path, &bytes)?;
+        }
+        if let Ok(mut p) = self.plans.lock() {
+            p.insert(plan.mission_id, plan);
+        }
+        Ok(())
+    }
+
+    /// The plan of `id`, if held.
+    pub fn get(&self, id: MissionId) -> Option<Arc<Plan>> {
+        self.plans.lock().ok().and_then(|p| p.get(&id).cloned())
+    }
+
+    /// Every plan held.
+    pub fn all(&self) -> Vec<Arc<Plan>> {
+        self.plans
+            .lock()
+            .map(|p| p.values().cloned().collect())
+            .unwrap_or_default()
+    }
+
+    /// Asks every process for the plans matching `selector` (e.g. [`ALL_PLANS`] or
+    /// `cellsar/<mission>/plan`); replies that do not decode are logged and skipped.
+    pub fn lookup(
+        node: &ZenohNode,
+        selector: &str,
+        timeout: Duration,
+    ) -> Result<Vec<Plan>, ServiceError> {
+        let opts = QueryOptions {
+            timeout,
+            target: QueryTarget::All,
+            limits: DecodeLimits {
+                max_body_bytes: MAX_PLAN_BYTES,
+                verify_crc: true,
+            },
+            ..QueryOptions::default()
+        };
+        let mut out: BTreeMap<MissionId, Plan> = BTreeMap::new();
+        for r in node.query::<PlanLookup, Plan>(selector, &PlanLookup {}, &opts)? {
+            match r {
+                Ok(p) => {
+                    out.insert(p.message.mission_id, p.message);
+                }
+                Err(e) => tracing::warn!(error = %e, "plan lookup reply skipped"),
+            }
+        }
+        Ok(out.into_values().collect())
+    }
+}
+
+fn answer_lookup(
+    plans: &Mutex<BTreeMap<MissionId, Arc<Plan>>>,
+    query: &Query,
+    malformed: &std::sync::atomic::AtomicU64,
+    log: &bridge::counters::BadPayloadLog,
+) {
+    let format = query.encoding().map(WireFormat::of).unwrap_or_default();
+    if let Some(payload) = query.payload() {
+        let bytes = payload.to_bytes();
+        if let Err(e) = format.decode::<PlanLookup>(&bytes, &DecodeLimits::default()) {
+            malformed.fetch_add(1, Ordering::Relaxed);
+            log.log(query.key_expr().as_str(), bytes.len(), &e);
+            let _ = query.reply_err(format!("bad plan lookup: {e}")).wait();
+            return;
+        }
+    }
+    let held: Vec<Arc<Plan>> = plans
+        .lock()
+        .map(|p| p.values().cloned().collect())
+        .unwrap_or_default();
+    for plan in held {
+        let Ok(key) = plan.key() else { continue };
+        let Ok(ke) = KeyExpr::try_from(key.clone()) else {
+            continue;
+        };
+        if !query.key_expr().intersects(&ke) {
+            continue;
+        }
+        let meta = Meta {
+            mission_id: plan.mission_id,
+            ..Meta::default()
+        };
+        match format.encode(plan.as_ref(), meta) {
+            Ok(bytes) => {
+                if let Err(e) = query
+                    .reply(ke, bytes)
+                    .encoding(format.encoding::<Plan>())
+                    .wait()
+                {
+                    tracing::debug!(error = %e, "plan lookup reply failed");
+                }
+            }
+            Err(e) => tracing::warn!(error = %e, "plan lookup: encoding failed"),
+        }
+    }
+}
+
+fn load_plan(path: &Path) -> Result<Plan, ServiceError> {
+    let bytes = std::fs::read(path).map_err(|e| io_err(path, e))?;
+    envelope::decode::<Plan>(
+        &bytes,
+        &DecodeLimits {
+            max_body_bytes: MAX_PLAN_BYTES,
+            verify_crc: true,
+        },
+    )
+    .map(|e| e.message)
+    .map_err(|source| ServiceError::Codec {
+        what: path.display().to_string(),
+        source,
+    })
+}
+
+/// Writes `bytes` to `path` through a temporary file and a rename (never a torn file).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ServiceError> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).map_err(|e| io_err(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
+}
+
+/// Flags of `cellsar-planner serve`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ServeArgs {
+    /// Instance name (liveliness token `cellsar/alive/planner/<instance>`).
+    #[arg(long, default_value = "planner")]
+    pub instance: String,
+    /// Keep the plans in this directory and answer lookups for them after a restart.
+    #[arg(long, value_name = "DIR")]
+    pub state_dir: Option<PathBuf>,
+    /// Zenoh flags.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
+}
+
+/// What a plan service did, at exit.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ServeReport {
+    /// Requests answered with a plan (fresh or cached).
+    pub plans: u64,
+    /// Requests answered from the cache.
+    pub cached: u64,
+    /// Requests answered with an error.
+    pub errors: u64,
+    /// Malformed requests (counted by the queryable).
+    pub malformed: u64,
+}
+
+/// Sends planner progress from the planning thread to the service loop (at most every 0.5 s).
+struct ProgressObserver {
+    tx: std::sync::mpsc::Sender<String>,
+    phase: String,
+    last: Instant,
+}
+
+impl Observer for ProgressObserver {
+    fn on_phase(&mut self, phase: &str) {
+        self.phase = phase.to_string();
+    }
+    fn on_iteration(&mut self, r: &IterationRecord) {
+        if self.last.elapsed() < Duration::from_millis(500) {
+            return;
+        }
+        self.last = Instant::now();
+        let _ = self.tx.send(format!(
+            "{} iteration {}: true energy {:.1} J",
+            self.phase, r.iteration, r.true_energy_j
+        ));
+    }
+}
+
+/// Plans `req` (validated; errors name the field).
+pub fn plan_request(
+    req: &PlanRequest,
+    instance: &str,
+    observer: &mut dyn Observer,
+) -> Result<Plan, ServiceError> {
+    let mission = Mission::from_file_struct(&req.mission)
+        .map_err(|e| ServiceError::BadRequest(format!("mission: {e}")))?;
+    let options = req.options.to_plan_options()?;
+    let result = plan_with_observer(&mission, &options, observer)
+        .map_err(|e| ServiceError::BadRequest(format!("planning {:?}: {e}", mission.name())))?;
+    let file = mission.to_file_struct();
+    Ok(Plan {
+        mission_id: mission_id(&file),
+        summary: Summary::new(&mission, &result),
+        mission: file,
+        options: req.options.clone(),
+        result,
+        planner: instance.to_string(),
+    })
+}
+
+/// Runs the plan service until `stop` is set: answers `cellsar/plan`, publishes each plan and
+/// its summary, answers plan lookups from its cache (persisted in `--state-dir`).
+pub fn serve(args: &ServeArgs, stop: &AtomicBool) -> Result<ServeReport, ServiceError> {
+    let node = ZenohNode::open(args.zenoh.to_config()?, "planner", &args.instance)?;
+    let report = serve_on(&node, args, stop);
+    if let Err(e) = node.close() {
+        tracing::warn!(error = %e, "closing the Zenoh session");
+    }
+    report
+}
+
+fn serve_on(
+    node: &ZenohNode,
+    args: &ServeArgs,
+    stop: &AtomicBool,
+) -> Result<ServeReport, ServiceError> {
+    let cache = PlanCache::new(node, args.state_dir.as_deref())?;
+    let board = StatusBoard::new("planner", &args.instance);
+    let requests = node.queryable::<PlanRequest>(
+        PLAN_KEY,
+        SubscribeOptions {
+            capacity: 16,
+            ..SubscribeOptions::default()
+        },
+    )?;
+    let mut plan_pubs: HashMap<MissionId, bridge::net::TypedPublisher<Plan>> = HashMap::new();
+    let mut summary_pubs: HashMap<MissionId, bridge::net::TypedPublisher<PlanSummary>> =
+        HashMap::new();
+    let mut report = ServeReport::default();
+    let mut seq = 0u64;
+    tracing::info!(key = PLAN_KEY, instance = %args.instance, "plan service ready");
+    while !stop.load(Ordering::Relaxed) {
+        let Some(q) = requests.recv_timeout(Duration::from_millis(100)) else {
+            continue;
+        };
+        let req = q.request.clone();
+        let cached = Mission::from_file_struct(&req.mission)
+            .ok()
+            .map(|m| mission_id(&m.to_file_struct()))
+            .and_then(|id| cache.get(id))
+            .filter(|p| p.options == req.options);
+        let plan = match cached {
+            Some(p) => {
+                report.cached += 1;
+                tracing::info!(mission = %p.mission_id, "plan request answered from the cache");
+                Ok(p)
+            }
+            None => plan_in_thread(node, &board, &req, &args.instance, stop).map(Arc::new),
+        };
+        if stop.load(Ordering::Relaxed) {
+            break;
+        }
+        match plan {
+            Ok(plan) => {
+                seq += 1;
+                let meta = Meta {
+                    mission_id: plan.mission_id,
+                    seq,
+                    time_unix_ns: 0,
+                };
+                cache.insert(plan.clone())?;
+                if let Err(e) = q.reply(plan.as_ref(), meta) {
+                    tracing::warn!(error = %e, "plan reply failed");
+                }
+                drop(q);
+                report.plans += 1;
+                publish_plan(node, &plan, meta, &mut plan_pubs, &mut summary_pubs)?;
+                let mut s = board.status(plan.mission_id, "planned");
+                s.done = plan.result.iterations as u64;
+                s.total = s.done;
+                s.counters.insert("plans".into(), report.plans);
+                s.message = format!(
+                    "{}: energy {:.1} J, feasible {}",
+                    plan.summary.mission, plan.summary.energy_j, plan.summary.feasible
+                );
+                board.publish(node, &s);
+            }
+            Err(e) => {
+                report.errors += 1;
+                tracing::warn!(error = %e, "plan request failed");
+                if let Err(e2) = q.reply_err(&e.to_string()) {
+                    tracing::warn!(error = %e2, "error reply failed");
+                }
+            }
+        }
+    }
+    report.malformed = requests.counters().snapshot().malformed + cache.malformed();
+    tracing::info!(
+        plans = report.plans,
+        cached = report.cached,
+        errors = report.errors,
+        malformed = report.malformed,
+        final_counters = true,
+        "plan service stopping"
+    );
+    Ok(report)
+}
+
+fn publish_plan(
+    node: &ZenohNode,
+    plan: &Plan,
+    meta: Meta,
+    plan_pubs: &mut HashMap<MissionId, bridge::net::TypedPublisher<Plan>>,
+    summary_pubs: &mut HashMap<MissionId, bridge::net::TypedPublisher<PlanSummary>>,
+) -> Result<(), ServiceError> {
+    let id = plan.mission_id;
+    let key = plan.key()?;
+    let p = match plan_pubs.entry(id) {
+        std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
+        std::collections::hash_map::Entry::Vacant(v) => v.insert(node.publisher::<Plan>(
+            &key,
+            PublishOptions {
+                mission_id: id,
+                ..PublishOptions::default()
+            },
+        )?),
+    };
+    p.put_with(plan, meta)?;
+    if let std::collections::hash_map::Entry::Vacant(v) = summary_pubs.entry(id) {
+        v.insert(node.publisher::<PlanSummary>(
+            &keys::mission(id, "plan/summary")?,
+            PublishOptions {
+                mission_id: id,
+                ..PublishOptions::json()
+            },
+        )?);
+    }
+    if let Some(p) = summary_pubs.get(&id) {
+        let s = PlanSummary {
+            mission_id: id,
+            mission: plan.summary.mission.clone(),
+            windows: plan
+                .mission
+                .landmarks
+                .points
+                .as_ref()
+                .map(Vec::len)
+                .unwrap_or(0),
+            summary: plan.summary.clone(),
+        };
+        p.put_with(&s, meta)?;
+    }
+    Ok(())
+}
+
+/// Plans in a worker thread so that a stop signal is seen while planning (the thread is left
+/// behind then: the process is exiting), publishing progress as `planning` status.
+fn plan_in_thread(
+    node: &ZenohNode,
+    board: &StatusBoard,
+    req: &PlanRequest,
+    instance: &str,
+    stop: &AtomicBool,
+) -> Result<Plan, ServiceError> {
+    let provisional = Mission::from_file_struct(&req.mission)
+        .map(|m| mission_id(&m.to_file_struct()))
+        .unwrap_or_default();
+    let (progress_tx, progress_rx) = std::sync::mpsc::channel::<String>();
+    let (done_tx, done_rx) = std::sync::mpsc::channel();
+    let (req, instance) = (req.clone(), instance.to_string());
+    std::thread::Builder::new()
+        .name("plan".into())
+        .spawn(move || {
+            let mut obs = ProgressObserver {
+                tx: progress_tx,
+                phase: String::new(),
+                last: Instant::now(),
+            };
+            let _ = done_tx.send(plan_request(&req, &instance, &mut obs));
+        })
+        .map_err(|e| ServiceError::Internal(format!("starting the planning thread: {e}")))?;
+    let mut status = board.status(provisional, "planning");
+    status.message = "planning".into();
+    board.publish(node, &status);
+    loop {
+        if stop.load(Ordering::Relaxed) {
+            return Err(ServiceError::Internal("stopped while planning".into()));
+        }
+        while let Ok(line) = progress_rx.try_recv() {
+            status.message = line;
+            status.uptime_s = board.started.elapsed().as_secs_f64();
+            board.publish(node, &status);
+        }
+        match done_rx.recv_timeout(Duration::from_millis(50)) {
+            Ok(result) => return result,
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(ServiceError::Internal(
+                    "the planning thread panicked".into(),
+                ))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::NoObserver;
+
+    fn short_mission() -> MissionFile {
+        MissionFile::from_toml_str(
+            "name = \"short\"\n[params]\nhorizon_s = 20.0\n[landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }, { x_m = 0.0, y_m = 30.0, from_s = 10.0, to_s = 20.0 }]\n",
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn plans_round_trip_in_both_forms() {
+        let req = PlanRequest {
+            mission: short_mission(),
+            options: PlanRequestOptions::default(),
+        };
+        let plan = plan_request(&req, "t", &mut NoObserver).unwrap();
+        assert_eq!(plan.mission_id, mission_id(&plan.mission));
+        let meta = Meta::default();
+        let limits = DecodeLimits {
+            max_body_bytes: MAX_PLAN_BYTES,
+            verify_crc: true,
+        };
+        let bin = envelope::encode(&plan, meta).unwrap();
+        let back: Plan = envelope::decode(&bin, &limits).unwrap().message;
+        assert_eq!(back.result.trajectory, plan.result.trajectory);
+        assert_eq!(back.summary, plan.summary);
+        assert_eq!(
+            serde_json::to_string(&back).unwrap(),
+            serde_json::to_string(&plan).unwrap()
+        );
+        // JSON for tools without Rust: readable, with the trajectory as numbers
+        let json = envelope::encode_json(&plan, meta).unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&json).unwrap();
+        assert_eq!(v["kind_name"], "planner.plan");
+        assert!(
+            v["body"]["result"]["trajectory"]["pos_m"]
+                .as_array()
+                .unwrap()
+                .len()
+                > 10
+        );
+        // the resolved mission plans to the same mission id
+        let again = Mission::from_file_struct(&plan.mission).unwrap();
+        assert_eq!(mission_id(&again.to_file_struct()), plan.mission_id);
+    }
+
+    #[test]
+    fn bad_requests_name_the_field() {
+        let mut req = PlanRequest {
+            mission: short_mission(),
+            options: PlanRequestOptions {
+                tolerance: Some(-1.0),
+                ..Default::default()
+            },
+        };
+        let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
+        assert!(e.to_string().contains("options.tolerance"), "{e}");
+        req.options = PlanRequestOptions::default();
+        req.mission.params.altitude_m = Some(-5.0);
+        let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
+        assert!(e.to_string().contains("altitude_m"), "{e}");
+        let e =
+            serde_json::from_str::<PlanRequest>(r#"{"mission": {"landmarks": {}}, "optoins": {}}"#)
+                .unwrap_err();
+        assert!(e.to_string().contains("optoins"), "{e}");
+    }
+}

@@ -1,0 +1,108 @@
+//! The radar as services: `cellsar-radar-sim echo` (UAV side: synthesises the IQ of the
+//! apertures a processor asks for, publishes them as frames on iceoryx2) and
+//! `cellsar-radar-sim process-service` (BS side: pulls apertures, cancels, images, detects,
+//! publishes detections and images on Zenoh).
+//!
+//! ```text
+//! cellsar/<m>/echo                 iceoryx2 frame service (IQ, zero copy); the same key on Zenoh
+//!                                  when cellsar-bridge carries it to another host
+//! cellsar/<m>/echo/request         queryable of echo: ApertureRequest -> RequestAck
+//! cellsar/<m>/frames               FrameInfo per frame sent (bincode, droppable)
+//! cellsar/<m>/detections           ApertureDetections per aperture (JSON)
+//! cellsar/<m>/image/<n>            ApertureImage of aperture n (bincode: f32 multilook)
+//! cellsar/<m>/metrics              MissionMetrics when every aperture is done (bincode)
+//! cellsar/<m>/results              queryable of the processor: ResultRequest -> ResultAck
+//!                                  (re-publishes what a consumer missed)
+//! cellsar/<m>/status/<role>        planner::service::ServiceStatus (JSON)
+//! ```
+//!
+//! # Delivery: pull, at least once, de-duplicated
+//! The processor drives: it asks the echo for at most `--window` apertures at a time
+//! (`ApertureRequest`, a Zenoh query; the reply says which frame sequence numbers will come),
+//! and asks again for an aperture whose frames stop arriving for `--resend-after-s` (frames
+//! lost to a full buffer, a frozen or restarted process, a dead bridge or router). Frame
+//! sequence numbers are a pure function of the mission ([`FrameLayout`]): a re-sent frame has
+//! its original number, so the processor keeps the first copy of each and drops the rest. The
+//! echo keeps no state beyond its queue. The processor stores each finished aperture in
+//! `--state-dir` before publishing it, so after a restart it resumes with the next one and
+//! re-publishes the stored results (consumers de-duplicate by mission and aperture). Frames
+//! never cross looks, so a single look can be asked for again (the resolution measurement at
+//! the end of a mission does that).
+//!
+//! Message kinds of this crate: `0x0300..=0x03ff` (the IQ frame is the bridge's `0x0200`).
+
+mod echo;
+mod layout;
+mod messages;
+mod process;
+
+pub use echo::{run_echo, EchoArgs, EchoReport};
+pub use layout::{FrameLayout, FrameSlot};
+pub use messages::*;
+pub use process::{run_processor, ApertureOutcome, MissionContext, ProcessArgs, ProcessReport};
+
+use std::path::PathBuf;
+
+/// Default largest frame payload, bytes (4 MiB: 100 pulses of 4096 samples fit; an iceoryx2
+/// publisher then maps 13 × 4 MiB of shared memory).
+pub const DEFAULT_MAX_FRAME_BYTES: usize = 4 << 20;
+
+/// Errors of the radar services; each names what failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ServiceError {
+    /// The radar library failed.
+    #[error(transparent)]
+    Radar(#[from] crate::RadarError),
+    /// The planner service layer failed.
+    #[error(transparent)]
+    Planner(#[from] planner::service::ServiceError),
+    /// Zenoh failed.
+    #[error(transparent)]
+    Net(#[from] bridge::NetError),
+    /// iceoryx2 failed.
+    #[error(transparent)]
+    Iox(#[from] bridge::iox::IoxError),
+    /// The Zenoh flags or file are invalid.
+    #[error(transparent)]
+    Config(#[from] bridge::zconfig::ConfigError),
+    /// A key could not be built.
+    #[error(transparent)]
+    Key(#[from] bridge::keys::KeyError),
+    /// A mission of a plan is invalid.
+    #[error("mission {mission}: {reason}")]
+    Mission {
+        /// Mission id.
+        mission: bridge::MissionId,
+        /// Why.
+        reason: String,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A stored or received message could not be encoded or decoded.
+    #[error("{what}: {source}")]
+    Codec {
+        /// What.
+        what: String,
+        /// The codec error.
+        source: bridge::CodecError,
+    },
+    /// A flag is invalid (the message names it).
+    #[error("{0}")]
+    Flag(String),
+    /// A worker thread stopped unexpectedly.
+    #[error("{0}")]
+    Internal(String),
+}
+
+/// Result of the services.
+pub type ServiceResult<T> = std::result::Result<T, ServiceError>;
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,514 @@
+//! `cellsar-radar-sim echo`: synthesises the frames of the apertures that processors ask for
+//! and publishes them on the iceoryx2 frame service `cellsar/<mission>/echo`.
+
+use std::collections::{HashMap, VecDeque};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use bridge::envelope::DecodeLimits;
+use bridge::iox::FramePublisherOptions;
+use bridge::net::{IncomingQuery, PublishOptions, SubscribeOptions, TypedPublisher};
+use bridge::zenoh::qos::CongestionControl;
+use bridge::{
+    keys, FrameMeta, FrameNode, FramePublisher, FrameServiceSpec, IoxArgs, MissionId, ZenohArgs,
+    ZenohNode,
+};
+use planner::service::{Plan, PlanCache, StatusBoard, ALL_PLANS, MAX_PLAN_BYTES};
+use serde::{Deserialize, Serialize};
+
+use crate::config::SceneFile;
+use crate::synth::{Components, Synthesizer};
+use crate::track::PulseMeta;
+
+use super::process::MissionContext;
+use super::{
+    ApertureRequest, FrameInfo, FrameSlot, RequestAck, ServiceError, ServiceResult,
+    DEFAULT_MAX_FRAME_BYTES,
+};
+
+/// Flags of `cellsar-radar-sim echo`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct EchoArgs {
+    /// Instance name (liveliness token `cellsar/alive/echo/<instance>`).
+    #[arg(long, default_value = "echo")]
+    pub instance: String,
+    /// Scene file (TOML): the objects, the radar and the processing settings.
+    #[arg(long)]
+    pub scene: PathBuf,
+    /// Largest frame payload in bytes; sizes the iceoryx2 service and the frames (every process
+    /// of the service, the bridge included, must use the same value).
+    #[arg(long, default_value_t = DEFAULT_MAX_FRAME_BYTES)]
+    pub max_frame_bytes: usize,
+    /// Seconds between status publications.
+    #[arg(long, default_value_t = 1.0)]
+    pub status_interval_s: f64,
+    /// Requests the echo queues at most (more are refused as busy).
+    #[arg(long, default_value_t = 64)]
+    pub max_queue: usize,
+    /// Zenoh flags.
+    #[command(flatten)]
+    pub zenoh: ZenohArgs,
+    /// iceoryx2 flags.
+    #[command(flatten)]
+    pub iox: IoxArgs,
+}
+
+/// What the echo did, at exit.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct EchoReport {
+    /// Requests accepted.
+    pub requests: u64,
+    /// Requests refused (unknown mission, bad aperture, layout mismatch, busy).
+    pub refused: u64,
+    /// Requests already queued (not added again).
+    pub merged: u64,
+    /// Frames sent.
+    pub frames: u64,
+    /// Deliveries skipped because a subscriber's buffer was full (a slow or frozen reader).
+    pub skipped_full: u64,
+    /// Frame sends that failed.
+    pub send_errors: u64,
+    /// Jobs (apertures or looks) finished.
+    pub jobs: u64,
+    /// Payload bytes sent.
+    pub bytes: u64,
+}
+
+struct EchoMission {
+    ctx: Arc<MissionContext>,
+    synth: Synthesizer,
+    publisher: Option<FramePublisher>,
+    info: TypedPublisher<FrameInfo>,
+}
+
+struct Job {
+    mission: MissionId,
+    aperture: usize,
+    look: Option<usize>,
+    slots: Vec<(u64, FrameSlot)>,
+    pulses: Vec<PulseMeta>,
+    next: usize,
+}
+
+/// Runs the echo service until `stop` is set.
+pub fn run_echo(args: &EchoArgs, stop: &AtomicBool) -> ServiceResult<EchoReport> {
+    if !(args.status_interval_s > 0.0 && args.status_interval_s.is_finite()) {
+        return Err(ServiceError::Flag(format!(
+            "--status-interval-s {} must be a positive number",
+            args.status_interval_s
+        )));
+    }
+    let scene = SceneFile::from_path(&args.scene)?;
+    let env = args.iox.env()?;
+    let node = ZenohNode::open(args.zenoh.to_config()?, "echo", &args.instance)?;
+    let r = Echo::new(args, scene, &node, &env).and_then(|mut e| e.run(stop));
+    if let Err(e) = node.close() {
+        tracing::warn!(error = %e, "closing the Zenoh session");
+    }
+    r
+}
+
+struct Echo<'a> {
+    args: &'a EchoArgs,
+    scene: SceneFile,
+    node: &'a ZenohNode,
+    frames: FrameNode,
+    cache: PlanCache,
+    board: StatusBoard,
+    missions: HashMap<MissionId, EchoMission>,
+    queue: VecDeque<Job>,
+    report: EchoReport,
+}
+
+impl<'a> Echo<'a> {
+    fn new(
+        args: &'a EchoArgs,
+        scene: SceneFile,
+        node: &'a ZenohNode,
+        env: &bridge::IoxEnv,
+    ) -> ServiceResult<Self> {
+        let node_name = format!("echo-{}", args.instance);
+        let (frames, cleanup) = FrameNode::new(env, &node_name)?;
+        if cleanup.cleaned > 0 {
+            tracing::info!(
+                cleaned = cleanup.cleaned,
+                "stale iceoryx2 resources of dead processes removed"
+            );
+        }
+        Ok(Echo {
+            args,
+            scene,
+            node,
+            frames,
+            cache: PlanCache::new(node, None)?,
+            board: StatusBoard::new("echo", &args.instance),
+            missions: HashMap::new(),
+            queue: VecDeque::new(),
+            report: EchoReport::default(),
+        })
+    }
+
+    fn run(&mut self, stop: &AtomicBool) -> ServiceResult<EchoReport> {
+        let plans = self.node.subscriber::<Plan>(
+            ALL_PLANS,
+            SubscribeOptions {
+                capacity: 16,
+                limits: DecodeLimits {
+                    max_body_bytes: MAX_PLAN_BYTES,
+                    verify_crc: true,
+                },
+                ..SubscribeOptions::default()
+            },
+        )?;
+        let requests = self.node.queryable::<ApertureRequest>(
+            "cellsar/*/echo/request",
+            SubscribeOptions {
+                capacity: 256,
+                ..SubscribeOptions::default()
+            },
+        )?;
+        match PlanCache::lookup(self.node, ALL_PLANS, Duration::from_secs(2)) {
+            Ok(found) => {
+                for p in found {
+                    self.add_plan(p);
+                }
+            }
+            Err(e) => tracing::warn!(error = %e, "plan lookup at start failed"),
+        }
+        tracing::info!(instance = %self.args.instance, "echo ready");
+        let interval = Duration::from_secs_f64(self.args.status_interval_s);
+        let mut last_status = Instant::now();
+        while !stop.load(Ordering::Relaxed) {
+            while let Some(p) = plans.try_recv() {
+                self.add_plan(p.message);
+            }
+            let wait = if self.queue.is_empty() {
+                Duration::from_millis(50)
+            } else {
+                Duration::ZERO
+            };
+            let first = if wait.is_zero() {
+                requests.recv_timeout(Duration::ZERO)
+            } else {
+                requests.recv_timeout(wait)
+            };
+            if let Some(q) = first {
+                self.handle_request(q);
+                while let Some(q) = requests.recv_timeout(Duration::ZERO) {
+                    self.handle_request(q);
+                }
+            }
+            if let Err(e) = self.send_next() {
+                tracing::warn!(error = %e, "sending a frame failed");
+                self.report.send_errors += 1;
+                self.queue.pop_front();
+            }
+            if last_status.elapsed() >= interval {
+                last_status = Instant::now();
+                let bad = plans.counters().snapshot().malformed
+                    + requests.counters().snapshot().malformed
+                    + self.cache.malformed();
+                self.publish_status("running", bad);
+            }
+        }
+        let bad = plans.counters().snapshot().malformed
+            + requests.counters().snapshot().malformed
+            + self.cache.malformed();
+        self.publish_status("stopping", bad);
+        let c = plans.counters().snapshot();
+        let q = requests.counters().snapshot();
+        tracing::info!(
+            final_counters = true,
+            requests = self.report.requests,
+            refused = self.report.refused,
+            merged = self.report.merged,
+            frames = self.report.frames,
+            skipped_full = self.report.skipped_full,
+            send_errors = self.report.send_errors,
+            jobs = self.report.jobs,
+            plans_malformed = c.malformed,
+            requests_malformed = q.malformed,
+            lookups_malformed = self.cache.malformed(),
+            "echo stopping"
+        );
+        Ok(self.report.clone())
+    }
+
+    fn add_plan(&mut self, plan: Plan) {
+        let id = plan.mission_id;
+        if self.missions.contains_key(&id) {
+            return;
+        }
+        match self.open_mission(plan) {
+            Ok(m) => {
+                tracing::info!(
+                    mission = %id,
+                    apertures = m.ctx.apertures.len(),
+                    frames = m.ctx.layout.total_frames(),
+                    frame_pulses = m.ctx.layout.frame_pulses(),
+                    "plan received"
+                );
+                self.missions.insert(id, m);
+            }
+            Err(e) => tracing::warn!(mission = %id, error = %e, "plan not usable"),
+        }
+    }
+
+    fn open_mission(&mut self, plan: Plan) -> ServiceResult<EchoMission> {
+        let plan = Arc::new(plan);
+        let ctx = Arc::new(MissionContext::new(
+            &plan,
+            &self.scene,
+            self.args.max_frame_bytes,
+        )?);
+        let objects = ctx.setup.objects(&ctx.mission)?;
+        let synth = ctx.setup.synthesizer(objects)?;
+        let info = self.node.publisher::<FrameInfo>(
+            &keys::mission(ctx.mission_id, "frames")?,
+            PublishOptions {
+                mission_id: ctx.mission_id,
+                congestion_control: CongestionControl::Drop,
+                ..PublishOptions::default()
+            },
+        )?;
+        self.cache.insert(plan)?;
+        // the publisher exists from the plan on, so processors are connected before they ask
+        let spec = FrameServiceSpec::new(
+            &keys::mission(ctx.mission_id, "echo")?,
+            self.args.max_frame_bytes,
+        );
+        let publisher = self
+            .frames
+            .publisher(&spec, FramePublisherOptions::default())?;
+        Ok(EchoMission {
+            ctx,
+            synth,
+            publisher: Some(publisher),
+            info,
+        })
+    }
+
+    fn handle_request(&mut self, q: IncomingQuery<ApertureRequest>) {
+        let r = q.request.clone();
+        if !self.missions.contains_key(&r.mission_id) {
+            // a processor may know a plan that this echo (just restarted) has not seen yet
+            if let Ok(key) = keys::mission(r.mission_id, "plan") {
+                if let Ok(found) = PlanCache::lookup(self.node, &key, Duration::from_millis(1500)) {
+                    for p in found {
+                        self.add_plan(p);
+                    }
+                }
+            }
+        }
+        match self.accept(&r) {
+            Ok(ack) => {
+                if ack.queued {
+                    self.report.requests += 1;
+                } else {
+                    self.report.merged += 1;
+                }
+                tracing::debug!(mission = %r.mission_id, aperture = r.aperture, look = ?r.look,
+                    requester = %r.requester, queued = ack.queued, "request");
+                if let Err(e) = q.reply(
+                    &ack,
+                    bridge::Meta {
+                        mission_id: r.mission_id,
+                        ..bridge::Meta::default()
+                    },
+                ) {
+                    tracing::warn!(error = %e, "request reply failed");
+                }
+            }
+            Err(msg) => {
+                self.report.refused += 1;
+                tracing::warn!(mission = %r.mission_id, aperture = r.aperture, requester = %r.requester, "request refused: {msg}");
+                if let Err(e) = q.reply_err(&msg) {
+                    tracing::warn!(error = %e, "error reply failed");
+                }
+            }
+        }
+    }
+
+    fn accept(&mut self, r: &ApertureRequest) -> Result<RequestAck, String> {
+        let Some(m) = self.missions.get(&r.mission_id) else {
+            return Err(format!(
+                "unknown mission {}: this echo has no plan for it (is a planner running?)",
+                r.mission_id
+            ));
+        };
+        let ctx = &m.ctx;
+        let ap = r.aperture as usize;
+        let Some(aperture) = ctx.apertures.get(ap) else {
+            return Err(format!(
+                "aperture {ap} does not exist: mission {} has {} apertures",
+                r.mission_id,
+                ctx.apertures.len()
+            ));
+        };
+        let look = r.look.map(|l| l as usize);
+        if let Some(l) = look {
+            if l >= aperture.looks {
+                return Err(format!(
+                    "look {l} of aperture {ap} does not exist: it has {} looks",
+                    aperture.looks
+                ));
+            }
+        }
+        if r.frame_pulses as usize != ctx.layout.frame_pulses() {
+            return Err(format!(
+                "frame layout mismatch: the requester expects {} pulses per frame, this echo sends {} (give both the same --max-frame-bytes)",
+                r.frame_pulses,
+                ctx.layout.frame_pulses()
+            ));
+        }
+        let slots = ctx.layout.slots(ap, look);
+        let seqs: Vec<u64> = slots.iter().map(|(s, _)| *s).collect();
+        let dup = self.queue.iter().any(|j| {
+            j.mission == r.mission_id && j.aperture == ap && j.look == look && j.next == 0
+        });
+        let queued_before = self.queue.len() as u32;
+        if !dup {
+            if self.queue.len() >= self.args.max_queue {
+                return Err(format!(
+                    "busy: {} requests queued (--max-queue)",
+                    self.queue.len()
+                ));
+            }
+            self.queue.push_back(Job {
+                mission: r.mission_id,
+                aperture: ap,
+                look,
+                slots,
+                pulses: Vec::new(),
+                next: 0,
+            });
+        }
+        Ok(RequestAck {
+            mission_id: r.mission_id,
+            aperture: r.aperture,
+            look: r.look,
+            seqs,
+            queued_before,
+            queued: !dup,
+        })
+    }
+
+    /// Synthesises and sends the next frame of the first job.
+    fn send_next(&mut self) -> ServiceResult<()> {
+        let Some(job) = self.queue.front_mut() else {
+            return Ok(());
+        };
+        let Some(m) = self.missions.get_mut(&job.mission) else {
+            self.queue.pop_front();
+            return Ok(());
+        };
+        let ctx = &m.ctx;
+        if job.pulses.is_empty() {
+            job.pulses = ctx.setup.pulses(&ctx.track, &ctx.apertures[job.aperture]);
+        }
+        let Some(&(seq, slot)) = job.slots.get(job.next) else {
+            self.queue.pop_front();
+            return Ok(());
+        };
+        let chunk = job
+            .pulses
+            .get(slot.first_pulse..slot.first_pulse + slot.pulses)
+            .ok_or_else(|| {
+                ServiceError::Internal(format!(
+                    "frame {seq}: pulses {}..{} outside aperture {}",
+                    slot.first_pulse,
+                    slot.first_pulse + slot.pulses,
+                    job.aperture
+                ))
+            })?;
+        let iq = m.synth.synthesize_frame(chunk, Components::ALL)?;
+        if m.publisher.is_none() {
+            let spec = FrameServiceSpec::new(
+                &keys::mission(ctx.mission_id, "echo")?,
+                self.args.max_frame_bytes,
+            );
+            m.publisher = Some(
+                self.frames
+                    .publisher(&spec, FramePublisherOptions::default())?,
+            );
+        }
+        let Some(publisher) = m.publisher.as_ref() else {
+            return Ok(());
+        };
+        let t_first_s = chunk.first().map_or(0.0, |p| p.t_s);
+        let spp = ctx.layout.samples_per_pulse();
+        let meta = FrameMeta::iq(
+            ctx.mission_id,
+            seq,
+            (t_first_s * 1e9).round() as i64,
+            slot.pulses as u32,
+            spp as u32,
+        );
+        let bytes = bridge::frame::samples_as_bytes(&iq);
+        let sent = publisher.send_bytes(&meta, bytes)?;
+        self.report.frames += 1;
+        self.report.bytes += bytes.len() as u64;
+        self.report.skipped_full += sent.skipped_full;
+        let info = FrameInfo {
+            mission_id: ctx.mission_id,
+            seq,
+            aperture: job.aperture as u32,
+            look: slot.look as u32,
+            first_pulse: (ctx.apertures[job.aperture].first_pulse + slot.first_pulse) as u64,
+            pulses: slot.pulses as u32,
+            samples_per_pulse: spp as u32,
+            t_first_s,
+            checksum: bridge::frame::checksum(bytes),
+            delivered: sent.delivered as u32,
+            skipped_full: sent.skipped_full as u32,
+        };
+        if let Err(e) = m.info.put_with(
+            &info,
+            bridge::Meta {
+                mission_id: ctx.mission_id,
+                seq,
+                time_unix_ns: 0,
+            },
+        ) {
+            tracing::debug!(error = %e, "frame info not published");
+        }
+        job.next += 1;
+        if job.next >= job.slots.len() {
+            self.report.jobs += 1;
+            tracing::debug!(mission = %job.mission, aperture = job.aperture, look = ?job.look, "job done");
+            self.queue.pop_front();
+        }
+        Ok(())
+    }
+
+    fn publish_status(&self, state: &str, malformed: u64) {
+        for (id, m) in &self.missions {
+            let mut s = self.board.status(*id, state);
+            s.total = m.ctx.layout.total_frames();
+            s.done = self.report.frames;
+            for (k, v) in [
+                ("requests", self.report.requests),
+                ("refused", self.report.refused),
+                ("merged", self.report.merged),
+                ("frames", self.report.frames),
+                ("skipped_full", self.report.skipped_full),
+                ("send_errors", self.report.send_errors),
+                ("jobs", self.report.jobs),
+                ("queued", self.queue.len() as u64),
+                ("bytes", self.report.bytes),
+                ("malformed", malformed),
+            ] {
+                s.counters.insert(k.to_string(), v);
+            }
+            s.message = format!(
+                "{} frames sent, {} deliveries skipped (full buffers), {} jobs queued",
+                self.report.frames,
+                self.report.skipped_full,
+                self.queue.len()
+            );
+            self.board.publish(self.node, &s);
+        }
+    }
+}
