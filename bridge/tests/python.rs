@@ -42,5 +42,8 @@ fn bridge_python_client() {
         .current_dir(workspace())
         .status()
         .expect("run pytest");
-    assert!(status.success(), "pytest bridge/tests/python failed: {status}");
+    assert!(
+        status.success(),
+        "pytest bridge/tests/python failed: {status}"
+    );
 }

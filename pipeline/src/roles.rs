@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 use bridge::forward::{Forwarder, ForwarderConfig, Route};
+use bridge::iox::Backpressure;
 use bridge::net::PublishOptions;
 use bridge::stats::BridgeStats;
 use bridge::zconfig::Mode;
@@ -70,6 +71,8 @@ pub fn run_bridge(args: &BridgeArgs, stop: &AtomicBool) -> Result<()> {
             Congestion::Drop => CongestionControl::Drop,
         },
         inbound_queue: 4,
+        // A frozen local consumer must never stall the bridge (SIGSTOP test).
+        inbound_backpressure: Backpressure::Discard,
     };
     config.validate()?;
     let env = args.iox.env()?;
