@@ -181,7 +181,12 @@ class PipelineClientTest(unittest.TestCase):
         with lock:
             self.assertEqual(statuses["processor"]["done"], 2)
             self.assertEqual(statuses["processor"]["counters"]["malformed"], 0)
-            self.assertGreaterEqual(statuses["echo"]["counters"]["frames"], 20)
+        # the echo service publishes its status periodically (not on each frame): wait for one
+        # that counts every frame of the 20-s mission, rather than read whichever came last
+        wait_for(lambda: statuses.get("echo", {}).get("counters", {}).get("frames", 0) >= 20,
+                 "the echo service's status counting >= 20 frames")
+        with lock:
+            self.assertEqual(statuses["echo"]["counters"]["malformed"], 0)
         for s in subs:
             s.undeclare()
 
