@@ -21,6 +21,7 @@ use serde_json::Value;
 /// 6 apertures of the small scene.
 const H: f64 = 60.0;
 
+/// The run (started with `--strict`) exits 0 when every landmark in view was detected, else 4.
 fn expect_exit(l: &mut Launch, reference: &std::path::Path) {
     let st = l.finish(Duration::from_secs(240));
     let report: Value =
@@ -41,7 +42,7 @@ fn expect_exit(l: &mut Launch, reference: &std::path::Path) {
 fn kill_mid_mission(role: &str, extra: &[&str]) -> Launch {
     let reference = reference(H);
     let dir = tempfile::tempdir().unwrap();
-    let mut args = vec!["--window", "1"];
+    let mut args = vec!["--window", "1", "--strict"];
     args.extend_from_slice(extra);
     let mut l = Launch::start(dir.path(), H, &args);
     l.event("planned", Duration::from_secs(120));
@@ -134,7 +135,7 @@ fn frozen_processor_does_not_stall_the_echo() {
     let reference = reference(H);
     let dir = tempfile::tempdir().unwrap();
     // through a router: the test's session reaches the echo whatever the state of the others
-    let mut l = Launch::start(dir.path(), H, &["--router"]);
+    let mut l = Launch::start(dir.path(), H, &["--router", "--strict"]);
     let z = join(&mut l);
     let node = ZenohNode::open(z.to_config().unwrap(), "tester", "freeze").unwrap();
     let planned = l.event("planned", Duration::from_secs(120));
@@ -337,7 +338,7 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     let mut l = Launch::start(
         dir.path(),
         30.0,
-        &["--transport", "zenoh", "--external", "echo"],
+        &["--transport", "zenoh", "--external", "echo", "--strict"],
     );
     let z = join(&mut l);
     let planned = l.event("planned", Duration::from_secs(120));

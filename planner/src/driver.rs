@@ -189,19 +189,21 @@ pub struct PlanResult {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PlanError {
     /// The mission cannot be flown (found before or during phase I).
-    #[error("{0}")]
+    #[error(transparent)]
     Infeasible(#[from] Infeasibility),
     /// The given start trajectory does not fit the mission.
     #[error("start trajectory: {0}")]
     InvalidInit(String),
     /// The first subproblem could not be solved.
-    #[error("iteration {iteration}: {source}")]
+    ///
+    /// The solver's error is part of the message (not a separate `source`), so that printing
+    /// the error chain names it once.
+    #[error("iteration {iteration}: {error}")]
     Solver {
         /// Iteration (0 = phase I).
         iteration: usize,
         /// The solver's error.
-        #[source]
-        source: SolveError,
+        error: SolveError,
     },
 }
 
@@ -514,7 +516,7 @@ fn make_feasible(
             Err(source) if tuning.kappa_scale >= 1.0 => {
                 return Err(PlanError::Solver {
                     iteration: 0,
-                    source,
+                    error: source,
                 })
             }
             Err(_) => {
@@ -706,7 +708,7 @@ fn run_exact(
                     if obj_hist.is_empty() && it <= 9 {
                         return Err(PlanError::Solver {
                             iteration: it,
-                            source: e,
+                            error: e,
                         });
                     }
                     termination = TerminationReason::SubproblemFailed(e.to_string());
@@ -844,7 +846,7 @@ fn run_paper(
                 if obj_hist.is_empty() {
                     return Err(PlanError::Solver {
                         iteration: it,
-                        source: e,
+                        error: e,
                     });
                 }
                 termination = TerminationReason::SubproblemFailed(e.to_string());

@@ -345,15 +345,15 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::BadInput(e)) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", planner::error_chain(e.as_ref()));
             ExitCode::from(2)
         }
         Err(Failure::Infeasible(e)) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", planner::error_chain(e.as_ref()));
             ExitCode::from(3)
         }
         Err(Failure::Internal(e)) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", planner::error_chain(e.as_ref()));
             ExitCode::from(1)
         }
     }

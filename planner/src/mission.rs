@@ -37,10 +37,10 @@ pub enum MissionError {
         message: String,
     },
     /// A parameter is out of range.
-    #[error("{0}")]
+    #[error(transparent)]
     Param(#[from] ParamError),
     /// The landmark table is invalid.
-    #[error("{0}")]
+    #[error(transparent)]
     Schedule(#[from] ScheduleError),
 }
 

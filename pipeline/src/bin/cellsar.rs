@@ -51,7 +51,7 @@ fn init_tracing(default: &str) {
 }
 
 fn fail(e: anyhow::Error) -> ExitCode {
-    eprintln!("error: {e:#}");
+    eprintln!("error: {}", planner::error_chain(e.as_ref()));
     ExitCode::from(1)
 }
 

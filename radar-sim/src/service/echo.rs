@@ -180,10 +180,16 @@ impl<'a> Echo<'a> {
         tracing::info!(instance = %self.args.instance, "echo ready");
         let interval = Duration::from_secs_f64(self.args.status_interval_s);
         let mut last_status = Instant::now();
+        // a status goes out at once for every newly known mission (then every `interval`), so
+        // that a watcher sees the echo's status even when a short mission ends within the
+        // first interval
+        let mut known_missions = 0;
         while !stop.load(Ordering::Relaxed) {
             while let Some(p) = plans.try_recv() {
                 self.add_plan(p.message);
             }
+            let status_due = self.missions.len() != known_missions;
+            known_missions = self.missions.len();
             let wait = if self.queue.is_empty() {
                 Duration::from_millis(50)
             } else {
@@ -205,7 +211,7 @@ impl<'a> Echo<'a> {
                 self.report.send_errors += 1;
                 self.queue.pop_front();
             }
-            if last_status.elapsed() >= interval {
+            if status_due || last_status.elapsed() >= interval {
                 last_status = Instant::now();
                 let bad = plans.counters().snapshot().malformed
                     + requests.counters().snapshot().malformed
