@@ -1,0 +1,101 @@
+//! Why the paper's default mission cannot be flown with `--resolution general` (README, "Resolution"):
+//! the allowed heading arcs of the default geometry, and the planner's named refusal.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use planner::geometry::{heading_unit, v2, ResolutionCell};
+use planner::evaluate::ResolutionMode;
+use planner::{plan, Mission, Params, PlanError, PlanOptions, Preset};
+
+/// Headings (whole degrees) at which a UAV flying at `speed_mps` with the landmark at the
+/// centre of its sensing circle sees a cell no wider than d_min, as closed arcs [from, to].
+fn allowed_arcs_deg(p: &Params, landmark: [f64; 2], speed_mps: f64) -> Vec<(u32, u32)> {
+    let ok = |deg: u32| {
+        let h = f64::from(deg).to_radians();
+        let u = heading_unit(h);
+        // the sensing centre is `centre_offset_m` to the right of the UAV
+        let uav = v2::sub(landmark, v2::scale(v2::right(u), p.centre_offset_m()));
+        ResolutionCell::new(p, uav, v2::scale(u, speed_mps), landmark).worst_width_m <= p.d_min_m
+    };
+    let mut arcs = Vec::new();
+    let mut start = None;
+    for deg in 0..=360u32 {
+        match (ok(deg % 360), start) {
+            (true, None) => start = Some(deg),
+            (false, Some(s)) => {
+                arcs.push((s, deg - 1));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(s) = start {
+        arcs.push((s, 360));
+    }
+    arcs
+}
+
+#[test]
+fn blind_arcs_around_north_and_east_at_the_default_geometry() {
+    let p = Params::default();
+    // the figures quoted in README.md
+    assert_eq!(
+        allowed_arcs_deg(&p, [0.0, 0.0], 15.0),
+        vec![(22, 68), (125, 325)]
+    );
+    assert_eq!(
+        allowed_arcs_deg(&p, [0.0, 0.0], 30.0),
+        vec![(13, 77), (106, 344)]
+    );
+    // heading north and heading east are blind at every speed up to V_m
+    for v in [8.0, 15.0, 22.0, 30.0] {
+        for a in allowed_arcs_deg(&p, [0.0, 0.0], v) {
+            assert!(!(a.0..=a.1).contains(&0) && !(a.0..=a.1).contains(&90), "{v}: {a:?}");
+        }
+    }
+}
+
+#[test]
+fn first_landmark_is_seen_from_the_default_start_only_near_the_blind_arc() {
+    // From the default start (−1000, −500) the first landmark (0, 0) is within r_s of the
+    // sensing centre in slot 1 (the UAV moves at most V_m δ = 15 m) only for headings of
+    // about 106–127°: the low edge of the large allowed arc, next to the blind arc around north.
+    let p = Params::default();
+    let step = p.max_speed_mps * p.slot_s;
+    let seen: Vec<u32> = (0..360u32)
+        .filter(|&deg| {
+            let h = f64::from(deg).to_radians();
+            let u = heading_unit(h);
+            let q = v2::add(p.start_m, v2::scale(u, step));
+            let c = v2::add(q, v2::scale(v2::right(u), p.centre_offset_m()));
+            v2::norm(c) <= p.sensing_radius_m
+        })
+        .collect();
+    let (lo, hi) = (*seen.first().unwrap(), *seen.last().unwrap());
+    assert!(
+        (100..=110).contains(&lo) && (120..=130).contains(&hi),
+        "{lo}..{hi}"
+    );
+}
+
+#[test]
+fn default_mission_under_general_resolution_is_refused_naming_an_early_slot() {
+    let m = Mission::preset(Preset::Default, 30.0).unwrap();
+    let options = PlanOptions {
+        resolution: ResolutionMode::General,
+        ..Default::default()
+    };
+    match plan(&m, &options) {
+        Err(PlanError::Infeasible(i)) => {
+            // within the first three landmark windows (30 s = 60 slots)
+            assert!(i.slot >= 1 && i.slot <= 60, "slot {}: {}", i.slot, i.reason);
+            assert!(i.reason.contains("resolution"), "{}", i.reason);
+        }
+        Ok(r) => panic!(
+            "a general-resolution plan of the default mission was found ({} J): README.md's \
+             'Resolution' section and issue 6's notes say it does not exist; update them",
+            r.evaluation.energy_j
+        ),
+        Err(e) => panic!("unexpected error: {e}"),
+    }
+}
