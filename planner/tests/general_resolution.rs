@@ -3,8 +3,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use planner::geometry::{heading_unit, v2, ResolutionCell};
 use planner::evaluate::ResolutionMode;
+use planner::geometry::{heading_unit, v2, ResolutionCell};
 use planner::{plan, Mission, Params, PlanError, PlanOptions, Preset};
 
 /// Headings (whole degrees) at which a UAV flying at `speed_mps` with the landmark at the
@@ -50,7 +50,10 @@ fn blind_arcs_around_north_and_east_at_the_default_geometry() {
     // heading north and heading east are blind at every speed up to V_m
     for v in [8.0, 15.0, 22.0, 30.0] {
         for a in allowed_arcs_deg(&p, [0.0, 0.0], v) {
-            assert!(!(a.0..=a.1).contains(&0) && !(a.0..=a.1).contains(&90), "{v}: {a:?}");
+            assert!(
+                !(a.0..=a.1).contains(&0) && !(a.0..=a.1).contains(&90),
+                "{v}: {a:?}"
+            );
         }
     }
 }
