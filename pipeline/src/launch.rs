@@ -825,19 +825,29 @@ fn missed_landmarks(
 ) -> String {
     let widths = window_worst_widths_m(mission, eval);
     let d_min = mission.params().d_min_m;
+    let mut wide = 0;
     let missed: Vec<String> = report
         .rows
         .iter()
         .filter(|r| r.in_view_fraction >= 0.5 && !r.detected)
         .map(|r| match r.landmark.and_then(|l| widths.get(l)) {
-            Some(w) if *w > d_min => format!("{} (cell {w:.0} m)", r.aperture),
+            Some(w) if *w > d_min => {
+                wide += 1;
+                format!("{} (cell {w:.0} m)", r.aperture)
+            }
             _ => r.aperture.to_string(),
         })
         .collect();
+    let why = if wide > 0 {
+        format!(
+            "; a cell wider than d_min = {d_min} m (near-blind bistatic geometry, which the \
+             paper's resolution criterion allows) merges neighbouring objects"
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "not detected although in view: aperture(s) {}; a cell wider than d_min = {d_min} m \
-         (near-blind bistatic geometry, allowed by the paper's resolution criterion) merges \
-         neighbouring objects: see report.md",
+        "not detected although in view: aperture(s) {}{why}; see report.md",
         missed.join(", ")
     )
 }
