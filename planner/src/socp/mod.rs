@@ -388,6 +388,14 @@ impl SocpSolver {
         let violation = prob.max_cone_violation(&x);
         let relative = prob.max_relative_cone_violation(&x);
         let finite = x.iter().all(|v| v.is_finite());
+        tracing::trace!(
+            variables = prob.n,
+            ?status,
+            iterations,
+            seconds,
+            relative_violation = relative,
+            "cone program solved"
+        );
         let accept = |ok: bool| -> Result<Solution, SolveError> {
             if ok && finite {
                 Ok(Solution {
