@@ -350,9 +350,12 @@ pub fn plan_with_observer(
 }
 
 /// Slot lengths of the coarse levels, finest first, s: the mission is first solved on slots of
-/// about 5 s, that solution starts a solve on slots of about 2.5 s, which starts the mission's
-/// own grid. (Both divide the paper's 10 s landmark windows.)
-const COARSE_LEVELS_S: [f64; 2] = [2.5, 5.0];
+/// about 10 s (one per landmark window of the paper's missions), that solution starts a solve on
+/// slots of about 5 s, that one a solve on slots of about 2.5 s, which starts the mission's own
+/// grid. (All divide the paper's 10 s landmark windows.) The 10 s level finds the shape of the
+/// track (the orbit of the 30 m mission) in a few cheap iterations: the default 30 m mission
+/// plans 2.3x faster with it (BENCHMARKS.md, "Planner").
+const COARSE_LEVELS_S: [f64; 3] = [2.5, 5.0, 10.0];
 
 /// The factor k (n divisible by k, at least 12 coarse slots) whose slot length k δ is closest to
 /// `target_s`, within a factor 1.5 of it.
