@@ -841,7 +841,7 @@ fn missed_landmarks(
     let why = if wide > 0 {
         format!(
             "; a cell wider than d_min = {d_min} m (near-blind bistatic geometry, which the \
-             paper's resolution criterion allows) merges neighbouring objects"
+             paper's resolution criterion allows) can merge neighbouring objects"
         )
     } else {
         String::new()
