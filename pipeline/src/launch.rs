@@ -746,7 +746,8 @@ fn run_on(
         serde_json::to_string_pretty(&pipeline)?,
     )
     .with_context(|| format!("writing {}", out.join("pipeline.json").display()))?;
-    write_report_md(out, &resolved, &plan, &report, &pipeline, n)?;
+    let widths = window_worst_widths_m(&resolved, &plan.result.evaluation);
+    write_report_md(out, &resolved, &plan, &report, &widths, &pipeline, n)?;
     println_human(args, "aperture landmark  in-view  detected  SNR/dB");
     for r in &report.rows {
         println_human(
@@ -784,8 +785,7 @@ fn run_on(
         ],
     );
     if !report.all_in_view_detected {
-        let missed = missed_landmarks(&resolved, &plan.result.evaluation, &report);
-        println_human(args, &missed);
+        println_human(args, &missed_landmarks(&resolved, &widths, &report));
     }
     Ok(if report.all_in_view_detected || !args.strict {
         Outcome::Complete
@@ -820,16 +820,15 @@ fn window_worst_widths_m(mission: &planner::Mission, eval: &planner::Evaluation)
 /// resolution cell explains it.
 fn missed_landmarks(
     mission: &planner::Mission,
-    eval: &planner::Evaluation,
+    widths: &[f64],
     report: &radar_sim::run::LoopReport,
 ) -> String {
-    let widths = window_worst_widths_m(mission, eval);
     let d_min = mission.params().d_min_m;
     let mut wide = 0;
     let missed: Vec<String> = report
         .rows
         .iter()
-        .filter(|r| r.in_view_fraction >= 0.5 && !r.detected)
+        .filter(|r| r.missed_in_view())
         .map(|r| match r.landmark.and_then(|l| widths.get(l)) {
             Some(w) if *w > d_min => {
                 wide += 1;
@@ -865,6 +864,7 @@ fn write_report_md(
     mission: &planner::Mission,
     plan: &Plan,
     report: &radar_sim::run::LoopReport,
+    widths: &[f64],
     pipeline: &Value,
     n: usize,
 ) -> Result<()> {
@@ -906,7 +906,6 @@ fn write_report_md(
         }
     );
     let _ = writeln!(s, "- restarts: {}", pipeline["restarts"]);
-    let widths = window_worst_widths_m(mission, &plan.result.evaluation);
     let d_min = mission.params().d_min_m;
     let _ = writeln!(
         s,

@@ -611,6 +611,17 @@ pub struct LoopRow {
     pub snr_db: Option<f64>,
 }
 
+/// A landmark counts as in view of its aperture when the plan keeps it in view in at least this
+/// fraction of its window's slots; such a landmark must be detected.
+pub const IN_VIEW_MIN_FRACTION: f64 = 0.5;
+
+impl LoopRow {
+    /// The landmark was in view (≥ [`IN_VIEW_MIN_FRACTION`] of its window) but not detected.
+    pub fn missed_in_view(&self) -> bool {
+        self.in_view_fraction >= IN_VIEW_MIN_FRACTION && !self.detected
+    }
+}
+
 /// The closed-loop report.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct LoopReport {
@@ -620,7 +631,7 @@ pub struct LoopReport {
     pub energy_j: f64,
     /// Per aperture.
     pub rows: Vec<LoopRow>,
-    /// Every landmark in view (≥ half of its window) was detected.
+    /// Every landmark in view (≥ [`IN_VIEW_MIN_FRACTION`] of its window) was detected.
     pub all_in_view_detected: bool,
     /// Processing metrics.
     pub metrics: Metrics,
@@ -667,10 +678,7 @@ pub fn loop_report(
     LoopReport {
         mission: mission.name().to_string(),
         energy_j: eval.energy_j,
-        all_in_view_detected: rows
-            .iter()
-            .filter(|r| r.in_view_fraction >= 0.5)
-            .all(|r| r.detected),
+        all_in_view_detected: !rows.iter().any(LoopRow::missed_in_view),
         rows,
         metrics,
     }
@@ -699,4 +707,28 @@ pub fn shorten(mission: &planner::Mission, horizon_s: f64) -> Result<planner::Mi
     file.params.horizon_s = Some(horizon_s);
     planner::Mission::from_file_struct(&file)
         .map_err(|e| RadarError::config("mission", e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{LoopRow, IN_VIEW_MIN_FRACTION};
+
+    fn row(in_view_fraction: f64, detected: bool) -> LoopRow {
+        LoopRow {
+            aperture: 0,
+            landmark: Some(0),
+            in_view_fraction,
+            detected,
+            snr_db: None,
+        }
+    }
+
+    #[test]
+    fn a_miss_counts_only_when_the_plan_keeps_the_landmark_in_view() {
+        assert!(row(1.0, false).missed_in_view());
+        assert!(row(IN_VIEW_MIN_FRACTION, false).missed_in_view());
+        assert!(!row(IN_VIEW_MIN_FRACTION - 0.01, false).missed_in_view());
+        assert!(!row(1.0, true).missed_in_view());
+        assert!(!row(0.0, true).missed_in_view());
+    }
 }
