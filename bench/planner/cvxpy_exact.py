@@ -88,13 +88,14 @@ SPEED_MARGIN_MPS = 1e-4
 SPEED_KEEP_FRACTION = 0.85
 # planner::evaluate::FEASIBILITY_TOL
 FEASIBILITY_TOL = 1e-4
-# planner::socp::SocpSettings::default(), passed to Clarabel as the Rust side does.
+# planner::socp::SocpSettings::exact_geometry(), passed to Clarabel as the Rust side does (the
+# Rust side repeats a failed solve with 10 refinement steps; no failure occurs on these missions).
 CLARABEL_OPTS = {
     "max_iter": 200,
     "tol_feas": 1e-8,
     "tol_gap_rel": 1e-8,
     "tol_gap_abs": 1e-8,
-    "iterative_refinement_max_iter": 10,
+    "iterative_refinement_max_iter": 0,
     "iterative_refinement_reltol": 1e-13,
     "presolve_enable": False,
 }

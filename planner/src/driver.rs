@@ -68,8 +68,11 @@ pub struct PlanOptions {
     pub tolerance: f64,
     /// Start from this trajectory instead of the built-in guidance start.
     pub init: Option<Trajectory>,
-    /// Settings of the cone-program solver.
+    /// Settings of the cone-program solver for the paper's schemes (`paper`, `baseline`).
     pub socp: SocpSettings,
+    /// Settings of the cone-program solver for the exact-geometry schemes (`exact`,
+    /// `baseline-exact`), their coarse start and their repair.
+    pub exact_socp: SocpSettings,
     /// Smallest factor on the proven centre-error bound that the exact scheme tries after
     /// successful steps (1 = always use the proven bound).
     pub min_kappa_scale: f64,
@@ -86,6 +89,16 @@ pub struct PlanOptions {
     pub resolution: ResolutionMode,
 }
 
+impl PlanOptions {
+    /// The cone-program settings of this run's scheme.
+    pub fn scheme_socp(&self) -> SocpSettings {
+        match self.scheme {
+            Scheme::Exact | Scheme::BaselineExact => self.exact_socp,
+            Scheme::Paper | Scheme::Baseline => self.socp,
+        }
+    }
+}
+
 impl Default for PlanOptions {
     fn default() -> Self {
         Self {
@@ -94,6 +107,7 @@ impl Default for PlanOptions {
             tolerance: 1e-4,
             init: None,
             socp: SocpSettings::default(),
+            exact_socp: SocpSettings::exact_geometry(),
             min_kappa_scale: 1.0 / 16.0,
             coarse: true,
             over_relaxation: true,
@@ -273,8 +287,8 @@ pub fn plan_with_observer(
         Scheme::Exact | Scheme::BaselineExact => options.resolution,
         Scheme::Paper | Scheme::Baseline => ResolutionMode::Paper,
     };
-    let mut solver = SocpSolver::new(options.socp);
-    let mut repair_solver = SocpSolver::new(options.socp);
+    let mut solver = SocpSolver::new(options.scheme_socp());
+    let mut repair_solver = SocpSolver::new(options.scheme_socp());
     // Every scheme needs a start that is feasible on the exact geometry, except the paper's
     // schemes started from a given path: that path is used as it is (its first (p5) is the
     // reproduction check).
@@ -399,7 +413,7 @@ fn coarse_start_from(
         resolution: options.resolution,
         ..ExactTuning::default()
     };
-    let mut solver = SocpSolver::new(options.socp);
+    let mut solver = SocpSolver::new(options.scheme_socp());
     let (start, _) = make_feasible(
         &coarse,
         match warm {
@@ -423,7 +437,7 @@ fn coarse_start_from(
             coarse: false,
             ..options.clone()
         };
-        let mut solver = SocpSolver::new(options.socp);
+        let mut solver = SocpSolver::new(options.scheme_socp());
         let solved = run_exact(
             &coarse,
             start,
