@@ -274,11 +274,12 @@ pub struct SocpSettings {
 }
 
 impl SocpSettings {
-    /// The settings of the exact-geometry cone programs: Clarabel's iterative refinement off
+    /// The settings of the `exact` scheme's cone programs: Clarabel's iterative refinement off
     /// (it is about half of the interior-point time on these well-scaled, banded programs and
-    /// changes their solutions by less than the solver tolerance), and a failed solve repeated
-    /// with Clarabel's default refinement (10 steps). The paper's schemes keep the defaults:
-    /// their later iterates depend on the solver's path (SPEC.md §4 item 10).
+    /// changes the planned energies by less than 1 J), and a failed solve repeated with
+    /// Clarabel's default refinement (10 steps). The comparison schemes keep the defaults: the
+    /// paper's later iterates depend on the solver's path (SPEC.md §4 item 10), and the
+    /// least-distance SCA lands on slightly longer local optima without refinement.
     pub fn exact_geometry() -> Self {
         Self {
             refine_max_iter: 0,
@@ -374,7 +375,12 @@ impl SocpSolver {
                     reuse: false,
                     ..self.settings
                 });
-                careful.solve_once(prob)
+                let again = careful.solve_once(prob);
+                match &again {
+                    Ok(sol) => tracing::debug!(status = ?sol.status, "retry solved"),
+                    Err(e) => tracing::debug!(error = %e, "retry failed too"),
+                }
+                again
             }
             other => other,
         }
