@@ -141,13 +141,15 @@ fn frozen_processor_does_not_stall_the_echo() {
     let planned = l.event("planned", Duration::from_secs(120));
     let m = MissionId::parse_hex(planned["mission_id"].as_str().unwrap()).unwrap();
     let fp = planned["frame_pulses"].as_u64().unwrap() as u32;
-    // the processor is subscribed once it has finished an aperture
+    // the processor is subscribed once it has finished an aperture; freeze it at once (the
+    // mission cannot finish while it is frozen; a 60 s mission is otherwise over in about a
+    // second, before this session could reach the echo)
     l.wait_for("the first aperture", Duration::from_secs(120), |e| {
         e["event"] == "aperture" && e["done"] == 1
     });
-    wait_sees(&node, "echo");
     let proc = l.pid("processor");
     signal(proc, "STOP");
+    wait_sees(&node, "echo", &l);
     let before = l.seen.len();
     // make the echo publish 4 apertures (40 frames) into the frozen reader's full buffer
     let t0 = Instant::now();
@@ -207,7 +209,7 @@ fn frozen_processor_does_not_stall_the_echo() {
 
 /// Waits until `node` sees the liveliness token of `role` (its session is connected and routes
 /// to it).
-fn wait_sees(node: &ZenohNode, role: &str) {
+fn wait_sees(node: &ZenohNode, role: &str, l: &Launch) {
     let deadline = Instant::now() + Duration::from_secs(60);
     loop {
         let alive = node
@@ -219,10 +221,19 @@ fn wait_sees(node: &ZenohNode, role: &str) {
         if !alive.is_empty() {
             return;
         }
-        assert!(
-            Instant::now() < deadline,
-            "the test session never saw {role}"
-        );
+        if Instant::now() >= deadline {
+            let all = node
+                .alive_now("cellsar/alive/**", Duration::from_millis(500))
+                .unwrap_or_default();
+            let info = node.session().info();
+            let routers: Vec<String> = info.routers_zid().wait().map(|z| z.to_string()).collect();
+            let peers: Vec<String> = info.peers_zid().wait().map(|z| z.to_string()).collect();
+            panic!(
+                "the test session never saw {role}; tokens it sees: {all:?}; routers {routers:?}, peers {peers:?}\nrouter log:\n{}\necho log:\n{}",
+                l.log("router"),
+                l.log("echo")
+            );
+        }
         std::thread::sleep(Duration::from_millis(100));
     }
 }
@@ -345,7 +356,7 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     let m = planned["mission_id"].as_str().unwrap().to_string();
     let node = ZenohNode::open(z.to_config().unwrap(), "tester", "flood").unwrap();
     for role in ["planner", "processor", "launcher"] {
-        wait_sees(&node, role);
+        wait_sees(&node, role, &l);
     }
     let k = |s: &str| format!("cellsar/{m}/{s}");
     flood_get(&node, "cellsar/plan", 0x0101);
@@ -377,7 +388,7 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     l.wait_for("the echo's status", Duration::from_secs(30), |e| {
         e["event"] == "status" && e["role"] == "echo"
     });
-    wait_sees(&node, "echo");
+    wait_sees(&node, "echo", &l);
     flood_get(&node, &k("echo/request"), 0x0301);
     flood_put(&node, &k("plan"), 0x0102);
     flood_get(&node, &k("plan"), 0x0103);
