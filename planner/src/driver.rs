@@ -372,8 +372,26 @@ pub fn plan_with_observer(
 /// slots of about 5 s, that one a solve on slots of about 2.5 s, which starts the mission's own
 /// grid. (All divide the paper's 10 s landmark windows.) The 10 s level finds the shape of the
 /// track (the orbit of the 30 m mission) in a few cheap iterations: the default 30 m mission
-/// plans 2.3x faster with it (BENCHMARKS.md, "Planner").
+/// plans 2.3x faster with it (BENCHMARKS.md, "Planner"). The `exact` scheme starts one level
+/// earlier, on 20 s slots ([`EXACT_COARSE_LEVELS_S`]).
 const COARSE_LEVELS_S: [f64; 3] = [2.5, 5.0, 10.0];
+
+/// The coarse levels of the `exact` scheme's built-in start: [`COARSE_LEVELS_S`] and a first
+/// solve on slots of about 20 s. A 20 s slot senses only the landmark of its end time (the 10 s
+/// level then repairs the others), but it finds the orbit of compact missions that the 10 s level
+/// can miss: random-9 and random-18 of Fig. 11 plan in 0.2 s instead of 6–16 s, at the floor
+/// instead of 5–6 J above it, and the staircase in 0.65 s instead of 1.3 s (BENCHMARKS.md).
+/// The comparison schemes keep [`COARSE_LEVELS_S`], so that their starts do not change.
+const EXACT_COARSE_LEVELS_S: [f64; 4] = [2.5, 5.0, 10.0, 20.0];
+
+/// The coarse levels for a scheme and purpose (optimising `exact`, or anything else).
+fn coarse_levels(options: &PlanOptions, optimise: bool) -> &'static [f64] {
+    if optimise && options.scheme == Scheme::Exact {
+        &EXACT_COARSE_LEVELS_S
+    } else {
+        &COARSE_LEVELS_S
+    }
+}
 
 /// The factor k (n divisible by k, at least 12 coarse slots) whose slot length k δ is closest to
 /// `target_s`, within a factor 1.5 of it.
@@ -386,7 +404,7 @@ fn coarse_factor(n: usize, delta: f64, target_s: f64) -> Option<usize> {
         .map(|(k, _)| k)
 }
 
-/// Solves the mission on coarser grids ([`COARSE_LEVELS_S`]) and interpolates the result to the
+/// Solves the mission on coarser grids ([`coarse_levels`]) and interpolates the result to the
 /// mission's slots. `None` when no suitable coarse grid exists or it fails.
 fn coarse_start(
     mission: &Mission,
@@ -409,7 +427,7 @@ fn coarse_start_from(
 ) -> Option<Trajectory> {
     let n = mission.slots();
     let delta = mission.params().slot_s;
-    let target = COARSE_LEVELS_S.get(level)?;
+    let target = coarse_levels(options, optimise).get(level)?;
     let factor = coarse_factor(n, delta, *target)?;
     let coarse = mission.coarsened(factor)?;
     let tuning = ExactTuning {
