@@ -187,7 +187,7 @@ fn sca_reuse(c: &mut Criterion) {
             let solver = warm.get_or_insert_with(|| {
                 let mut solver = SocpSolver::new(SocpSettings {
                     reuse: true,
-                    ..SocpSettings::default()
+                    ..SocpSettings::exact_geometry()
                 });
                 // the first solve builds the pattern; timed calls only update values in place
                 let (_, ipm) = sca_iteration(&m, s, &mut solver);
@@ -202,7 +202,7 @@ fn sca_reuse(c: &mut Criterion) {
             let s = start.get_or_insert_with(|| feasible_start(&m));
             let mut solver = SocpSolver::new(SocpSettings {
                 reuse: false,
-                ..SocpSettings::default()
+                ..SocpSettings::exact_geometry()
             });
             b.iter(|| sca_iteration(&m, s, &mut solver))
         });
@@ -227,6 +227,10 @@ fn settings_variants() -> Vec<(&'static str, SocpSettings)> {
     let d = SocpSettings::default();
     vec![
         ("default (tol 1e-8, refine <= 10)", d),
+        (
+            "exact_geometry (tol 1e-8, no refinement; the exact scheme's)",
+            SocpSettings::exact_geometry(),
+        ),
         (
             "tol 1e-6",
             SocpSettings {
@@ -325,7 +329,7 @@ fn scaling(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::from_parameter(n), m, |b, m| {
             let s = start.get_or_insert_with(|| feasible_start(m));
             let solver = warm.get_or_insert_with(|| {
-                let mut solver = SocpSolver::new(SocpSettings::default());
+                let mut solver = SocpSolver::new(SocpSettings::exact_geometry());
                 let (_, ipm) = sca_iteration(m, s, &mut solver);
                 if let Ok(mut t) = IPM.lock() {
                     t.insert(("scaling".to_string(), n), ipm);
