@@ -13,8 +13,11 @@
 //! frame crosses at most one Zenoh hop even with several bridges per host (Zenoh's own routing
 //! covers multi-hop). The forwarder is payload-agnostic: it never looks past the frame header.
 //!
-//! The two directions run on their own threads, each with its own iceoryx2 node; the Zenoh
-//! callbacks only queue samples. Every frame is counted once per direction ([`RouteStats`]).
+//! The direction to Zenoh runs on its own thread, waiting on the local services' events. The
+//! direction from Zenoh queues each frame for a thread of its own that re-publishes it or,
+//! with [`ForwarderConfig::inbound_queue`] `== 0`, re-publishes it in the Zenoh callback.
+//! Each direction has its own iceoryx2 node. Every frame is counted once per direction
+//! ([`RouteStats`]).
 
 use std::collections::HashSet;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -32,7 +35,8 @@ use zenoh::Wait;
 use crate::counters::BadPayloadLog;
 use crate::envelope::CodecError;
 use crate::iox::{
-    Backpressure, FrameNode, FramePublisherOptions, FrameServiceSpec, IoxEnv, IoxError,
+    Backpressure, FrameNode, FramePublisher, FramePublisherOptions, FrameServiceSpec, IoxEnv,
+    IoxError,
 };
 use crate::keys;
 use crate::net::{split_frame_payload, NetError, ZenohFramePublisher, ZenohNode};
@@ -120,7 +124,10 @@ pub struct ForwarderConfig {
     /// Congestion control of the Zenoh publishers (block: lossless, back-pressure; drop: never
     /// stall on a slow network, count nothing lost locally).
     pub congestion_control: CongestionControl,
-    /// Frames queued between the Zenoh callbacks and the inbound thread.
+    /// Frames queued between the Zenoh callbacks and an inbound thread that re-publishes them;
+    /// `0` re-publishes in the Zenoh callback itself, so a frame reaches the local subscribers
+    /// without waking another thread first (Zenoh's receive path then waits for the copy into
+    /// shared memory). A queue (the binary's default is 4) decouples the two.
     pub inbound_queue: usize,
     /// What re-publishing a remote frame does when a local subscriber's buffer is full:
     /// `Discard` (default: skip and count, a frozen local consumer never stalls the bridge) or
@@ -151,12 +158,6 @@ impl ForwarderConfig {
                 });
             }
             r.service.validate().map_err(ForwardError::Iox)?;
-        }
-        if self.inbound_queue == 0 {
-            return Err(ForwardError::Route {
-                route: "inbound_queue".into(),
-                reason: "must be at least 1".into(),
-            });
         }
         Ok(())
     }
@@ -333,7 +334,7 @@ impl Forwarder {
         let mut tokens = Vec::new();
 
         // From Zenoh: callbacks queue samples for the inbound thread.
-        let (tx, rx) = mpsc::sync_channel::<Inbound>(config.inbound_queue);
+        let (tx, rx) = mpsc::sync_channel::<Inbound>(config.inbound_queue.max(1));
         let (ready_tx, ready_rx) = mpsc::channel::<Result<(), ForwardError>>();
         let inbound_routes: Vec<(usize, Route)> = config
             .routes
@@ -342,7 +343,46 @@ impl Forwarder {
             .filter(|(_, r)| r.direction.inbound())
             .map(|(i, r)| (i, r.clone()))
             .collect();
-        if !inbound_routes.is_empty() {
+        if !inbound_routes.is_empty() && config.inbound_queue == 0 {
+            // Inline: each Zenoh callback copies its frame into shared memory and publishes it
+            // (no hand-off to another thread, so no extra wake-up on the way).
+            let (inode, _) = FrameNode::new(env, &format!("bridge-{}-in", config.instance))?;
+            let inode = Arc::new(inode);
+            for (i, r) in &inbound_routes {
+                let publisher = inode.publisher(
+                    &r.service,
+                    FramePublisherOptions {
+                        checksum: false,
+                        backpressure: config.inbound_backpressure,
+                    },
+                )?;
+                let sink = InlineInbound {
+                    publisher,
+                    route: r.clone(),
+                    counters: counters.clone(),
+                    index: *i,
+                    verify_checksum: config.verify_checksum,
+                    log: BadPayloadLog::default(),
+                    _node: inode.clone(),
+                };
+                let sub = node
+                    .session()
+                    .declare_subscriber(r.key.clone())
+                    .callback(move |sample: Sample| {
+                        if sample.kind() == SampleKind::Put {
+                            sink.on_sample(&sample);
+                        }
+                    })
+                    .allowed_origin(Locality::Remote)
+                    .wait()
+                    .map_err(|e| NetError::Zenoh {
+                        op: "declare subscriber",
+                        key: r.key.clone(),
+                        reason: e.to_string(),
+                    })?;
+                subscribers.push(sub);
+            }
+        } else if !inbound_routes.is_empty() {
             let env_in = env.clone();
             let c = counters.clone();
             let s = stop.clone();
@@ -561,49 +601,94 @@ fn inbound_thread(
         let Some((_, route, publisher)) = pubs.iter().find(|(j, _, _)| *j == i) else {
             continue;
         };
-        let c = &counters[i].inb;
-        DirectionCounters::add(&c.received, 1);
-        let payload = sample.payload();
-        let checked = split_frame_payload(payload, route.service.max_payload_bytes).and_then(
-            |(h, chunks)| {
-                if verify_checksum && h.has_checksum() {
-                    let mut hasher = crc32fast::Hasher::new();
-                    for ch in &chunks {
-                        hasher.update(ch);
-                    }
-                    let actual = hasher.finalize();
-                    if actual != h.checksum {
-                        return Err(CodecError::Checksum {
-                            expected: h.checksum,
-                            actual,
-                        });
-                    }
-                }
-                Ok((h, chunks))
-            },
+        deliver_inbound(
+            &sample,
+            route,
+            publisher,
+            &counters[i].inb,
+            verify_checksum,
+            &log,
         );
-        let (mut header, chunks) = match checked {
-            Ok(v) => v,
-            Err(e) => {
-                DirectionCounters::add(&c.malformed, 1);
-                log.log(&route.key, payload.len(), &e);
-                continue;
-            }
-        };
-        header.flags |= FLAG_BRIDGED;
-        match publisher.send_chunks(&header, chunks.iter().copied()) {
-            Ok(report) => {
-                DirectionCounters::add(&c.forwarded, 1);
-                DirectionCounters::add(&c.bytes, header.payload_len);
-                DirectionCounters::add(&c.dropped, report.skipped_full);
-            }
-            Err(e) => {
-                DirectionCounters::add(&c.send_errors, 1);
-                tracing::warn!(service = %route.service.name, error = %e, "re-publishing a remote frame failed");
-            }
-        }
     }
     Ok(())
+}
+
+/// One inbound route delivered in the Zenoh callback (`inbound_queue == 0`). The publisher is
+/// declared before the node so that it is dropped first.
+struct InlineInbound {
+    publisher: FramePublisher,
+    route: Route,
+    counters: Arc<Vec<RouteCounters>>,
+    index: usize,
+    verify_checksum: bool,
+    log: BadPayloadLog,
+    _node: Arc<FrameNode>,
+}
+
+impl InlineInbound {
+    fn on_sample(&self, sample: &Sample) {
+        if let Some(c) = self.counters.get(self.index) {
+            deliver_inbound(
+                sample,
+                &self.route,
+                &self.publisher,
+                &c.inb,
+                self.verify_checksum,
+                &self.log,
+            );
+        }
+    }
+}
+
+/// Checks one frame from Zenoh (header, size, optional CRC) and re-publishes it on the local
+/// service with [`FLAG_BRIDGED`] set: one copy, from Zenoh's buffers into a loaned sample.
+fn deliver_inbound(
+    sample: &Sample,
+    route: &Route,
+    publisher: &FramePublisher,
+    c: &DirectionCounters,
+    verify_checksum: bool,
+    log: &BadPayloadLog,
+) {
+    DirectionCounters::add(&c.received, 1);
+    let payload = sample.payload();
+    let checked =
+        split_frame_payload(payload, route.service.max_payload_bytes).and_then(|(h, chunks)| {
+            if verify_checksum && h.has_checksum() {
+                let mut hasher = crc32fast::Hasher::new();
+                for ch in &chunks {
+                    hasher.update(ch);
+                }
+                let actual = hasher.finalize();
+                if actual != h.checksum {
+                    return Err(CodecError::Checksum {
+                        expected: h.checksum,
+                        actual,
+                    });
+                }
+            }
+            Ok((h, chunks))
+        });
+    let (mut header, chunks) = match checked {
+        Ok(v) => v,
+        Err(e) => {
+            DirectionCounters::add(&c.malformed, 1);
+            log.log(&route.key, payload.len(), &e);
+            return;
+        }
+    };
+    header.flags |= FLAG_BRIDGED;
+    match publisher.send_chunks(&header, chunks.iter().copied()) {
+        Ok(report) => {
+            DirectionCounters::add(&c.forwarded, 1);
+            DirectionCounters::add(&c.bytes, header.payload_len);
+            DirectionCounters::add(&c.dropped, report.skipped_full);
+        }
+        Err(e) => {
+            DirectionCounters::add(&c.send_errors, 1);
+            tracing::warn!(service = %route.service.name, error = %e, "re-publishing a remote frame failed");
+        }
+    }
 }
 
 fn outbound_thread(

@@ -725,7 +725,7 @@ fn query_stats(probe: &ZenohNode, instance: &str) -> serde_json::Value {
 
 /// Two "hosts" (isolated iceoryx2 environments), a bridge on each forwarding the same
 /// service both ways: each side's consumer gets exactly the frames of both producers, once;
-/// nothing loops. Both bridges then stop cleanly on SIGTERM / SIGINT with their counters logged.
+/// nothing loops (bridge b re-publishes inline, bridge a through its queue). Both bridges then stop cleanly on SIGTERM / SIGINT with their counters logged.
 #[test]
 fn bridges_forward_both_ways_without_loops() {
     let ha = Iso::new("ha");
@@ -746,10 +746,15 @@ fn bridges_forward_both_ways_without_loops() {
     ];
     let service = "cellsar/test/echo";
     let key = "cellsar/test/echo";
+    // bridge b re-publishes in Zenoh's callback, bridge a from its queue thread: both modes
     let mut bb = Proc::spawn(
         "bridge-b",
         bridge_exe(),
-        &bridge_args("b", service, &hb, &listen),
+        &[
+            bridge_args("b", service, &hb, &listen),
+            vec![s("--inbound-queue"), s("0")],
+        ]
+        .concat(),
         dir.path(),
         "info",
     );
@@ -894,7 +899,13 @@ fn bridge_survives_10k_malformed_payloads() {
             "f",
             &format!("cellsar/test/flood={key}@in"),
             &hb,
-            &[s("-c"), cfg.display().to_string()],
+            // inline mode: every payload is checked inside Zenoh's callback
+            &[
+                s("-c"),
+                cfg.display().to_string(),
+                s("--inbound-queue"),
+                s("0"),
+            ],
         ),
         dir.path(),
         "info,bridge=debug",

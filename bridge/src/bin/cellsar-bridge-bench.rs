@@ -192,6 +192,9 @@ enum Cmd {
         /// Also write the raw reports (JSON) here.
         #[arg(long)]
         json_out: Option<PathBuf>,
+        /// `--inbound-queue` of the receiving bridge (0: re-publish in Zenoh's callback).
+        #[arg(long, default_value_t = 4)]
+        bridge_inbound_queue: usize,
     },
 }
 
@@ -275,6 +278,7 @@ fn run(cli: Cli) -> Result<()> {
             latency_budget_mb_s,
             repeats,
             json_out,
+            bridge_inbound_queue,
         } => bench(
             &sizes_mib,
             frames,
@@ -282,6 +286,7 @@ fn run(cli: Cli) -> Result<()> {
             latency_budget_mb_s,
             repeats.max(1),
             json_out.as_deref(),
+            bridge_inbound_queue,
         ),
     }
 }
@@ -817,6 +822,7 @@ struct BenchCtx {
     root: PathBuf,
     max: usize,
     run: usize,
+    inbound_queue: usize,
 }
 
 impl BenchCtx {
@@ -954,7 +960,12 @@ impl BenchCtx {
             v
         };
         // lossless runs: bridge B waits for the consumer instead of skipping it
-        let mut zb = vec![s("-l"), ep.clone()];
+        let mut zb = vec![
+            s("-l"),
+            ep.clone(),
+            s("--inbound-queue"),
+            self.inbound_queue.to_string(),
+        ];
         if block {
             zb.extend([s("--inbound-backpressure"), s("block")]);
         }
@@ -1060,6 +1071,7 @@ fn bench(
     latency_budget_mb_s: f64,
     repeats: usize,
     json_out: Option<&Path>,
+    inbound_queue: usize,
 ) -> Result<()> {
     let me = std::env::current_exe()?;
     let bridge_exe = me.with_file_name("cellsar-bridge");
@@ -1074,6 +1086,7 @@ fn bench(
         root: root.clone(),
         max: sizes_mib.iter().copied().max().unwrap_or(32) << 20,
         run: 0,
+        inbound_queue,
     };
     let mut rows: Vec<BenchRow> = Vec::new();
     let push = |rows: &mut Vec<BenchRow>,

@@ -72,7 +72,9 @@ struct Cli {
     /// Congestion control of the Zenoh publishers.
     #[arg(long, value_enum, default_value_t = Congestion::Block)]
     congestion: Congestion,
-    /// Frames queued between Zenoh and the iceoryx2 side.
+    /// Frames queued between Zenoh and a thread that re-publishes them on iceoryx2; 0
+    /// re-publishes in Zenoh's callback without a thread hand-off (no latency gain measured on
+    /// a 2-vCPU host: see bridge/BENCHMARKS.md).
     #[arg(long, default_value_t = 4)]
     inbound_queue: usize,
     /// When a local subscriber's buffer is full: discard (skip and count; never stall) or
