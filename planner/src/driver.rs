@@ -6,6 +6,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
+use crate::geometry::v2;
 use crate::init::{guidance_start, precheck, Infeasibility};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::schemes::paper::{PaperObjective, PaperState};
@@ -314,6 +315,7 @@ pub fn plan_with_observer(
             },
             &mut repair_solver,
             observer,
+            options.scheme == Scheme::Exact,
         )?,
         None => (start, 0),
     };
@@ -451,6 +453,7 @@ fn coarse_start_from(
         &tuning,
         &mut solver,
         &mut NoObserver,
+        optimise && options.scheme == Scheme::Exact,
     )
     .ok()?;
     let tr = if optimise {
@@ -489,8 +492,15 @@ fn coarse_start_from(
 
 /// Per-slot violation used by the elastic phase: the largest of the sensing excess (m), the
 /// azimuth speed shortfall (m/s) and the range keep-out shortfall (m) of each landmark slot,
-/// summed over slots (the same quantities that the subproblem's slack σ_t bounds).
-fn total_violation(mission: &Mission, ev: &Evaluation, mode: ResolutionMode) -> f64 {
+/// summed over slots (the same quantities that the subproblem's slack σ_t bounds). With
+/// `whole_slot`, the sensing excess is the larger of the slot-end centre's and the slot-start
+/// centre's (straight flight at the slot's heading), as [`ExactTuning::whole_slot_sensing`] imposes.
+fn total_violation(
+    mission: &Mission,
+    ev: &Evaluation,
+    mode: ResolutionMode,
+    whole_slot: bool,
+) -> f64 {
     let p = mission.params();
     let v_min = p.min_speed_mps();
     let keepout = p.range_keepout_m();
@@ -498,9 +508,14 @@ fn total_violation(mission: &Mission, ev: &Evaluation, mode: ResolutionMode) -> 
         .iter()
         .filter(|s| s.landmark_m.is_some())
         .map(|s| {
-            let sens = s.centre_error_m.unwrap_or(0.0) - p.sensing_radius_m;
+            let mut sens = s.centre_error_m.unwrap_or(0.0) - p.sensing_radius_m;
+            if let (true, Some(g)) = (whole_slot, s.landmark_m) {
+                // the centre at the start of the slot (straight flight, same heading)
+                let start = v2::sub(s.centre_m, v2::scale(s.velocity_mps, p.slot_s));
+                sens = sens.max(v2::dist(start, g) - p.sensing_radius_m);
+            }
             let speed = v_min - s.speed_mps;
-            let range = keepout.map_or(0.0, |k| k - crate::geometry::v2::dist(s.centre_m, p.bs_m));
+            let range = keepout.map_or(0.0, |k| k - v2::dist(s.centre_m, p.bs_m));
             let width = match mode {
                 ResolutionMode::General => s.worst_width_m - p.d_min_m,
                 ResolutionMode::Paper => 0.0,
@@ -517,6 +532,13 @@ fn total_violation(mission: &Mission, ev: &Evaluation, mode: ResolutionMode) -> 
 /// Phase I (elastic SCA): while `start` violates the exact constraints, minimise the objective
 /// plus a penalty on the total violation (a merit function that decreases monotonically); stops
 /// at the first iterate that is feasible on the exact geometry. Returns it and the iterations.
+///
+/// `exact_rules` (the `exact` scheme): the merit also counts the slot-start centre where the
+/// subproblem imposes whole-slot sensing (as its slacks do; otherwise its steps, which trade
+/// slot-start against slot-end violation, look uphill and phase I stalls: random-3 of Fig. 11),
+/// and a step rejected at the proven centre bound shortens the next one (trust region) instead
+/// of repeating the same subproblem. The comparison schemes keep the earlier rules, so that
+/// their starts, and the results compared with the paper, do not change.
 fn make_feasible(
     mission: &Mission,
     start: Trajectory,
@@ -524,6 +546,7 @@ fn make_feasible(
     base: &ExactTuning,
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
+    exact_rules: bool,
 ) -> Result<(Trajectory, usize), PlanError> {
     let mode = base.resolution;
     let mut current = start;
@@ -544,8 +567,10 @@ fn make_feasible(
         elastic_weight: Some(weight),
         ..*base
     };
-    let mut merit = value(&ev) + weight * total_violation(mission, &ev, mode);
-    let mut best_violation = total_violation(mission, &ev, mode);
+    let slot_start = exact_rules && base.whole_slot_sensing;
+    let violation_of = |ev: &Evaluation| total_violation(mission, ev, mode, slot_start);
+    let mut merit = value(&ev) + weight * violation_of(&ev);
+    let mut best_violation = violation_of(&ev);
     let mut stalls = 0;
     for it in 1..=100 {
         tuning.elastic_weight = Some(weight);
@@ -563,7 +588,7 @@ fn make_feasible(
                 continue;
             }
         };
-        let merit_of = |ev: &Evaluation| value(ev) + weight * total_violation(mission, ev, mode);
+        let merit_of = |ev: &Evaluation| value(ev) + weight * violation_of(ev);
         let mut cand = sub.trajectory(&sol.x, &current);
         let mut cand_ev = evaluate(mission, &cand);
         let mut cand_merit = merit_of(&cand_ev);
@@ -582,7 +607,7 @@ fn make_feasible(
                 }
             }
         }
-        let violation = total_violation(mission, &cand_ev, mode);
+        let violation = violation_of(&cand_ev);
         tracing::debug!(
             iteration = it,
             violation,
@@ -599,10 +624,16 @@ fn make_feasible(
                 return Ok((current, it));
             }
             tuning.kappa_scale = (tuning.kappa_scale * 0.5).max(1.0 / 16.0);
+            // a successful step relaxes the trust region again, as in the main loop
+            tuning.trust_radius_m = tuning.trust_radius_m.map(|r| r * 4.0).filter(|r| *r < 50.0);
         } else if tuning.kappa_scale < 1.0 {
             // the optimistic centre model overreached: back to the proven bound
             tuning.kappa_scale = (tuning.kappa_scale * 4.0).min(1.0);
             continue;
+        } else if exact_rules {
+            // rejected at the proven bound: the same subproblem would give the same step, so
+            // shorten it (trust region on the velocity change, as in the main loop)
+            tuning.trust_radius_m = Some(tuning.trust_radius_m.map_or(2.0, |r| r * 0.5));
         }
         if violation < best_violation * 0.99 {
             best_violation = violation;
@@ -615,7 +646,7 @@ fn make_feasible(
             if stalls % 3 == 0 && weight < 1e5 {
                 // the penalty may not be exact yet: charge violations more
                 weight *= 10.0;
-                merit = value(&ev) + weight * total_violation(mission, &ev, mode);
+                merit = value(&ev) + weight * violation_of(&ev);
             }
         }
     }

@@ -161,26 +161,34 @@ fn exact_is_feasible_on_the_default_mission_200m() {
     assert!(r.trajectory.length_m() > 6_575.0);
 }
 
-/// Fig. 11's random realisation 18: the 10 s coarse level alone started the fine SCA from a poor
-/// track (16.5 kJ) that it then took 198 iterations to improve; the 20 s level finds the orbit at
-/// once.
+/// Fig. 11's random realisations 18 and 3. Realisation 18: the 10 s coarse level alone started
+/// the fine SCA from a poor track (16.5 kJ) that it then took 198 iterations to improve; the 20 s
+/// level finds the orbit at once. Realisation 3: the 20 s level's phase I stalled (its merit
+/// counted only the slot-end centre while its slacks also bound the slot-start centre), so the
+/// plan fell back to the 10 s level and took 138 fine iterations to end 11 J above the floor.
 #[test]
-fn exact_reaches_the_floor_at_once_on_random_realisation_18() {
-    let file = planner::MissionFile::from_toml_str(
-        "[params]\n[landmarks]\npreset = \"random\"\nspacing_m = 100.0\nseed = 18\n",
-    )
-    .unwrap();
-    let m = Mission::from_file_struct(&file).unwrap();
-    let r = plan(&m, &PlanOptions::default()).unwrap();
-    let c = check(&m, &r.trajectory);
-    assert_feasible_on_exact_geometry(&c);
-    assert!(
-        c.energy_j < FLOOR_J + 2.0,
-        "{} J vs floor {FLOOR_J} J",
-        c.energy_j
-    );
-    assert!(r.iterations <= 5, "{} fine iterations", r.iterations);
-    assert_eq!(r.termination, TerminationReason::Converged);
+fn exact_reaches_the_floor_at_once_on_random_realisations_18_and_3() {
+    for seed in [18, 3] {
+        let file = planner::MissionFile::from_toml_str(&format!(
+            "[params]\n[landmarks]\npreset = \"random\"\nspacing_m = 100.0\nseed = {seed}\n"
+        ))
+        .unwrap();
+        let m = Mission::from_file_struct(&file).unwrap();
+        let r = plan(&m, &PlanOptions::default()).unwrap();
+        let c = check(&m, &r.trajectory);
+        assert_feasible_on_exact_geometry(&c);
+        assert!(
+            c.energy_j < FLOOR_J + 2.0,
+            "random-{seed}: {} J vs floor {FLOOR_J} J",
+            c.energy_j
+        );
+        assert!(
+            r.iterations <= 5,
+            "random-{seed}: {} fine iterations",
+            r.iterations
+        );
+        assert_eq!(r.termination, TerminationReason::Converged, "random-{seed}");
+    }
 }
 
 #[test]
