@@ -271,6 +271,13 @@ pub struct SocpSettings {
     /// certificate of infeasibility or unboundedness that an unrefined KKT solve can fake), it is
     /// repeated once from scratch with this many; 0 = no retry.
     pub retry_refine_max_iter: u32,
+    /// When a solve still stops inaccurate (not a certificate), try it again with other
+    /// linear-algebra settings, in order: the other refinement setting (none ↔ 10 steps), then
+    /// tolerances of 1e-6. Every answer must still pass our residual check, so a fallback can
+    /// only turn a failure into an accepted solution, never weaken what is accepted. (Found on
+    /// Fig. 11's random realisations 3 and 19, whose first `baseline` program Clarabel stopped
+    /// `AlmostSolved` at a relative cone violation of 1.5e-4 and 2.9e-4: the plan failed.)
+    pub fallbacks: bool,
 }
 
 impl SocpSettings {
@@ -300,6 +307,7 @@ impl Default for SocpSettings {
             refine_max_iter: 10,
             refine_reltol: 1e-13,
             retry_refine_max_iter: 0,
+            fallbacks: true,
         }
     }
 }
@@ -361,36 +369,93 @@ impl SocpSolver {
 
     /// Solves `prob`; reuses the previous pattern when the structure is unchanged. A failed
     /// solve is repeated once with more iterative refinement when the settings ask for it
-    /// ([`SocpSettings::retry_refine_max_iter`]).
+    /// ([`SocpSettings::retry_refine_max_iter`]), and an inaccurate one with the
+    /// [`SocpSettings::fallbacks`]; the last attempt's error is what the caller sees.
     pub fn solve(&mut self, prob: &ProblemBuilder) -> Result<Solution, SolveError> {
         let start = Instant::now();
-        let first = self.solve_once(prob);
-        let retry = self.settings.retry_refine_max_iter;
-        match first {
-            Err(ref e) if retry > self.settings.refine_max_iter && e.may_be_numerical() => {
-                tracing::debug!(error = %e, refine_max_iter = retry, "cone program retried with refinement");
-                self.retries += 1;
-                let mut careful = SocpSolver::new(SocpSettings {
-                    refine_max_iter: retry,
-                    retry_refine_max_iter: 0,
-                    reuse: false,
-                    ..self.settings
-                });
-                match careful.solve_once(prob) {
-                    Ok(mut sol) => {
-                        tracing::debug!(status = ?sol.status, "retry solved");
-                        // both attempts count
-                        sol.seconds = start.elapsed().as_secs_f64();
-                        Ok(sol)
-                    }
-                    Err(e) => {
-                        tracing::debug!(error = %e, "retry failed too");
-                        Err(e)
-                    }
+        let mut result = self.solve_once(prob);
+        let mut retried = false;
+        for (settings, after_certificate) in self.retry_ladder() {
+            let retry = match &result {
+                Ok(_) => break,
+                Err(e) if after_certificate => e.may_be_numerical(),
+                Err(e) => matches!(e, SolveError::Inaccurate { .. }),
+            };
+            if !retry {
+                continue;
+            }
+            if let Err(e) = &result {
+                tracing::debug!(
+                    error = %e,
+                    refine_max_iter = settings.refine_max_iter,
+                    tol_feas = settings.tol_feas,
+                    "cone program retried"
+                );
+            }
+            self.retries += 1;
+            retried = true;
+            result = SocpSolver::new(settings).solve_once(prob);
+            match &result {
+                Ok(sol) => tracing::debug!(status = ?sol.status, "retry solved"),
+                Err(e) => tracing::debug!(error = %e, "retry failed too"),
+            }
+        }
+        if let (true, Ok(sol)) = (retried, result.as_mut()) {
+            // every attempt counts
+            sol.seconds = start.elapsed().as_secs_f64();
+        }
+        result
+    }
+
+    /// The settings of the retries, in order, each with whether it also follows a certificate
+    /// of infeasibility or unboundedness (only the refinement retry does: an unrefined KKT solve
+    /// can fake one). Each retry builds a fresh solver and does not retry again.
+    fn retry_ladder(&self) -> Vec<(SocpSettings, bool)> {
+        let base = SocpSettings {
+            reuse: false,
+            retry_refine_max_iter: 0,
+            fallbacks: false,
+            ..self.settings
+        };
+        let mut ladder: Vec<(SocpSettings, bool)> = Vec::new();
+        if self.settings.retry_refine_max_iter > self.settings.refine_max_iter {
+            ladder.push((
+                SocpSettings {
+                    refine_max_iter: self.settings.retry_refine_max_iter,
+                    ..base
+                },
+                true,
+            ));
+        }
+        if self.settings.fallbacks {
+            let other_refine = if self.settings.refine_max_iter > 0 {
+                0
+            } else {
+                10
+            };
+            let candidates = [
+                SocpSettings {
+                    refine_max_iter: other_refine,
+                    ..base
+                },
+                SocpSettings {
+                    tol_feas: base.tol_feas.max(1e-6),
+                    tol_gap_rel: base.tol_gap_rel.max(1e-6),
+                    ..base
+                },
+            ];
+            for c in candidates {
+                let same = |o: &SocpSettings| {
+                    o.refine_max_iter == c.refine_max_iter
+                        && o.tol_feas == c.tol_feas
+                        && o.tol_gap_rel == c.tol_gap_rel
+                };
+                if !same(&base) && !ladder.iter().any(|(o, _)| same(o)) {
+                    ladder.push((c, false));
                 }
             }
-            other => other,
         }
+        ladder
     }
 
     fn solve_once(&mut self, prob: &ProblemBuilder) -> Result<Solution, SolveError> {
@@ -556,14 +621,16 @@ mod tests {
         assert_eq!(s.builds, 1);
     }
 
-    /// A failed solve is repeated once with refinement when (and only when) the settings ask
-    /// for it; the retry's own failure is what the caller sees.
+    /// A failed solve is repeated with refinement when (and only when) the settings ask for it,
+    /// then with the fallbacks when they are on; the last attempt's failure is what the caller
+    /// sees.
     #[test]
-    fn failed_solve_is_retried_with_refinement() {
+    fn failed_solve_is_retried_with_refinement_then_fallbacks() {
         let b = unit_disc_problem();
-        // one interior-point iteration cannot solve it: both attempts stop at the limit
+        // one interior-point iteration cannot solve it: every attempt stops at the limit
         let starved = SocpSettings {
             max_iter: 1,
+            fallbacks: false,
             ..SocpSettings::exact_geometry()
         };
         let mut s = SocpSolver::new(starved);
@@ -571,15 +638,79 @@ mod tests {
         assert_eq!(s.retries, 1);
         let mut s = SocpSolver::new(SocpSettings {
             max_iter: 1,
+            fallbacks: false,
             ..SocpSettings::default()
         });
         assert!(s.solve(&b).is_err());
         assert_eq!(s.retries, 0);
+        // with the fallbacks: the other refinement setting, then looser tolerances (for the
+        // exact settings the other refinement setting is the refinement retry itself)
+        for (settings, attempts) in [
+            (SocpSettings::exact_geometry(), 2),
+            (SocpSettings::default(), 2),
+        ] {
+            let mut s = SocpSolver::new(SocpSettings {
+                max_iter: 1,
+                ..settings
+            });
+            assert!(matches!(s.solve(&b), Err(SolveError::Inaccurate { .. })));
+            assert_eq!(s.retries, attempts);
+        }
         // a solvable program needs no retry, and the fast settings find the same optimum
         let mut s = SocpSolver::new(SocpSettings::exact_geometry());
         let sol = s.solve(&b).unwrap();
         assert_eq!(s.retries, 0);
         assert!((sol.objective + 2f64.sqrt()).abs() < 1e-6);
+    }
+
+    /// A program that the default tolerances cannot finish within the iteration limit but the
+    /// looser fallback can is rescued, and the answer still passes the residual check.
+    #[test]
+    fn looser_fallback_rescues_an_inaccurate_stop() {
+        let b = unit_disc_problem();
+        let iterations = |tol: f64| {
+            SocpSolver::new(SocpSettings {
+                tol_feas: tol,
+                tol_gap_rel: tol,
+                ..SocpSettings::default()
+            })
+            .solve(&b)
+            .unwrap()
+            .iterations
+        };
+        let (tight, loose) = (iterations(1e-8), iterations(1e-6));
+        assert!(
+            loose < tight,
+            "1e-6 needs {loose}, 1e-8 needs {tight} iterations"
+        );
+        // stopped at the limit, Clarabel calls the point AlmostSolved: accept none here
+        let limited = SocpSettings {
+            max_iter: loose,
+            almost_solved_violation: -1.0,
+            ..SocpSettings::default()
+        };
+        let mut s = SocpSolver::new(SocpSettings {
+            fallbacks: false,
+            ..limited
+        });
+        let first = s.solve(&b);
+        assert!(
+            matches!(first, Err(SolveError::Inaccurate { .. })),
+            "{tight} {loose} {:?}",
+            first.map(|s| (s.status, s.iterations, s.violation))
+        );
+        let mut s = SocpSolver::new(limited);
+        let sol = s.solve(&b).unwrap();
+        assert_eq!(
+            s.retries, 2,
+            "other refinement first, then the looser tolerances"
+        );
+        assert!(sol.violation <= 1e-6, "{}", sol.violation);
+        assert!(
+            (sol.objective + 2f64.sqrt()).abs() < 1e-5,
+            "{}",
+            sol.objective
+        );
     }
 
     #[test]
