@@ -127,7 +127,8 @@ pub struct ForwarderConfig {
     /// Frames queued between the Zenoh callbacks and an inbound thread that re-publishes them;
     /// `0` re-publishes in the Zenoh callback itself, so a frame reaches the local subscribers
     /// without waking another thread first (Zenoh's receive path then waits for the copy into
-    /// shared memory). A queue (the binary's default is 4) decouples the two.
+    /// shared memory and, with [`Backpressure::Block`], for a full local subscriber). A queue
+    /// (the binary's default is 4) decouples the two.
     pub inbound_queue: usize,
     /// What re-publishing a remote frame does when a local subscriber's buffer is full:
     /// `Discard` (default: skip and count, a frozen local consumer never stalls the bridge) or
