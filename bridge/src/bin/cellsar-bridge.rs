@@ -47,10 +47,10 @@ enum LocalBackpressure {
 #[derive(Parser, Debug)]
 #[command(name = "cellsar-bridge", version)]
 struct Cli {
-    /// Instance name (liveliness token cellsar/alive/bridge/<instance>, stats key).
+    /// Instance name (liveliness token `cellsar/alive/bridge/<instance>`, stats key).
     #[arg(long, default_value = "bridge")]
     instance: String,
-    /// A route NAME[=KEY][@both|out|in]: iceoryx2 frame service NAME <-> Zenoh key KEY
+    /// A route `NAME[=KEY][@both|out|in]`: iceoryx2 frame service NAME <-> Zenoh key KEY
     /// (default: the same string), both ways unless told otherwise. Repeatable.
     #[arg(long = "service", value_name = "ROUTE", required = true)]
     services: Vec<String>,
