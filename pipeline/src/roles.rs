@@ -25,10 +25,10 @@ pub enum Congestion {
 /// Flags of `cellsar bridge` (as `cellsar-bridge`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct BridgeArgs {
-    /// Instance name (liveliness token cellsar/alive/bridge/<instance>, stats key).
+    /// Instance name (liveliness token `cellsar/alive/bridge/<instance>`, stats key).
     #[arg(long, default_value = "bridge")]
     pub instance: String,
-    /// A route NAME[=KEY][@both|out|in] (repeatable).
+    /// A route `NAME[=KEY][@both|out|in]` (repeatable).
     #[arg(long = "service", value_name = "ROUTE", required = true)]
     pub services: Vec<String>,
     /// Largest frame payload in bytes (as given to the echo and the processor).
@@ -121,7 +121,7 @@ pub fn run_bridge(args: &BridgeArgs, stop: &AtomicBool) -> Result<()> {
 /// Flags of `cellsar router`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct RouterArgs {
-    /// Instance name (liveliness token cellsar/alive/router/<instance>).
+    /// Instance name (liveliness token `cellsar/alive/router/<instance>`).
     #[arg(long, default_value = "router")]
     pub instance: String,
     /// Zenoh flags (mode defaults to router; give -l ENDPOINT or -c FILE).

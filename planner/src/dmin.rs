@@ -1,4 +1,4 @@
-//! The expected least distance E[d_min] from a designated object to the other N − 1 objects of a
+//! The expected least distance E\[d_min\] from a designated object to the other N − 1 objects of a
 //! uniform (Poisson, conditioned on N) point set in a disk of radius R (paper Section II-A).
 //!
 //! SPEC.md §4 item 1: the paper's CDF (eq. `cpdf_of_l`) lacks a factor l in its last term. The
@@ -23,7 +23,7 @@ pub enum CdfForm {
     AsPrinted,
 }
 
-/// Invalid input to the E[d_min] functions.
+/// Invalid input to the E\[d_min\] functions.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DminError {
     /// The radius must be finite and positive.
@@ -81,7 +81,7 @@ fn check(radius_m: f64, objects: u64) -> Result<(), DminError> {
     Ok(())
 }
 
-/// E[d_min] = ∫₀^{2R} (1 − F(l))^{N−1} dl, m, by adaptive Simpson quadrature.
+/// E\[d_min\] = ∫₀^{2R} (1 − F(l))^{N−1} dl, m, by adaptive Simpson quadrature.
 pub fn expected_dmin_m(radius_m: f64, objects: u64, form: CdfForm) -> Result<f64, DminError> {
     check(radius_m, objects)?;
     let n1 = (objects - 1) as f64;
@@ -117,7 +117,7 @@ pub fn expected_dmin_m(radius_m: f64, objects: u64, form: CdfForm) -> Result<f64
     Ok(total)
 }
 
-/// Monte Carlo E[d_min]: `trials` sets of N uniform points in the disk, least distance from the
+/// Monte Carlo E\[d_min\]: `trials` sets of N uniform points in the disk, least distance from the
 /// first (designated) point to the others. Returns (mean, standard error), m.
 pub fn expected_dmin_monte_carlo_m(
     radius_m: f64,

@@ -6,7 +6,7 @@
 //!
 //! Layers, bottom up:
 //! - models: [`params`], [`landmarks`], [`mission`], [`power`], [`geometry`], [`dmin`];
-//! - exact-geometry evaluation of any trajectory: [`evaluate`];
+//! - exact-geometry evaluation of any trajectory: [`evaluate()`];
 //! - trajectories and their files: [`trajectory`];
 //! - the convex machinery: [`socp`] (Clarabel), [`schemes`] (the subproblems), [`init`]
 //!   (pre-check and start), [`driver`] (the iteration loop: [`plan`]).

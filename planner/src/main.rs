@@ -1,4 +1,4 @@
-//! `cellsar-planner`: plan a mission, evaluate a trajectory, reproduce the paper, compute E[d_min].
+//! `cellsar-planner`: plan a mission, evaluate a trajectory, reproduce the paper, compute `E[d_min]`.
 //!
 //! Exit codes: 0 success, 1 internal failure (I/O, solver), 2 bad input (names the field, slot
 //! or file), 3 the mission cannot be flown (names the first slot and the reason).
@@ -92,7 +92,7 @@ enum Command {
         #[command(flatten)]
         args: planner::service::ServeArgs,
     },
-    /// Expected least object distance E[d_min] in a disk: correct formula, as printed, Monte Carlo.
+    /// Expected least object distance `E[d_min]` in a disk: correct formula, as printed, Monte Carlo.
     Dmin {
         /// Disk radius R, m.
         #[arg(long)]

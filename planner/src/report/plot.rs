@@ -1,5 +1,5 @@
 //! SVG plots: trajectories with landmarks, BS and sensing circles; line plots (energy per slot,
-//! convergence, power vs speed, E[d_min] vs R, ...).
+//! convergence, power vs speed, E\[d_min\] vs R, ...).
 
 use std::path::Path;
 

@@ -24,7 +24,7 @@ use crate::{plan, Mission, Params, PlanOptions, PlanResult, Scheme};
 /// A figure or table of the paper's Section IV.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Figure {
-    /// E[d_min] vs R.
+    /// E\[d_min\] vs R.
     F4a,
     /// Convergence.
     F4b,

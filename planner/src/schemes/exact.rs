@@ -425,7 +425,7 @@ const CELL_MARGIN_FACTOR: f64 = 3.0;
 /// Position sensitivities (L_iso, L_cross) of the two cell conditions around `q0`: for speeds up to
 /// V_m, |f(q, v) − f(q0, v)| ≤ L ‖q − q0‖ for f = s k(q)·v − ‖g(q)‖/(T_d d_min) (iso-range) and
 /// f = s k(q)·v − c/(B d_min) ‖A(q) v‖ (cross-track), estimated by finite differences and
-/// multiplied by [`CELL_MARGIN_FACTOR`]; the property test in this module checks the bound.
+/// multiplied by `CELL_MARGIN_FACTOR`; the property test in this module checks the bound.
 pub fn cell_margins(p: &crate::Params, q0: [f64; 2], landmark: [f64; 2]) -> (f64, f64) {
     let cl = CellLinear::new(p, q0, landmark);
     let iso_rhs = |c: &CellLinear| v2::norm(c.grad) / (p.integration_time_s * p.d_min_m);
