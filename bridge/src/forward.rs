@@ -334,8 +334,7 @@ impl Forwarder {
         let mut subscribers = Vec::new();
         let mut tokens = Vec::new();
 
-        // From Zenoh: callbacks queue samples for the inbound thread.
-        let (tx, rx) = mpsc::sync_channel::<Inbound>(config.inbound_queue.max(1));
+        // From Zenoh: re-published in the callbacks (inline) or queued for the inbound thread.
         let (ready_tx, ready_rx) = mpsc::channel::<Result<(), ForwardError>>();
         let inbound_routes: Vec<(usize, Route)> = config
             .routes
@@ -347,43 +346,30 @@ impl Forwarder {
         if !inbound_routes.is_empty() && config.inbound_queue == 0 {
             // Inline: each Zenoh callback copies its frame into shared memory and publishes it
             // (no hand-off to another thread, so no extra wake-up on the way).
-            let (inode, _) = FrameNode::new(env, &format!("bridge-{}-in", config.instance))?;
+            let (inode, pubs) = inbound_publishers(
+                env,
+                &config.instance,
+                &inbound_routes,
+                config.inbound_backpressure,
+            )?;
             let inode = Arc::new(inode);
-            for (i, r) in &inbound_routes {
-                let publisher = inode.publisher(
-                    &r.service,
-                    FramePublisherOptions {
-                        checksum: false,
-                        backpressure: config.inbound_backpressure,
-                    },
-                )?;
+            for (index, route, publisher) in pubs {
+                let key = route.key.clone();
                 let sink = InlineInbound {
                     publisher,
-                    route: r.clone(),
+                    route,
                     counters: counters.clone(),
-                    index: *i,
+                    index,
                     verify_checksum: config.verify_checksum,
                     log: BadPayloadLog::default(),
                     _node: inode.clone(),
                 };
-                let sub = node
-                    .session()
-                    .declare_subscriber(r.key.clone())
-                    .callback(move |sample: Sample| {
-                        if sample.kind() == SampleKind::Put {
-                            sink.on_sample(&sample);
-                        }
-                    })
-                    .allowed_origin(Locality::Remote)
-                    .wait()
-                    .map_err(|e| NetError::Zenoh {
-                        op: "declare subscriber",
-                        key: r.key.clone(),
-                        reason: e.to_string(),
-                    })?;
-                subscribers.push(sub);
+                subscribers.push(remote_subscriber(node, &key, move |sample| {
+                    sink.on_sample(&sample)
+                })?);
             }
         } else if !inbound_routes.is_empty() {
+            let (tx, rx) = mpsc::sync_channel::<Inbound>(config.inbound_queue);
             let env_in = env.clone();
             let c = counters.clone();
             let s = stop.clone();
@@ -405,27 +391,13 @@ impl Forwarder {
             for (i, r) in &inbound_routes {
                 let tx = tx.clone();
                 let i = *i;
-                let sub = node
-                    .session()
-                    .declare_subscriber(r.key.clone())
-                    .callback(move |sample: Sample| {
-                        if sample.kind() == SampleKind::Put {
-                            // Blocks when the queue is full: back-pressure to the sender
-                            // rather than loss (the inbound thread never blocks on iceoryx2).
-                            let _ = tx.send((i, sample));
-                        }
-                    })
-                    .allowed_origin(Locality::Remote)
-                    .wait()
-                    .map_err(|e| NetError::Zenoh {
-                        op: "declare subscriber",
-                        key: r.key.clone(),
-                        reason: e.to_string(),
-                    })?;
-                subscribers.push(sub);
+                // Blocks when the queue is full: back-pressure to the sender rather than loss
+                // (the inbound thread never blocks on iceoryx2).
+                subscribers.push(remote_subscriber(node, &r.key, move |sample| {
+                    let _ = tx.send((i, sample));
+                })?);
             }
         }
-        drop(tx);
 
         // To Zenoh.
         let outbound: Vec<(usize, Route, ZenohFramePublisher)> = config
@@ -563,22 +535,7 @@ fn inbound_thread(
     stop: &AtomicBool,
     ready: mpsc::Sender<Result<(), ForwardError>>,
 ) -> Result<(), ForwardError> {
-    let setup = || -> Result<_, ForwardError> {
-        let (node, _) = FrameNode::new(env, &format!("bridge-{instance}-in"))?;
-        let mut pubs = Vec::new();
-        for (i, r) in routes {
-            let p = node.publisher(
-                &r.service,
-                FramePublisherOptions {
-                    checksum: false,
-                    backpressure,
-                },
-            )?;
-            pubs.push((*i, r.clone(), p));
-        }
-        Ok((node, pubs))
-    };
-    let (_node, pubs) = match setup() {
+    let (_node, pubs) = match inbound_publishers(env, instance, routes, backpressure) {
         Ok(v) => {
             let _ = ready.send(Ok(()));
             v
@@ -612,6 +569,56 @@ fn inbound_thread(
         );
     }
     Ok(())
+}
+
+/// A publisher of the direction from Zenoh: route index, route, publisher.
+type InboundPublisher = (usize, Route, FramePublisher);
+
+/// The iceoryx2 node of the direction from Zenoh and a publisher per inbound route.
+fn inbound_publishers(
+    env: &IoxEnv,
+    instance: &str,
+    routes: &[(usize, Route)],
+    backpressure: Backpressure,
+) -> Result<(FrameNode, Vec<InboundPublisher>), ForwardError> {
+    let (node, _) = FrameNode::new(env, &format!("bridge-{instance}-in"))?;
+    let mut pubs = Vec::with_capacity(routes.len());
+    for (i, r) in routes {
+        let p = node.publisher(
+            &r.service,
+            FramePublisherOptions {
+                checksum: false,
+                backpressure,
+            },
+        )?;
+        pubs.push((*i, r.clone(), p));
+    }
+    Ok((node, pubs))
+}
+
+/// A Zenoh subscriber on `key` that hears only other sessions (so nothing this bridge sends
+/// loops back) and calls `on_put` for each put.
+fn remote_subscriber(
+    node: &ZenohNode,
+    key: &str,
+    on_put: impl Fn(Sample) + Send + Sync + 'static,
+) -> Result<zenoh::pubsub::Subscriber<()>, ForwardError> {
+    node.session()
+        .declare_subscriber(key.to_owned())
+        .callback(move |sample: Sample| {
+            if sample.kind() == SampleKind::Put {
+                on_put(sample);
+            }
+        })
+        .allowed_origin(Locality::Remote)
+        .wait()
+        .map_err(|e| {
+            ForwardError::from(NetError::Zenoh {
+                op: "declare subscriber",
+                key: key.to_owned(),
+                reason: e.to_string(),
+            })
+        })
 }
 
 /// One inbound route delivered in the Zenoh callback (`inbound_queue == 0`). The publisher is

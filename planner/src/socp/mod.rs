@@ -374,34 +374,34 @@ impl SocpSolver {
     pub fn solve(&mut self, prob: &ProblemBuilder) -> Result<Solution, SolveError> {
         let start = Instant::now();
         let mut result = self.solve_once(prob);
-        let mut retried = false;
+        if result.is_ok() {
+            return result;
+        }
         for (settings, after_certificate) in self.retry_ladder() {
-            let retry = match &result {
-                Ok(_) => break,
-                Err(e) if after_certificate => e.may_be_numerical(),
-                Err(e) => matches!(e, SolveError::Inaccurate { .. }),
+            let Err(e) = &result else { break };
+            let applies = if after_certificate {
+                e.may_be_numerical()
+            } else {
+                matches!(e, SolveError::Inaccurate { .. })
             };
-            if !retry {
+            if !applies {
                 continue;
             }
-            if let Err(e) = &result {
-                tracing::debug!(
-                    error = %e,
-                    refine_max_iter = settings.refine_max_iter,
-                    tol_feas = settings.tol_feas,
-                    "cone program retried"
-                );
-            }
+            tracing::debug!(
+                error = %e,
+                refine_max_iter = settings.refine_max_iter,
+                tol_feas = settings.tol_feas,
+                "cone program retried"
+            );
             self.retries += 1;
-            retried = true;
             result = SocpSolver::new(settings).solve_once(prob);
             match &result {
                 Ok(sol) => tracing::debug!(status = ?sol.status, "retry solved"),
                 Err(e) => tracing::debug!(error = %e, "retry failed too"),
             }
         }
-        if let (true, Ok(sol)) = (retried, result.as_mut()) {
-            // every attempt counts
+        if let Ok(sol) = result.as_mut() {
+            // a retried solve: every attempt counts
             sol.seconds = start.elapsed().as_secs_f64();
         }
         result
@@ -444,13 +444,9 @@ impl SocpSolver {
                     ..base
                 },
             ];
+            // all derive from `base`: skip one that repeats the first attempt or a retry
             for c in candidates {
-                let same = |o: &SocpSettings| {
-                    o.refine_max_iter == c.refine_max_iter
-                        && o.tol_feas == c.tol_feas
-                        && o.tol_gap_rel == c.tol_gap_rel
-                };
-                if !same(&base) && !ladder.iter().any(|(o, _)| same(o)) {
+                if c != base && !ladder.iter().any(|(o, _)| *o == c) {
                     ladder.push((c, false));
                 }
             }
