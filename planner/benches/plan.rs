@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, SamplingMode};
 use planner::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
-use planner::socp::{SocpSettings, SocpSolver};
+use planner::socp::{Backend, SocpSettings, SocpSolver};
 use planner::{
     plan, plan_with_observer, IterationRecord, Mission, Observer, PlanOptions, Preset, Trajectory,
 };
@@ -230,6 +230,13 @@ fn settings_variants() -> Vec<(&'static str, SocpSettings)> {
         (
             "exact_geometry (tol 1e-8, no refinement; the exact scheme's)",
             SocpSettings::exact_geometry(),
+        ),
+        (
+            "banded IPM (planner::socp::banded; Clarabel if it fails)",
+            SocpSettings {
+                backend: Backend::Banded,
+                ..SocpSettings::exact_geometry()
+            },
         ),
         (
             "tol 1e-6",

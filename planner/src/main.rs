@@ -13,6 +13,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use planner::dmin::{expected_dmin_m, expected_dmin_monte_carlo_m, CdfForm};
 use planner::evaluate::ResolutionMode;
 use planner::report::{self, reproduce, Summary};
+use planner::socp::{Backend, SocpSettings};
 use planner::{
     evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanError, PlanOptions,
     Scheme, Trajectory,
@@ -64,6 +65,11 @@ enum Command {
         /// 2-D resolution cell ≤ d_min, away from blind geometry) or paper (δ_r, δ_a ≤ d_min).
         #[arg(long, default_value = "paper", value_parser = parse_resolution)]
         resolution: ResolutionMode,
+        /// Interior-point method of the exact scheme's cone programs: clarabel (default), or
+        /// banded (the planner's own banded normal-equations method, Clarabel where it gives no
+        /// answer; experimental, see BENCHMARKS.md).
+        #[arg(long, default_value = "clarabel", value_parser = parse_backend)]
+        socp_backend: Backend,
     },
     /// Evaluate a trajectory of a mission on the exact geometry (true energy, violations).
     Evaluate {
@@ -129,6 +135,16 @@ fn parse_resolution(s: &str) -> Result<ResolutionMode, String> {
         "paper" => Ok(ResolutionMode::Paper),
         _ => Err(format!(
             "unknown resolution `{s}`; expected general or paper"
+        )),
+    }
+}
+
+fn parse_backend(s: &str) -> Result<Backend, String> {
+    match s {
+        "clarabel" => Ok(Backend::Clarabel),
+        "banded" => Ok(Backend::Banded),
+        _ => Err(format!(
+            "unknown cone-program backend `{s}`; expected clarabel or banded"
         )),
     }
 }
@@ -199,6 +215,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             no_coarse,
             plain_sca,
             resolution,
+            socp_backend,
         } => {
             let m = Mission::from_path(&mission).map_err(bad)?;
             if !(tolerance.is_finite() && tolerance > 0.0) {
@@ -226,6 +243,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     1.0
                 } else {
                     PlanOptions::default().min_kappa_scale
+                },
+                exact_socp: SocpSettings {
+                    backend: socp_backend,
+                    ..SocpSettings::exact_geometry()
                 },
                 ..PlanOptions::default()
             };
