@@ -1013,7 +1013,20 @@ fn bridge_rejects_bad_configuration() {
         let mut p = Proc::spawn("bridge-bad", bridge_exe(), &a, dir.path(), "warn");
         let st = p.wait(T);
         assert_eq!(st.code(), Some(1), "{args:?}");
-        assert!(p.stderr().contains(needle), "{args:?}: {}", p.stderr_tail());
+        let err = p.stderr();
+        assert!(err.contains(needle), "{args:?}: {}", p.stderr_tail());
+        // printed once (not also through tracing), each cause once
+        let lines: Vec<&str> = err.lines().filter(|l| l.contains(needle)).collect();
+        assert_eq!(lines.len(), 1, "{args:?}: {err}");
+        assert!(lines[0].starts_with("cellsar-bridge: "), "{}", lines[0]);
+        let parts: Vec<&str> = lines[0].split(": ").collect();
+        for (i, part) in parts.iter().enumerate() {
+            assert!(
+                !parts[i + 1..].contains(part),
+                "cause repeated: {}",
+                lines[0]
+            );
+        }
     }
     let _ = IoxEnv::default_env();
 }

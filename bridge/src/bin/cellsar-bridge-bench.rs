@@ -237,7 +237,10 @@ fn main() {
         .init();
     init_iceoryx_logging();
     if let Err(e) = run(Cli::parse()) {
-        eprintln!("cellsar-bridge-bench: {e:#}");
+        eprintln!(
+            "cellsar-bridge-bench: {}",
+            cellsar_error::error_chain(e.as_ref())
+        );
         std::process::exit(1);
     }
 }

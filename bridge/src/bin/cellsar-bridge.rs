@@ -93,8 +93,8 @@ struct Cli {
 fn main() {
     init_tracing();
     if let Err(e) = run(Cli::parse()) {
-        tracing::error!("{e:#}");
-        eprintln!("cellsar-bridge: {e:#}");
+        // once, on stderr (tracing's own output also goes there)
+        eprintln!("cellsar-bridge: {}", cellsar_error::error_chain(e.as_ref()));
         std::process::exit(1);
     }
 }

@@ -1,0 +1,66 @@
+//! # cellsar-error
+//!
+//! How every cellsar binary prints an error: [`error_chain`]. A crate of its own because the
+//! transport crate (`bridge`) needs it and cannot depend on the planner (the planner depends on
+//! it), while the planner also builds without the transport (for the FMU).
+
+/// The message of `error` followed by each cause in its `source()` chain that the message
+/// does not already contain, joined by ": ".
+///
+/// Many error types here include their source in their own message (so that `to_string()`
+/// alone, as sent in a service's error reply, is complete) and also expose it as `source()`;
+/// printing the chain with `{:#}` would then name the same cause twice. Binaries print errors
+/// through this function so that each cause appears once.
+pub fn error_chain(error: &(dyn std::error::Error + 'static)) -> String {
+    let mut msg = error.to_string();
+    let mut cause = error.source();
+    while let Some(c) = cause {
+        let text = c.to_string();
+        if !msg.contains(&text) {
+            msg.push_str(": ");
+            msg.push_str(&text);
+        }
+        cause = c.source();
+    }
+    msg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_chain;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("reading {path}: {source}")]
+    struct Outer {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    }
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("cannot plan")]
+    struct Terse {
+        #[source]
+        source: Outer,
+    }
+
+    #[test]
+    fn each_cause_is_named_once() {
+        let inner = std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let outer = Outer {
+            path: "m.toml".into(),
+            source: inner,
+        };
+        assert_eq!(error_chain(&outer), "reading m.toml: no such file");
+        let terse = Terse { source: outer };
+        assert_eq!(
+            error_chain(&terse),
+            "cannot plan: reading m.toml: no such file"
+        );
+        let any = anyhow::Error::new(terse).context("plan service");
+        assert_eq!(
+            error_chain(any.as_ref()),
+            "plan service: cannot plan: reading m.toml: no such file"
+        );
+    }
+}
