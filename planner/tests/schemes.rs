@@ -211,9 +211,14 @@ fn exact_is_feasible_on_the_default_mission_200m() {
 /// level finds the orbit at once. Realisation 3: the 20 s level's phase I stalled (its merit
 /// counted only the slot-end centre while its slacks also bound the slot-start centre), so the
 /// plan fell back to the 10 s level and took 138 fine iterations to end 11 J above the floor.
+/// Realisation 19: its 20 s level stalls for good (23 m of whole-slot violation left), and the
+/// 10 s level, started again from the guidance law, left the fine SCA 149 iterations to end 7 J
+/// above the floor; the stalled 20 s track now starts the 10 s level (as well as the guidance
+/// law; the cheaper result is kept). Realisation 0 (the one Fig. 11 plots) ended 406 J above the
+/// floor after 17 iterations for the same reason.
 #[test]
-fn exact_reaches_the_floor_at_once_on_random_realisations_18_and_3() {
-    for seed in [18, 3] {
+fn exact_reaches_the_floor_at_once_on_random_realisations_18_3_19_and_0() {
+    for seed in [18, 3, 19, 0] {
         let file = planner::MissionFile::from_toml_str(&format!(
             "[params]\n[landmarks]\npreset = \"random\"\nspacing_m = 100.0\nseed = {seed}\n"
         ))
