@@ -163,6 +163,25 @@ impl ProblemBuilder {
         lin + quad
     }
 
+    /// Checks that every variable index names one of the problem's variables (the builder
+    /// itself does not check them as they are added).
+    pub fn validate(&self) -> Result<(), SolveError> {
+        let n = self.n;
+        if let Some(&(i, j, _)) = self.p.iter().find(|&&(i, j, _)| i >= n || j >= n) {
+            return Err(SolveError::Setup(format!(
+                "quadratic cost entry ({i}, {j}) names a variable beyond {n}"
+            )));
+        }
+        for (r, row) in self.rows.iter().enumerate() {
+            if let Some((j, _)) = row.terms().find(|&(j, _)| j >= n) {
+                return Err(SolveError::Setup(format!(
+                    "constraint row {r} names variable {j} of {n}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
     fn a_triplets(&self) -> (Vec<usize>, Vec<usize>, Vec<f64>, Vec<f64>) {
         let nnz: usize = self.rows.iter().map(Lin::len).sum();
         let (mut ri, mut ci, mut v) = (
@@ -400,6 +419,7 @@ impl SocpSolver {
     /// [`SocpSettings::fallbacks`]; the last attempt's error is what the caller sees.
     pub fn solve(&mut self, prob: &ProblemBuilder) -> Result<Solution, SolveError> {
         let start = Instant::now();
+        prob.validate()?;
         if self.settings.backend == Backend::Banded {
             match self.solve_banded(prob) {
                 Ok(sol) => return Ok(sol),
@@ -781,6 +801,30 @@ mod tests {
             (sol.objective + 2f64.sqrt()).abs() < 1e-5,
             "{}",
             sol.objective
+        );
+    }
+
+    /// A variable index beyond the problem is a setup error naming it, not a panic.
+    #[test]
+    fn out_of_range_variables_are_setup_errors() {
+        let mut b = ProblemBuilder::new(2);
+        b.add_square_cost(5, 1.0);
+        let e = SocpSolver::new(SocpSettings::default())
+            .solve(&b)
+            .unwrap_err();
+        assert!(
+            matches!(&e, SolveError::Setup(m) if m.contains("(5, 5)")),
+            "{e}"
+        );
+        let mut b = ProblemBuilder::new(2);
+        b.nonneg(Lin::var(0, 1.0));
+        b.soc(Lin::var(1, 1.0), &[Lin::var(7, 1.0)]);
+        let e = SocpSolver::new(SocpSettings::exact_geometry())
+            .solve(&b)
+            .unwrap_err();
+        assert!(
+            matches!(&e, SolveError::Setup(m) if m.contains("row 2") && m.contains("variable 7")),
+            "{e}"
         );
     }
 

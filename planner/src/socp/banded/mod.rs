@@ -185,6 +185,17 @@ impl Structure {
         if prob.cones.iter().any(|&(c, _)| c == Cone::Zero) {
             return Err(BandedError::Unsupported("equality constraints".into()));
         }
+        if let Some(&(i, j, _)) = prob.p.iter().find(|&&(i, j, _)| i >= n || j >= n) {
+            return Err(BandedError::Unsupported(format!(
+                "quadratic cost entry ({i}, {j}) names a variable beyond {n}"
+            )));
+        }
+        if prob.q.len() != n {
+            return Err(BandedError::Unsupported(format!(
+                "{} linear cost entries for {n} variables",
+                prob.q.len()
+            )));
+        }
         // first and last cone each variable appears in
         let mut first = vec![usize::MAX; n];
         let mut last = vec![0usize; n];

@@ -152,6 +152,12 @@ fn unsupported_programs_are_named() {
     b.zero(Lin::var(0, 1.0));
     let err = solve(&b, &BandedSettings::default()).unwrap_err();
     assert!(err.to_string().contains("equality"), "{err}");
+    // a cost on a variable that does not exist
+    let mut b = ProblemBuilder::new(1);
+    b.add_square_cost(3, 1.0);
+    b.nonneg(Lin::var(0, 1.0));
+    let err = solve(&b, &BandedSettings::default()).unwrap_err();
+    assert!(err.to_string().contains("(3, 3)"), "{err}");
     // a cone over all variables: bandwidth n − 1
     let mut b = ProblemBuilder::new(80);
     let tail: Vec<Lin> = (1..80).map(|j| Lin::var(j, 1.0)).collect();
