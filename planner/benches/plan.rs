@@ -232,13 +232,6 @@ fn settings_variants() -> Vec<(&'static str, SocpSettings)> {
             SocpSettings::exact_geometry(),
         ),
         (
-            "banded IPM (planner::socp::banded; Clarabel if it fails)",
-            SocpSettings {
-                backend: Backend::Banded,
-                ..SocpSettings::exact_geometry()
-            },
-        ),
-        (
             "tol 1e-6",
             SocpSettings {
                 tol_feas: 1e-6,
@@ -260,6 +253,13 @@ fn settings_variants() -> Vec<(&'static str, SocpSettings)> {
                 tol_gap_rel: 1e-6,
                 refine_max_iter: 2,
                 ..d
+            },
+        ),
+        (
+            "banded IPM (planner::socp::banded; Clarabel if it fails)",
+            SocpSettings {
+                backend: Backend::Banded,
+                ..SocpSettings::exact_geometry()
             },
         ),
     ]

@@ -268,7 +268,8 @@ pub fn plan_with_observer(
                         && !evaluate(mission, tr).is_feasible_for(options.resolution) =>
                 {
                     coarse_start_from(mission, obj, true, options, Some(tr), 0)
-                        .map_or_else(|| tr.clone(), LevelStart::into_track)
+                        .and_then(LevelStart::solved)
+                        .unwrap_or_else(|| tr.clone())
                 }
                 _ => tr.clone(),
             }
@@ -417,22 +418,27 @@ fn coarse_start(
     optimise: bool,
     options: &PlanOptions,
 ) -> Option<Trajectory> {
-    coarse_start_from(mission, objective, optimise, options, None, 0).map(LevelStart::into_track)
+    coarse_start_from(mission, objective, optimise, options, None, 0).and_then(LevelStart::solved)
 }
 
 /// What a coarse level hands to the next finer one, interpolated to that one's slots.
 enum LevelStart {
     /// Feasible at its level (and optimised there when asked).
     Solved(Trajectory),
-    /// The least-violation iterate of a phase I that stalled (only for `exact`): the level's
-    /// windows cannot all be held over its whole slots, but the track has the right shape.
+    /// The last accepted (least-merit) iterate of a phase I that stalled (only for `exact`):
+    /// the level's windows cannot all be held over its whole slots, but the track has the right
+    /// shape.
     Stalled(Trajectory),
 }
 
 impl LevelStart {
-    fn into_track(self) -> Trajectory {
+    /// The track when it is feasible at its level. The finest coarse level hands only such a
+    /// track to the fine grid (a stalled one there would replace the guidance start or a given
+    /// `--init` path, which the fine phase I repairs itself).
+    fn solved(self) -> Option<Trajectory> {
         match self {
-            LevelStart::Solved(t) | LevelStart::Stalled(t) => t,
+            LevelStart::Solved(t) => Some(t),
+            LevelStart::Stalled(_) => None,
         }
     }
 }
@@ -441,7 +447,8 @@ impl LevelStart {
 /// coarse slot ends) or else from the next coarser level (or the guidance law).
 ///
 /// For `exact`, when the next coarser level stalled, this level is solved from both its
-/// stalled track and the guidance law and keeps the cheaper result: the stalled track is the
+/// stalled track and the guidance law and keeps the cheaper result (when both stall here too,
+/// the track that came from the coarser level is handed on): the stalled track is the
 /// better start on Fig. 11's random realisations (19: 149 fine iterations to 7 J above the
 /// floor from the guidance law, 1 iteration to the floor from the stalled 20 s track), the
 /// guidance law on the square of Fig. 9 (H = 1000 m: 35 440 J against 39 380 J).
@@ -501,7 +508,7 @@ fn coarse_start_from(
         let start = match feasible {
             Ok((start, _)) => start,
             Err(e) => {
-                tracing::debug!(factor, error = %e, "coarse level stalled");
+                tracing::debug!(factor, error = %e, "coarse level: no feasible track");
                 if exact_rules && stalled.is_none() {
                     stalled = stalled_at;
                 }
@@ -515,7 +522,7 @@ fn coarse_start_from(
                 ..options.clone()
             };
             let mut solver = SocpSolver::new(options.scheme_socp());
-            let Ok(solved) = run_exact(
+            let solved = match run_exact(
                 &coarse,
                 start,
                 objective,
@@ -523,8 +530,12 @@ fn coarse_start_from(
                 &sub_options,
                 &mut solver,
                 &mut NoObserver,
-            ) else {
-                continue;
+            ) {
+                Ok(solved) => solved,
+                Err(e) => {
+                    tracing::debug!(factor, error = %e, "coarse level: optimisation failed");
+                    continue;
+                }
             };
             tracing::debug!(
                 factor,
@@ -595,6 +606,7 @@ fn total_violation(
 /// Phase I (elastic SCA): while `start` violates the exact constraints, minimise the objective
 /// plus a penalty on the total violation (a merit function that decreases monotonically); stops
 /// at the first iterate that is feasible on the exact geometry. Returns it and the iterations.
+/// When it stalls instead, the last accepted (least-merit) iterate is left in `stalled_at`.
 ///
 /// `exact_rules` (the `exact` scheme): the merit also counts the slot-start centre where the
 /// subproblem imposes whole-slot sensing (as its slacks do; otherwise its steps, which trade

@@ -45,6 +45,8 @@ pub struct ProblemBuilder {
     rows: Vec<Lin>,
     /// Cone blocks: (kind, number of rows).
     cones: Vec<(Cone, usize)>,
+    /// The first linear-cost index beyond the problem, if any (reported by `validate`).
+    bad_cost_index: Option<usize>,
 }
 
 impl ProblemBuilder {
@@ -67,10 +69,14 @@ impl ProblemBuilder {
         self.rows.len()
     }
 
-    /// Adds `c` to the linear objective coefficient of variable `j`.
+    /// Adds `c` to the linear objective coefficient of variable `j` (an index beyond the
+    /// problem is reported by [`ProblemBuilder::validate`]).
     pub fn add_linear_cost(&mut self, j: usize, c: f64) {
-        if let Some(q) = self.q.get_mut(j) {
-            *q += c;
+        match self.q.get_mut(j) {
+            Some(q) => *q += c,
+            None => {
+                self.bad_cost_index.get_or_insert(j);
+            }
         }
     }
 
@@ -167,6 +173,11 @@ impl ProblemBuilder {
     /// itself does not check them as they are added).
     pub fn validate(&self) -> Result<(), SolveError> {
         let n = self.n;
+        if let Some(j) = self.bad_cost_index {
+            return Err(SolveError::Setup(format!(
+                "linear cost entry {j} names a variable beyond {n}"
+            )));
+        }
         if let Some(&(i, j, _)) = self.p.iter().find(|&&(i, j, _)| i >= n || j >= n) {
             return Err(SolveError::Setup(format!(
                 "quadratic cost entry ({i}, {j}) names a variable beyond {n}"
@@ -234,7 +245,8 @@ pub enum SolveError {
     /// Clarabel proved the subproblem unbounded.
     #[error("subproblem is unbounded (solver status {0:?})")]
     Unbounded(SolverStatus),
-    /// The banded method gave no answer (only seen when Clarabel is not tried after it).
+    /// The banded method gave no answer. [`SocpSolver::solve`] then always asks Clarabel, so
+    /// its callers see Clarabel's outcome; this variant only carries the reason to the log.
     #[error("banded interior-point method: {0}")]
     Banded(String),
     /// Clarabel stopped without a solution of the required accuracy.
@@ -262,7 +274,8 @@ pub struct Solution {
     pub x: Vec<f64>,
     /// Objective value ½xᵀPx + qᵀx at `x`.
     pub objective: f64,
-    /// Clarabel's status (`Solved`, or `AlmostSolved` that passed our residual check).
+    /// Clarabel's status (`Solved`, or `AlmostSolved` that passed our residual check); an
+    /// answer of the banded method ([`Backend::Banded`]) reports `Solved`.
     pub status: SolverStatus,
     /// Interior-point iterations.
     pub iterations: u32,
@@ -413,24 +426,32 @@ impl SocpSolver {
             .map_err(|e| SolveError::Setup(e.to_string()))
     }
 
-    /// Solves `prob`; reuses the previous pattern when the structure is unchanged. A failed
-    /// solve is repeated once with more iterative refinement when the settings ask for it
-    /// ([`SocpSettings::retry_refine_max_iter`]), and an inaccurate one with the
-    /// [`SocpSettings::fallbacks`]; the last attempt's error is what the caller sees.
+    /// Solves `prob`; reuses the previous pattern when the structure is unchanged. With
+    /// [`Backend::Banded`] the banded method tries first and Clarabel solves what it does not.
+    /// A failed Clarabel solve is repeated once with more iterative refinement when the settings
+    /// ask for it ([`SocpSettings::retry_refine_max_iter`]), and an inaccurate one with the
+    /// [`SocpSettings::fallbacks`]; the last attempt's error is what the caller sees. A variable
+    /// index beyond the problem is a [`SolveError::Setup`]. The answer's `seconds` count every
+    /// attempt.
     pub fn solve(&mut self, prob: &ProblemBuilder) -> Result<Solution, SolveError> {
         let start = Instant::now();
         prob.validate()?;
+        let mut banded_failed = false;
         if self.settings.backend == Backend::Banded {
             match self.solve_banded(prob) {
                 Ok(sol) => return Ok(sol),
                 Err(e) => {
                     tracing::debug!(error = %e, "banded interior-point method gave no answer; Clarabel solves");
                     self.banded_fallbacks += 1;
+                    banded_failed = true;
                 }
             }
         }
         let mut result = self.solve_once(prob);
         if result.is_ok() {
+            if let (true, Ok(sol)) = (banded_failed, result.as_mut()) {
+                sol.seconds = start.elapsed().as_secs_f64();
+            }
             return result;
         }
         for (settings, after_certificate) in self.retry_ladder() {
@@ -814,6 +835,15 @@ mod tests {
             .unwrap_err();
         assert!(
             matches!(&e, SolveError::Setup(m) if m.contains("(5, 5)")),
+            "{e}"
+        );
+        let mut b = ProblemBuilder::new(2);
+        b.add_linear_cost(4, 1.0);
+        let e = SocpSolver::new(SocpSettings::default())
+            .solve(&b)
+            .unwrap_err();
+        assert!(
+            matches!(&e, SolveError::Setup(m) if m.contains("entry 4")),
             "{e}"
         );
         let mut b = ProblemBuilder::new(2);

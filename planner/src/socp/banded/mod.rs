@@ -46,7 +46,9 @@ use super::{Cone, ProblemBuilder};
 pub struct BandedSettings {
     /// Largest number of interior-point iterations.
     pub max_iter: u32,
-    /// Primal residual tolerance (relative, as Clarabel's `tol_feas`).
+    /// Primal residual tolerance (relative, as Clarabel's `tol_feas`; like all tolerances
+    /// here, tested on the equilibrated, cost-scaled program; the caller checks the answer's
+    /// cone violation in the original units).
     pub tol_feas: f64,
     /// Dual residual tolerance (relative). Looser than the primal one: the normal equations
     /// of second-order cones have a condition number ~ 1/μ², and the dual residual stalls at
@@ -102,7 +104,8 @@ pub enum BandedError {
         /// Where the factorisation failed.
         source: band::NotPositiveDefinite,
     },
-    /// A search direction with a non-finite entry, or an iterate left the cones.
+    /// A residual that is not finite, or an iterate left the cones. (A non-finite search
+    /// direction or a vanishing step ends the iteration as [`BandedError::NotConverged`].)
     #[error("interior-point iteration {iteration}: numerical breakdown ({what})")]
     Numerical {
         /// Iteration at which it happened.
@@ -200,12 +203,18 @@ impl Structure {
         let mut first = vec![usize::MAX; n];
         let mut last = vec![0usize; n];
         let mut r = 0;
-        for (c, &(_, dim)) in prob.cones.iter().enumerate() {
-            for row in &prob.rows[r..r + dim] {
+        for (c, &(cone, dim)) in prob.cones.iter().enumerate() {
+            if cone == Cone::NonNeg && dim != 1 {
+                return Err(BandedError::Unsupported(format!(
+                    "nonnegative cone of {dim} rows at row {r} (one row each expected)"
+                )));
+            }
+            for (k, row) in prob.rows[r..r + dim].iter().enumerate() {
                 for (j, _) in row.terms() {
                     if j >= n {
                         return Err(BandedError::Unsupported(format!(
-                            "row {r} names variable {j} of {n}"
+                            "row {} names variable {j} of {n}",
+                            r + k
                         )));
                     }
                     first[j] = first[j].min(c);
@@ -776,7 +785,7 @@ impl Newton {
             let err = inf_norm(&self.ex)
                 .max(inf_norm(&self.ez))
                 .max(inf_norm(&self.exi));
-            if err <= refine_tol * scale || err.is_nan() {
+            if err <= refine_tol * scale {
                 break;
             }
             let (ex, ez, exi) = (
