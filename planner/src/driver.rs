@@ -317,7 +317,6 @@ pub fn plan_with_observer(
             &mut repair_solver,
             observer,
             options.scheme == Scheme::Exact,
-            &mut None,
         )?,
         None => (start, 0),
     };
@@ -409,9 +408,8 @@ fn coarse_factor(n: usize, delta: f64, target_s: f64) -> Option<usize> {
 }
 
 /// Solves the mission on coarser grids ([`coarse_levels`]) and interpolates the result to the
-/// mission's slots. `None` when no suitable coarse grid exists or it fails. (For `exact`, the
-/// result may be the least-violation track of a level whose phase I stalled: the caller repairs
-/// every start on the fine grid anyway.)
+/// mission's slots. `None` when no suitable coarse grid exists or it fails (a stalled finest
+/// level included: see [`LevelStart::solved`]).
 fn coarse_start(
     mission: &Mission,
     objective: ExactObjective,
@@ -483,18 +481,15 @@ fn coarse_start_from(
             None => vec![guidance_start(&coarse, options.resolution)],
         },
     };
-    let value = |tr: &Trajectory| {
-        let ev = evaluate(&coarse, tr);
-        match objective {
-            ExactObjective::Energy => ev.energy_j,
-            ExactObjective::Distance => ev.length_m,
-        }
+    let value = |ev: &Evaluation| match objective {
+        ExactObjective::Energy => ev.energy_j,
+        ExactObjective::Distance => ev.length_m,
     };
     let mut best: Option<(f64, Trajectory)> = None;
     let mut stalled: Option<Trajectory> = None;
+    let single = starts.len() == 1;
     for start in starts {
         let mut solver = SocpSolver::new(options.scheme_socp());
-        let mut stalled_at = None;
         let feasible = make_feasible(
             &coarse,
             start,
@@ -503,19 +498,18 @@ fn coarse_start_from(
             &mut solver,
             &mut NoObserver,
             exact_rules,
-            &mut stalled_at,
         );
         let start = match feasible {
             Ok((start, _)) => start,
-            Err(e) => {
-                tracing::debug!(factor, error = %e, "coarse level: no feasible track");
+            Err(f) => {
+                tracing::debug!(factor, error = %f.error, "coarse level: no feasible track");
                 if exact_rules && stalled.is_none() {
-                    stalled = stalled_at;
+                    stalled = f.stalled;
                 }
                 continue;
             }
         };
-        let tr = if optimise {
+        let tr: (f64, Trajectory) = if optimise {
             let sub_options = PlanOptions {
                 init: None,
                 coarse: false,
@@ -543,13 +537,15 @@ fn coarse_start_from(
                 energy_j = solved.evaluation.energy_j,
                 "coarse solve"
             );
-            solved.trajectory
+            (value(&solved.evaluation), solved.trajectory)
+        } else if single {
+            // nothing to compare (the comparison schemes always have one start)
+            (0.0, start)
         } else {
-            start
+            (value(&evaluate(&coarse, &start)), start)
         };
-        let v = value(&tr);
-        if best.as_ref().is_none_or(|(b, _)| v < *b) {
-            best = Some((v, tr));
+        if best.as_ref().is_none_or(|(b, _)| tr.0 < *b) {
+            best = Some(tr);
         }
     }
     let to_fine = |tr: Trajectory| Trajectory {
@@ -606,7 +602,7 @@ fn total_violation(
 /// Phase I (elastic SCA): while `start` violates the exact constraints, minimise the objective
 /// plus a penalty on the total violation (a merit function that decreases monotonically); stops
 /// at the first iterate that is feasible on the exact geometry. Returns it and the iterations.
-/// When it stalls instead, the last accepted (least-merit) iterate is left in `stalled_at`.
+/// When it stalls instead, the error carries the last accepted (least-merit) iterate.
 ///
 /// `exact_rules` (the `exact` scheme): the merit also counts the slot-start centre where the
 /// subproblem imposes whole-slot sensing (as its slacks do; otherwise its steps, which trade
@@ -614,7 +610,6 @@ fn total_violation(
 /// and a step rejected at the proven centre bound shortens the next one (trust region) instead
 /// of repeating the same subproblem. The comparison schemes keep the earlier rules, so that
 /// their starts, and the results compared with the paper, do not change.
-#[allow(clippy::too_many_arguments)]
 fn make_feasible(
     mission: &Mission,
     start: Trajectory,
@@ -623,8 +618,7 @@ fn make_feasible(
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
     exact_rules: bool,
-    stalled_at: &mut Option<Trajectory>,
-) -> Result<(Trajectory, usize), PlanError> {
+) -> Result<(Trajectory, usize), PhaseOneFailure> {
     let mode = base.resolution;
     let mut current = start;
     let mut ev = evaluate(mission, &current);
@@ -655,9 +649,12 @@ fn make_feasible(
         let sol = match solver.solve(&sub.builder) {
             Ok(sol) => sol,
             Err(source) if tuning.kappa_scale >= 1.0 => {
-                return Err(PlanError::Solver {
-                    iteration: 0,
-                    error: source,
+                return Err(PhaseOneFailure {
+                    error: PlanError::Solver {
+                        iteration: 0,
+                        error: source,
+                    },
+                    stalled: None,
                 })
             }
             Err(_) => {
@@ -727,7 +724,6 @@ fn make_feasible(
             }
         }
     }
-    *stalled_at = Some(current);
     let p = mission.params();
     let first = ev
         .slots
@@ -740,7 +736,7 @@ fn make_feasible(
         })
         .map(|s| s.t)
         .unwrap_or(1);
-    Err(PlanError::Infeasible(Infeasibility {
+    let error = PlanError::Infeasible(Infeasibility {
         slot: first,
         t_s: first as f64 * p.slot_s,
         reason: format!(
@@ -752,7 +748,24 @@ fn make_feasible(
             ev.violations.min_speed_mps,
             ev.violations.worst_width_m
         ),
-    }))
+    });
+    Err(PhaseOneFailure {
+        error,
+        stalled: Some(current),
+    })
+}
+
+/// Why phase I gave no feasible start.
+struct PhaseOneFailure {
+    error: PlanError,
+    /// Its last accepted (least-merit) iterate when it stalled (not after a solver failure).
+    stalled: Option<Trajectory>,
+}
+
+impl From<PhaseOneFailure> for PlanError {
+    fn from(f: PhaseOneFailure) -> Self {
+        f.error
+    }
 }
 
 fn record(

@@ -45,8 +45,9 @@ pub struct ProblemBuilder {
     rows: Vec<Lin>,
     /// Cone blocks: (kind, number of rows).
     cones: Vec<(Cone, usize)>,
-    /// The first linear-cost index beyond the problem, if any (reported by `validate`).
-    bad_cost_index: Option<usize>,
+    /// The first entry that names a variable beyond the problem, recorded as it is added
+    /// (reported by [`ProblemBuilder::validate`]).
+    invalid: Option<String>,
 }
 
 impl ProblemBuilder {
@@ -69,38 +70,64 @@ impl ProblemBuilder {
         self.rows.len()
     }
 
+    /// Records `what` as the problem's first invalid entry unless one is recorded already.
+    fn note_invalid(&mut self, what: impl FnOnce() -> String) {
+        if self.invalid.is_none() {
+            self.invalid = Some(what());
+        }
+    }
+
+    /// Appends a constraint row, noting it when it names a variable beyond the problem.
+    fn push_row(&mut self, row: Lin) {
+        let (r, n) = (self.rows.len(), self.n);
+        if let Some((j, _)) = row.terms().find(|&(j, _)| j >= n) {
+            self.note_invalid(|| format!("constraint row {r} names variable {j} of {n}"));
+        }
+        self.rows.push(row);
+    }
+
     /// Adds `c` to the linear objective coefficient of variable `j` (an index beyond the
     /// problem is reported by [`ProblemBuilder::validate`]).
     pub fn add_linear_cost(&mut self, j: usize, c: f64) {
+        let n = self.n;
         match self.q.get_mut(j) {
             Some(q) => *q += c,
             None => {
-                self.bad_cost_index.get_or_insert(j);
+                self.note_invalid(|| format!("linear cost entry {j} names a variable beyond {n}"))
             }
         }
     }
 
-    /// Adds `c x_j²` to the objective (as P_jj = 2c).
+    /// Adds `c x_j²` to the objective (as P_jj = 2c; an index beyond the problem is reported
+    /// by [`ProblemBuilder::validate`]).
     pub fn add_square_cost(&mut self, j: usize, c: f64) {
+        let n = self.n;
+        if j >= n {
+            self.note_invalid(|| {
+                format!("quadratic cost entry ({j}, {j}) names a variable beyond {n}")
+            });
+        }
         self.p.push((j, j, 2.0 * c));
     }
 
     /// `e ≥ 0`.
     pub fn nonneg(&mut self, e: Lin) {
-        self.rows.push(e);
+        self.push_row(e);
         self.cones.push((Cone::NonNeg, 1));
     }
 
     /// `e = 0`.
     pub fn zero(&mut self, e: Lin) {
-        self.rows.push(e);
+        self.push_row(e);
         self.cones.push((Cone::Zero, 1));
     }
 
     /// `head ≥ ‖tail‖`.
     pub fn soc(&mut self, head: Lin, tail: &[Lin]) {
-        self.rows.push(head);
-        self.rows.extend_from_slice(tail);
+        self.push_row(head);
+        for row in tail {
+            self.push_row(row.clone());
+        }
         self.cones.push((Cone::Soc, 1 + tail.len()));
     }
 
@@ -169,28 +196,13 @@ impl ProblemBuilder {
         lin + quad
     }
 
-    /// Checks that every variable index names one of the problem's variables (the builder
-    /// itself does not check them as they are added).
+    /// Whether every entry names one of the problem's variables: the first one that does not
+    /// was noted as it was added, so this costs nothing per solve.
     pub fn validate(&self) -> Result<(), SolveError> {
-        let n = self.n;
-        if let Some(j) = self.bad_cost_index {
-            return Err(SolveError::Setup(format!(
-                "linear cost entry {j} names a variable beyond {n}"
-            )));
+        match &self.invalid {
+            Some(what) => Err(SolveError::Setup(what.clone())),
+            None => Ok(()),
         }
-        if let Some(&(i, j, _)) = self.p.iter().find(|&&(i, j, _)| i >= n || j >= n) {
-            return Err(SolveError::Setup(format!(
-                "quadratic cost entry ({i}, {j}) names a variable beyond {n}"
-            )));
-        }
-        for (r, row) in self.rows.iter().enumerate() {
-            if let Some((j, _)) = row.terms().find(|&(j, _)| j >= n) {
-                return Err(SolveError::Setup(format!(
-                    "constraint row {r} names variable {j} of {n}"
-                )));
-            }
-        }
-        Ok(())
     }
 
     fn a_triplets(&self) -> (Vec<usize>, Vec<usize>, Vec<f64>, Vec<f64>) {
@@ -695,7 +707,7 @@ mod tests {
     use super::*;
 
     /// min x + y s.t. ‖(x, y)‖ ≤ 1: optimum x = y = −1/√2, objective −√2.
-    fn unit_disc_problem() -> ProblemBuilder {
+    pub(crate) fn unit_disc_problem() -> ProblemBuilder {
         let mut b = ProblemBuilder::new(2);
         b.add_linear_cost(0, 1.0);
         b.add_linear_cost(1, 1.0);
@@ -828,34 +840,33 @@ mod tests {
     /// A variable index beyond the problem is a setup error naming it, not a panic.
     #[test]
     fn out_of_range_variables_are_setup_errors() {
-        let mut b = ProblemBuilder::new(2);
-        b.add_square_cost(5, 1.0);
-        let e = SocpSolver::new(SocpSettings::default())
-            .solve(&b)
-            .unwrap_err();
-        assert!(
-            matches!(&e, SolveError::Setup(m) if m.contains("(5, 5)")),
-            "{e}"
-        );
-        let mut b = ProblemBuilder::new(2);
-        b.add_linear_cost(4, 1.0);
-        let e = SocpSolver::new(SocpSettings::default())
-            .solve(&b)
-            .unwrap_err();
-        assert!(
-            matches!(&e, SolveError::Setup(m) if m.contains("entry 4")),
-            "{e}"
-        );
-        let mut b = ProblemBuilder::new(2);
-        b.nonneg(Lin::var(0, 1.0));
-        b.soc(Lin::var(1, 1.0), &[Lin::var(7, 1.0)]);
-        let e = SocpSolver::new(SocpSettings::exact_geometry())
-            .solve(&b)
-            .unwrap_err();
-        assert!(
-            matches!(&e, SolveError::Setup(m) if m.contains("row 2") && m.contains("variable 7")),
-            "{e}"
-        );
+        let mut square = ProblemBuilder::new(2);
+        square.add_square_cost(5, 1.0);
+        let mut linear = ProblemBuilder::new(2);
+        linear.add_linear_cost(4, 1.0);
+        let mut row = ProblemBuilder::new(2);
+        row.nonneg(Lin::var(0, 1.0));
+        row.soc(Lin::var(1, 1.0), &[Lin::var(7, 1.0)]);
+        let banded = SocpSettings {
+            backend: Backend::Banded,
+            ..SocpSettings::exact_geometry()
+        };
+        for (b, settings, needles) in [
+            (&square, SocpSettings::default(), &["(5, 5)"][..]),
+            (&linear, SocpSettings::default(), &["entry 4"][..]),
+            (
+                &row,
+                SocpSettings::exact_geometry(),
+                &["row 2", "variable 7"][..],
+            ),
+            (&row, banded, &["row 2", "variable 7"][..]),
+        ] {
+            let e = SocpSolver::new(settings).solve(b).unwrap_err();
+            assert!(
+                matches!(&e, SolveError::Setup(m) if needles.iter().all(|n| m.contains(n))),
+                "{e}"
+            );
+        }
     }
 
     #[test]

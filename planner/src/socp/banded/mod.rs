@@ -183,40 +183,18 @@ struct Structure {
 
 impl Structure {
     fn new(prob: &ProblemBuilder, max_bandwidth: usize) -> Result<Self, BandedError> {
+        // every index names a variable (the builder noted any that does not)
+        prob.validate()
+            .map_err(|e| BandedError::Unsupported(e.to_string()))?;
         let n = prob.n;
         let m = prob.rows.len();
-        if prob.cones.iter().any(|&(c, _)| c == Cone::Zero) {
-            return Err(BandedError::Unsupported("equality constraints".into()));
-        }
-        if let Some(&(i, j, _)) = prob.p.iter().find(|&&(i, j, _)| i >= n || j >= n) {
-            return Err(BandedError::Unsupported(format!(
-                "quadratic cost entry ({i}, {j}) names a variable beyond {n}"
-            )));
-        }
-        if prob.q.len() != n {
-            return Err(BandedError::Unsupported(format!(
-                "{} linear cost entries for {n} variables",
-                prob.q.len()
-            )));
-        }
         // first and last cone each variable appears in
         let mut first = vec![usize::MAX; n];
         let mut last = vec![0usize; n];
         let mut r = 0;
-        for (c, &(cone, dim)) in prob.cones.iter().enumerate() {
-            if cone == Cone::NonNeg && dim != 1 {
-                return Err(BandedError::Unsupported(format!(
-                    "nonnegative cone of {dim} rows at row {r} (one row each expected)"
-                )));
-            }
-            for (k, row) in prob.rows[r..r + dim].iter().enumerate() {
+        for (c, &(_, dim)) in prob.cones.iter().enumerate() {
+            for row in &prob.rows[r..r + dim] {
                 for (j, _) in row.terms() {
-                    if j >= n {
-                        return Err(BandedError::Unsupported(format!(
-                            "row {} names variable {j} of {n}",
-                            r + k
-                        )));
-                    }
                     first[j] = first[j].min(c);
                     last[j] = last[j].max(c);
                 }
@@ -670,6 +648,34 @@ fn inf_norm(a: &[f64]) -> f64 {
     a.iter().fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
+/// A vector of the Newton system's three blocks: as a right-hand side (bx, bz, ξ) or as a
+/// direction (Δx, Δz̃, Δs̃ in the scaled space).
+#[derive(Debug, Clone)]
+struct Kkt {
+    /// Primal block (n entries).
+    x: Vec<f64>,
+    /// Dual block (m entries): bz, or Δz̃ = W Δz.
+    z: Vec<f64>,
+    /// Complementarity block (m entries): ξ, or Δs̃ = W⁻¹ Δs.
+    s: Vec<f64>,
+}
+
+impl Kkt {
+    fn zeros(n: usize, m: usize) -> Self {
+        Self {
+            x: vec![0.0; n],
+            z: vec![0.0; m],
+            s: vec![0.0; m],
+        }
+    }
+
+    fn inf_norm(&self) -> f64 {
+        inf_norm(&self.x)
+            .max(inf_norm(&self.z))
+            .max(inf_norm(&self.s))
+    }
+}
+
 /// Workspace of the Newton solves.
 struct Newton {
     hm: BandMatrix,
@@ -680,17 +686,15 @@ struct Newton {
     tn2: Vec<f64>,
     tm: Vec<f64>,
     tm2: Vec<f64>,
-    /// Residuals of the full system and the correction, for iterative refinement.
-    ex: Vec<f64>,
-    ez: Vec<f64>,
-    exi: Vec<f64>,
-    cx: Vec<f64>,
-    cs: Vec<f64>,
-    cz: Vec<f64>,
+    /// Residual of the full system and its correction, for iterative refinement.
+    residual: Kkt,
+    correction: Kkt,
+    /// See [`BandedSettings::refine_tol`].
+    refine_tol: f64,
 }
 
 impl Newton {
-    fn new(n: usize, m: usize, bw: usize) -> Self {
+    fn new(n: usize, m: usize, bw: usize, refine_tol: f64) -> Self {
         Self {
             hm: BandMatrix::new(n, bw),
             chol: BandCholesky::new(n, bw),
@@ -699,115 +703,82 @@ impl Newton {
             tn2: vec![0.0; n],
             tm: vec![0.0; m],
             tm2: vec![0.0; m],
-            ex: vec![0.0; n],
-            ez: vec![0.0; m],
-            exi: vec![0.0; m],
-            cx: vec![0.0; n],
-            cs: vec![0.0; m],
-            cz: vec![0.0; m],
+            residual: Kkt::zeros(n, m),
+            correction: Kkt::zeros(n, m),
+            refine_tol,
         }
     }
 
-    /// One reduced solve (H already factored), no refinement.
-    #[allow(clippy::too_many_arguments)]
+    /// One reduced solve with the factored H, no refinement (`tm`: scratch of m entries).
     fn reduced(
-        &mut self,
+        chol: &BandCholesky,
+        tm: &mut [f64],
         st: &Structure,
         sc: &Scaling,
-        bx: &[f64],
-        bz: &[f64],
-        xi: &[f64],
-        dx: &mut [f64],
-        ds: &mut [f64],
-        dz: &mut [f64],
+        rhs: &Kkt,
+        out: &mut Kkt,
     ) {
         // H Δx = bx + Gᵀ W⁻¹ (W⁻¹ bz − ξ)
-        self.tm.copy_from_slice(bz);
-        sc.apply_winv(st, &mut self.tm);
-        for (t, x) in self.tm.iter_mut().zip(xi) {
+        tm.copy_from_slice(&rhs.z);
+        sc.apply_winv(st, tm);
+        for (t, x) in tm.iter_mut().zip(&rhs.s) {
             *t -= x;
         }
-        sc.apply_winv(st, &mut self.tm);
-        st.gt_mul(&self.tm, dx);
-        for (t, b) in dx.iter_mut().zip(bx) {
+        sc.apply_winv(st, tm);
+        st.gt_mul(tm, &mut out.x);
+        for (t, b) in out.x.iter_mut().zip(&rhs.x) {
             *t += b;
         }
-        self.chol.solve(dx);
+        chol.solve(&mut out.x);
         // Δz̃ = W⁻¹(G Δx − bz) + ξ ; Δs̃ = ξ − Δz̃
-        st.g_mul(dx, &mut self.tm);
-        for (t, b) in self.tm.iter_mut().zip(bz) {
+        st.g_mul(&out.x, tm);
+        for (t, b) in tm.iter_mut().zip(&rhs.z) {
             *t -= b;
         }
-        sc.apply_winv(st, &mut self.tm);
+        sc.apply_winv(st, tm);
         for i in 0..st.m {
-            dz[i] = self.tm[i] + xi[i];
-            ds[i] = xi[i] - dz[i];
+            out.z[i] = tm[i] + rhs.s[i];
+            out.s[i] = rhs.s[i] - out.z[i];
         }
     }
 
-    /// Solves P Δx + Gᵀ Δz = bx, G Δx + Δs = bz, Δs̃ + Δz̃ = ξ (Δs̃ = W⁻¹Δs, Δz̃ = WΔz), with H
-    /// already factored: Δx into `dx`, the scaled Δs̃, Δz̃ into `ds`, `dz`. Iterative
-    /// refinement runs on this full system (the reduced one alone loses the dual equation's
-    /// accuracy as the scaling grows ill-conditioned near the optimum).
-    #[allow(clippy::too_many_arguments)]
-    fn solve(
-        &mut self,
-        st: &Structure,
-        sc: &Scaling,
-        refine_steps: u32,
-        refine_tol: f64,
-        bx: &[f64],
-        bz: &[f64],
-        xi: &[f64],
-        dx: &mut [f64],
-        ds: &mut [f64],
-        dz: &mut [f64],
-    ) {
-        self.reduced(st, sc, bx, bz, xi, dx, ds, dz);
-        let scale = 1.0 + inf_norm(bx).max(inf_norm(bz)).max(inf_norm(xi));
+    /// Solves P Δx + Gᵀ Δz = bx, G Δx + Δs = bz, Δs̃ + Δz̃ = ξ (Δs̃ = W⁻¹Δs, Δz̃ = WΔz) with H
+    /// already factored. Iterative refinement runs on this full system (the reduced one alone
+    /// loses the dual equation's accuracy as the scaling grows ill-conditioned near the
+    /// optimum).
+    fn solve(&mut self, st: &Structure, sc: &Scaling, refine_steps: u32, rhs: &Kkt, out: &mut Kkt) {
+        Self::reduced(&self.chol, &mut self.tm, st, sc, rhs, out);
+        let scale = 1.0 + rhs.inf_norm();
         for _ in 0..refine_steps {
+            let e = &mut self.residual;
             // ex = bx − P Δx − Gᵀ W⁻¹ Δz̃
-            st.p_mul(dx, &mut self.tn);
-            self.tm.copy_from_slice(dz);
+            st.p_mul(&out.x, &mut self.tn);
+            self.tm.copy_from_slice(&out.z);
             sc.apply_winv(st, &mut self.tm);
             st.gt_mul(&self.tm, &mut self.tn2);
             for i in 0..st.n {
-                self.ex[i] = bx[i] - self.tn[i] - self.tn2[i];
+                e.x[i] = rhs.x[i] - self.tn[i] - self.tn2[i];
             }
             // ez = bz − G Δx − W Δs̃ ; eξ = ξ − Δs̃ − Δz̃
-            st.g_mul(dx, &mut self.tm);
-            self.tm2.copy_from_slice(ds);
+            st.g_mul(&out.x, &mut self.tm);
+            self.tm2.copy_from_slice(&out.s);
             sc.apply_w(st, &mut self.tm2);
             for i in 0..st.m {
-                self.ez[i] = bz[i] - self.tm[i] - self.tm2[i];
-                self.exi[i] = xi[i] - ds[i] - dz[i];
+                e.z[i] = rhs.z[i] - self.tm[i] - self.tm2[i];
+                e.s[i] = rhs.s[i] - out.s[i] - out.z[i];
             }
-            let err = inf_norm(&self.ex)
-                .max(inf_norm(&self.ez))
-                .max(inf_norm(&self.exi));
-            if err <= refine_tol * scale {
+            if e.inf_norm() <= self.refine_tol * scale {
                 break;
             }
-            let (ex, ez, exi) = (
-                std::mem::take(&mut self.ex),
-                std::mem::take(&mut self.ez),
-                std::mem::take(&mut self.exi),
-            );
-            let (mut cx, mut cs, mut cz) = (
-                std::mem::take(&mut self.cx),
-                std::mem::take(&mut self.cs),
-                std::mem::take(&mut self.cz),
-            );
-            self.reduced(st, sc, &ex, &ez, &exi, &mut cx, &mut cs, &mut cz);
-            for i in 0..st.n {
-                dx[i] += cx[i];
+            Self::reduced(&self.chol, &mut self.tm, st, sc, e, &mut self.correction);
+            let c = &self.correction;
+            for (d, c) in out.x.iter_mut().zip(&c.x) {
+                *d += c;
             }
             for i in 0..st.m {
-                ds[i] += cs[i];
-                dz[i] += cz[i];
+                out.s[i] += c.s[i];
+                out.z[i] += c.z[i];
             }
-            (self.ex, self.ez, self.exi) = (ex, ez, exi);
-            (self.cx, self.cs, self.cz) = (cx, cs, cz);
         }
     }
 }
@@ -825,7 +796,7 @@ pub fn solve(
     };
     let (n, m) = (st.n, st.m);
     let bw = st.bandwidth;
-    let mut nw = Newton::new(n, m, bw);
+    let mut nw = Newton::new(n, m, bw, settings.refine_tol);
     let mut sc = Scaling::new(m, st.blocks.len());
 
     // start (W = I): (P + GᵀG) x = −q + Gᵀh, s = h − G x, z = −s, both shifted into the cones
@@ -866,18 +837,15 @@ pub fn solve(
 
     let norm_h = inf_norm(&st.h);
     let norm_q = inf_norm(&st.q);
-    let mut rx = vec![0.0; n];
-    let mut rz = vec![0.0; m];
     let mut px = vec![0.0; n];
     let mut gtz = vec![0.0; n];
     let mut gx = vec![0.0; m];
-    let (mut dx_a, mut ds_a, mut dz_a) = (vec![0.0; n], vec![0.0; m], vec![0.0; m]);
-    let (mut dx, mut ds, mut dz) = (vec![0.0; n], vec![0.0; m], vec![0.0; m]);
-    let mut xi = vec![0.0; m];
+    // right-hand side: the negated residuals −r_x, −r_z and, per solve, ξ
+    let mut rhs = Kkt::zeros(n, m);
+    let mut affine = Kkt::zeros(n, m);
+    let mut dir = Kkt::zeros(n, m);
     let mut rs = vec![0.0; m];
     let mut tmp = vec![0.0; m];
-    let mut neg_rx = vec![0.0; n];
-    let mut neg_rz = vec![0.0; m];
     let (mut pres, mut dres, mut gap_rel) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
     let mut gap0 = 0.0f64;
     let mut ran = 0;
@@ -888,10 +856,10 @@ pub fn solve(
         st.gt_mul(&z, &mut gtz);
         st.g_mul(&x, &mut gx);
         for i in 0..n {
-            rx[i] = px[i] + gtz[i] + st.q[i];
+            rhs.x[i] = -(px[i] + gtz[i] + st.q[i]);
         }
         for i in 0..m {
-            rz[i] = gx[i] + s[i] - st.h[i];
+            rhs.z[i] = -(gx[i] + s[i] - st.h[i]);
         }
         let xpx = dot(&x, &px);
         let pobj = 0.5 * xpx + dot(&st.q, &x);
@@ -899,8 +867,8 @@ pub fn solve(
         // zᵀr_z| would charge the dual residual once more, times the large positions
         let gap_abs = dot(&s, &z);
         gap_rel = gap_abs / pobj.abs().max(1.0);
-        pres = inf_norm(&rz) / (1.0 + norm_h.max(inf_norm(&x)).max(inf_norm(&s)));
-        dres = inf_norm(&rx) / (1.0 + norm_q.max(inf_norm(&px)).max(inf_norm(&gtz)));
+        pres = inf_norm(&rhs.z) / (1.0 + norm_h.max(inf_norm(&x)).max(inf_norm(&s)));
+        dres = inf_norm(&rhs.x) / (1.0 + norm_q.max(inf_norm(&px)).max(inf_norm(&gtz)));
         tracing::trace!(
             iteration,
             pobj,
@@ -946,19 +914,12 @@ pub fn solve(
         nw.chol
             .factor(&nw.hm)
             .map_err(|source| BandedError::Factorisation { iteration, source })?;
-        let gap = dot(&s, &z);
-        let mu = gap / st.degree as f64;
+        let mu = gap_abs / st.degree as f64;
         if iteration == 0 {
-            gap0 = gap;
-        } else if gap > 1e8 * gap0.max(1.0) {
+            gap0 = gap_abs;
+        } else if gap_abs > 1e8 * gap0.max(1.0) {
             // s and z grow without bound: no solution this method can reach
             break;
-        }
-        for i in 0..n {
-            neg_rx[i] = -rx[i];
-        }
-        for i in 0..m {
-            neg_rz[i] = -rz[i];
         }
 
         // refinement only pays near the optimum, where the scaling is ill-conditioned
@@ -968,64 +929,52 @@ pub fn solve(
             0
         };
         // predictor: λ ∘ (Δs̃ + Δz̃) = −λ∘λ, i.e. ξ = −λ
-        for i in 0..m {
-            xi[i] = -sc.lambda[i];
+        for (x, l) in rhs.s.iter_mut().zip(&sc.lambda) {
+            *x = -l;
         }
-        nw.solve(
-            &st,
-            &sc,
-            refine_steps,
-            settings.refine_tol,
-            &neg_rx,
-            &neg_rz,
-            &xi,
-            &mut dx_a,
-            &mut ds_a,
-            &mut dz_a,
-        );
+        nw.solve(&st, &sc, refine_steps, &rhs, &mut affine);
         let alpha_a = sc
-            .max_step(&st, &ds_a)
-            .min(sc.max_step(&st, &dz_a))
+            .max_step(&st, &affine.s)
+            .min(sc.max_step(&st, &affine.z))
             .min(1.0);
         // σ from the gap the affine step would leave (in the scaled space, sᵀz = λᵀλ)
         let mut new_gap = 0.0;
         for i in 0..m {
-            new_gap += (sc.lambda[i] + alpha_a * ds_a[i]) * (sc.lambda[i] + alpha_a * dz_a[i]);
+            new_gap +=
+                (sc.lambda[i] + alpha_a * affine.s[i]) * (sc.lambda[i] + alpha_a * affine.z[i]);
         }
-        let sigma = (new_gap / gap).clamp(0.0, 1.0).powi(3);
+        let sigma = (new_gap / gap_abs).clamp(0.0, 1.0).powi(3);
 
         // corrector: r = −λ∘λ − Δs̃_a ∘ Δz̃_a + σ μ e
         product(&st, &sc.lambda, &sc.lambda, &mut rs);
-        product(&st, &ds_a, &dz_a, &mut tmp);
+        product(&st, &affine.s, &affine.z, &mut tmp);
         for i in 0..m {
             rs[i] = -rs[i] - tmp[i];
         }
         add_identity(&st, &mut rs, sigma * mu);
-        inverse_product(&st, &sc.lambda, &rs, &mut xi);
-        nw.solve(
-            &st,
-            &sc,
-            refine_steps,
-            settings.refine_tol,
-            &neg_rx,
-            &neg_rz,
-            &xi,
-            &mut dx,
-            &mut ds,
-            &mut dz,
-        );
-        let scaled_max = sc.max_step(&st, &ds).min(sc.max_step(&st, &dz));
+        inverse_product(&st, &sc.lambda, &rs, &mut rhs.s);
+        nw.solve(&st, &sc, refine_steps, &rhs, &mut dir);
+        let scaled_max = sc.max_step(&st, &dir.s).min(sc.max_step(&st, &dir.z));
         // back to the unscaled space: Δs = W Δs̃, Δz = W⁻¹ Δz̃
-        sc.apply_w(&st, &mut ds);
-        sc.apply_winv(&st, &mut dz);
+        let Kkt {
+            x: dx,
+            z: dz,
+            s: ds,
+        } = &mut dir;
+        sc.apply_w(&st, ds);
+        sc.apply_winv(&st, dz);
         // the same step limit in the unscaled space: near the optimum the scaling is so
         // ill-conditioned that rounding in W could otherwise put s or z just outside a cone
         let alpha_max = scaled_max
-            .min(max_step(&st, &s, &ds))
-            .min(max_step(&st, &z, &dz));
+            .min(max_step(&st, &s, ds))
+            .min(max_step(&st, &z, dz));
         let alpha = (0.99 * alpha_max).min(1.0);
         if !(alpha.is_finite() && alpha > 1e-10)
-            || dx.iter().chain(&ds).chain(&dz).any(|v| !v.is_finite())
+            || dx
+                .iter()
+                .chain(ds.iter())
+                .chain(dz.iter())
+                .any(|v| !v.is_finite())
         {
             break;
         }

@@ -12,13 +12,7 @@ fn banded(prob: &ProblemBuilder) -> BandedSolution {
 /// min x + y s.t. ‖(x, y)‖ ≤ 1: x = y = −1/√2.
 #[test]
 fn unit_disc() {
-    let mut b = ProblemBuilder::new(2);
-    b.add_linear_cost(0, 1.0);
-    b.add_linear_cost(1, 1.0);
-    b.soc(
-        Lin::constant_only(1.0),
-        &[Lin::var(0, 1.0), Lin::var(1, 1.0)],
-    );
+    let b = crate::socp::tests::unit_disc_problem();
     let sol = banded(&b);
     let h = -1.0 / 2f64.sqrt();
     assert!(
