@@ -27,6 +27,9 @@ pub enum ResolutionMode {
 }
 
 impl ResolutionMode {
+    /// All modes.
+    pub const ALL: [ResolutionMode; 2] = [ResolutionMode::Paper, ResolutionMode::General];
+
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {

@@ -129,33 +129,32 @@ macro_rules! out {
     }};
 }
 
+/// Parses one of a closed set of names (`what` names the option in the message).
+fn parse_named<T: Copy>(
+    s: &str,
+    all: &[T],
+    name: fn(T) -> &'static str,
+    what: &str,
+) -> Result<T, String> {
+    all.iter().copied().find(|&v| name(v) == s).ok_or_else(|| {
+        let names: Vec<&str> = all.iter().map(|&v| name(v)).collect();
+        format!(
+            "unknown {what} `{s}`; expected one of: {}",
+            names.join(", ")
+        )
+    })
+}
+
 fn parse_resolution(s: &str) -> Result<ResolutionMode, String> {
-    match s {
-        "general" => Ok(ResolutionMode::General),
-        "paper" => Ok(ResolutionMode::Paper),
-        _ => Err(format!(
-            "unknown resolution `{s}`; expected general or paper"
-        )),
-    }
+    parse_named(s, &ResolutionMode::ALL, ResolutionMode::name, "resolution")
 }
 
 fn parse_backend(s: &str) -> Result<Backend, String> {
-    match s {
-        "clarabel" => Ok(Backend::Clarabel),
-        "banded" => Ok(Backend::Banded),
-        _ => Err(format!(
-            "unknown cone-program backend `{s}`; expected clarabel or banded"
-        )),
-    }
+    parse_named(s, &Backend::ALL, Backend::name, "cone-program backend")
 }
 
 fn parse_scheme(s: &str) -> Result<Scheme, String> {
-    Scheme::from_name(s).ok_or_else(|| {
-        format!(
-            "unknown scheme `{s}`; expected one of: {}",
-            Scheme::ALL.map(Scheme::name).join(", ")
-        )
-    })
+    parse_named(s, &Scheme::ALL, Scheme::name, "scheme")
 }
 
 /// How a command failed, for the exit code.

@@ -345,6 +345,19 @@ pub enum Backend {
     Banded,
 }
 
+impl Backend {
+    /// All backends.
+    pub const ALL: [Backend; 2] = [Backend::Clarabel, Backend::Banded];
+
+    /// The name used on the command line (`--socp-backend`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Clarabel => "clarabel",
+            Backend::Banded => "banded",
+        }
+    }
+}
+
 impl SocpSettings {
     /// The settings of the `exact` scheme's cone programs: Clarabel's iterative refinement off
     /// (it is about half of the interior-point time on these well-scaled, banded programs and
