@@ -35,7 +35,21 @@ pub enum DminError {
     /// At least one Monte Carlo trial.
     #[error("trials = 0: at least one Monte Carlo trial is needed")]
     Trials,
+    /// The quadrature did not reach its tolerance within its budget of integrand evaluations
+    /// (the as-printed integrand for very large N, which changes sign and spans hundreds of
+    /// orders of magnitude).
+    #[error("objects = {objects}: the quadrature of E[d_min] did not converge within {evaluations} evaluations")]
+    Quadrature {
+        /// N.
+        objects: u64,
+        /// The evaluation budget.
+        evaluations: usize,
+    },
 }
+
+/// Most integrand evaluations one E\[d_min\] quadrature may spend (the correct formula needs a
+/// few thousand at any N).
+pub const QUADRATURE_BUDGET: usize = 20_000_000;
 
 /// CDF of the distance between two points drawn uniformly in a disk of radius `r`.
 pub fn pair_distance_cdf(l: f64, r: f64, form: CdfForm) -> f64 {
@@ -82,6 +96,9 @@ fn check(radius_m: f64, objects: u64) -> Result<(), DminError> {
 }
 
 /// E\[d_min\] = ∫₀^{2R} (1 − F(l))^{N−1} dl, m, by adaptive Simpson quadrature.
+///
+/// With [`CdfForm::AsPrinted`] the base 1 − F exceeds 1 near l = 0, so the value may be
+/// meaningless (or not finite) for large N.
 pub fn expected_dmin_m(radius_m: f64, objects: u64, form: CdfForm) -> Result<f64, DminError> {
     check(radius_m, objects)?;
     let n1 = (objects - 1) as f64;
@@ -104,9 +121,15 @@ pub fn expected_dmin_m(radius_m: f64, objects: u64, form: CdfForm) -> Result<f64
     let mut total = 0.0;
     let mut a = 0.0;
     let mut w = (radius_m / (n1.sqrt() * 20.0)).min(2.0 * radius_m);
+    let mut budget = QUADRATURE_BUDGET;
     while a < 2.0 * radius_m {
         let b = (a + w).min(2.0 * radius_m);
-        let part = adaptive_simpson(&f, a, b, 1e-12 * (1.0 + total), 40);
+        let part = adaptive_simpson(&f, a, b, 1e-12 * (1.0 + total), 40, &mut budget).ok_or(
+            DminError::Quadrature {
+                objects,
+                evaluations: QUADRATURE_BUDGET,
+            },
+        )?;
         total += part;
         if part.abs() < 1e-15 * total && f(b).abs() < 1e-15 {
             break;
@@ -157,7 +180,17 @@ fn simpson(fa: f64, fm: f64, fb: f64, a: f64, b: f64) -> f64 {
 }
 
 /// Adaptive Simpson quadrature with an explicit stack (bounded depth, no recursion).
-fn adaptive_simpson(f: &impl Fn(f64) -> f64, a: f64, b: f64, tol: f64, max_depth: u32) -> f64 {
+/// Adaptive Simpson quadrature of `f` over [a, b]; `None` when more than `budget` evaluations
+/// would be needed (the budget left is written back).
+fn adaptive_simpson(
+    f: &impl Fn(f64) -> f64,
+    a: f64,
+    b: f64,
+    tol: f64,
+    max_depth: u32,
+    budget: &mut usize,
+) -> Option<f64> {
+    *budget = budget.checked_sub(3)?;
     let fa = f(a);
     let fb = f(b);
     let m = 0.5 * (a + b);
@@ -166,6 +199,7 @@ fn adaptive_simpson(f: &impl Fn(f64) -> f64, a: f64, b: f64, tol: f64, max_depth
     let mut stack = vec![(a, b, fa, fm, fb, whole, tol, 0u32)];
     let mut total = 0.0;
     while let Some((a, b, fa, fm, fb, whole, tol, depth)) = stack.pop() {
+        *budget = budget.checked_sub(2)?;
         let m = 0.5 * (a + b);
         let lm = 0.5 * (a + m);
         let rm = 0.5 * (m + b);
@@ -174,19 +208,44 @@ fn adaptive_simpson(f: &impl Fn(f64) -> f64, a: f64, b: f64, tol: f64, max_depth
         let left = simpson(fa, flm, fm, a, m);
         let right = simpson(fm, frm, fb, m, b);
         let delta = left + right - whole;
-        if depth >= max_depth || delta.abs() <= 15.0 * tol {
+        // The tolerance is also relative to the piece itself: the as-printed integrand reaches
+        // 1e300 for large N, where an absolute 1e-12 would split every piece max_depth levels
+        // deep (2^40 pieces: it never ended). A non-finite sample ends the refinement too:
+        // splitting cannot make it finite.
+        let accept = 15.0 * tol.max(1e-13 * (left + right).abs());
+        if depth >= max_depth || delta.abs() <= accept || !delta.is_finite() {
             total += left + right + delta / 15.0;
         } else {
             stack.push((a, m, fa, flm, fm, left, tol / 2.0, depth + 1));
             stack.push((m, b, fm, frm, fb, right, tol / 2.0, depth + 1));
         }
     }
-    total
+    Some(total)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn as_printed_with_huge_values_ends() {
+        // Before the fix the quadrature split pieces of the as-printed integrand 40 levels deep
+        // (an absolute tolerance of 1e-12 it could not reach) and did not end for N ≥ 50 000;
+        // the correct formula stays close to its large-N asymptote.
+        for objects in [50_000, 100_000, 1_000_000] {
+            match expected_dmin_m(5000.0, objects, CdfForm::AsPrinted) {
+                Ok(v) => assert!(v.is_nan() || v >= 0.0, "{objects}: {v}"),
+                Err(e) => assert!(matches!(e, DminError::Quadrature { .. }), "{e}"),
+            }
+        }
+        let correct = expected_dmin_m(5000.0, 50_000, CdfForm::Correct).unwrap();
+        // E[d_min] ≈ R sqrt(π/N)/2 for large N: 19.8 m
+        let asymptote = 0.5 * 5000.0 * (std::f64::consts::PI / 50_000.0).sqrt();
+        assert!(
+            (correct / asymptote - 1.0).abs() < 0.02,
+            "{correct} vs {asymptote}"
+        );
+    }
 
     #[test]
     fn correct_cdf_is_a_distribution() {

@@ -202,6 +202,10 @@ pub struct PlanResult {
     pub cone_programs: usize,
     /// The resolution requirement the plan was made for.
     pub resolution: ResolutionMode,
+    /// Why a given start (`PlanOptions::init`) was not used: it could not be repaired (made
+    /// feasible) and the plan starts from the built-in start instead. `None` when the given
+    /// start was used or none was given.
+    pub init_replaced: Option<String>,
 }
 
 /// Why planning failed.
@@ -254,6 +258,13 @@ pub fn plan_with_observer(
             if tr.pos_m.iter().flatten().any(|v| !v.is_finite()) {
                 return Err(PlanError::InvalidInit("non-finite position".into()));
             }
+            if v2::dist(tr.start_m, p.start_m) > 1e-6 {
+                return Err(PlanError::InvalidInit(format!(
+                    "it starts at ({}, {}) m (its t = 0 row), but the mission starts at \
+                     start_m = ({}, {}) m",
+                    tr.start_m[0], tr.start_m[1], p.start_m[0], p.start_m[1]
+                )));
+            }
             // A given start that is infeasible (a warm start after the mission changed, say)
             // is repaired and re-optimised on the coarse grid first, like the built-in start:
             // large steps fix large violations in few iterations.
@@ -274,19 +285,7 @@ pub fn plan_with_observer(
                 _ => tr.clone(),
             }
         }
-        // The built-in start: the guidance law on a coarse grid made feasible there (phase I);
-        // for the exact-geometry schemes also optimised there. The paper's schemes get the plain
-        // feasible path, as Algorithm 1's step 1 asks ("a feasible initial flight path").
-        None => match options.scheme {
-            Scheme::Exact => coarse_start(mission, ExactObjective::Energy, options.coarse, options),
-            Scheme::BaselineExact => {
-                coarse_start(mission, ExactObjective::Distance, options.coarse, options)
-            }
-            Scheme::Paper | Scheme::Baseline => {
-                coarse_start(mission, ExactObjective::Energy, false, options)
-            }
-        }
-        .unwrap_or_else(|| guidance_start(mission, options.resolution)),
+        None => built_in_start(mission, options),
     };
     let start_energy_j = evaluate(mission, &start).energy_j;
     let resolution = match options.scheme {
@@ -305,19 +304,47 @@ pub fn plan_with_observer(
             options.init.is_none().then_some(ExactObjective::Energy)
         }
     };
+    let repair_tuning = ExactTuning {
+        resolution,
+        ..ExactTuning::default()
+    };
+    let mut init_replaced = None;
     let (start, repair_iterations) = match phase1 {
-        Some(objective) => make_feasible(
-            mission,
-            start,
-            objective,
-            &ExactTuning {
-                resolution,
-                ..ExactTuning::default()
-            },
-            &mut repair_solver,
-            observer,
-            options.scheme == Scheme::Exact,
-        )?,
+        Some(objective) => {
+            let exact_rules = options.scheme == Scheme::Exact;
+            match make_feasible(
+                mission,
+                start,
+                objective,
+                &repair_tuning,
+                &mut repair_solver,
+                observer,
+                exact_rules,
+            ) {
+                Ok(repaired) => repaired,
+                // A given path phase I cannot repair (far outside the speed limits, or so far
+                // from the landmarks that the elastic program is numerically infeasible): plan
+                // from the built-in start rather than fail, and say so.
+                Err(failure) if options.init.is_some() => {
+                    let reason = failure.error.to_string();
+                    tracing::warn!(
+                        error = %reason,
+                        "the given start cannot be repaired; planning from the built-in start"
+                    );
+                    init_replaced = Some(reason);
+                    make_feasible(
+                        mission,
+                        built_in_start(mission, options),
+                        objective,
+                        &repair_tuning,
+                        &mut repair_solver,
+                        observer,
+                        exact_rules,
+                    )?
+                }
+                Err(failure) => return Err(failure.into()),
+            }
+        }
         None => (start, 0),
     };
     observer.on_phase("solve");
@@ -365,9 +392,26 @@ pub fn plan_with_observer(
     out.resolution = resolution;
     out.start_energy_j = start_energy_j;
     out.repair_iterations = repair_iterations;
+    out.init_replaced = init_replaced;
     out.cone_programs += repair_solver.builds.max(repair_iterations);
     out.solve_seconds = started.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// The built-in start: the guidance law on a coarse grid made feasible there (phase I); for the
+/// exact-geometry schemes also optimised there. The paper's schemes get the plain feasible path,
+/// as Algorithm 1's step 1 asks ("a feasible initial flight path").
+fn built_in_start(mission: &Mission, options: &PlanOptions) -> Trajectory {
+    match options.scheme {
+        Scheme::Exact => coarse_start(mission, ExactObjective::Energy, options.coarse, options),
+        Scheme::BaselineExact => {
+            coarse_start(mission, ExactObjective::Distance, options.coarse, options)
+        }
+        Scheme::Paper | Scheme::Baseline => {
+            coarse_start(mission, ExactObjective::Energy, false, options)
+        }
+    }
+    .unwrap_or_else(|| guidance_start(mission, options.resolution))
 }
 
 /// Slot lengths of the coarse levels, finest first, s: the mission is first solved on slots of
@@ -816,6 +860,7 @@ fn finish(
         repair_iterations: 0,
         cone_programs,
         resolution: ResolutionMode::Paper,
+        init_replaced: None,
     }
 }
 

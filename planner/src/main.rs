@@ -174,6 +174,18 @@ fn bad(e: impl Into<anyhow::Error>) -> Failure {
     Failure::BadInput(e.into())
 }
 
+/// An output directory must be a directory or not exist yet (bad input otherwise, before any
+/// work is done).
+fn check_out_dir(out: &std::path::Path) -> Result<(), Failure> {
+    if out.exists() && !out.is_dir() {
+        return Err(bad(anyhow::anyhow!(
+            "--out {}: exists and is not a directory",
+            out.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Shows iterations on a spinner (hidden when stderr is not a terminal).
 struct Progress(ProgressBar);
 
@@ -217,6 +229,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             socp_backend,
         } => {
             let m = Mission::from_path(&mission).map_err(bad)?;
+            check_out_dir(&out)?;
             if !(tolerance.is_finite() && tolerance > 0.0) {
                 return Err(bad(anyhow::anyhow!(
                     "--tolerance {tolerance}: must be a finite number > 0"
@@ -284,6 +297,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 s.min_speed_mps,
                 s.max_speed_mps
             );
+            if let Some(reason) = &result.init_replaced {
+                out!(
+                    "note: the --init path could not be made feasible ({reason}); planned from the built-in start instead"
+                );
+            }
             for f in files {
                 out!("wrote {}", f.display());
             }
@@ -318,6 +336,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Reproduce { out, quick, only } => {
             let figures =
                 reproduce::FigureSet::parse(&only).map_err(|e| bad(anyhow::anyhow!(e)))?;
+            check_out_dir(&out)?;
             let report = reproduce::reproduce(&out, quick, &figures)
                 .with_context(|| format!("reproducing into {}", out.display()))?;
             out!("wrote {}", report.display());
@@ -341,13 +360,27 @@ fn run(cli: Cli) -> Result<(), Failure> {
             seed,
         } => {
             let correct = expected_dmin_m(radius_m, objects, CdfForm::Correct).map_err(bad)?;
-            let printed = expected_dmin_m(radius_m, objects, CdfForm::AsPrinted).map_err(bad)?;
+            // the as-printed formula may not converge for very large N: say so, do not fail
+            let printed = match expected_dmin_m(radius_m, objects, CdfForm::AsPrinted) {
+                Ok(v) => Ok(v),
+                Err(e @ planner::dmin::DminError::Quadrature { .. }) => Err(e),
+                Err(e) => return Err(bad(e)),
+            };
             let (mc, se) =
                 expected_dmin_monte_carlo_m(radius_m, objects, trials, seed).map_err(bad)?;
             out!("R = {radius_m} m, N = {objects}");
             out!("E[d_min] correct formula : {correct:.3} m");
-            out!("E[d_min] as printed      : {printed:.3} m  (the paper's eq. lacks a factor l)");
-            out!("E[d_min] Monte Carlo     : {mc:.3} ± {se:.3} m  ({trials} trials)");
+            match printed {
+                Ok(v) => {
+                    out!("E[d_min] as printed      : {v:.3} m  (the paper's eq. lacks a factor l)")
+                }
+                Err(e) => out!("E[d_min] as printed      : not computed ({e})"),
+            }
+            if trials > 1 {
+                out!("E[d_min] Monte Carlo     : {mc:.3} ± {se:.3} m  ({trials} trials)");
+            } else {
+                out!("E[d_min] Monte Carlo     : {mc:.3} m  (1 trial: no standard error)");
+            }
             Ok(())
         }
     }
@@ -360,6 +393,7 @@ fn main() -> ExitCode {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let cli = Cli::parse();
     match run(cli) {

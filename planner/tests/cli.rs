@@ -182,6 +182,23 @@ fn bad_init_csv_exits_2_and_names_the_line() {
 }
 
 #[test]
+fn out_that_is_a_file_exits_2_before_planning() {
+    let d = tmp("outfile");
+    let file = d.join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let o = bin()
+        .arg("plan")
+        .arg(repo().join("missions/explicit.toml"))
+        .arg("--out")
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("is not a directory"));
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+}
+
+#[test]
 fn dmin_prints_the_three_values() {
     let o = bin()
         .args([
@@ -198,6 +215,22 @@ fn dmin_prints_the_three_values() {
     assert!(o.status.success());
     let s = String::from_utf8_lossy(&o.stdout);
     assert!(s.contains("correct formula") && s.contains("as printed") && s.contains("Monte Carlo"));
+    // N where the as-printed quadrature cannot converge: reported, not a hang or a failure
+    let o = bin()
+        .args([
+            "dmin",
+            "--radius-m",
+            "5000",
+            "--objects",
+            "100000",
+            "--trials",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("not computed") && s.contains("1 trial"), "{s}");
     let o = bin()
         .args(["dmin", "--radius-m=-1", "--objects", "10"])
         .output()

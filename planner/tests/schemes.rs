@@ -313,6 +313,64 @@ fn infeasible_mission_is_reported_before_solving() {
 }
 
 #[test]
+fn init_paths_phase_one_cannot_use_are_still_planned() {
+    // Given paths far outside the speed limit (every slot at one point 1 km away: the first
+    // step is 1 km in 0.5 s; or the feasible start shifted by 300 m after the first slot). Before
+    // the fix every one failed with "iteration 0: subproblem is infeasible": the speed floor of
+    // the repair program (85 % of the previous step) lay above the speed limit.
+    let m = short_mission();
+    let n = m.slots();
+    let built_in = plan(&m, &PlanOptions::default()).unwrap();
+    let shifted = Trajectory {
+        pos_m: built_in
+            .trajectory
+            .pos_m
+            .iter()
+            .map(|q| [q[0] + 300.0, q[1]])
+            .collect(),
+        ..built_in.trajectory.clone()
+    };
+    let parked = Trajectory {
+        pos_m: vec![[100.0, 0.0]; n],
+        ..built_in.trajectory.clone()
+    };
+    for (name, init) in [("shifted", shifted), ("parked", parked)] {
+        let r = plan(
+            &m,
+            &PlanOptions {
+                init: Some(init),
+                ..Default::default()
+            },
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_feasible_on_exact_geometry(&check(&m, &r.trajectory));
+        assert!(r.evaluation.is_feasible(), "{name}");
+        assert_eq!(r.trajectory.start_m, m.params().start_m, "{name}");
+    }
+}
+
+#[test]
+fn init_that_starts_elsewhere_is_rejected() {
+    // Its t = 0 row is not the mission's start: it used to become the plan's start silently.
+    let m = short_mission();
+    let bad = Trajectory {
+        slot_s: 0.5,
+        start_m: [0.0, 0.0],
+        pos_m: vec![[0.0, 0.0]; m.slots()],
+    };
+    let e = plan(
+        &m,
+        &PlanOptions {
+            init: Some(bad),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(matches!(e, planner::PlanError::InvalidInit(_)), "{e}");
+    assert!(e.to_string().contains("start_m"), "{e}");
+}
+
+#[test]
 fn bad_init_is_rejected_with_a_message() {
     let m = short_mission();
     let bad = Trajectory {

@@ -270,12 +270,20 @@ pub fn write_plan_dir(
     written.push(path);
 
     let path = dir.join("summary.json");
-    let json = serde_json::to_string_pretty(&Summary::new(mission, result)).map_err(|e| {
-        ReportError::Encode {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        }
-    })?;
+    let encode_error = |e: serde_json::Error| ReportError::Encode {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    };
+    let mut value = serde_json::to_value(Summary::new(mission, result)).map_err(encode_error)?;
+    // Only in the file (the summary is also a wire message, whose layout stays fixed): why a
+    // given `--init` path was replaced by the built-in start.
+    if let (Some(reason), Some(map)) = (&result.init_replaced, value.as_object_mut()) {
+        map.insert(
+            "init_replaced".to_string(),
+            serde_json::Value::String(reason.clone()),
+        );
+    }
+    let json = serde_json::to_string_pretty(&value).map_err(encode_error)?;
     write_file(&path, &json)?;
     written.push(path);
 

@@ -260,7 +260,9 @@ impl ExactSubproblem {
             let u_norm = v2::norm(l.step_m);
             let h = l.dir;
             let along = vx.clone().scaled(h[0]).plus_lin(&vy.clone().scaled(h[1]));
-            let keep = tuning.speed_keep_fraction * u_norm;
+            // (at most 95 % of the speed limit's step: a given path may be faster than the
+            // limit, and a floor above it would make the program infeasible)
+            let keep = (tuning.speed_keep_fraction * u_norm).min(0.95 * delta * v_max);
             let s_min = match sv.sigma {
                 None => (delta * v_min).max(keep),
                 Some(sig) => {
