@@ -28,6 +28,26 @@ use crate::error::{RadarError, Result};
 /// Boltzmann constant, J/K.
 pub const BOLTZMANN_J_PER_K: f64 = 1.380_649e-23;
 
+/// Most objects a scene may hold (`objects.count`, or the mean of `objects.intensity_per_km2`
+/// over the disk).
+pub const MAX_OBJECTS: usize = 1_000_000;
+
+/// Most complex samples in one pulse, `symbols_per_pulse × fft_size` (2^20: 8 MiB of IQ per
+/// pulse; the default is 4096).
+pub const MAX_SAMPLES_PER_PULSE: usize = 1 << 20;
+
+/// Most samples of an upsampled range profile, `fft_size × upsample` (2^22: 64 MiB per
+/// profile buffer; the default is 32768).
+pub const MAX_PROFILE_SAMPLES: usize = 1 << 22;
+
+/// Most pixels on a side of the image grid, `2 round(grid_half_m / pixel_m) + 1` (4097: one
+/// look image is then 128 MiB, the CFAR's work arrays about 1 GiB; the default is 251).
+pub const MAX_GRID_SIDE_PX: usize = 4097;
+
+/// Most pixels of a CFAR guard or training band (`processing.cfar_guard_px`,
+/// `processing.cfar_train_px`): the grid's side.
+pub const MAX_CFAR_BAND_PX: usize = MAX_GRID_SIDE_PX;
+
 /// The `[objects]` table: the random scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -116,9 +136,11 @@ pub enum MotionModel {
 pub struct RadarConfig {
     /// Pulse repetition frequency: how often the processor takes one pulse (a group of
     /// `symbols_per_pulse` OFDM symbols) from the BS's continuous stream, Hz. Default 100
-    /// (≥ 2 V / L_a up to 25 m/s: the along-track sample spacing stays ≤ L_a / 2).
+    /// (≥ 2 V / L_a up to 25 m/s: the along-track sample spacing stays ≤ L_a / 2). At most
+    /// [`RadarConfig::max_prf_hz`] (48 kHz at the defaults: one pulse per symbol).
     pub prf_hz: f64,
-    /// OFDM symbols per pulse. Default 1.
+    /// OFDM symbols per pulse, 1..=64, with `symbols_per_pulse × fft_size` ≤
+    /// [`MAX_SAMPLES_PER_PULSE`]. Default 1.
     pub symbols_per_pulse: usize,
     /// Subcarrier spacing Δf, Hz. Default 60 kHz (NR numerology μ = 2).
     pub subcarrier_spacing_hz: f64,
@@ -288,7 +310,8 @@ pub struct ProcessingConfig {
     pub azimuth_weighting: Weighting,
     /// Upsampling factor of the range profile before linear interpolation. Default 8.
     pub upsample: usize,
-    /// Half-size of the square image grid around each landmark, m. Default 50.
+    /// Half-size of the square image grid around each landmark, m (the grid is at most
+    /// [`MAX_GRID_SIDE_PX`] pixels a side). Default 50.
     pub grid_half_m: f64,
     /// Pixel spacing, m. Default 0.4.
     pub pixel_m: f64,
@@ -391,11 +414,25 @@ impl ObjectsConfig {
             non_negative("objects.intensity_per_km2", i)?;
         }
         if let Some(n) = self.count {
-            if n > 1_000_000 {
-                return Err(RadarError::config("objects.count", "at most 1e6 objects"));
+            if n > MAX_OBJECTS {
+                return Err(RadarError::config(
+                    "objects.count",
+                    format!("{n} objects: at most {MAX_OBJECTS}"),
+                ));
             }
         }
         positive("objects.radius_m", self.radius_m)?;
+        if let Some(mean) = self.mean_poisson_count() {
+            if mean > MAX_OBJECTS as f64 {
+                return Err(RadarError::config(
+                    "objects.intensity_per_km2",
+                    format!(
+                        "gives {mean:.0} objects on average in a disk of radius {} m (at most {MAX_OBJECTS})",
+                        self.radius_m
+                    ),
+                ));
+            }
+        }
         if let Some(c) = self.center_m {
             finite("objects.center_m[0]", c[0])?;
             finite("objects.center_m[1]", c[1])?;
@@ -408,10 +445,23 @@ impl ObjectsConfig {
         positive("objects.landmark_rcs_m2", self.landmark_rcs_m2)?;
         Ok(())
     }
+
+    /// Mean number of Poisson objects, λ π R² (`None` when `count` fixes it or no intensity is
+    /// given).
+    pub fn mean_poisson_count(&self) -> Option<f64> {
+        match (self.count, self.intensity_per_km2) {
+            (None, Some(lambda)) => {
+                Some(lambda * std::f64::consts::PI * self.radius_m * self.radius_m / 1e6)
+            }
+            _ => None,
+        }
+    }
 }
 
 impl RadarConfig {
-    /// Checks every value; the error names the first bad field.
+    /// Checks every value, against the signal model too (a pulse takes whole OFDM symbols of
+    /// the BS's stream, so at most one pulse per `symbols_per_pulse` symbols; the occupied band
+    /// must fit the sample rate); the error names the first bad field and the limit.
     pub fn validate(&self) -> Result<()> {
         positive("radar.prf_hz", self.prf_hz)?;
         if self.symbols_per_pulse == 0 || self.symbols_per_pulse > 64 {
@@ -436,8 +486,50 @@ impl RadarConfig {
                 ),
             ));
         }
+        if self.samples_per_pulse() > MAX_SAMPLES_PER_PULSE {
+            return Err(RadarError::config(
+                "radar.symbols_per_pulse",
+                format!(
+                    "{} symbols of fft_size = {} samples make {} samples per pulse (at most {MAX_SAMPLES_PER_PULSE})",
+                    self.symbols_per_pulse,
+                    self.fft_size,
+                    self.samples_per_pulse()
+                ),
+            ));
+        }
+        let max_prf = self.max_prf_hz();
+        if self.prf_hz > max_prf {
+            return Err(RadarError::config(
+                "radar.prf_hz",
+                format!(
+                    "{} Hz is above {max_prf} Hz, the most the signal model can produce: the BS \
+                     sends {} OFDM symbols per second (sample rate {} Hz / (fft_size {} + \
+                     cp_samples {}) samples per symbol) and a pulse takes symbols_per_pulse = {} \
+                     of them",
+                    self.prf_hz,
+                    self.symbol_rate_hz(),
+                    self.sample_rate_hz(),
+                    self.fft_size,
+                    self.cp_samples,
+                    self.symbols_per_pulse
+                ),
+            ));
+        }
         if let Some(b) = self.bandwidth_hz {
             positive("radar.bandwidth_hz", b)?;
+            let sc = (b / self.subcarrier_spacing_hz).round();
+            if sc < 2.0 || sc > (self.fft_size - 2) as f64 {
+                return Err(RadarError::config(
+                    "radar.bandwidth_hz",
+                    format!(
+                        "B = {b} Hz gives {sc} subcarriers of {} Hz; need 2..={} (fft_size − 2): \
+                         the band must lie within the sample rate {} Hz",
+                        self.subcarrier_spacing_hz,
+                        self.fft_size - 2,
+                        self.sample_rate_hz()
+                    ),
+                ));
+            }
         }
         positive("radar.tx_power_w", self.tx_power_w)?;
         finite("radar.tx_gain_dbi", self.tx_gain_dbi)?;
@@ -460,6 +552,22 @@ impl RadarConfig {
     /// Sample rate f_s = N Δf, Hz.
     pub fn sample_rate_hz(&self) -> f64 {
         self.fft_size as f64 * self.subcarrier_spacing_hz
+    }
+
+    /// OFDM symbols the BS sends per second, f_s / (N + N_cp) (48 kHz at the defaults).
+    pub fn symbol_rate_hz(&self) -> f64 {
+        self.sample_rate_hz() / (self.fft_size + self.cp_samples) as f64
+    }
+
+    /// Highest PRF the signal model can produce: one pulse per `symbols_per_pulse` symbols,
+    /// f_s / ((N + N_cp) symbols_per_pulse), Hz.
+    pub fn max_prf_hz(&self) -> f64 {
+        self.symbol_rate_hz() / self.symbols_per_pulse.max(1) as f64
+    }
+
+    /// Complex samples per pulse, `symbols_per_pulse × fft_size`.
+    pub fn samples_per_pulse(&self) -> usize {
+        self.symbols_per_pulse.saturating_mul(self.fft_size)
     }
 
     /// Noise variance of one complex sample, σ² = k T0 F f_s, W.
@@ -507,11 +615,15 @@ impl ProcessingConfig {
         }
         positive("processing.grid_half_m", self.grid_half_m)?;
         positive("processing.pixel_m", self.pixel_m)?;
-        let n = 2.0 * self.grid_half_m / self.pixel_m;
-        if n > 8192.0 {
+        let n = self.grid_side_px();
+        if n > MAX_GRID_SIDE_PX as f64 {
             return Err(RadarError::config(
-                "processing.pixel_m",
-                format!("the grid would be {n:.0} pixels wide (at most 8192)"),
+                "processing.grid_half_m",
+                format!(
+                    "±{} m at pixel_m = {} m makes a grid {n:.0} pixels wide (at most \
+                     {MAX_GRID_SIDE_PX})",
+                    self.grid_half_m, self.pixel_m
+                ),
             ));
         }
         if let Some(t) = self.look_s {
@@ -521,11 +633,19 @@ impl ProcessingConfig {
         if !(self.pfa > 0.0 && self.pfa < 0.5) {
             return Err(RadarError::config("processing.pfa", "must lie in (0, 0.5)"));
         }
-        if self.cfar_train_px == 0 {
+        if !(1..=MAX_CFAR_BAND_PX).contains(&self.cfar_train_px) {
             return Err(RadarError::config(
                 "processing.cfar_train_px",
-                "must be >= 1",
+                format!("{} must lie in 1..={MAX_CFAR_BAND_PX}", self.cfar_train_px),
             ));
+        }
+        if let Some(g) = self.cfar_guard_px {
+            if g > MAX_CFAR_BAND_PX {
+                return Err(RadarError::config(
+                    "processing.cfar_guard_px",
+                    format!("{g} must be at most {MAX_CFAR_BAND_PX}"),
+                ));
+            }
         }
         if let Some(r) = self.cluster_radius_m {
             non_negative("processing.cluster_radius_m", r)?;
@@ -534,6 +654,12 @@ impl ProcessingConfig {
             positive("processing.match_radius_m", r)?;
         }
         Ok(())
+    }
+
+    /// Pixels on a side of the image grid, 2 round(grid_half_m / pixel_m) + 1 (as
+    /// [`crate::backproject::Grid::square`] makes it), as f64 so that huge values compare.
+    pub fn grid_side_px(&self) -> f64 {
+        2.0 * (self.grid_half_m / self.pixel_m).round() + 1.0
     }
 }
 
@@ -548,15 +674,28 @@ impl SceneFile {
 
     /// Reads and validates a scene file.
     pub fn from_path(path: &std::path::Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| RadarError::io(path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| RadarError::read(path, e))?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
-    /// Checks every table.
+    /// Checks every table, and the values that depend on several (the upsampled range
+    /// profile, `fft_size × upsample`, is at most [`MAX_PROFILE_SAMPLES`]).
     pub fn validate(&self) -> Result<()> {
         self.objects.validate()?;
         self.radar.validate()?;
-        self.processing.validate()
+        self.processing.validate()?;
+        let profile = self.radar.fft_size.saturating_mul(self.processing.upsample);
+        if profile > MAX_PROFILE_SAMPLES {
+            return Err(RadarError::config(
+                "processing.upsample",
+                format!(
+                    "{} × radar.fft_size = {} makes range profiles of {profile} samples (at most \
+                     {MAX_PROFILE_SAMPLES})",
+                    self.processing.upsample, self.radar.fft_size
+                ),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -591,6 +730,79 @@ mod tests {
         assert!(e.to_string().contains("objects.count"), "{e}");
         let e = SceneFile::from_toml_str("[radar]\ncp_samples = 5000\n", "s.toml").unwrap_err();
         assert!(e.to_string().contains("radar.cp_samples"), "{e}");
+    }
+
+    fn err(text: &str) -> String {
+        SceneFile::from_toml_str(text, "s.toml")
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn prf_is_bounded_by_the_symbol_rate() {
+        let r = RadarConfig::default();
+        assert!((r.symbol_rate_hz() - 48_000.0).abs() < 1e-6);
+        assert!((r.max_prf_hz() - 48_000.0).abs() < 1e-6);
+        // at the limit: one pulse per symbol
+        SceneFile::from_toml_str("[radar]\nprf_hz = 48000\n", "s.toml").unwrap();
+        for prf in ["1e5", "1e7", "48000.5"] {
+            let e = err(&format!("[radar]\nprf_hz = {prf}\n"));
+            assert!(
+                e.contains("radar.prf_hz")
+                    && e.contains("48000 Hz")
+                    && e.contains("symbols_per_pulse"),
+                "{e}"
+            );
+        }
+        // 4 symbols per pulse: at most 12 kHz
+        let e = err("[radar]\nprf_hz = 20000\nsymbols_per_pulse = 4\n");
+        assert!(e.contains("radar.prf_hz") && e.contains("12000 Hz"), "{e}");
+    }
+
+    #[test]
+    fn sizes_that_would_exhaust_memory_are_refused_by_field() {
+        // samples per pulse
+        let e = err(
+            "[radar]\nfft_size = 1048576\nsymbols_per_pulse = 2\ncp_samples = 0\nprf_hz = 10\n",
+        );
+        assert!(
+            e.contains("radar.symbols_per_pulse") && e.contains("2097152"),
+            "{e}"
+        );
+        // the band must fit the sample rate
+        let e = err("[radar]\nbandwidth_hz = 300e6\n");
+        assert!(
+            e.contains("radar.bandwidth_hz") && e.contains("245760000"),
+            "{e}"
+        );
+        SceneFile::from_toml_str("[radar]\nbandwidth_hz = 150e6\n", "s.toml").unwrap();
+        // grid
+        let e = err("[processing]\ngrid_half_m = 1000\npixel_m = 0.4\n");
+        assert!(
+            e.contains("processing.grid_half_m") && e.contains("5001"),
+            "{e}"
+        );
+        SceneFile::from_toml_str(
+            "[processing]\ngrid_half_m = 819.2\npixel_m = 0.4\n",
+            "s.toml",
+        )
+        .unwrap();
+        // CFAR bands
+        let e = err("[processing]\ncfar_train_px = 1000000\n");
+        assert!(e.contains("processing.cfar_train_px"), "{e}");
+        let e = err("[processing]\ncfar_guard_px = 1000000\n");
+        assert!(e.contains("processing.cfar_guard_px"), "{e}");
+        // upsampled range profile
+        let e = err("[radar]\nfft_size = 262144\ncp_samples = 0\n[processing]\nupsample = 32\n");
+        assert!(
+            e.contains("processing.upsample") && e.contains("8388608"),
+            "{e}"
+        );
+        // objects: the Poisson mean is checked by validate, not only when generating
+        let e = err("[objects]\nintensity_per_km2 = 1e9\nradius_m = 400\n");
+        assert!(e.contains("objects.intensity_per_km2"), "{e}");
+        let e = err("[objects]\ncount = 2000000\n");
+        assert!(e.contains("objects.count"), "{e}");
     }
 
     #[test]

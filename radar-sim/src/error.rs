@@ -32,7 +32,16 @@ pub enum RadarError {
         /// Actual size or shape.
         found: String,
     },
-    /// A file could not be read or written.
+    /// An input file could not be read (missing, unreadable, truncated).
+    #[error("{path}: {source}")]
+    Read {
+        /// The file.
+        path: String,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// An output file could not be written (or a directory created).
     #[error("{path}: {source}")]
     Io {
         /// The file.
@@ -75,12 +84,31 @@ impl RadarError {
         }
     }
 
-    /// Shorthand for [`RadarError::Io`].
+    /// Shorthand for [`RadarError::Io`] (an output could not be written).
     pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
         Self::Io {
             path: path.display().to_string(),
             source,
         }
+    }
+
+    /// Shorthand for [`RadarError::Read`] (an input could not be read).
+    pub fn read(path: &std::path::Path, source: std::io::Error) -> Self {
+        Self::Read {
+            path: path.display().to_string(),
+            source,
+        }
+    }
+
+    /// Whether the error is the caller's input: an invalid scene value or option, a missing
+    /// or malformed input file, a plan that does not fit the scene ([`RadarError::Config`],
+    /// [`RadarError::Read`], [`RadarError::Format`], [`RadarError::Mismatch`]). The others
+    /// (a failed write, a numerical failure, an inconsistent array) are runtime failures.
+    pub fn is_bad_input(&self) -> bool {
+        matches!(
+            self,
+            Self::Config { .. } | Self::Read { .. } | Self::Format { .. } | Self::Mismatch(_)
+        )
     }
 }
 

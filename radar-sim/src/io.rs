@@ -174,11 +174,11 @@ impl NpyReader {
     pub fn open(path: &Path) -> Result<Self> {
         let shown = path.display().to_string();
         let bad = |loc: &str, why: String| RadarError::format(&shown, loc, why);
-        let f = File::open(path).map_err(|e| RadarError::io(path, e))?;
+        let f = File::open(path).map_err(|e| RadarError::read(path, e))?;
         let mut file = BufReader::new(f);
         let mut pre = [0u8; 8];
         file.read_exact(&mut pre)
-            .map_err(|e| RadarError::io(path, e))?;
+            .map_err(|e| RadarError::read(path, e))?;
         if &pre[..6] != b"\x93NUMPY" {
             return Err(bad("magic", "not an NPY file".into()));
         }
@@ -186,20 +186,20 @@ impl NpyReader {
             1 => {
                 let mut b = [0u8; 2];
                 file.read_exact(&mut b)
-                    .map_err(|e| RadarError::io(path, e))?;
+                    .map_err(|e| RadarError::read(path, e))?;
                 u16::from_le_bytes(b) as usize
             }
             2 | 3 => {
                 let mut b = [0u8; 4];
                 file.read_exact(&mut b)
-                    .map_err(|e| RadarError::io(path, e))?;
+                    .map_err(|e| RadarError::read(path, e))?;
                 u32::from_le_bytes(b) as usize
             }
             v => return Err(bad("version", format!("unsupported NPY version {v}"))),
         };
         let mut h = vec![0u8; hlen];
         file.read_exact(&mut h)
-            .map_err(|e| RadarError::io(path, e))?;
+            .map_err(|e| RadarError::read(path, e))?;
         let h = String::from_utf8_lossy(&h).to_string();
         let field = |key: &str| -> Result<String> {
             let k = format!("'{key}':");
@@ -239,12 +239,15 @@ impl NpyReader {
             .collect::<Result<Vec<_>>>()?;
         let data_offset = file
             .stream_position()
-            .map_err(|e| RadarError::io(path, e))?;
-        let n: usize = shape.iter().product();
+            .map_err(|e| RadarError::read(path, e))?;
+        let bytes = shape
+            .iter()
+            .try_fold(t.size() as u64, |a, &d| a.checked_mul(d as u64))
+            .ok_or_else(|| bad("shape", format!("{shape:?} overflows")))?;
         let len = std::fs::metadata(path)
-            .map_err(|e| RadarError::io(path, e))?
+            .map_err(|e| RadarError::read(path, e))?
             .len();
-        if len < data_offset + (n * t.size()) as u64 {
+        if len < data_offset.saturating_add(bytes) {
             return Err(bad("data", format!("file too short for shape {shape:?}")));
         }
         Ok(Self {
@@ -265,15 +268,15 @@ impl NpyReader {
             ));
         }
         let n: usize = self.shape.iter().product();
-        if first + count > n {
+        if first.checked_add(count).is_none_or(|e| e > n) {
             return Err(RadarError::format(
                 &self.path,
                 "data",
-                format!("elements {first}..{} beyond {n}", first + count),
+                format!("{count} elements from {first} go beyond {n}"),
             ));
         }
         let path = self.path.clone();
-        let io = |e| RadarError::Io {
+        let io = |e| RadarError::Read {
             path: path.clone(),
             source: e,
         };
@@ -337,7 +340,7 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<(
 
 /// Reads a CSV file into (header, rows); the error names the file and line.
 pub fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>)> {
-    let text = std::fs::read_to_string(path).map_err(|e| RadarError::io(path, e))?;
+    let text = std::fs::read_to_string(path).map_err(|e| RadarError::read(path, e))?;
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
     let header: Vec<String> = lines
         .next()
@@ -507,8 +510,25 @@ mod tests {
         let e = w.finish().unwrap_err().to_string();
         assert!(e.contains("a.npy") && e.contains("0 of 4"), "{e}");
         std::fs::write(&p, b"hello").unwrap();
+        let e = NpyReader::open(&p).unwrap_err();
+        assert!(e.to_string().contains("a.npy"), "{e}");
+        assert!(e.is_bad_input(), "{e:?}");
+        // a missing input is a read error (bad input), not a write error
+        let e = NpyReader::open(&dir.path().join("none.npy")).unwrap_err();
+        assert!(matches!(e, RadarError::Read { .. }), "{e:?}");
+        // a header whose shape overflows: a named error, no panic
+        let mut bytes = npy_header(NpyType::C8, &[usize::MAX / 2, 3]);
+        bytes.extend_from_slice(&[0u8; 16]);
+        std::fs::write(&p, &bytes).unwrap();
         let e = NpyReader::open(&p).unwrap_err().to_string();
-        assert!(e.contains("a.npy"), "{e}");
+        assert!(e.contains("a.npy") && e.contains("overflows"), "{e}");
+        // reads beyond the data: named, also when first + count overflows
+        let mut w = NpyWriter::create(&p, NpyType::F4, &[2]).unwrap();
+        w.write_f4(&[1.0, 2.0]).unwrap();
+        w.finish().unwrap();
+        let mut r = NpyReader::open(&p).unwrap();
+        let e = r.read_f4(usize::MAX, 2).unwrap_err().to_string();
+        assert!(e.contains("go beyond 2"), "{e}");
     }
 
     #[test]

@@ -7,7 +7,8 @@
 //! Layers (pure, no I/O): [`config`], [`waveform`], [`antenna`], [`scene`], [`track`],
 //! [`synth`], [`cancel`], [`compress`], [`backproject`], [`cfar`], [`scoring`], [`resolution`],
 //! [`pipeline`] (streaming API: one frame of pulses / one aperture at a time). File formats
-//! (NPY, CSV, JSON, PNG) live in [`io`].
+//! (NPY, CSV, JSON, PNG) live in [`io`]; the bounds on a run's
+//! IQ and memory, checked before simulating, in [`limits`].
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
@@ -21,6 +22,7 @@ pub mod cputime;
 mod dsp;
 pub mod error;
 pub mod io;
+pub mod limits;
 pub mod linalg;
 pub mod pipeline;
 pub mod psf;

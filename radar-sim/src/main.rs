@@ -1,20 +1,34 @@
 //! `cellsar-radar-sim`: simulate what the UAV records along a planned track, process it into
 //! SAR images and detections, or run the whole loop from a mission file.
+//!
+//! Exit codes (as `cellsar-planner`): 0 success; 2 bad input (a missing or malformed file, an
+//! invalid scene, a bad option, a run above the IQ limits); 3 the mission cannot be flown (the
+//! planner proves it infeasible, `closed-loop`); 4 `closed-loop` missed a landmark in view;
+//! 1 a runtime failure (a write, a numerical or service failure).
 
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use radar_sim::config::SceneFile;
-use radar_sim::run;
+use radar_sim::limits::{IqLimitArgs, IqLimits, DEFAULT_MAX_APERTURE_GIB};
+use radar_sim::pipeline::RadarSetup;
+use radar_sim::{run, RadarError};
+
+const EXIT_CODES: &str = "Exit codes: 0 success; 2 bad input (missing or malformed file, \
+invalid scene, bad option, a run above --max-iq-gib / --max-aperture-gib); 3 the mission cannot \
+be flown (closed-loop: the planner proves it infeasible); 4 closed-loop: a landmark in view was \
+not detected; 1 runtime failure (writing the output, a numerical or service failure).";
 
 #[derive(Parser)]
 #[command(
     name = "cellsar-radar-sim",
     version,
-    about = "Bistatic OFDM SAR simulator and processor for cellsar"
+    about = "Bistatic OFDM SAR simulator and processor for cellsar",
+    after_help = EXIT_CODES
 )]
 struct Cli {
     #[command(subcommand)]
@@ -28,12 +42,15 @@ enum Cmd {
         /// The planner's output directory.
         #[arg(long)]
         plan: PathBuf,
-        /// Scene file (TOML).
+        /// Scene file (TOML), required (e.g. radar-sim/scenes/default.toml).
         #[arg(long)]
         scene: PathBuf,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+        /// Limits on the run's IQ, checked before anything is simulated.
+        #[command(flatten)]
+        limits: IqLimitArgs,
     },
     /// Recording → cancellation, images (PNG, NPY), detections.csv/.json, metrics.json.
     Process {
@@ -43,20 +60,28 @@ enum Cmd {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+        /// Refuse a recording in which one aperture (its IQ, plus its look images with
+        /// `processing.save_complex`) would take more than this many GiB of memory.
+        #[arg(long, value_name = "GIB", default_value_t = DEFAULT_MAX_APERTURE_GIB)]
+        max_aperture_gib: f64,
     },
     /// Mission → plan → echoes → processing → scoring, with a short report.
     ClosedLoop {
         /// Mission file (TOML or JSON).
         mission: PathBuf,
-        /// Scene file (TOML).
+        /// Scene file (TOML), required (e.g. radar-sim/scenes/default.toml).
         #[arg(long)]
         scene: PathBuf,
         /// Output directory (plan/, recording/, processed/, report.json).
         #[arg(long)]
         out: PathBuf,
-        /// Keep only the landmark windows that end within this horizon, s.
-        #[arg(long)]
+        /// Keep only the landmark windows that end within this horizon, s (default: the whole
+        /// mission).
+        #[arg(long, value_name = "S")]
         horizon_s: Option<f64>,
+        /// Limits on the run's IQ, checked before planning.
+        #[command(flatten)]
+        limits: IqLimitArgs,
     },
     /// Resolution report: measured −3 dB region of a point response vs the predicted cell at
     /// several bistatic angles (one near blind) and bandwidths → RESOLUTION.md, JSON, SVGs.
@@ -93,17 +118,71 @@ fn bar(len: u64, what: &str) -> ProgressBar {
     b
 }
 
-fn simulate(plan: &Path, scene: &Path, out: &Path) -> Result<()> {
+/// How a command failed, for the exit code.
+enum Failure {
+    /// Bad input: a missing or malformed file, an invalid scene, a bad option (exit 2).
+    BadInput(anyhow::Error),
+    /// The mission cannot be flown (exit 3).
+    Infeasible(anyhow::Error),
+    /// `closed-loop` missed a landmark in view (exit 4).
+    Missed(anyhow::Error),
+    /// A runtime failure (exit 1).
+    Internal(anyhow::Error),
+}
+
+impl From<anyhow::Error> for Failure {
+    fn from(e: anyhow::Error) -> Self {
+        Failure::Internal(e)
+    }
+}
+
+impl From<RadarError> for Failure {
+    fn from(e: RadarError) -> Self {
+        if e.is_bad_input() {
+            Failure::BadInput(e.into())
+        } else {
+            Failure::Internal(e.into())
+        }
+    }
+}
+
+#[cfg(feature = "service")]
+impl From<radar_sim::service::ServiceError> for Failure {
+    fn from(e: radar_sim::service::ServiceError) -> Self {
+        use radar_sim::service::ServiceError as S;
+        let bad = match &e {
+            S::Radar(r) => r.is_bad_input(),
+            S::Config(_) | S::Flag(_) => true,
+            S::Planner(p) => matches!(p, planner::service::ServiceError::Config(_)),
+            _ => false,
+        };
+        if bad {
+            Failure::BadInput(e.into())
+        } else {
+            Failure::Internal(e.into())
+        }
+    }
+}
+
+fn bad(e: impl Into<anyhow::Error>) -> Failure {
+    Failure::BadInput(e.into())
+}
+
+type Result<T, E = Failure> = std::result::Result<T, E>;
+
+fn simulate(plan: &Path, scene: &Path, out: &Path, limits: &IqLimits) -> Result<()> {
     let (mission, traj) = planner::report::read_plan_dir(plan)
-        .with_context(|| format!("reading plan directory {}", plan.display()))?;
+        .with_context(|| format!("reading plan directory {}", plan.display()))
+        .map_err(bad)?;
     let scene = SceneFile::from_path(scene)?;
     let b = bar(1, "simulate");
     let t = Instant::now();
-    let meta = run::simulate(&mission, &traj, &scene, out, &mut |d, n| {
+    let meta = run::simulate_limited(&mission, &traj, &scene, out, limits, &mut |d, n| {
         b.set_length(n);
         b.set_position(d);
-    })?;
+    });
     b.finish();
+    let meta = meta?;
     for w in &meta.warnings {
         tracing::warn!("{w}");
     }
@@ -121,14 +200,15 @@ fn simulate(plan: &Path, scene: &Path, out: &Path) -> Result<()> {
     Ok(())
 }
 
-fn process(input: &Path, out: &Path) -> Result<run::Metrics> {
+fn process(input: &Path, out: &Path, limits: &IqLimits) -> Result<run::Metrics> {
     let b = bar(1, "process");
     let t = Instant::now();
-    let m = run::process(input, out, &mut |d, n| {
+    let m = run::process_limited(input, out, limits, &mut |d, n| {
         b.set_length(n);
         b.set_position(d);
-    })?;
+    });
     b.finish();
+    let m = m?;
     println!(
         "processed in {:.1} s: Pd {:.3} ({} objects ≥ 13 dB), {} false alarms (design {:.2}), mean error {:.2} m, DP reduction {:.1} dB, residual {:.2} dB over noise",
         t.elapsed().as_secs_f64(),
@@ -149,15 +229,44 @@ fn process(input: &Path, out: &Path) -> Result<run::Metrics> {
     Ok(m)
 }
 
-fn closed_loop(mission: &Path, scene: &Path, out: &Path, horizon: Option<f64>) -> Result<bool> {
-    let mut m = planner::Mission::from_path(mission)?;
+fn closed_loop(
+    mission: &Path,
+    scene: &Path,
+    out: &Path,
+    horizon: Option<f64>,
+    limits: &IqLimits,
+) -> Result<bool> {
+    let mut m = planner::Mission::from_path(mission).map_err(bad)?;
     if let Some(h) = horizon {
-        m = run::shorten(&m, h)?;
+        if !(h.is_finite() && h > 0.0) {
+            return Err(bad(anyhow::anyhow!(
+                "--horizon-s {h}: must be a finite number > 0"
+            )));
+        }
+        m = run::shorten(&m, h)
+            .with_context(|| format!("--horizon-s {h}"))
+            .map_err(bad)?;
     }
     let scene_file = SceneFile::from_path(scene)?;
+    // everything the run will make is known from the windows and the scene: refuse before
+    // planning
+    let setup = RadarSetup::new(m.params(), &scene_file)?;
+    radar_sim::limits::check_mission(&setup, &m, limits)?;
     let t = Instant::now();
-    let result = planner::plan(&m, &planner::PlanOptions::default())
-        .map_err(|e| anyhow::anyhow!("planning {}: {e}", mission.display()))?;
+    let result = planner::plan(&m, &planner::PlanOptions::default()).map_err(|e| {
+        let what = format!("planning {}", mission.display());
+        match e {
+            planner::PlanError::Infeasible(_) => {
+                Failure::Infeasible(anyhow::Error::new(e).context(what))
+            }
+            planner::PlanError::InvalidInit(_) => {
+                Failure::BadInput(anyhow::Error::new(e).context(what))
+            }
+            planner::PlanError::Solver { .. } => {
+                Failure::Internal(anyhow::Error::new(e).context(what))
+            }
+        }
+    })?;
     println!(
         "planned {} slots in {:.1} s: energy {:.0} J, feasible {}",
         m.slots(),
@@ -166,18 +275,22 @@ fn closed_loop(mission: &Path, scene: &Path, out: &Path, horizon: Option<f64>) -
         result.evaluation.is_feasible()
     );
     let plan_dir = out.join("plan");
-    planner::report::write_plan_dir(&plan_dir, &m, &result)?;
+    planner::report::write_plan_dir(&plan_dir, &m, &result)
+        .with_context(|| format!("writing {}", plan_dir.display()))?;
     let rec = out.join("recording");
-    let (m2, traj) = planner::report::read_plan_dir(&plan_dir)?;
+    // the plan just written: a failure to read it back is a runtime failure
+    let (m2, traj) = planner::report::read_plan_dir(&plan_dir)
+        .with_context(|| format!("reading back {}", plan_dir.display()))?;
     let b = bar(1, "simulate");
-    run::simulate(&m2, &traj, &scene_file, &rec, &mut |d, n| {
+    let sim = run::simulate_limited(&m2, &traj, &scene_file, &rec, limits, &mut |d, n| {
         b.set_length(n);
         b.set_position(d);
-    })?;
+    });
     b.finish();
-    let metrics = process(&rec, &out.join("processed"))?;
+    sim?;
+    let metrics = process(&rec, &out.join("processed"), limits)?;
     let report = run::loop_report(&m2, &result.evaluation, metrics);
-    radar_sim::io::write_json(&out.join("report.json"), &report)?;
+    radar_sim::io::write_json(&out.join("report.json"), &report).map_err(anyhow::Error::new)?;
     println!("aperture landmark  in-view  detected  SNR/dB");
     for r in &report.rows {
         println!(
@@ -205,7 +318,9 @@ fn resolution(out: &Path, bandwidths_mhz: &[f64]) -> Result<()> {
         .iter()
         .find(|b| !(b.is_finite() && **b > 0.0))
     {
-        bail!("--bandwidths-mhz: {b} is not a positive bandwidth");
+        return Err(bad(anyhow::anyhow!(
+            "--bandwidths-mhz: {b} is not a positive bandwidth"
+        )));
     }
     let cases = radar_sim::psf::default_cases();
     let b = bar((bandwidths_mhz.len() * cases.len()) as u64, "resolution");
@@ -226,14 +341,16 @@ fn resolution(out: &Path, bandwidths_mhz: &[f64]) -> Result<()> {
     Ok(())
 }
 
-fn main() -> std::process::ExitCode {
-    match run_cli() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {}", planner::error_chain(e.as_ref()));
-            std::process::ExitCode::FAILURE
-        }
-    }
+fn main() -> ExitCode {
+    let code = match run_cli() {
+        Ok(()) => return ExitCode::SUCCESS,
+        Err(Failure::BadInput(e)) => (2, e),
+        Err(Failure::Infeasible(e)) => (3, e),
+        Err(Failure::Missed(e)) => (4, e),
+        Err(Failure::Internal(e)) => (1, e),
+    };
+    eprintln!("error: {}", planner::error_chain(code.1.as_ref()));
+    ExitCode::from(code.0)
 }
 
 fn run_cli() -> Result<()> {
@@ -243,20 +360,37 @@ fn run_cli() -> Result<()> {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     #[cfg(feature = "service")]
     bridge::iox::init_iceoryx_logging();
     match Cli::parse().cmd {
-        Cmd::Simulate { plan, scene, out } => simulate(&plan, &scene, &out),
-        Cmd::Process { input, out } => process(&input, &out).map(|_| ()),
+        Cmd::Simulate {
+            plan,
+            scene,
+            out,
+            limits,
+        } => simulate(&plan, &scene, &out, &limits.limits()?),
+        Cmd::Process {
+            input,
+            out,
+            max_aperture_gib,
+        } => {
+            let limits =
+                IqLimits::from_gib(radar_sim::limits::DEFAULT_MAX_IQ_GIB, max_aperture_gib)?;
+            process(&input, &out, &limits).map(|_| ())
+        }
         Cmd::ClosedLoop {
             mission,
             scene,
             out,
             horizon_s,
+            limits,
         } => {
-            if !closed_loop(&mission, &scene, &out, horizon_s)? {
-                bail!("a landmark in view was not detected (see report.json)");
+            if !closed_loop(&mission, &scene, &out, horizon_s, &limits.limits()?)? {
+                return Err(Failure::Missed(anyhow::anyhow!(
+                    "a landmark in view was not detected (see report.json)"
+                )));
             }
             Ok(())
         }
@@ -266,14 +400,14 @@ fn run_cli() -> Result<()> {
         } => resolution(&out, &bandwidths_mhz),
         #[cfg(feature = "service")]
         Cmd::Echo { args } => {
-            let stop = planner::service::stop_on_signals()?;
+            let stop = planner::service::stop_on_signals().map_err(anyhow::Error::new)?;
             let report = radar_sim::service::run_echo(&args, &stop)?;
             tracing::info!(?report, "echo stopped");
             Ok(())
         }
         #[cfg(feature = "service")]
         Cmd::ProcessService { args } => {
-            let stop = planner::service::stop_on_signals()?;
+            let stop = planner::service::stop_on_signals().map_err(anyhow::Error::new)?;
             let report = radar_sim::service::run_processor(&args, &stop)?;
             tracing::info!(?report, "processor stopped");
             Ok(())

@@ -13,6 +13,7 @@ use crate::error::{RadarError, Result};
 use crate::io::{
     csv_f64, read_csv, write_csv, write_json, write_png_db, NpyReader, NpyType, NpyWriter,
 };
+use crate::limits::{IqBudget, IqLimits};
 use crate::pipeline::{Processor, RadarSetup};
 use crate::scene::SceneObject;
 use crate::synth::Components;
@@ -76,7 +77,11 @@ fn iq_path(dir: &Path, ap: usize) -> PathBuf {
     dir.join("iq").join(format!("aperture_{ap:03}.npy"))
 }
 
-/// Simulates the recording of `mission` flown along `traj` over the scene into `out`.
+/// Frames of `run::simulate` hold at most this many bytes of IQ (and 100 pulses).
+pub const SIMULATE_FRAME_BYTES: usize = 64 << 20;
+
+/// Simulates the recording of `mission` flown along `traj` over the scene into `out`, refusing
+/// a run above the default [`IqLimits`] (see [`simulate_limited`]).
 pub fn simulate(
     mission: &planner::Mission,
     traj: &planner::Trajectory,
@@ -84,13 +89,29 @@ pub fn simulate(
     out: &Path,
     progress: Progress<'_>,
 ) -> Result<RecordingMeta> {
+    simulate_limited(mission, traj, scene, out, &IqLimits::default(), progress)
+}
+
+/// Simulates the recording of `mission` flown along `traj` over the scene into `out`. Before
+/// anything is synthesised or written, the run's IQ and the memory of its largest aperture are
+/// checked against `limits` ([`crate::limits::IqBudget`]).
+pub fn simulate_limited(
+    mission: &planner::Mission,
+    traj: &planner::Trajectory,
+    scene: &SceneFile,
+    out: &Path,
+    limits: &IqLimits,
+    progress: Progress<'_>,
+) -> Result<RecordingMeta> {
     let setup = RadarSetup::new(mission.params(), scene)?;
-    let objects = setup.objects(mission)?;
     let aps = setup.apertures(mission)?;
+    IqBudget::new(&setup, &aps).check(&setup, limits)?;
+    let objects = setup.objects(mission)?;
     let track = PlannedTrack::new(traj.clone(), mission.params().altitude_m);
     let synth = setup.synthesizer(objects.clone())?;
     mkdir(&out.join("iq"))?;
     let spp = synth.samples_per_pulse();
+    let frame_pulses = (SIMULATE_FRAME_BYTES / (spp * 8).max(1)).clamp(1, 100);
     let total: u64 = aps.iter().map(|a| a.pulses() as u64).sum();
     let mut done = 0u64;
     let mut pulse_rows = Vec::new();
@@ -130,7 +151,7 @@ pub fn simulate(
         crate::pipeline::synthesize_frames(
             &synth,
             &pulses,
-            100,
+            frame_pulses,
             Components::ALL,
             &mut |ps, iq| {
                 w.write_c8(iq)?;
@@ -363,10 +384,23 @@ pub struct DetectionRow {
     pub error_m: Option<f64>,
 }
 
-/// Processes the recording in `input` into `out`.
+/// Processes the recording in `input` into `out`, refusing apertures above the default
+/// [`IqLimits`] (see [`process_limited`]).
 pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metrics> {
+    process_limited(input, out, &IqLimits::default(), progress)
+}
+
+/// Processes the recording in `input` into `out`. Each aperture is held in memory at once, so
+/// before anything is read, the memory of the largest one is checked against
+/// `limits.max_aperture_bytes` (the recording's total size does not matter here).
+pub fn process_limited(
+    input: &Path,
+    out: &Path,
+    limits: &IqLimits,
+    progress: Progress<'_>,
+) -> Result<Metrics> {
     let meta_path = input.join("meta.json");
-    let text = std::fs::read_to_string(&meta_path).map_err(|e| RadarError::io(&meta_path, e))?;
+    let text = std::fs::read_to_string(&meta_path).map_err(|e| RadarError::read(&meta_path, e))?;
     let meta: RecordingMeta = serde_json::from_str(&text)
         .map_err(|e| RadarError::format(meta_path.display().to_string(), "JSON", e.to_string()))?;
     if meta.format != FORMAT {
@@ -377,6 +411,19 @@ pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metri
         ));
     }
     let setup = RadarSetup::new(&meta.params, &meta.scene)?;
+    let aps: Vec<Aperture> = meta.apertures.iter().map(|a| a.aperture.clone()).collect();
+    let budget = IqBudget::new(&setup, &aps);
+    if budget.samples_per_pulse != meta.samples_per_pulse as u64 {
+        return Err(RadarError::format(
+            meta_path.display().to_string(),
+            "samples_per_pulse",
+            format!(
+                "{}, but the scene's radar gives {}",
+                meta.samples_per_pulse, budget.samples_per_pulse
+            ),
+        ));
+    }
+    budget.check_aperture(limits)?;
     let proc = Processor::new(setup.clone())?;
     let truth_path = input.join("truth.csv");
     let truth = if truth_path.exists() {

@@ -76,15 +76,11 @@ pub fn generate(
     let r = cfg.radius_m;
     let n = match (cfg.count, cfg.intensity_per_km2) {
         (Some(n), _) => n,
-        (None, Some(lambda)) => {
-            let mean = lambda * std::f64::consts::PI * r * r / 1e6;
+        (None, Some(_)) => {
+            // validate() bounds the mean by MAX_OBJECTS
+            let mean = cfg.mean_poisson_count().unwrap_or(0.0);
             if mean <= 0.0 {
                 0
-            } else if mean > 1e6 {
-                return Err(RadarError::config(
-                    "objects.intensity_per_km2",
-                    format!("gives {mean:.0} objects on average (at most 1e6)"),
-                ));
             } else {
                 let p = Poisson::new(mean)
                     .map_err(|e| RadarError::config("objects.intensity_per_km2", e.to_string()))?;

@@ -94,6 +94,63 @@ fn closed_loop_on_shortened_default_mission() {
         std::fs::read_to_string(again.join("detections.csv")).unwrap(),
         det
     );
+
+    // an aperture (10 s: 31 MiB of IQ) above --max-aperture-gib is refused before reading
+    let small = dir.path().join("small");
+    let o = bin()
+        .arg("process")
+        .arg("--in")
+        .arg(out.join("recording"))
+        .arg("--out")
+        .arg(&small)
+        .args(["--max-aperture-gib", "0.01"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("aperture 0") && e.contains("--max-aperture-gib"),
+        "{e}"
+    );
+    assert!(!small.join("images").exists());
+}
+
+/// A plan directory whose 10-s track runs far from its one landmark.
+fn far_plan(dir: &Path) -> std::path::PathBuf {
+    let plan = dir.join("plan");
+    std::fs::create_dir_all(&plan).unwrap();
+    std::fs::write(
+        plan.join("mission.toml"),
+        "name = \"far\"\n[params]\nhorizon_s = 10.0\n[landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }]\n",
+    )
+    .unwrap();
+    let mut csv = String::from("t_s,x_m,y_m\n0,5000,5000\n");
+    for t in 1..=20 {
+        csv += &format!("{},{},5000\n", t as f64 * 0.5, 5000.0 + 10.0 * t as f64);
+    }
+    std::fs::write(plan.join("trajectory.csv"), csv).unwrap();
+    plan
+}
+
+/// The default scene with `key = value` set in its table.
+fn scene_with(dir: &Path, name: &str, key: &str, value: &str) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(root().join("scenes/default.toml")).unwrap();
+    let mut found = false;
+    let out: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.split('=').next().map(str::trim) == Some(key) {
+                found = true;
+                format!("{key} = {value}")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    assert!(found, "{key} not in the default scene");
+    let p = dir.join(name);
+    std::fs::write(&p, out.join("\n")).unwrap();
+    p
 }
 
 #[test]
@@ -112,8 +169,8 @@ fn bad_inputs_get_named_errors() {
         .args(["--horizon-s", "10"])
         .output()
         .unwrap();
-    assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("radar.prf_hz"), "{e}");
     // a missing plan directory
     let o = bin()
@@ -125,7 +182,7 @@ fn bad_inputs_get_named_errors() {
         .arg(dir.path().join("y"))
         .output()
         .unwrap();
-    assert!(!o.status.success());
+    assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/plan"));
     // process on a directory that is no recording
     let o = bin()
@@ -136,21 +193,44 @@ fn bad_inputs_get_named_errors() {
         .arg(dir.path().join("z"))
         .output()
         .unwrap();
-    assert!(!o.status.success());
+    assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("meta.json"));
+    // a missing scene file
+    let o = bin()
+        .arg("closed-loop")
+        .arg(root().join("missions/default.toml"))
+        .args(["--scene", "/nonexistent/scene.toml"])
+        .arg("--out")
+        .arg(dir.path().join("x"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/scene.toml"));
+    // a bad option value (clap's usage errors exit 2 too)
+    let o = bin()
+        .arg("closed-loop")
+        .arg(root().join("missions/default.toml"))
+        .arg("--scene")
+        .arg(root().join("scenes/default.toml"))
+        .arg("--out")
+        .arg(dir.path().join("x"))
+        .args(["--horizon-s", "1"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--horizon-s"));
+    let o = bin()
+        .arg("simulate")
+        .arg("--plan")
+        .arg(dir.path())
+        .arg("--out")
+        .arg(dir.path().join("x"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--scene"));
     // a plan that looks elsewhere: a trajectory far from the landmarks
-    let plan = dir.path().join("plan");
-    std::fs::create_dir_all(&plan).unwrap();
-    std::fs::write(
-        plan.join("mission.toml"),
-        "name = \"far\"\n[params]\nhorizon_s = 10.0\n[landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }]\n",
-    )
-    .unwrap();
-    let mut csv = String::from("t_s,x_m,y_m\n0,5000,5000\n");
-    for t in 1..=20 {
-        csv += &format!("{},{},5000\n", t as f64 * 0.5, 5000.0 + 10.0 * t as f64);
-    }
-    std::fs::write(plan.join("trajectory.csv"), csv).unwrap();
+    let plan = far_plan(dir.path());
     let o = bin()
         .arg("simulate")
         .arg("--plan")
@@ -161,7 +241,156 @@ fn bad_inputs_get_named_errors() {
         .arg(dir.path().join("w"))
         .output()
         .unwrap();
-    assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("no landmark is in the receive beam"), "{e}");
+}
+
+#[test]
+fn scenes_beyond_the_signal_model_or_the_iq_limits_are_refused_before_simulating() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = far_plan(dir.path());
+    let simulate = |scene: &Path, out: &Path, extra: &[&str]| {
+        bin()
+            .arg("simulate")
+            .arg("--plan")
+            .arg(&plan)
+            .arg("--scene")
+            .arg(scene)
+            .arg("--out")
+            .arg(out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    // a PRF above the BS's symbol rate (48 kHz): the signal model cannot produce it
+    for prf in ["1e5", "1e7"] {
+        let scene = scene_with(dir.path(), "prf.toml", "prf_hz", prf);
+        let out = dir.path().join("prf");
+        let o = simulate(&scene, &out, &[]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{e}");
+        assert!(e.contains("radar.prf_hz") && e.contains("48000 Hz"), "{e}");
+        assert!(!out.exists());
+    }
+    // 40 kHz is possible, but 10 s of it is 12 GiB of IQ
+    let scene = scene_with(dir.path(), "fast.toml", "prf_hz", "40000");
+    let out = dir.path().join("fast");
+    let o = simulate(&scene, &out, &["--max-iq-gib", "1"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("radar.prf_hz") && e.contains("12.2 GiB of IQ") && e.contains("--max-iq-gib"),
+        "{e}"
+    );
+    assert!(!out.exists());
+    // under the default total limit (16 GiB), the one aperture is above its own (2 GiB)
+    let o = simulate(&scene, &out, &[]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("--max-aperture-gib"), "{e}");
+    assert!(!out.exists());
+    // a bad limit names the flag
+    let o = simulate(&scene, &out, &["--max-iq-gib=nan"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("--max-iq-gib"), "{e}");
+    // a grid that would not fit in memory
+    let scene = scene_with(dir.path(), "grid.toml", "grid_half_m", "1e6");
+    let o = simulate(&scene, &out, &[]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("processing.grid_half_m"), "{e}");
+}
+
+#[test]
+fn an_infeasible_mission_exits_3_and_a_failed_write_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    // the second landmark is 100 km away, 0.5 s after the first window
+    let mission = dir.path().join("far.toml");
+    std::fs::write(
+        &mission,
+        "name = \"far\"\n[params]\nhorizon_s = 60\nstart_m = [-1000.0, 0.0]\n[landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 20.0 }, { x_m = 100000.0, y_m = 0.0, from_s = 20.0, to_s = 40.0 }]\n",
+    )
+    .unwrap();
+    let o = bin()
+        .arg("closed-loop")
+        .arg(&mission)
+        .arg("--scene")
+        .arg(root().join("scenes/default.toml"))
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{e}");
+    assert!(e.contains("cannot be flown"), "{e}");
+    // valid inputs, but the output cannot be written (a file where a directory must go)
+    let blocker = dir.path().join("file");
+    std::fs::write(&blocker, "x").unwrap();
+    let o = bin()
+        .arg("simulate")
+        .arg("--plan")
+        .arg(far_plan(dir.path()))
+        .arg("--scene")
+        .arg(root().join("scenes/default.toml"))
+        .arg("--out")
+        .arg(blocker.join("rec"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("file/rec"), "{e}");
+}
+
+#[test]
+fn a_missed_landmark_exits_4_and_redirected_logs_have_no_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    // a landmark too faint to be detected, in view of the plan
+    let scene = scene_with(dir.path(), "faint.toml", "landmark_rcs_m2", "1e-9");
+    let o = bin()
+        .env("RUST_LOG", "planner=debug")
+        .arg("closed-loop")
+        .arg(root().join("missions/default.toml"))
+        .arg("--scene")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.path().join("loop"))
+        .args(["--horizon-s", "10"])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{out}\n{e}");
+    assert!(out.contains("every landmark in view detected: NO"), "{out}");
+    assert!(e.contains("DEBUG"), "{e}");
+    assert!(
+        !e.contains('\u{1b}'),
+        "ANSI codes in redirected stderr: {e}"
+    );
+}
+
+#[test]
+fn help_documents_the_exit_codes_and_the_required_scene() {
+    let o = bin().arg("--help").output().unwrap();
+    let h = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success());
+    for code in [
+        "0 success",
+        "2 bad input",
+        "3 the mission cannot be flown",
+        "4 closed-loop",
+        "1 runtime failure",
+    ] {
+        assert!(h.contains(code), "{code}: {h}");
+    }
+    for cmd in ["simulate", "closed-loop"] {
+        let o = bin().args([cmd, "--help"]).output().unwrap();
+        let h = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            h.contains("--scene <SCENE>") && h.contains("--max-iq-gib"),
+            "{h}"
+        );
+        assert!(!h.contains("--scene <SCENE>  [default"), "{h}");
+    }
 }

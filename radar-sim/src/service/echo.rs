@@ -19,6 +19,7 @@ use planner::service::{Plan, PlanCache, StatusBoard, ALL_PLANS, MAX_PLAN_BYTES};
 use serde::{Deserialize, Serialize};
 
 use crate::config::SceneFile;
+use crate::limits::IqLimitArgs;
 use crate::synth::{Components, Synthesizer};
 use crate::track::PulseMeta;
 
@@ -47,6 +48,9 @@ pub struct EchoArgs {
     /// Requests the echo queues at most (more are refused as busy).
     #[arg(long, default_value_t = 64)]
     pub max_queue: usize,
+    /// Limits on a mission's IQ and on one aperture's memory (a plan above them is refused).
+    #[command(flatten)]
+    pub limits: IqLimitArgs,
     /// Zenoh flags.
     #[command(flatten)]
     pub zenoh: ZenohArgs,
@@ -100,6 +104,7 @@ pub fn run_echo(args: &EchoArgs, stop: &AtomicBool) -> ServiceResult<EchoReport>
             args.status_interval_s
         )));
     }
+    args.limits.limits()?;
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
     let node = ZenohNode::open(args.zenoh.to_config()?, "echo", &args.instance)?;
@@ -264,10 +269,11 @@ impl<'a> Echo<'a> {
 
     fn open_mission(&mut self, plan: Plan) -> ServiceResult<EchoMission> {
         let plan = Arc::new(plan);
-        let ctx = Arc::new(MissionContext::new(
+        let ctx = Arc::new(MissionContext::with_limits(
             &plan,
             &self.scene,
             self.args.max_frame_bytes,
+            &self.args.limits.limits()?,
         )?);
         let objects = ctx.setup.objects(&ctx.mission)?;
         let synth = ctx.setup.synthesizer(objects)?;

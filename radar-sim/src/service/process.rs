@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::cancel::CancelStats;
 use crate::config::SceneFile;
+use crate::limits::{IqBudget, IqLimitArgs, IqLimits};
 use crate::pipeline::{Processor, RadarSetup};
 use crate::run::{ApertureSummary, DetectionRow, MeasuredResolution, Metrics};
 use crate::scene::SceneObject;
@@ -53,14 +54,27 @@ pub struct MissionContext {
 }
 
 impl MissionContext {
-    /// Resolves a plan against a scene; errors name the mission.
+    /// Resolves a plan against a scene under the default [`IqLimits`]; errors name the
+    /// mission.
     pub fn new(plan: &Arc<Plan>, scene: &SceneFile, max_frame_bytes: usize) -> ServiceResult<Self> {
+        Self::with_limits(plan, scene, max_frame_bytes, &IqLimits::default())
+    }
+
+    /// Resolves a plan against a scene; a mission whose IQ or largest aperture exceeds
+    /// `limits` is refused ([`crate::limits::IqBudget`]); errors name the mission.
+    pub fn with_limits(
+        plan: &Arc<Plan>,
+        scene: &SceneFile,
+        max_frame_bytes: usize,
+        limits: &IqLimits,
+    ) -> ServiceResult<Self> {
         let mission = plan.mission().map_err(|e| ServiceError::Mission {
             mission: plan.mission_id,
             reason: e.to_string(),
         })?;
         let setup = RadarSetup::new(mission.params(), scene)?;
         let apertures = setup.apertures(&mission)?;
+        IqBudget::new(&setup, &apertures).check(&setup, limits)?;
         let spp = setup.scene.radar.symbols_per_pulse * setup.num.fft_size;
         let layout = FrameLayout::new(&apertures, spp, max_frame_bytes)?;
         let track = PlannedTrack::new(plan.result.trajectory.clone(), mission.params().altitude_m);
@@ -112,6 +126,9 @@ pub struct ProcessArgs {
     /// Seconds between status publications.
     #[arg(long, default_value_t = 1.0)]
     pub status_interval_s: f64,
+    /// Limits on a mission's IQ and on one aperture's memory (a plan above them is refused).
+    #[command(flatten)]
+    pub limits: IqLimitArgs,
     /// Zenoh flags.
     #[command(flatten)]
     pub zenoh: ZenohArgs,
@@ -624,6 +641,7 @@ pub fn run_processor(args: &ProcessArgs, stop: &AtomicBool) -> ServiceResult<Pro
     if args.window == 0 {
         return Err(ServiceError::Flag("--window must be at least 1".into()));
     }
+    args.limits.limits()?;
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
     let node = ZenohNode::open(args.zenoh.to_config()?, "processor", &args.instance)?;
@@ -1073,9 +1091,11 @@ impl Proc<'_> {
             return;
         }
         let plan = Arc::new(plan);
-        let made = MissionContext::new(&plan, self.scene, self.args.max_frame_bytes)
-            .map(Arc::new)
-            .and_then(ProcContext::new);
+        let limits = self.args.limits.limits().unwrap_or_default();
+        let made =
+            MissionContext::with_limits(&plan, self.scene, self.args.max_frame_bytes, &limits)
+                .map(Arc::new)
+                .and_then(ProcContext::new);
         let ctx = match made {
             Ok(c) => Arc::new(c),
             Err(e) => {
