@@ -48,6 +48,11 @@ pub const WIRE_PREFIX_LEN: usize = HEADER_LEN + DESCRIPTOR_LEN;
 pub const FLAG_BRIDGED: u16 = 2;
 /// Default largest frame payload (64 MiB).
 pub const DEFAULT_MAX_FRAME_BYTES: usize = 64 << 20;
+/// The default `--max-frame-bytes` of the IQ frame services (4 MiB: 100 pulses of 4096
+/// samples fit): `cellsar-bridge`, `cellsar bridge`, `cellsar run`, `cellsar echo` and
+/// `cellsar process` all default to it, as every process of a mission must use the same value
+/// (`radar_sim::service::DEFAULT_MAX_FRAME_BYTES` must equal it).
+pub const SERVICE_MAX_FRAME_BYTES: usize = 4 << 20;
 
 /// The header of a frame (iceoryx2 user header; see the module documentation for its wire
 /// form).

@@ -12,6 +12,7 @@
 //!   stale-resource cleanup, isolated roots for tests).
 //! - [`forward`]: the iceoryx2 <-> Zenoh forwarder behind the `cellsar-bridge` binary.
 //! - [`counters`], [`seq`]: what every endpoint counts; sequence gaps and duplicates.
+//! - [`flags`]: checks of numeric flags (seconds, rates) shared by the binaries.
 //!
 //! This crate knows no domain type: the planner and radar crates define their messages and
 //! implement [`Message`] for them.
@@ -20,6 +21,7 @@
 
 pub mod counters;
 pub mod envelope;
+pub mod flags;
 pub mod forward;
 pub mod frame;
 pub mod iox;
@@ -37,8 +39,8 @@ pub use iox::{
     IoxArgs, IoxEnv, IoxError,
 };
 pub use net::{
-    FrameSubscribeOptions, NetError, OwnedFrame, PublishOptions, QueryOptions, Received,
-    SubscribeOptions, WireFormat, ZenohFrame, ZenohNode,
+    FrameSubscribeOptions, NetError, OwnedFrame, PendingQuery, PublishOptions, QueryOptions,
+    Received, SubscribeOptions, WireFormat, ZenohFrame, ZenohNode,
 };
 pub use seq::{SeqObservation, SeqTracker};
 pub use zconfig::ZenohArgs;

@@ -14,9 +14,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use zenoh::bytes::{Encoding, ZBytes};
+use zenoh::handlers::FifoChannelHandler;
 use zenoh::liveliness::LivelinessToken;
 use zenoh::qos::{CongestionControl, Priority};
-use zenoh::query::{Query, QueryTarget};
+use zenoh::query::{Query, QueryTarget, Reply};
 use zenoh::sample::{Locality, Sample, SampleKind};
 use zenoh::{Config, Session, Wait};
 
@@ -71,7 +72,90 @@ fn zerr(op: &'static str, key: &str, e: impl std::fmt::Display) -> NetError {
     NetError::Zenoh {
         op,
         key: key.to_string(),
-        reason: e.to_string(),
+        reason: crate::zconfig::clean_zenoh_message(&e.to_string()),
+    }
+}
+
+fn decode_reply<Rep: Message>(
+    key: &str,
+    reply: &Reply,
+    limits: &DecodeLimits,
+) -> Result<Received<Rep>, NetError> {
+    match reply.result() {
+        Ok(sample) => {
+            let bytes = sample.payload().to_bytes();
+            let format = WireFormat::of(sample.encoding());
+            format
+                .decode::<Rep>(&bytes, limits)
+                .map(|env| Received {
+                    key: sample.key_expr().as_str().to_string(),
+                    header: env.header,
+                    format,
+                    message: env.message,
+                })
+                .map_err(|source| NetError::Codec {
+                    key: key.to_string(),
+                    source,
+                })
+        }
+        Err(err) => {
+            let message = err
+                .payload()
+                .try_to_string()
+                .map(|s| s.into_owned())
+                .unwrap_or_else(|_| format!("{} bytes of non-UTF-8", err.payload().len()));
+            Err(NetError::Remote {
+                key: key.to_string(),
+                message,
+            })
+        }
+    }
+}
+
+/// A query in flight ([`ZenohNode::start_query`]); dropping it abandons the query.
+pub struct PendingQuery<Rep> {
+    key: String,
+    replies: FifoChannelHandler<Reply>,
+    limits: DecodeLimits,
+    timeout: Duration,
+    first_err: Option<NetError>,
+    _rep: PhantomData<fn() -> Rep>,
+}
+
+impl<Rep> std::fmt::Debug for PendingQuery<Rep> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PendingQuery")
+            .field("key", &self.key)
+            .field("timeout", &self.timeout)
+            .finish()
+    }
+}
+
+impl<Rep: Message> PendingQuery<Rep> {
+    /// Waits at most `wait` for the answer: `None` while it is still open; `Some(Ok)` with the
+    /// first good reply; `Some(Err)` once every reply came in (or the query's timeout passed)
+    /// without a good one: the first remote error or bad reply, else [`NetError::NoReply`].
+    /// Call it again after `Some` and it says `NoReply`.
+    pub fn poll(&mut self, wait: Duration) -> Option<Result<Received<Rep>, NetError>> {
+        let mut wait = wait;
+        loop {
+            match self.replies.recv_timeout(wait) {
+                Ok(Some(reply)) => match decode_reply::<Rep>(&self.key, &reply, &self.limits) {
+                    Ok(r) => return Some(Ok(r)),
+                    Err(e) => {
+                        self.first_err.get_or_insert(e);
+                        wait = Duration::ZERO;
+                    }
+                },
+                Ok(None) => return None,
+                Err(_) => {
+                    return Some(Err(self.first_err.take().unwrap_or(NetError::NoReply {
+                        key: self.key.clone(),
+                        timeout: self.timeout,
+                    })))
+                }
+            }
+        }
     }
 }
 
@@ -362,6 +446,20 @@ impl ZenohNode {
         request: &Req,
         opts: &QueryOptions,
     ) -> Result<Vec<Result<Received<Rep>, NetError>>, NetError> {
+        let replies = self.send_query(key, request, opts)?;
+        let mut out = Vec::new();
+        while let Ok(reply) = replies.recv() {
+            out.push(decode_reply::<Rep>(key, &reply, &opts.limits));
+        }
+        Ok(out)
+    }
+
+    fn send_query<Req: Message>(
+        &self,
+        key: &str,
+        request: &Req,
+        opts: &QueryOptions,
+    ) -> Result<FifoChannelHandler<Reply>, NetError> {
         let payload = opts
             .format
             .encode(request, opts.meta)
@@ -369,50 +467,33 @@ impl ZenohNode {
                 key: key.to_string(),
                 source,
             })?;
-        let replies = self
-            .session
+        self.session
             .get(key.to_string())
             .payload(payload)
             .encoding(opts.format.encoding::<Req>())
             .target(opts.target)
             .timeout(opts.timeout)
             .wait()
-            .map_err(|e| zerr("get", key, e))?;
-        let mut out = Vec::new();
-        while let Ok(reply) = replies.recv() {
-            match reply.result() {
-                Ok(sample) => {
-                    let bytes = sample.payload().to_bytes();
-                    let format = WireFormat::of(sample.encoding());
-                    out.push(
-                        format
-                            .decode::<Rep>(&bytes, &opts.limits)
-                            .map(|env| Received {
-                                key: sample.key_expr().as_str().to_string(),
-                                header: env.header,
-                                format,
-                                message: env.message,
-                            })
-                            .map_err(|source| NetError::Codec {
-                                key: key.to_string(),
-                                source,
-                            }),
-                    );
-                }
-                Err(err) => {
-                    let message = err
-                        .payload()
-                        .try_to_string()
-                        .map(|s| s.into_owned())
-                        .unwrap_or_else(|_| format!("{} bytes of non-UTF-8", err.payload().len()));
-                    out.push(Err(NetError::Remote {
-                        key: key.to_string(),
-                        message,
-                    }));
-                }
-            }
-        }
-        Ok(out)
+            .map_err(|e| zerr("get", key, e))
+    }
+
+    /// Sends a typed query and returns at once: [`PendingQuery::poll`] then waits for its
+    /// first good reply a little at a time, so that the caller can give up (drop it) at any
+    /// moment, on a signal for instance.
+    pub fn start_query<Req: Message, Rep: Message>(
+        &self,
+        key: &str,
+        request: &Req,
+        opts: &QueryOptions,
+    ) -> Result<PendingQuery<Rep>, NetError> {
+        Ok(PendingQuery {
+            key: key.to_string(),
+            replies: self.send_query(key, request, opts)?,
+            limits: opts.limits,
+            timeout: opts.timeout,
+            first_err: None,
+            _rep: PhantomData,
+        })
     }
 
     /// Sends a typed query and returns the first good reply; a remote error is returned as

@@ -212,6 +212,85 @@ fn query_reply_errors_and_wrong_kinds() {
     assert_eq!(c.malformed, 1);
 }
 
+/// A query started with `start_query` is polled a little at a time (the caller can stop
+/// waiting at any moment, e.g. on SIGINT), answers when the queryable replies, and says
+/// `NoReply` once its timeout passed without an answer.
+#[test]
+fn pending_query_is_polled_without_blocking() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = pair(dir.path(), "pq");
+    let key = "cellsar/test/pending";
+    let q = a
+        .queryable::<PlanRequest>(key, SubscribeOptions::default())
+        .unwrap();
+    let opts = QueryOptions {
+        timeout: Duration::from_secs(30),
+        ..Default::default()
+    };
+    let deadline = Instant::now() + T;
+    // until the queryable is known: a query that reached it stays open (no answer yet)
+    let mut attempt = 0u32;
+    let (mut pending, inq) = 'found: loop {
+        attempt += 1;
+        assert!(Instant::now() < deadline, "the queryable was never reached");
+        let req = PlanRequest {
+            mission: "m".into(),
+            slots: attempt,
+        };
+        let p = b
+            .start_query::<PlanRequest, PlanSummary>(key, &req, &opts)
+            .unwrap();
+        while let Some(inq) = q.recv_timeout(Duration::from_millis(200)) {
+            if inq.request.slots == attempt {
+                break 'found (p, inq);
+            }
+        }
+    };
+    for _ in 0..5 {
+        let t = Instant::now();
+        assert!(pending.poll(Duration::from_millis(50)).is_none());
+        assert!(t.elapsed() < Duration::from_secs(2), "{:?}", t.elapsed());
+    }
+    inq.reply(
+        &PlanSummary {
+            mission: "m".into(),
+            energy_j: 7.0,
+            pos_m: vec![],
+        },
+        Meta::default(),
+    )
+    .unwrap();
+    drop(inq);
+    let got = loop {
+        if let Some(r) = pending.poll(Duration::from_millis(50)) {
+            break r;
+        }
+        assert!(Instant::now() < deadline, "no answer");
+    };
+    assert_eq!(got.unwrap().message.energy_j, 7.0);
+    // nobody answers this key: NoReply once the timeout passed
+    let mut none = b
+        .start_query::<PlanRequest, PlanSummary>(
+            "cellsar/test/nobody",
+            &PlanRequest {
+                mission: "m".into(),
+                slots: 1,
+            },
+            &QueryOptions {
+                timeout: Duration::from_millis(300),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    let r = loop {
+        if let Some(r) = none.poll(Duration::from_millis(50)) {
+            break r;
+        }
+        assert!(Instant::now() < deadline, "the query never ended");
+    };
+    assert!(matches!(r, Err(NetError::NoReply { .. })), "{r:?}");
+}
+
 #[test]
 fn liveliness_tokens_come_and_go() {
     let dir = tempfile::tempdir().unwrap();
@@ -991,7 +1070,8 @@ fn bridge_survives_10k_malformed_payloads() {
     assert!(log.contains("more rejected payloads were logged at DEBUG only"));
 }
 
-/// A bridge with a bad route or an unusable Zenoh flag fails at start with a message naming it.
+/// A bridge with a bad route or an unusable Zenoh flag fails at start (exit code 2: bad input)
+/// with one clean line naming it (no Debug output, no source paths of Zenoh).
 #[test]
 fn bridge_rejects_bad_configuration() {
     let dir = tempfile::tempdir().unwrap();
@@ -1007,14 +1087,21 @@ fn bridge_rejects_bad_configuration() {
             vec![s("--service"), s("x"), s("--instance"), s("a/b")],
             "instance",
         ),
+        (
+            vec![s("--service"), s("x"), s("-e"), s("garbage")],
+            "--connect garbage",
+        ),
     ] {
         let mut a = args.clone();
         a.extend(iso.args());
         let mut p = Proc::spawn("bridge-bad", bridge_exe(), &a, dir.path(), "warn");
         let st = p.wait(T);
-        assert_eq!(st.code(), Some(1), "{args:?}");
+        assert_eq!(st.code(), Some(2), "{args:?}");
         let err = p.stderr();
         assert!(err.contains(needle), "{args:?}: {}", p.stderr_tail());
+        for noise in [".rs:", "Message {", "Json5Err", ".cargo"] {
+            assert!(!err.contains(noise), "{args:?}: {noise:?} in {err}");
+        }
         // printed once (not also through tracing), each cause once
         let lines: Vec<&str> = err.lines().filter(|l| l.contains(needle)).collect();
         assert_eq!(lines.len(), 1, "{args:?}: {err}");
@@ -1027,6 +1114,20 @@ fn bridge_rejects_bad_configuration() {
                 lines[0]
             );
         }
+    }
+    // a number of seconds that is not one: refused by name before anything starts
+    for bad in ["nan", "-1", "0"] {
+        let mut a = vec![s("--service"), s("x"), format!("--stats-interval-s={bad}")];
+        a.extend(iso.args());
+        let mut p = Proc::spawn("bridge-bad", bridge_exe(), &a, dir.path(), "warn");
+        let st = p.wait(T);
+        assert_eq!(st.code(), Some(2), "{bad}: {}", p.stderr_tail());
+        assert!(
+            p.stderr().contains("--stats-interval-s"),
+            "{}",
+            p.stderr_tail()
+        );
+        assert!(!p.stderr().contains("panicked"), "{}", p.stderr_tail());
     }
     let _ = IoxEnv::default_env();
 }

@@ -1,13 +1,17 @@
 //! `cellsar run`: the whole pipeline as supervised child processes.
 //!
-//! 1. Checks the inputs (mission, scene) before anything starts.
+//! 1. Checks the inputs before anything starts: every option a child would refuse, the Zenoh
+//!    and iceoryx2 flags, the mission and the scene (bad input: [`FailureKind::BadInput`],
+//!    exit code 2), and the mission's necessary conditions of feasibility
+//!    ([`FailureKind::Infeasible`], exit code 3).
 //! 2. Chooses the Zenoh network: by default an isolated mesh on loopback (the launcher listens on
 //!    a free port, every child connects to it; no multicast, no router); with `--router` a
 //!    router child and every process its client; with Zenoh flags, those flags for everyone.
 //! 3. Starts the planner, echo and processor (and the bridge for `--transport zenoh` or
 //!    `--bridge`), watches their liveliness tokens, restarts a child that dies (at most
 //!    `--max-restarts` times each).
-//! 4. Asks the planner for the plan, writes `plan/`, collects every aperture's detections and
+//! 4. Asks the planner for the plan (waiting for the planner to appear and for its answer
+//!    together at most `--plan-timeout-s`), writes `plan/`, collects every aperture's detections and
 //!    image and the metrics (asking the processor again for what it missed), and writes the
 //!    same files as `cellsar-radar-sim closed-loop`, plus `pipeline.json` and `report.md`.
 //! 5. Stops every child (SIGTERM, then SIGKILL after a grace period) at the end, on SIGINT or
@@ -21,22 +25,24 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context, Result};
 use bridge::envelope::DecodeLimits;
+use bridge::flags;
 use bridge::net::{QueryOptions, SubscribeOptions, WireFormat};
 use bridge::zconfig::Mode;
-use bridge::{keys, IoxArgs, NetError, ZenohArgs, ZenohNode};
+use bridge::{keys, FrameServiceSpec, IoxArgs, NetError, ZenohArgs, ZenohNode};
 use indicatif::{ProgressBar, ProgressStyle};
 use planner::service::{
     Plan, PlanRequest, PlanRequestOptions, ServiceStatus, MAX_PLAN_BYTES, PLAN_KEY,
 };
 use radar_sim::config::SceneFile;
 use radar_sim::service::{
-    ApertureDetections, ApertureImage, MissionContext, MissionMetrics, ResultAck, ResultRequest,
-    DEFAULT_MAX_FRAME_BYTES,
+    ApertureDetections, ApertureImage, FrameLayout, MissionContext, MissionMetrics, ResultAck,
+    ResultRequest,
 };
 use serde_json::{json, Value};
 
 use crate::collect::{Added, Collector};
 use crate::events::Events;
+use crate::exit::{Failure, FailureKind};
 use crate::supervise::{stop_all, ChildSpec, Supervised};
 
 /// How IQ frames reach the processor.
@@ -50,6 +56,11 @@ pub enum Transport {
 }
 
 /// Flags of `cellsar run`.
+///
+/// Exit codes: 0 done; 1 failure at run time; 2 bad input (an option, the mission or the scene
+/// file; the message names it; nothing was started); 3 the mission cannot be flown; 4 done
+/// with `--strict` but a landmark in view was not detected; 130 interrupted (SIGINT/SIGTERM;
+/// every child stopped).
 #[derive(clap::Args, Debug, Clone)]
 pub struct RunArgs {
     /// Mission file (TOML or JSON).
@@ -62,7 +73,7 @@ pub struct RunArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Keep only the landmark windows that end within this horizon, s.
-    #[arg(long)]
+    #[arg(long, value_parser = flags::parse_seconds)]
     pub horizon_s: Option<f64>,
     /// How IQ frames reach the processor.
     #[arg(long, value_enum, default_value_t = Transport::Iox)]
@@ -80,24 +91,26 @@ pub struct RunArgs {
     /// Restarts allowed per child before the run is given up.
     #[arg(long, default_value_t = 5)]
     pub max_restarts: u32,
-    /// Largest IQ frame payload, bytes (sizes the iceoryx2 service and the frames).
-    #[arg(long, default_value_t = DEFAULT_MAX_FRAME_BYTES)]
+    /// Largest IQ frame payload, bytes (sizes the iceoryx2 service and the frames; at least
+    /// one pulse of the scene).
+    #[arg(long, default_value_t = bridge::frame::SERVICE_MAX_FRAME_BYTES)]
     pub max_frame_bytes: usize,
-    /// Apertures the processor asks for at once.
+    /// Apertures the processor asks for at once (at least 1).
     #[arg(long, default_value_t = 2)]
     pub window: usize,
     /// The processor asks again for an aperture after this many seconds without frames.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_parser = flags::parse_seconds)]
     pub resend_after_s: f64,
     /// Exit with code 4 when a landmark in view was not detected (default: report it in
     /// `report.md`/`report.json` and on stdout, exit 0 once the run completed).
     #[arg(long)]
     pub strict: bool,
     /// Give up after this many seconds (default: no limit).
-    #[arg(long)]
+    #[arg(long, value_parser = flags::parse_seconds)]
     pub timeout_s: Option<f64>,
-    /// Longest wait for the plan, s.
-    #[arg(long, default_value_t = 900.0)]
+    /// Longest wait for the plan, s: waiting for a planner to appear (a local one starting,
+    /// or an `--external planner`) and for its answer together; then the run fails (exit 1).
+    #[arg(long, default_value_t = 900.0, value_parser = flags::parse_seconds)]
     pub plan_timeout_s: f64,
     /// Print events (children started/exited, liveliness, apertures) as JSON lines on stdout.
     #[arg(long)]
@@ -105,7 +118,7 @@ pub struct RunArgs {
     /// Keep the services' state directory (`.state/`) after a successful run.
     #[arg(long)]
     pub keep_state: bool,
-    /// `RUST_LOG` of the children (their logs go to `<out>/logs/`).
+    /// `RUST_LOG` of the children (their logs go to `<out>/logs/`); a valid filter.
     #[arg(long, default_value = "info")]
     pub child_log: String,
     /// Zenoh flags (used by the launcher and passed to every child).
@@ -152,32 +165,122 @@ fn absolute(p: &Path) -> Result<PathBuf> {
     }
 }
 
-/// Runs the pipeline; returns how it ended.
-pub fn run(args: &RunArgs, stop: Arc<AtomicBool>) -> Result<Outcome> {
-    let wall = Instant::now();
-    // 1. inputs, checked before anything starts
-    let mut mission = planner::Mission::from_path(&args.mission)
-        .with_context(|| format!("mission {}", args.mission.display()))?;
-    if let Some(h) = args.horizon_s {
-        mission =
-            radar_sim::run::shorten(&mission, h).with_context(|| format!("--horizon-s {h}"))?;
+/// The answer of the planner to a plan request was an error.
+#[derive(Debug, thiserror::Error)]
+#[error("the planner refused the mission: {message}")]
+pub struct PlanRefused {
+    /// The planner's message.
+    pub message: String,
+}
+
+/// The text the planner's error names a mission that cannot be flown with
+/// (`planner::init::Infeasibility`, also inside the plan service's answer).
+pub const INFEASIBLE_MARK: &str = "mission cannot be flown";
+
+impl PlanRefused {
+    /// Whether the planner found that the mission cannot be flown (rather than failing).
+    pub fn infeasible(&self) -> bool {
+        self.message.contains(INFEASIBLE_MARK)
     }
-    let scene = SceneFile::from_path(&args.scene)?;
-    radar_sim::pipeline::RadarSetup::new(mission.params(), &scene).with_context(|| {
+}
+
+/// Checks every input of `cellsar run` before anything starts, as the children would: the
+/// numbers, `--window`, `--child-log`, `--max-frame-bytes` against the scene's pulses, the
+/// Zenoh and iceoryx2 flags, the mission (with `--horizon-s`) and the scene and the IQ they
+/// need ([`FailureKind::BadInput`]), then the mission's necessary conditions of feasibility
+/// ([`FailureKind::Infeasible`]). Returns the mission to plan.
+pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
+    for (flag, v) in [
+        ("--timeout-s", args.timeout_s),
+        ("--plan-timeout-s", Some(args.plan_timeout_s)),
+        ("--resend-after-s", Some(args.resend_after_s)),
+        ("--horizon-s", args.horizon_s),
+    ] {
+        if let Some(v) = v {
+            flags::seconds(flag, v).map_err(Failure::bad_input)?;
+        }
+    }
+    if args.window == 0 {
+        return Err(Failure::bad_input(anyhow!(
+            "--window 0: must be at least 1 (apertures the processor asks for at once)"
+        )));
+    }
+    tracing_subscriber::EnvFilter::try_new(&args.child_log)
+        .map_err(|e| Failure::bad_input(anyhow!("--child-log {:?}: {e}", args.child_log)))?;
+    args.zenoh.to_config().map_err(Failure::bad_input)?;
+    // the iceoryx2 configuration file and prefix as every child reads them (the root is
+    // created by the children)
+    IoxArgs {
+        root: None,
+        ..args.iox.clone()
+    }
+    .env()
+    .map_err(Failure::bad_input)?;
+    if let Some(r) = args.iox.root.as_ref().filter(|r| r.exists() && !r.is_dir()) {
+        return Err(Failure::bad_input(anyhow!(
+            "--iox-root {}: not a directory",
+            r.display()
+        )));
+    }
+    let mut mission = planner::Mission::from_path(&args.mission)
+        .with_context(|| format!("mission {}", args.mission.display()))
+        .map_err(Failure::bad_input)?;
+    if let Some(h) = args.horizon_s {
+        mission = radar_sim::run::shorten(&mission, h)
+            .with_context(|| format!("--horizon-s {h}"))
+            .map_err(Failure::bad_input)?;
+    }
+    let scene = SceneFile::from_path(&args.scene).map_err(Failure::bad_input)?;
+    let context = || {
         format!(
             "scene {} with mission {}",
             args.scene.display(),
             args.mission.display()
         )
-    })?;
-    for (flag, v) in [
-        ("--resend-after-s", args.resend_after_s),
-        ("--plan-timeout-s", args.plan_timeout_s),
-    ] {
-        if !(v > 0.0 && v.is_finite()) {
-            bail!("{flag} {v} must be a positive number");
-        }
-    }
+    };
+    let setup = radar_sim::pipeline::RadarSetup::new(mission.params(), &scene)
+        .with_context(context)
+        .map_err(Failure::bad_input)?;
+    radar_sim::limits::check_mission(&setup, &mission, &radar_sim::limits::IqLimits::default())
+        .with_context(context)
+        .map_err(Failure::bad_input)?;
+    // the frame service every process opens, and the frames of one pulse at least
+    let mfb = args.max_frame_bytes;
+    FrameServiceSpec::new("cellsar/0000000000000000/echo", mfb)
+        .validate()
+        .map_err(|e| Failure::bad_input(anyhow!("--max-frame-bytes {mfb}: {e}")))?;
+    let samples_per_pulse = setup.scene.radar.symbols_per_pulse * setup.num.fft_size;
+    FrameLayout::new(&[], samples_per_pulse, mfb)
+        .with_context(|| format!("scene {}", args.scene.display()))
+        .map_err(Failure::bad_input)?;
+    planner::init::precheck(&mission)
+        .with_context(|| format!("mission {}", args.mission.display()))
+        .map_err(Failure::infeasible)?;
+    Ok(mission)
+}
+
+fn classify(e: anyhow::Error) -> Failure {
+    let kind = match e.downcast_ref::<PlanRefused>() {
+        Some(r) if r.infeasible() => FailureKind::Infeasible,
+        _ => FailureKind::Runtime,
+    };
+    Failure { kind, error: e }
+}
+
+/// Runs the pipeline; returns how it ended, or the failure (its kind picks the exit code).
+pub fn run(args: &RunArgs, stop: Arc<AtomicBool>) -> Result<Outcome, Failure> {
+    let wall = Instant::now();
+    // 1. inputs, checked before anything starts
+    let mission = check_inputs(args)?;
+    launch(args, &mission, stop, wall).map_err(classify)
+}
+
+fn launch(
+    args: &RunArgs,
+    mission: &planner::Mission,
+    stop: Arc<AtomicBool>,
+    wall: Instant,
+) -> Result<Outcome> {
     let out = absolute(&args.out)?;
     let state = out.join(".state");
     let logs = out.join("logs");
@@ -246,10 +349,21 @@ pub fn run(args: &RunArgs, stop: Arc<AtomicBool>) -> Result<Outcome> {
             ("iox", json!(iox.to_cli_args())),
         ],
     );
-    let node = open_with_retry(&net.launcher, &stop)?;
+    let node = match open_with_retry(&net.launcher, &stop) {
+        Ok(n) => n,
+        Err(e) => {
+            stop_all(&mut children, Duration::from_secs(10), &events);
+            remove_shm(&iox);
+            return if stop.load(Ordering::Relaxed) {
+                Ok(Outcome::Interrupted)
+            } else {
+                Err(e)
+            };
+        }
+    };
     let result = run_on(
         args,
-        &mission,
+        mission,
         &scene_path,
         &out,
         &state,
@@ -394,7 +508,11 @@ fn run_on(
         children.push(Supervised::start(spec("processor", xa), events)?);
     }
 
-    let deadline = args.timeout_s.map(|t| wall + Duration::from_secs_f64(t));
+    // checked in check_inputs; an unusable value here means "no limit" rather than a panic
+    let deadline = args
+        .timeout_s
+        .and_then(|t| flags::seconds("--timeout-s", t).ok())
+        .and_then(|d| wall.checked_add(d));
     let backoff = Duration::from_millis(500);
     let supervise = |children: &mut Vec<Supervised>| -> Result<()> {
         for c in children.iter_mut() {
@@ -431,7 +549,8 @@ fn run_on(
         Ok(())
     };
 
-    // 4a. the plan
+    // 4a. the plan: waiting for a planner and for its answer, together at most
+    // --plan-timeout-s; SIGINT/SIGTERM at any moment ends the run as interrupted
     let spinner = ProgressBar::new_spinner();
     if let Ok(s) = ProgressStyle::with_template("{spinner} {prefix:>9} {msg} [{elapsed}]") {
         spinner.set_style(s);
@@ -443,46 +562,63 @@ fn run_on(
         options: PlanRequestOptions::default(),
     };
     let plan_started = Instant::now();
+    let plan_timeout = flags::seconds("--plan-timeout-s", args.plan_timeout_s)?;
+    let plan_deadline = plan_started.checked_add(plan_timeout);
+    let plan_left = || {
+        plan_deadline.map_or(plan_timeout, |d| {
+            d.saturating_duration_since(Instant::now())
+        })
+    };
     let planner_alive = || {
         alive
             .alive()
             .iter()
             .any(|k| keys::parse_alive(k).is_some_and(|(role, _)| role == "planner"))
     };
-    let plan: Plan = std::thread::scope(|scope| -> Result<Plan> {
+    let no_plan = |what: &str| {
+        anyhow!(
+            "no plan within --plan-timeout-s {} s: {what}",
+            args.plan_timeout_s
+        )
+    };
+    let mut get_plan = || -> Result<Option<Plan>> {
         let mut attempt = 0u32;
         loop {
             attempt += 1;
             // wait for the planner's token
             while !planner_alive() {
                 if stop.load(Ordering::Relaxed) {
-                    bail!("interrupted");
+                    return Ok(None);
                 }
                 check_time("waiting for the planner")?;
+                if plan_left().is_zero() {
+                    return Err(no_plan(if local("planner") {
+                        "the planner did not announce itself (see logs/planner.log)"
+                    } else {
+                        "no planner announced itself (cellsar/alive/planner/*): start \
+                         `cellsar-planner serve` with the same Zenoh flags"
+                    }));
+                }
                 supervise(children)?;
                 alive_log(events);
                 std::thread::sleep(Duration::from_millis(20));
             }
-            let req = request.clone();
-            let timeout = Duration::from_secs_f64(args.plan_timeout_s);
-            let q = scope.spawn(move || {
-                node.query_one::<PlanRequest, Plan>(
-                    PLAN_KEY,
-                    &req,
-                    &QueryOptions {
-                        timeout,
-                        format: WireFormat::Bincode,
-                        limits: DecodeLimits {
-                            max_body_bytes: MAX_PLAN_BYTES,
-                            verify_crc: true,
-                        },
-                        ..QueryOptions::default()
+            let mut query = node.start_query::<PlanRequest, Plan>(
+                PLAN_KEY,
+                &request,
+                &QueryOptions {
+                    timeout: plan_left(),
+                    format: WireFormat::Bincode,
+                    limits: DecodeLimits {
+                        max_body_bytes: MAX_PLAN_BYTES,
+                        verify_crc: true,
                     },
-                )
-            });
-            while !q.is_finished() {
+                    ..QueryOptions::default()
+                },
+            )?;
+            let answer = loop {
                 if stop.load(Ordering::Relaxed) {
-                    bail!("interrupted");
+                    return Ok(None);
                 }
                 check_time("planning")?;
                 supervise(children)?;
@@ -492,17 +628,19 @@ fn run_on(
                         spinner.set_message(s.message.message.clone());
                     }
                 }
-                std::thread::sleep(Duration::from_millis(20));
-            }
-            match q
-                .join()
-                .map_err(|_| anyhow!("the plan query thread panicked"))?
-            {
-                Ok(r) => return Ok(r.message),
+                if let Some(a) = query.poll(Duration::from_millis(20)) {
+                    break a;
+                }
+            };
+            match answer {
+                Ok(r) => return Ok(Some(r.message)),
                 Err(NetError::Remote { message, .. })
                     if !message.contains("stopped while planning") =>
                 {
-                    bail!("the planner refused the mission: {message}")
+                    return Err(PlanRefused { message }.into())
+                }
+                Err(e) if plan_left().is_zero() => {
+                    return Err(anyhow::Error::new(e).context(no_plan("the planner did not answer")))
                 }
                 Err(e) if attempt < 1 + args.max_restarts => {
                     tracing::warn!(error = %e, attempt, "no plan; asking again");
@@ -515,9 +653,14 @@ fn run_on(
                 Err(e) => return Err(e).context("asking the planner for the plan"),
             }
         }
-    })?;
-    let plan_s = plan_started.elapsed().as_secs_f64();
+    };
+    let plan = get_plan();
     spinner.finish_and_clear();
+    let Some(plan) = plan? else {
+        events.emit("interrupted", &[]);
+        return Ok(Outcome::Interrupted);
+    };
+    let plan_s = plan_started.elapsed().as_secs_f64();
     let id = plan.mission_id;
     let resolved = plan.mission()?;
     let plan_dir = out.join("plan");
@@ -939,4 +1082,33 @@ fn write_report_md(
     let _ = writeln!(s, "\nFiles: plan/, images/aperture_NNN.{{npy,png}}, detections.csv, detections.json, metrics.json, report.json, pipeline.json (timings, counters, events), logs/.");
     std::fs::write(out.join("report.md"), s)
         .with_context(|| format!("writing {}", out.join("report.md").display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plan service answers with the planner's error text: a mission that cannot be flown
+    /// is told apart (exit code 3) from a planner that failed (exit code 1).
+    #[test]
+    fn an_infeasible_refusal_is_told_apart() {
+        let e = planner::PlanError::Infeasible(planner::init::Infeasibility {
+            slot: 23,
+            t_s: 11.5,
+            reason: "no trajectory".into(),
+        });
+        // as the plan service words it (planner::service::plan_request)
+        let refused = PlanRefused {
+            message: format!("planning \"m\": {e}"),
+        };
+        assert!(refused.infeasible());
+        assert_eq!(classify(refused.into()).kind, FailureKind::Infeasible);
+        let failed = PlanRefused {
+            message: "planning \"m\": iteration 0: solver failed".into(),
+        };
+        assert!(!failed.infeasible());
+        let f = classify(anyhow::Error::new(failed).context("asking"));
+        assert_eq!(f.kind, FailureKind::Runtime);
+        assert_eq!(classify(anyhow!("other")).kind, FailureKind::Runtime);
+    }
 }

@@ -9,7 +9,8 @@
 //! - [`supervise`]: child processes (start, restart within a bound, stop, reap);
 //! - [`collect`]: results de-duplicated by mission and aperture, and the output files;
 //! - [`roles`]: the bridge and router roles of the `cellsar` binary;
-//! - [`events`]: the event log (`pipeline.json`, `--events-json`).
+//! - [`events`]: the event log (`pipeline.json`, `--events-json`);
+//! - [`exit`]: the exit codes of the `cellsar` binary and the failures that carry them.
 //!
 //! The `cellsar` binary is also every child: `cellsar planner` is `cellsar-planner serve`,
 //! `cellsar echo` is `cellsar-radar-sim echo`, `cellsar process` is
@@ -20,6 +21,7 @@
 
 pub mod collect;
 pub mod events;
+pub mod exit;
 pub mod launch;
 pub mod roles;
 pub mod supervise;

@@ -4,14 +4,16 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use bridge::forward::{Forwarder, ForwarderConfig, Route};
 use bridge::iox::Backpressure;
 use bridge::net::PublishOptions;
 use bridge::stats::BridgeStats;
 use bridge::zconfig::Mode;
 use bridge::zenoh::qos::CongestionControl;
-use bridge::{keys, IoxArgs, ZenohArgs, ZenohNode};
+use bridge::{flags, keys, IoxArgs, ZenohArgs, ZenohNode};
+
+use crate::exit::Failure;
 
 /// Congestion control of the bridge's Zenoh publishers.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,14 +33,15 @@ pub struct BridgeArgs {
     /// A route `NAME[=KEY][@both|out|in]` (repeatable).
     #[arg(long = "service", value_name = "ROUTE", required = true)]
     pub services: Vec<String>,
-    /// Largest frame payload in bytes (as given to the echo and the processor).
-    #[arg(long, default_value_t = radar_sim::service::DEFAULT_MAX_FRAME_BYTES)]
+    /// Largest frame payload in bytes (as given to the echo and the processor; the same
+    /// default as theirs and `cellsar-bridge`'s).
+    #[arg(long, default_value_t = bridge::frame::SERVICE_MAX_FRAME_BYTES)]
     pub max_frame_bytes: usize,
     /// Congestion control of the Zenoh publishers.
     #[arg(long, value_enum, default_value_t = Congestion::Block)]
     pub congestion: Congestion,
-    /// Seconds between counter logs and stats publications.
-    #[arg(long, default_value_t = 5.0)]
+    /// Seconds between counter logs and stats publications (finite, > 0).
+    #[arg(long, default_value_t = 5.0, value_parser = flags::parse_seconds)]
     pub stats_interval_s: f64,
     /// Zenoh flags.
     #[command(flatten)]
@@ -48,18 +51,15 @@ pub struct BridgeArgs {
     pub iox: IoxArgs,
 }
 
-/// Runs the bridge until `stop` is set.
-pub fn run_bridge(args: &BridgeArgs, stop: &AtomicBool) -> Result<()> {
-    if !(args.stats_interval_s > 0.0 && args.stats_interval_s.is_finite()) {
-        bail!(
-            "--stats-interval-s must be a positive number, got {}",
-            args.stats_interval_s
-        );
-    }
+/// Runs the bridge until `stop` is set. Flags, routes and the Zenoh and iceoryx2
+/// configuration are checked before anything starts (bad input).
+pub fn run_bridge(args: &BridgeArgs, stop: &AtomicBool) -> Result<(), Failure> {
+    let interval =
+        flags::seconds("--stats-interval-s", args.stats_interval_s).map_err(Failure::bad_input)?;
     let mut routes = Vec::new();
     for s in &args.services {
-        let r = Route::parse(s, args.max_frame_bytes)?;
-        r.service.validate()?;
+        let r = Route::parse(s, args.max_frame_bytes).map_err(Failure::bad_input)?;
+        r.service.validate().map_err(Failure::bad_input)?;
         routes.push(r);
     }
     let config = ForwarderConfig {
@@ -74,10 +74,23 @@ pub fn run_bridge(args: &BridgeArgs, stop: &AtomicBool) -> Result<()> {
         // A frozen local consumer must never stall the bridge (SIGSTOP test).
         inbound_backpressure: Backpressure::Discard,
     };
-    config.validate()?;
-    let env = args.iox.env()?;
-    let node = ZenohNode::open(args.zenoh.to_config()?, "bridge", &args.instance)?;
-    let forwarder = Forwarder::start(&node, &env, &config)?;
+    config.validate().map_err(Failure::bad_input)?;
+    keys::alive("bridge", &args.instance).map_err(Failure::bad_input)?;
+    let zconfig = args.zenoh.to_config().map_err(Failure::bad_input)?;
+    let env = args.iox.env().map_err(Failure::bad_input)?;
+    forward(args, &config, zconfig, &env, interval, stop).map_err(Failure::runtime)
+}
+
+fn forward(
+    args: &BridgeArgs,
+    config: &ForwarderConfig,
+    zconfig: bridge::zenoh::Config,
+    env: &bridge::IoxEnv,
+    interval: Duration,
+    stop: &AtomicBool,
+) -> Result<()> {
+    let node = ZenohNode::open(zconfig, "bridge", &args.instance)?;
+    let forwarder = Forwarder::start(&node, env, config)?;
     let stats_pub = node.publisher::<BridgeStats>(
         &keys::bridge_stats(&args.instance)?,
         PublishOptions {
@@ -86,7 +99,6 @@ pub fn run_bridge(args: &BridgeArgs, stop: &AtomicBool) -> Result<()> {
         },
     )?;
     tracing::info!(instance = %args.instance, routes = args.services.len(), "bridge running");
-    let interval = Duration::from_secs_f64(args.stats_interval_s);
     let mut last = Instant::now();
     let mut failed = false;
     while !stop.load(Ordering::Relaxed) {
@@ -129,16 +141,30 @@ pub struct RouterArgs {
     pub zenoh: ZenohArgs,
 }
 
-/// A plain Zenoh router (what `zenohd` does without plugins) until `stop` is set.
-pub fn run_router(args: &RouterArgs, stop: &AtomicBool) -> Result<()> {
+/// A plain Zenoh router (what `zenohd` does without plugins) until `stop` is set. The flags
+/// are checked before anything starts (bad input).
+pub fn run_router(args: &RouterArgs, stop: &AtomicBool) -> Result<(), Failure> {
     let mut z = args.zenoh.clone();
     if z.listen.is_empty() && z.config.is_none() {
-        bail!("a router needs an endpoint to listen on: give -l ENDPOINT (e.g. -l tcp/0.0.0.0:7447) or -c FILE");
+        return Err(Failure::bad_input(anyhow!("a router needs an endpoint to listen on: give -l ENDPOINT (e.g. -l tcp/0.0.0.0:7447) or -c FILE")));
     }
     if z.mode.is_none() {
         z.mode = Some(Mode::Router);
     }
-    let config = z.to_config().context("router configuration")?;
+    let config = z
+        .to_config()
+        .context("router configuration")
+        .map_err(Failure::bad_input)?;
+    keys::alive("router", &args.instance).map_err(Failure::bad_input)?;
+    route(args, &z, config, stop).map_err(Failure::runtime)
+}
+
+fn route(
+    args: &RouterArgs,
+    z: &ZenohArgs,
+    config: bridge::zenoh::Config,
+    stop: &AtomicBool,
+) -> Result<()> {
     let node = ZenohNode::open(config, "router", &args.instance)?;
     tracing::info!(instance = %args.instance, listen = ?z.listen, "router running");
     while !stop.load(Ordering::Relaxed) {

@@ -1,10 +1,12 @@
 //! The launcher end to end: the same outputs as `closed-loop` over iceoryx2 and over Zenoh
-//! through the bridge, clean stops, named errors, a child that keeps failing.
+//! through the bridge, clean stops, named errors and their exit codes, a child that keeps
+//! failing, the plan timeout.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 mod common;
 
+use std::ffi::OsString;
 use std::process::Command;
 use std::time::Duration;
 
@@ -126,12 +128,12 @@ fn sigint_stops_every_child() {
 #[test]
 fn a_child_that_keeps_failing_stops_the_run() {
     let dir = tempfile::tempdir().unwrap();
-    let bad = dir.path().join("missing-iceoryx2.toml");
-    let mut l = Launch::start(
-        dir.path(),
-        H,
-        &["--max-restarts", "2", "--iox-config", bad.to_str().unwrap()],
-    );
+    // the planner cannot create its state directory (a file is in the way): it fails at
+    // start, every time (the inputs themselves are fine, so the launcher starts it)
+    let blocker = dir.path().join("out/.state/planner");
+    std::fs::create_dir_all(blocker.parent().unwrap()).unwrap();
+    std::fs::write(&blocker, "not a directory").unwrap();
+    let mut l = Launch::start(dir.path(), H, &["--max-restarts", "2"]);
     let st = l.finish(Duration::from_secs(120));
     assert_eq!(st.code(), Some(1));
     let err = l.stderr_tail();
@@ -144,7 +146,11 @@ fn a_child_that_keeps_failing_stops_the_run() {
     for e in l.named("child_started") {
         assert!(!running(e["pid"].as_u64().unwrap() as u32));
     }
-    assert!(l.log("echo").contains("missing-iceoryx2.toml"));
+    assert!(
+        l.log("planner").contains(".state/planner"),
+        "{}",
+        l.log("planner")
+    );
 }
 
 #[test]
@@ -161,7 +167,7 @@ fn bad_inputs_are_named_before_anything_starts() {
         .arg(dir.path().join("out"))
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "bad input");
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("radar.prf_hz"), "{e}");
     assert!(!dir.path().join("out/logs").exists());
@@ -174,7 +180,7 @@ fn bad_inputs_are_named_before_anything_starts() {
         .output()
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "bad input");
     assert!(e.contains("/nonexistent/mission.toml"), "{e}");
 
     let o = Command::new(exe())
@@ -196,4 +202,148 @@ fn bad_inputs_are_named_before_anything_starts() {
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("-l ENDPOINT"), "{e}");
+}
+
+fn run_args(dir: &std::path::Path, out: &str, extra: &[&str]) -> Vec<OsString> {
+    let mut a: Vec<OsString> = vec!["run".into(), mission().into(), "--scene".into()];
+    a.push(scene().into());
+    a.push("--out".into());
+    a.push(dir.join(out).into());
+    a.extend(["--horizon-s", "30"].iter().map(OsString::from));
+    a.extend(extra.iter().map(OsString::from));
+    a
+}
+
+/// Every option a child would refuse, and the Zenoh and iceoryx2 flags, are checked before
+/// anything starts: exit code 2 (bad input), one line naming the option, no panic, no output
+/// directory, nothing left in /dev/shm.
+#[test]
+fn bad_options_exit_2_before_anything_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing-iceoryx2.toml");
+    let missing = missing.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--timeout-s", "nan"], "--timeout-s"),
+        (vec!["--timeout-s=-1"], "--timeout-s"),
+        (vec!["--plan-timeout-s", "inf"], "--plan-timeout-s"),
+        (vec!["--resend-after-s", "0"], "--resend-after-s"),
+        (vec!["--window", "0"], "--window"),
+        (vec!["--max-frame-bytes", "100"], "--max-frame-bytes"),
+        (vec!["--max-frame-bytes", "0"], "--max-frame-bytes"),
+        (vec!["--child-log", "=["], "--child-log"),
+        (vec!["--iox-config", missing], "--iox-config"),
+        (vec!["-e", "garbage"], "--connect garbage"),
+        (vec!["-l", "garbage"], "--listen garbage"),
+    ];
+    for (i, (extra, needle)) in cases.iter().enumerate() {
+        let out = format!("out{i}");
+        let e = cellsar_bounded(
+            &run_args(dir.path(), &out, extra),
+            dir.path(),
+            Duration::from_secs(60),
+            |_| {},
+        );
+        assert_eq!(e.code, Some(2), "{extra:?}: {}", e.stderr);
+        assert!(e.stderr.contains(needle), "{extra:?}: {}", e.stderr);
+        for noise in ["panicked", "backtrace", ".rs:", "Message {", ".cargo"] {
+            assert!(
+                !e.stderr.contains(noise),
+                "{extra:?}: {noise:?} in {}",
+                e.stderr
+            );
+        }
+        assert_eq!(
+            e.stderr.lines().filter(|l| l.contains(needle)).count(),
+            1,
+            "{extra:?}: printed once: {}",
+            e.stderr
+        );
+        assert!(
+            !dir.path().join(&out).exists(),
+            "{extra:?}: something started"
+        );
+        let left = shm_files(&format!("cs{}_", e.pid));
+        assert!(left.is_empty(), "{extra:?}: left in /dev/shm: {left:?}");
+    }
+}
+
+/// A mission that cannot be flown exits with code 3, naming the slot, before anything starts.
+#[test]
+fn an_infeasible_mission_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("far.toml");
+    std::fs::write(
+        &m,
+        "name = \"unreachable\"\n[params]\nhorizon_s = 20\nstart_m = [-1000.0, 0.0]\n\
+         [landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }, \
+         { x_m = 50000.0, y_m = 0.0, from_s = 10.0, to_s = 20.0 }]\n",
+    )
+    .unwrap();
+    let args: Vec<OsString> = vec![
+        "run".into(),
+        m.into(),
+        "--scene".into(),
+        scene().into(),
+        "--out".into(),
+        dir.path().join("out").into(),
+    ];
+    let e = cellsar_bounded(&args, dir.path(), Duration::from_secs(60), |_| {});
+    assert_eq!(e.code, Some(3), "{}", e.stderr);
+    assert!(
+        e.stderr.contains("cannot be flown") && e.stderr.contains("slot"),
+        "{}",
+        e.stderr
+    );
+    assert!(!dir.path().join("out").exists());
+}
+
+/// `--plan-timeout-s` also bounds the wait for a planner that never appears (here an
+/// `--external` one that is not running): exit 1 naming the option, soon after the timeout.
+#[test]
+fn plan_timeout_covers_waiting_for_the_planner() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = cellsar_bounded(
+        &run_args(
+            dir.path(),
+            "out",
+            &["--external", "planner", "--plan-timeout-s", "2"],
+        ),
+        dir.path(),
+        Duration::from_secs(60),
+        |_| {},
+    );
+    assert_eq!(e.code, Some(1), "{}", e.stderr);
+    assert!(e.stderr.contains("--plan-timeout-s 2"), "{}", e.stderr);
+    assert!(e.elapsed < Duration::from_secs(30), "took {:?}", e.elapsed);
+    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
+}
+
+/// SIGINT while the launcher waits for a planner exits 130, like SIGINT while imaging.
+#[test]
+fn sigint_while_waiting_for_the_planner_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let logs = dir.path().join("out/logs");
+    let e = cellsar_bounded(
+        &run_args(
+            dir.path(),
+            "out",
+            &["--external", "planner", "--plan-timeout-s", "600"],
+        ),
+        dir.path(),
+        Duration::from_secs(90),
+        move |pid| {
+            std::thread::spawn(move || {
+                // once the children run (the launcher is then waiting for the planner)
+                let deadline = std::time::Instant::now() + Duration::from_secs(60);
+                while !logs.join("processor.log").exists() && std::time::Instant::now() < deadline {
+                    std::thread::sleep(Duration::from_millis(50));
+                }
+                std::thread::sleep(Duration::from_millis(500));
+                signal(pid, "INT");
+            });
+        },
+    );
+    assert_eq!(e.code, Some(130), "{}", e.stderr);
+    assert!(e.stderr.contains("interrupted"), "{}", e.stderr);
+    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
 }

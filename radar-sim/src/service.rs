@@ -45,7 +45,9 @@ use std::path::PathBuf;
 
 /// Default largest frame payload, bytes (4 MiB: 100 pulses of 4096 samples fit; an iceoryx2
 /// publisher then maps 13 × 4 MiB of shared memory).
-pub const DEFAULT_MAX_FRAME_BYTES: usize = 4 << 20;
+/// The same value as `cellsar-bridge` and `cellsar run` use ([`bridge::frame::SERVICE_MAX_FRAME_BYTES`]):
+/// the services and the bridge must agree on it.
+pub const DEFAULT_MAX_FRAME_BYTES: usize = bridge::frame::SERVICE_MAX_FRAME_BYTES;
 
 /// Errors of the radar services; each names what failed.
 #[derive(Debug, thiserror::Error)]

@@ -394,3 +394,23 @@ fn help_documents_the_exit_codes_and_the_required_scene() {
         assert!(!h.contains("--scene <SCENE>  [default"), "{h}");
     }
 }
+
+#[test]
+fn service_seconds_beyond_a_duration_exit_2_naming_the_flag() {
+    // 1e300 s passed the old "> 0 and finite" check and panicked converting to a Duration.
+    let scene = root().join("radar-sim/scenes/default.toml");
+    for (cmd, flag) in [
+        ("echo", "--status-interval-s"),
+        ("process-service", "--status-interval-s"),
+        ("process-service", "--resend-after-s"),
+    ] {
+        let o = bin()
+            .args([cmd, "--no-multicast-scouting", flag, "1e300", "--scene"])
+            .arg(&scene)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{cmd} {flag}: {err}");
+        assert!(err.contains(flag) && !err.contains("panicked"), "{err}");
+    }
+}

@@ -51,7 +51,7 @@ struct FrameArgs {
     #[arg(long, default_value_t = 1 << 20)]
     frame_bytes: usize,
     /// Frames per second (0: as fast as possible).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = bridge::flags::parse_non_negative)]
     rate_hz: f64,
     /// Do not compute CRCs.
     #[arg(long)]
@@ -64,10 +64,10 @@ struct RxArgs {
     #[arg(long, default_value_t = 100)]
     frames: u64,
     /// Give up after this many seconds.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = bridge::flags::parse_seconds)]
     timeout_s: f64,
-    /// Stop when no frame arrived for this long after the first one.
-    #[arg(long, default_value_t = 3.0)]
+    /// Stop when no frame arrived for this long after the first one, s.
+    #[arg(long, default_value_t = 3.0, value_parser = bridge::flags::parse_seconds)]
     idle_s: f64,
     /// Verify each frame's CRC (reads the whole payload).
     #[arg(long)]
@@ -180,11 +180,11 @@ enum Cmd {
         #[arg(long, default_value_t = 100)]
         frames: u64,
         /// Frames per second of the latency runs (at most).
-        #[arg(long, default_value_t = 20.0)]
+        #[arg(long, default_value_t = 20.0, value_parser = bridge::flags::parse_non_negative)]
         latency_rate_hz: f64,
         /// Latency runs are paced to at most this many MB/s, so they measure latency and not
         /// queueing.
-        #[arg(long, default_value_t = 100.0)]
+        #[arg(long, default_value_t = 100.0, value_parser = bridge::flags::parse_non_negative)]
         latency_budget_mb_s: f64,
         /// Repetitions (plain Zenoh and bridged runs alternate within each).
         #[arg(long, default_value_t = 3)]
@@ -335,15 +335,19 @@ impl Pacer {
     fn new(rate_hz: f64) -> Self {
         Pacer {
             start: Instant::now(),
-            period: (rate_hz > 0.0).then(|| Duration::from_secs_f64(1.0 / rate_hz)),
+            period: (rate_hz > 0.0)
+                .then(|| Duration::try_from_secs_f64(1.0 / rate_hz).unwrap_or(Duration::MAX)),
             n: 0,
         }
     }
     fn wait(&mut self) {
         if let Some(p) = self.period {
-            let due = self.start + p * self.n;
+            // checked: an absurdly low rate must not overflow the clock (it is then not paced)
+            let due = p
+                .checked_mul(self.n)
+                .and_then(|d| self.start.checked_add(d));
             let now = Instant::now();
-            if due > now {
+            if let Some(due) = due.filter(|d| *d > now) {
                 std::thread::sleep(due - now);
             }
         }
@@ -853,7 +857,9 @@ impl BenchCtx {
         } else {
             0.0
         };
-        Duration::from_secs_f64(60.0 + 2.0 * paced + frames as f64)
+        Duration::from_secs_f64(
+            (60.0 + 2.0 * paced + frames as f64).min(bridge::flags::MAX_SECONDS),
+        )
     }
 
     /// Producer -> consumer on one iceoryx2 service.

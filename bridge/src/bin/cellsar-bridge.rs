@@ -8,7 +8,9 @@
 //!
 //! Logs its counters every `--stats-interval-s` and on exit, publishes them as JSON on
 //! `cellsar/bridge/<instance>/stats` and answers queries there. Stops cleanly on SIGINT or
-//! SIGTERM (exit code 0); exits with 1 on a setup failure or when a forwarding thread dies.
+//! SIGTERM (exit code 0). Exit codes: 2 bad input (a flag, route, Zenoh or iceoryx2
+//! configuration; the message names it, on one line), 1 a failure at run time (setting up
+//! Zenoh or iceoryx2, a forwarding thread that dies).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -44,6 +46,9 @@ enum LocalBackpressure {
 }
 
 /// Forwards iceoryx2 frame services to Zenoh keys and back, without loops.
+///
+/// Exit codes: 0 stopped by SIGINT/SIGTERM; 1 failure at run time; 2 bad input (flag, route,
+/// Zenoh or iceoryx2 configuration).
 #[derive(Parser, Debug)]
 #[command(name = "cellsar-bridge", version)]
 struct Cli {
@@ -54,8 +59,9 @@ struct Cli {
     /// (default: the same string), both ways unless told otherwise. Repeatable.
     #[arg(long = "service", value_name = "ROUTE", required = true)]
     services: Vec<String>,
-    /// Largest frame payload in bytes (sizes every service's samples).
-    #[arg(long, default_value_t = 32 << 20)]
+    /// Largest frame payload in bytes (sizes every service's samples; the echo and the
+    /// processor must be given the same value, and have the same default).
+    #[arg(long, default_value_t = bridge::frame::SERVICE_MAX_FRAME_BYTES)]
     max_frame_bytes: usize,
     /// Subscribers each service admits.
     #[arg(long, default_value_t = 4)]
@@ -81,8 +87,8 @@ struct Cli {
     /// block (lossless; back-pressures Zenoh and the remote sender).
     #[arg(long, value_enum, default_value_t = LocalBackpressure::Discard)]
     inbound_backpressure: LocalBackpressure,
-    /// Seconds between counter logs and stats publications.
-    #[arg(long, default_value_t = 5.0)]
+    /// Seconds between counter logs and stats publications (finite, > 0).
+    #[arg(long, default_value_t = 5.0, value_parser = bridge::flags::parse_seconds)]
     stats_interval_s: f64,
     #[command(flatten)]
     zenoh: ZenohArgs,
@@ -92,31 +98,32 @@ struct Cli {
 
 fn main() {
     init_tracing();
-    if let Err(e) = run(Cli::parse()) {
-        // once, on stderr (tracing's own output also goes there)
+    let cli = Cli::parse();
+    // once, on stderr (tracing's own output also goes there)
+    let report = |e: anyhow::Error, code: i32| -> ! {
         eprintln!("cellsar-bridge: {}", cellsar_error::error_chain(e.as_ref()));
-        std::process::exit(1);
+        std::process::exit(code);
+    };
+    let setup = match check(&cli) {
+        Ok(s) => s,
+        Err(e) => report(e, 2),
+    };
+    if let Err(e) = run(&cli, setup) {
+        report(e, 1);
     }
 }
 
-fn init_tracing() {
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
-    tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .init();
-    init_iceoryx_logging();
+/// What [`check`] derived from the flags.
+struct Setup {
+    config: ForwarderConfig,
+    zconfig: bridge::zenoh::Config,
+    env: bridge::IoxEnv,
+    interval: Duration,
 }
 
-fn run(cli: Cli) -> Result<()> {
-    if !(cli.stats_interval_s > 0.0 && cli.stats_interval_s.is_finite()) {
-        bail!(
-            "--stats-interval-s must be a positive number, got {}",
-            cli.stats_interval_s
-        );
-    }
+/// Checks every flag before anything starts (bad input: exit code 2).
+fn check(cli: &Cli) -> Result<Setup> {
+    let interval = bridge::flags::seconds("--stats-interval-s", cli.stats_interval_s)?;
     let mut routes = Vec::new();
     for s in &cli.services {
         let mut r = Route::parse(s, cli.max_frame_bytes)?;
@@ -141,15 +148,41 @@ fn run(cli: Cli) -> Result<()> {
         },
     };
     config.validate()?;
+    keys::alive("bridge", &cli.instance)?;
+    let zconfig = cli.zenoh.to_config()?;
+    let env = cli.iox.env()?;
+    Ok(Setup {
+        config,
+        zconfig,
+        env,
+        interval,
+    })
+}
 
+fn init_tracing() {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .init();
+    init_iceoryx_logging();
+}
+
+fn run(cli: &Cli, setup: Setup) -> Result<()> {
+    let Setup {
+        config,
+        zconfig,
+        env,
+        interval,
+    } = setup;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         signal_hook::flag::register(sig, stop.clone())
             .with_context(|| format!("installing the handler of signal {sig}"))?;
     }
 
-    let zconfig = cli.zenoh.to_config()?;
-    let env = cli.iox.env()?;
     let node = ZenohNode::open(zconfig, "bridge", &cli.instance)?;
     let forwarder = Forwarder::start(&node, &env, &config)?;
 
@@ -189,7 +222,6 @@ fn run(cli: Cli) -> Result<()> {
         "bridge running (kind {}); stops on SIGINT/SIGTERM",
         BridgeStats::NAME
     );
-    let interval = Duration::from_secs_f64(cli.stats_interval_s);
     let mut last = Instant::now();
     let mut failed = false;
     while !stop.load(Ordering::Relaxed) {
@@ -247,5 +279,32 @@ fn log_stats(stats: &BridgeStats, last: bool) {
             in_send_errors = i.send_errors,
             "route counters"
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn max_frame_bytes_defaults_to_the_services_value() {
+        let cli = Cli::try_parse_from(["cellsar-bridge", "--service", "x"]).unwrap();
+        assert_eq!(cli.max_frame_bytes, bridge::frame::SERVICE_MAX_FRAME_BYTES);
+    }
+
+    #[test]
+    fn stats_interval_must_be_positive_seconds() {
+        for bad in ["nan", "-1", "0", "inf"] {
+            let e = Cli::try_parse_from([
+                "cellsar-bridge",
+                "--service",
+                "x",
+                &format!("--stats-interval-s={bad}"),
+            ])
+            .unwrap_err();
+            assert_eq!(e.exit_code(), 2, "{bad}");
+            assert!(e.to_string().contains("--stats-interval-s"), "{e}");
+        }
     }
 }

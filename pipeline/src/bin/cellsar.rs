@@ -1,20 +1,29 @@
 //! `cellsar`: the pipeline launcher (`cellsar run`) and, as subcommands, every process it
 //! starts (planner, echo, process, bridge, router).
 //!
-//! Exit codes: 0 done (and, for `run`, every landmark in view detected); 1 failure; 2 bad
-//! input; 4 `run` completed but a landmark in view was missed; 130 interrupted.
+//! Exit codes ([`pipeline::exit`]): 0 done; 1 failure at run time; 2 bad input (an option,
+//! the mission or the scene file; the message names it; nothing started); 3 the mission
+//! cannot be flown; 4 `run --strict` completed but a landmark in view was missed; 130
+//! interrupted.
 
 use std::process::ExitCode;
 
+use anyhow::Context;
 use clap::{Parser, Subcommand};
+use pipeline::exit::{self, Failure};
 use pipeline::launch::{self, Outcome, RunArgs};
 use pipeline::roles::{self, BridgeArgs, RouterArgs};
+
+const EXIT_CODES: &str = "Exit codes: 0 done; 1 failure at run time; 2 bad input (an option, the \
+mission or the scene file; nothing started); 3 the mission cannot be flown; 4 `run --strict`: a \
+landmark in view was not detected; 130 interrupted (SIGINT/SIGTERM, every child stopped).";
 
 #[derive(Parser, Debug)]
 #[command(
     name = "cellsar",
     version,
-    about = "cellsar pipeline: planner, echo simulator and processor as supervised processes over Zenoh and iceoryx2"
+    about = "cellsar pipeline: planner, echo simulator and processor as supervised processes over Zenoh and iceoryx2",
+    after_help = EXIT_CODES
 )]
 struct Cli {
     #[command(subcommand)]
@@ -26,6 +35,7 @@ enum Command {
     /// Run a mission through the whole pipeline (children: planner, echo, processor, and the
     /// bridge / a router when asked) and write plan/, images/, detections.csv, metrics.json,
     /// report.json, report.md, pipeline.json.
+    #[command(after_help = EXIT_CODES)]
     Run(Box<RunArgs>),
     /// The plan service (as `cellsar-planner serve`).
     Planner(planner::service::ServeArgs),
@@ -50,9 +60,37 @@ fn init_tracing(default: &str) {
     bridge::iox::init_iceoryx_logging();
 }
 
-fn fail(e: anyhow::Error) -> ExitCode {
-    eprintln!("error: {}", planner::error_chain(e.as_ref()));
-    ExitCode::from(1)
+fn fail(f: Failure) -> ExitCode {
+    eprintln!("error: {f}");
+    ExitCode::from(f.exit_code())
+}
+
+/// Bad input unless the radar service failed at run time.
+fn radar_failure(e: radar_sim::service::ServiceError) -> Failure {
+    use radar_sim::service::ServiceError as E;
+    match e {
+        E::Flag(_) | E::Config(_) => Failure::bad_input(e),
+        _ => Failure::runtime(e),
+    }
+}
+
+/// What the radar services would refuse, checked before they start: the numbers, the scene,
+/// the Zenoh and iceoryx2 flags.
+fn check_radar_service(
+    seconds: &[(&str, f64)],
+    scene: &std::path::Path,
+    zenoh: &bridge::ZenohArgs,
+    iox: &bridge::IoxArgs,
+) -> Result<(), Failure> {
+    for (flag, v) in seconds {
+        bridge::flags::seconds(flag, *v).map_err(Failure::bad_input)?;
+    }
+    radar_sim::config::SceneFile::from_path(scene)
+        .context("--scene")
+        .map_err(Failure::bad_input)?;
+    zenoh.to_config().map_err(Failure::bad_input)?;
+    iox.env().map_err(Failure::bad_input)?;
+    Ok(())
 }
 
 fn main() -> ExitCode {
@@ -63,40 +101,141 @@ fn main() -> ExitCode {
     });
     let stop = match planner::service::stop_on_signals() {
         Ok(s) => s,
-        Err(e) => return fail(e.into()),
+        Err(e) => return fail(Failure::runtime(e)),
     };
     if !matches!(cli.command, Command::Run(_)) {
         pipeline::supervise::exit_with_launcher(&stop);
     }
-    let r: anyhow::Result<()> = match cli.command {
+    let r: Result<(), Failure> = match cli.command {
         Command::Run(args) => {
             return match launch::run(&args, stop) {
                 Ok(Outcome::Complete) => ExitCode::SUCCESS,
                 Ok(Outcome::MissedLandmark) => {
                     eprintln!("a landmark in view was not detected (see report.json)");
-                    ExitCode::from(4)
+                    ExitCode::from(exit::MISSED_LANDMARK)
                 }
                 Ok(Outcome::Interrupted) => {
                     eprintln!("interrupted; children stopped");
-                    ExitCode::from(130)
+                    ExitCode::from(exit::INTERRUPTED)
                 }
                 Err(e) => fail(e),
             }
         }
-        Command::Planner(a) => planner::service::serve(&a, &stop)
-            .map(|r| tracing::info!(?r, "plan service stopped"))
-            .map_err(Into::into),
-        Command::Echo(a) => radar_sim::service::run_echo(&a, &stop)
-            .map(|r| tracing::info!(?r, "echo stopped"))
-            .map_err(Into::into),
-        Command::Process(a) => radar_sim::service::run_processor(&a, &stop)
-            .map(|r| tracing::info!(?r, "processor stopped"))
-            .map_err(Into::into),
+        Command::Planner(a) => a
+            .zenoh
+            .to_config()
+            .map_err(Failure::bad_input)
+            .and_then(|_| {
+                planner::service::serve(&a, &stop).map_err(|e| match e {
+                    planner::service::ServiceError::Config(_) => Failure::bad_input(e),
+                    _ => Failure::runtime(e),
+                })
+            })
+            .map(|r| tracing::info!(?r, "plan service stopped")),
+        Command::Echo(a) => check_radar_service(
+            &[("--status-interval-s", a.status_interval_s)],
+            &a.scene,
+            &a.zenoh,
+            &a.iox,
+        )
+        .and_then(|()| radar_sim::service::run_echo(&a, &stop).map_err(radar_failure))
+        .map(|r| tracing::info!(?r, "echo stopped")),
+        Command::Process(a) => if a.window == 0 {
+            Err(Failure::bad_input(anyhow::anyhow!(
+                "--window 0: must be at least 1"
+            )))
+        } else {
+            check_radar_service(
+                &[
+                    ("--resend-after-s", a.resend_after_s),
+                    ("--status-interval-s", a.status_interval_s),
+                ],
+                &a.scene,
+                &a.zenoh,
+                &a.iox,
+            )
+        }
+        .and_then(|()| radar_sim::service::run_processor(&a, &stop).map_err(radar_failure))
+        .map(|r| tracing::info!(?r, "processor stopped")),
         Command::Bridge(a) => roles::run_bridge(&a, &stop),
         Command::Router(a) => roles::run_router(&a, &stop),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => fail(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+
+    fn parse(args: &[&str]) -> Command {
+        Cli::try_parse_from(std::iter::once("cellsar").chain(args.iter().copied()))
+            .unwrap()
+            .command
+    }
+
+    /// Every process of a mission must use the same --max-frame-bytes: the defaults agree
+    /// (with `cellsar-bridge`'s, tested in the bridge crate against the same constant).
+    #[test]
+    fn max_frame_bytes_defaults_agree() {
+        let want = bridge::frame::SERVICE_MAX_FRAME_BYTES;
+        assert_eq!(radar_sim::service::DEFAULT_MAX_FRAME_BYTES, want);
+        let got = [
+            match parse(&["run", "m.toml", "--scene", "s.toml", "--out", "o"]) {
+                Command::Run(a) => a.max_frame_bytes,
+                c => panic!("{c:?}"),
+            },
+            match parse(&["echo", "--scene", "s.toml"]) {
+                Command::Echo(a) => a.max_frame_bytes,
+                c => panic!("{c:?}"),
+            },
+            match parse(&["process", "--scene", "s.toml"]) {
+                Command::Process(a) => a.max_frame_bytes,
+                c => panic!("{c:?}"),
+            },
+            match parse(&["bridge", "--service", "x"]) {
+                Command::Bridge(a) => a.max_frame_bytes,
+                c => panic!("{c:?}"),
+            },
+        ];
+        assert_eq!(got, [want; 4]);
+    }
+
+    /// Seconds that are not a finite positive number are refused by clap, naming the option
+    /// (exit code 2).
+    #[test]
+    fn float_seconds_options_are_checked_when_parsed() {
+        let base = ["run", "m.toml", "--scene", "s.toml", "--out", "o"];
+        for opt in [
+            "--timeout-s",
+            "--plan-timeout-s",
+            "--resend-after-s",
+            "--horizon-s",
+        ] {
+            for bad in ["nan", "-1", "0", "inf", "1e300"] {
+                let arg = format!("{opt}={bad}");
+                let e = Cli::try_parse_from(
+                    std::iter::once("cellsar")
+                        .chain(base.iter().copied())
+                        .chain([arg.as_str()]),
+                )
+                .unwrap_err();
+                assert_eq!(e.exit_code(), 2, "{arg}");
+                assert!(e.to_string().contains(opt), "{arg}: {e}");
+            }
+        }
+        let e = Cli::try_parse_from([
+            "cellsar",
+            "bridge",
+            "--service",
+            "x",
+            "--stats-interval-s",
+            "nan",
+        ])
+        .unwrap_err();
+        assert!(e.to_string().contains("--stats-interval-s"), "{e}");
     }
 }

@@ -112,6 +112,75 @@ pub fn rows_per_aperture(csv: &Path) -> HashMap<String, usize> {
     m
 }
 
+/// How a bounded run of the `cellsar` binary ended.
+pub struct Ended {
+    /// Exit code (None: killed by a signal).
+    pub code: Option<i32>,
+    /// Its stderr.
+    pub stderr: String,
+    /// Its pid (for the iceoryx2 prefix `cs<pid>_` of a launcher).
+    pub pid: u32,
+    /// How long it ran.
+    pub elapsed: Duration,
+}
+
+/// Runs `cellsar ARGS` (stdin closed, stdout discarded, stderr kept) and waits at most
+/// `timeout` for it (then kills it and fails the test); `on_start` is called once it runs
+/// (to send it a signal, say).
+pub fn cellsar_bounded(
+    args: &[std::ffi::OsString],
+    dir: &Path,
+    timeout: Duration,
+    on_start: impl FnOnce(u32),
+) -> Ended {
+    let err = dir.join(format!("cellsar-{}.err", std::process::id()));
+    let started = Instant::now();
+    let mut child = Command::new(exe())
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::from(std::fs::File::create(&err).unwrap()))
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    on_start(pid);
+    let deadline = started + timeout;
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if Instant::now() >= deadline {
+            signal(pid, "TERM");
+            std::thread::sleep(Duration::from_secs(2));
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!(
+                "cellsar {args:?} did not end within {timeout:?}; stderr:\n{}",
+                std::fs::read_to_string(&err).unwrap_or_default()
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    Ended {
+        code: status.code(),
+        stderr: std::fs::read_to_string(&err).unwrap_or_default(),
+        pid,
+        elapsed: started.elapsed(),
+    }
+}
+
+/// Files in /dev/shm whose names start with `prefix`.
+pub fn shm_files(prefix: &str) -> Vec<String> {
+    std::fs::read_dir("/dev/shm")
+        .map(|rd| {
+            rd.flatten()
+                .map(|e| e.file_name().to_string_lossy().to_string())
+                .filter(|n| n.starts_with(prefix))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// A `cellsar run` with `--events-json`; killed and reaped (children included) on drop.
 pub struct Launch {
     pub child: Child,

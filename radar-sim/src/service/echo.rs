@@ -98,12 +98,9 @@ struct Job {
 
 /// Runs the echo service until `stop` is set.
 pub fn run_echo(args: &EchoArgs, stop: &AtomicBool) -> ServiceResult<EchoReport> {
-    if !(args.status_interval_s > 0.0 && args.status_interval_s.is_finite()) {
-        return Err(ServiceError::Flag(format!(
-            "--status-interval-s {} must be a positive number",
-            args.status_interval_s
-        )));
-    }
+    // finite, > 0 and at most bridge::flags::MAX_SECONDS (1e300 panicked in Duration)
+    bridge::flags::seconds("--status-interval-s", args.status_interval_s)
+        .map_err(|e| ServiceError::Flag(e.to_string()))?;
     args.limits.limits()?;
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;

@@ -632,11 +632,8 @@ pub fn run_processor(args: &ProcessArgs, stop: &AtomicBool) -> ServiceResult<Pro
         ("--resend-after-s", args.resend_after_s),
         ("--status-interval-s", args.status_interval_s),
     ] {
-        if !(v > 0.0 && v.is_finite()) {
-            return Err(ServiceError::Flag(format!(
-                "{flag} {v} must be a positive number"
-            )));
-        }
+        // finite, > 0 and at most bridge::flags::MAX_SECONDS (1e300 panicked in Duration)
+        bridge::flags::seconds(flag, v).map_err(|e| ServiceError::Flag(e.to_string()))?;
     }
     if args.window == 0 {
         return Err(ServiceError::Flag("--window must be at least 1".into()));
