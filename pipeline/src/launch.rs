@@ -75,6 +75,12 @@ pub struct RunArgs {
     /// Keep only the landmark windows that end within this horizon, s.
     #[arg(long, value_parser = flags::parse_seconds)]
     pub horizon_s: Option<f64>,
+    /// The plan's resolution requirement: `paper` (the paper's δ_r, δ_a ≤ d_min) or `general`
+    /// (the worst width of the true bistatic cell ≤ d_min in every landmark slot; top-level
+    /// README, "Resolution"). Sent with the plan request; `cellsar-radar-sim closed-loop
+    /// --resolution` gives the same results.
+    #[arg(long, default_value = "paper", value_parser = planner::evaluate::ResolutionMode::parse)]
+    pub resolution: planner::evaluate::ResolutionMode,
     /// How IQ frames reach the processor.
     #[arg(long, value_enum, default_value_t = Transport::Iox)]
     pub transport: Transport,
@@ -559,7 +565,10 @@ fn run_on(
     spinner.enable_steady_tick(Duration::from_millis(200));
     let request = PlanRequest {
         mission: mission.to_file_struct(),
-        options: PlanRequestOptions::default(),
+        options: PlanRequestOptions {
+            resolution: Some(args.resolution),
+            ..PlanRequestOptions::default()
+        },
     };
     let plan_started = Instant::now();
     let plan_timeout = flags::seconds("--plan-timeout-s", args.plan_timeout_s)?;

@@ -347,3 +347,35 @@ fn sigint_while_waiting_for_the_planner_exits_130() {
     assert!(e.stderr.contains("interrupted"), "{}", e.stderr);
     assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
 }
+
+/// `--resolution` reaches the planner: under the general cell the default mission cannot be
+/// planned from its start (top-level README, "Resolution": the planner stops at slot 23), so
+/// the run exits 3 naming the resolution; with the default `paper` the same mission is planned
+/// (every other test here).
+#[test]
+fn resolution_general_reaches_the_planner() {
+    let dir = tempfile::tempdir().unwrap();
+    let args: Vec<OsString> = vec![
+        "run".into(),
+        mission().into(),
+        "--scene".into(),
+        scene().into(),
+        "--out".into(),
+        dir.path().join("out").into(),
+        "--horizon-s".into(),
+        "30".into(),
+        "--resolution".into(),
+        "general".into(),
+    ];
+    let e = cellsar_bounded(&args, dir.path(), Duration::from_secs(120), |_| {});
+    assert_eq!(e.code, Some(3), "{}", e.stderr);
+    assert!(e.stderr.contains("resolution"), "{}", e.stderr);
+    // an unknown mode is bad input, named, before anything starts
+    let mut bad = args.clone();
+    if let Some(last) = bad.last_mut() {
+        *last = "fine".into();
+    }
+    let e = cellsar_bounded(&bad, dir.path(), Duration::from_secs(30), |_| {});
+    assert_eq!(e.code, Some(2), "{}", e.stderr);
+    assert!(e.stderr.contains("--resolution"), "{}", e.stderr);
+}

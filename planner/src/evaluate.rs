@@ -37,6 +37,15 @@ impl ResolutionMode {
             ResolutionMode::General => "general",
         }
     }
+
+    /// Parses a name as printed by [`ResolutionMode::name`]; the error lists the names (a clap
+    /// value parser for `--resolution` in every binary).
+    pub fn parse(name: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|r| r.name() == name)
+            .ok_or_else(|| format!("unknown resolution `{name}`; expected one of: paper, general"))
+    }
 }
 
 /// A landmark slot is called blind when the angle ψ between the range gradient and the track is

@@ -63,7 +63,7 @@ enum Command {
         plain_sca: bool,
         /// Resolution requirement of the exact-geometry schemes: general (the worst width of the
         /// 2-D resolution cell ≤ d_min, away from blind geometry) or paper (δ_r, δ_a ≤ d_min).
-        #[arg(long, default_value = "paper", value_parser = parse_resolution)]
+        #[arg(long, default_value = "paper", value_parser = ResolutionMode::parse)]
         resolution: ResolutionMode,
         /// Interior-point method of the exact scheme's cone programs: clarabel (default), or
         /// banded (the planner's own banded normal-equations method, Clarabel where it gives no
@@ -143,10 +143,6 @@ fn parse_named<T: Copy>(
             names.join(", ")
         )
     })
-}
-
-fn parse_resolution(s: &str) -> Result<ResolutionMode, String> {
-    parse_named(s, &ResolutionMode::ALL, ResolutionMode::name, "resolution")
 }
 
 fn parse_backend(s: &str) -> Result<Backend, String> {

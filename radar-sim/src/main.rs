@@ -82,6 +82,11 @@ enum Cmd {
         /// Limits on the run's IQ, checked before planning.
         #[command(flatten)]
         limits: IqLimitArgs,
+        /// The resolution requirement of the plan: `paper` (the paper's δ_r, δ_a ≤ d_min) or
+        /// `general` (the worst width of the true bistatic cell ≤ d_min in every landmark slot;
+        /// see the top-level README, "Resolution").
+        #[arg(long, default_value = "paper", value_parser = planner::evaluate::ResolutionMode::parse)]
+        resolution: planner::evaluate::ResolutionMode,
     },
     /// Resolution report: measured −3 dB region of a point response vs the predicted cell at
     /// several bistatic angles (one near blind) and bandwidths → RESOLUTION.md, JSON, SVGs.
@@ -235,6 +240,7 @@ fn closed_loop(
     out: &Path,
     horizon: Option<f64>,
     limits: &IqLimits,
+    plan_options: &planner::PlanOptions,
 ) -> Result<bool> {
     let mut m = planner::Mission::from_path(mission).map_err(bad)?;
     if let Some(h) = horizon {
@@ -253,7 +259,7 @@ fn closed_loop(
     let setup = RadarSetup::new(m.params(), &scene_file)?;
     radar_sim::limits::check_mission(&setup, &m, limits)?;
     let t = Instant::now();
-    let result = planner::plan(&m, &planner::PlanOptions::default()).map_err(|e| {
+    let result = planner::plan(&m, plan_options).map_err(|e| {
         let what = format!("planning {}", mission.display());
         match e {
             planner::PlanError::Infeasible(_) => {
@@ -272,7 +278,7 @@ fn closed_loop(
         m.slots(),
         t.elapsed().as_secs_f64(),
         result.evaluation.energy_j,
-        result.evaluation.is_feasible()
+        result.evaluation.is_feasible_for(plan_options.resolution)
     );
     let plan_dir = out.join("plan");
     planner::report::write_plan_dir(&plan_dir, &m, &result)
@@ -386,8 +392,20 @@ fn run_cli() -> Result<()> {
             out,
             horizon_s,
             limits,
+            resolution,
         } => {
-            if !closed_loop(&mission, &scene, &out, horizon_s, &limits.limits()?)? {
+            let plan_options = planner::PlanOptions {
+                resolution,
+                ..Default::default()
+            };
+            if !closed_loop(
+                &mission,
+                &scene,
+                &out,
+                horizon_s,
+                &limits.limits()?,
+                &plan_options,
+            )? {
                 return Err(Failure::Missed(anyhow::anyhow!(
                     "a landmark in view was not detected (see report.json)"
                 )));

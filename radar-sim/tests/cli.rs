@@ -414,3 +414,29 @@ fn service_seconds_beyond_a_duration_exit_2_naming_the_flag() {
         assert!(err.contains(flag) && !err.contains("panicked"), "{err}");
     }
 }
+
+#[test]
+fn closed_loop_plans_for_the_general_resolution_cell() {
+    // The default mission started where a general-resolution plan exists (top-level README,
+    // "Resolution"), first two windows: every landmark slot resolved under the general cell.
+    let dir = tempfile::tempdir().unwrap();
+    let o = bin()
+        .arg("closed-loop")
+        .arg(root().join("../missions/default-30m-far-start.toml"))
+        .arg("--scene")
+        .arg(root().join("scenes/default.toml"))
+        .arg("--out")
+        .arg(dir.path())
+        .args(["--horizon-s", "20", "--resolution", "general"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(matches!(o.status.code(), Some(0 | 4)), "{err}");
+    let s: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("plan/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(s["resolution"], "general");
+    assert_eq!(s["feasible"], true);
+    assert_eq!(s["slots_unresolved_general"], 0);
+}
