@@ -28,48 +28,13 @@ import csv
 import math
 import sys
 import time
-import tomllib
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import minimize
 
-DEFAULTS = {
-    "bandwidth_hz": 150e6,
-    "wavelength_m": 0.1,
-    "integration_time_s": 1.0,
-    "observation_angle_rad": math.pi / 4,
-    "d_min_m": 20.0,
-    "altitude_m": 1000.0,
-    "max_speed_mps": 50.0,
-    "slot_s": 0.5,
-    "horizon_s": 300.0,
-    "start_m": [-1000.0, -500.0],
-    "bs_m": [1000.0, -1000.0],
-    "bs_height_m": 50.0,
-    "sensing_radius_m": 200.0,
-    "blade_power_w": 3.4,
-    "tip_speed_mps": 60.0,
-    "induced_power_w": 118.0,
-    "induced_velocity_mps": 5.4,
-    "rotor_solidity": 0.02,
-    "rotor_disc_area_m2": 0.5,
-    "air_density_kgpm3": 1.225,
-    "fuselage_drag_ratio": 0.3,
-    "uav_mass_kg": 2.0,
-}
-C_MPS = 299_792_458.0
-
-
-def power_w(p, v):
-    """P(V) of SPEC.md (rotary wing, Zeng et al.)."""
-    a = v**2 / (2 * p["induced_velocity_mps"] ** 2)
-    induced = np.sqrt(1.0 / (np.sqrt(1 + a * a) + a))
-    return (
-        p["blade_power_w"] * (1 + 3 * v**2 / p["tip_speed_mps"] ** 2)
-        + p["induced_power_w"] * induced
-        + 0.5 * p["fuselage_drag_ratio"] * p["air_density_kgpm3"] * p["rotor_solidity"]
-        * p["rotor_disc_area_m2"] * v**3
-    )
+# the mission file, schedule and power model of the CVXPY comparison (same venv)
+from cvxpy_exact import InputError, Mission, load_mission, power_w, schedule
 
 
 def main():
@@ -84,24 +49,16 @@ def main():
     ap.add_argument("--write-init", help="write the NLP's track as a `plan --init` CSV here")
     a = ap.parse_args()
 
-    with open(f"{a.plan_dir}/mission.toml", "rb") as f:
-        mission = tomllib.load(f)
-    unknown = set(mission.get("params", {})) - set(DEFAULTS)
-    if unknown:
-        sys.exit(f"nlp_check: unknown parameters in mission.toml: {sorted(unknown)}")
-    p = {**DEFAULTS, **mission.get("params", {})}
-    eta = p["observation_angle_rad"]
-    offset_m = p["altitude_m"] * math.tan(eta)
-    v_min = p["wavelength_m"] * p["altitude_m"] / (p["integration_time_s"] * p["d_min_m"] * math.cos(eta))
-    if C_MPS / (p["bandwidth_hz"] * p["d_min_m"]) - math.sin(eta) > 0:
+    try:
+        p, points = load_mission(Path(a.plan_dir) / "mission.toml")
+    except InputError as e:
+        sys.exit(f"nlp_check: {e}")
+    n = int(round(p["horizon_s"] / p["slot_s"]))
+    lm = schedule(p, points, n)
+    m = Mission(p=p, slots=n, landmark=lm, lm_idx=np.flatnonzero(~np.isnan(lm[:, 0])))
+    if m.keepout is not None:
         sys.exit("nlp_check: the range-resolution constraint is not vacuous for this mission; not handled")
-    dt = p["slot_s"]
-    n = int(round(p["horizon_s"] / dt))
-    lm = np.full((n, 2), np.nan)
-    for pt in mission["landmarks"]["points"]:
-        for t in range(1, n + 1):
-            if pt["from_s"] < t * dt <= pt["to_s"] and np.isnan(lm[t - 1, 0]):
-                lm[t - 1] = (pt["x_m"], pt["y_m"])
+    offset_m, v_min, dt = m.offset, m.v_min, m.delta
     sensed = ~np.isnan(lm[:, 0])
     start = np.array(p["start_m"], dtype=float)
     rs = p["sensing_radius_m"]
@@ -118,7 +75,7 @@ def main():
         return al, v, q, c
 
     def energy(x):
-        return float(np.sum(power_w(p, track(x)[1])) * dt)
+        return float(np.sum(power_w(m, track(x)[1])) * dt)
 
     def margin(x):
         c = track(x)[3]
@@ -168,7 +125,7 @@ def main():
     secs = time.perf_counter() - t0
     al, v, q, c = track(res.x)
     worst = float(np.sqrt(np.sum((c[sensed] - lm[sensed]) ** 2, 1)).max())
-    floor = p["horizon_s"] * float(np.min(power_w(p, np.linspace(v_min, p["max_speed_mps"], 20001))))
+    floor = p["horizon_s"] * float(np.min(power_w(m, np.linspace(v_min, p["max_speed_mps"], 20001))))
     print(f"start {a.start}: energy {energy(x0):.1f} J, worst centre distance "
           f"{float(np.sqrt(np.sum((track(x0)[3][sensed] - lm[sensed]) ** 2, 1)).max()):.1f} m")
     print(f"SLSQP ({k} knots every {a.knot_s:g} s): {res.message} after {res.nit} iterations, {secs:.1f} s")
