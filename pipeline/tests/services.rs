@@ -40,6 +40,11 @@ impl World {
         World { dir, hub, iox }
     }
 
+    /// The iceoryx2 prefix of this world's services (unique per test).
+    fn prefix(&self) -> &str {
+        &self.iox[3]
+    }
+
     fn zenoh(&self) -> Vec<String> {
         ZenohArgs::isolated(
             &["tcp/127.0.0.1:0".to_string()],
@@ -69,6 +74,22 @@ impl World {
             a.extend(self.iox.clone());
         }
         Service::start(role, self.dir.path(), &a)
+    }
+}
+
+/// iceoryx2 keeps a node-management file per prefix in /dev/shm that outlives the services
+/// (one per test, and the next test's prefix differs, so the stale-resource clean-up at start
+/// never sees it): remove this world's files when the test ends.
+impl Drop for World {
+    fn drop(&mut self) {
+        let prefix = self.prefix().to_string();
+        if let Ok(entries) = std::fs::read_dir("/dev/shm") {
+            for e in entries.flatten() {
+                if e.file_name().to_string_lossy().starts_with(&prefix) {
+                    let _ = std::fs::remove_file(e.path());
+                }
+            }
+        }
     }
 }
 
