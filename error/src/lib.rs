@@ -1,6 +1,7 @@
 //! # cellsar-error
 //!
-//! How every cellsar binary prints an error: [`error_chain`]. A crate of its own because the
+//! How every cellsar binary prints an error ([`error_chain`]) and sets up its log
+//! ([`init_logging`]). A crate of its own because the
 //! transport crate (`bridge`) needs it and cannot depend on the planner (the planner depends on
 //! it), while the planner also builds without the transport (for the FMU).
 
@@ -23,6 +24,19 @@ pub fn error_chain(error: &(dyn std::error::Error + 'static)) -> String {
         cause = c.source();
     }
     msg
+}
+
+/// Sets up `tracing` for a binary: the filter from `RUST_LOG`, else `default_filter` (e.g.
+/// `"warn"`); output to stderr, with ANSI colours only when stderr is a terminal (no escape
+/// codes in redirected logs). Call once, first thing in `main`.
+pub fn init_logging(default_filter: &str) {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_filter));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .init();
 }
 
 #[cfg(test)]

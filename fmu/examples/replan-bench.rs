@@ -9,10 +9,7 @@ use anyhow::{Context, Result};
 use planner::{Mission, MissionFile};
 
 fn main() -> Result<()> {
-    tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
-        .with_writer(std::io::stderr)
-        .init();
+    planner::init_logging("error");
     let mission = Mission::from_file_struct(
         &MissionFile::from_toml_str(fmu::core::DEFAULT_MISSION_TOML).map_err(anyhow::Error::msg)?,
     )?;

@@ -38,4 +38,4 @@ pub use params::{ParamError, Params, ParamsOverride};
 pub use power::PowerModel;
 pub use trajectory::{Trajectory, TrajectoryError};
 
-pub use cellsar_error::error_chain;
+pub use cellsar_error::{error_chain, init_logging};

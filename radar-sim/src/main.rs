@@ -360,14 +360,7 @@ fn main() -> ExitCode {
 }
 
 fn run_cli() -> Result<()> {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
-        )
-        .with_writer(std::io::stderr)
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .init();
+    planner::init_logging("warn");
     #[cfg(feature = "service")]
     bridge::iox::init_iceoryx_logging();
     match Cli::parse().cmd {

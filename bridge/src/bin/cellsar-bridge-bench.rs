@@ -228,13 +228,7 @@ struct TxReport {
 }
 
 fn main() {
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
-    tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .init();
+    cellsar_error::init_logging("warn");
     init_iceoryx_logging();
     if let Err(e) = run(Cli::parse()) {
         eprintln!(
