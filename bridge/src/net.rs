@@ -72,7 +72,7 @@ fn zerr(op: &'static str, key: &str, e: impl std::fmt::Display) -> NetError {
     NetError::Zenoh {
         op,
         key: key.to_string(),
-        reason: crate::zconfig::clean_zenoh_message(&e.to_string()),
+        reason: e.to_string(),
     }
 }
 
@@ -251,7 +251,15 @@ impl ZenohNode {
         let alive = keys::alive(role, instance)?;
         let session = zenoh::open(config)
             .wait()
-            .map_err(|e| zerr("open", "", e))?;
+            // a configuration error comes back as Debug text with source paths: clean it
+            // here, where users see it (not on the per-frame put path)
+            .map_err(|e| {
+                zerr(
+                    "open",
+                    "",
+                    crate::zconfig::clean_zenoh_message(&e.to_string()),
+                )
+            })?;
         let token = session
             .liveliness()
             .declare_token(alive.clone())

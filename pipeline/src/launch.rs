@@ -255,8 +255,7 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     FrameServiceSpec::new("cellsar/0000000000000000/echo", mfb)
         .validate()
         .map_err(|e| Failure::bad_input(anyhow!("--max-frame-bytes {mfb}: {e}")))?;
-    let samples_per_pulse = setup.scene.radar.symbols_per_pulse * setup.num.fft_size;
-    FrameLayout::new(&[], samples_per_pulse, mfb)
+    FrameLayout::new(&[], setup.scene.radar.samples_per_pulse(), mfb)
         .with_context(|| format!("scene {}", args.scene.display()))
         .map_err(Failure::bad_input)?;
     planner::init::precheck(&mission)

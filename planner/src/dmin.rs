@@ -179,8 +179,8 @@ fn simpson(fa: f64, fm: f64, fb: f64, a: f64, b: f64) -> f64 {
     (b - a) / 6.0 * (fa + 4.0 * fm + fb)
 }
 
-/// Adaptive Simpson quadrature with an explicit stack (bounded depth, no recursion).
-/// Adaptive Simpson quadrature of `f` over [a, b]; `None` when more than `budget` evaluations
+/// Adaptive Simpson quadrature of `f` over [a, b] with an explicit stack (bounded depth, no
+/// recursion); `None` when more than `budget` evaluations
 /// would be needed (the budget left is written back).
 fn adaptive_simpson(
     f: &impl Fn(f64) -> f64,

@@ -45,11 +45,6 @@ impl Scheme {
             Scheme::BaselineExact => "baseline-exact",
         }
     }
-
-    /// Parses a name as printed by [`Scheme::name`].
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|s| s.name() == name)
-    }
 }
 
 impl std::fmt::Display for Scheme {
@@ -100,6 +95,16 @@ impl PlanOptions {
         match self.scheme {
             Scheme::Exact => self.exact_socp,
             Scheme::BaselineExact | Scheme::Paper | Scheme::Baseline => self.socp,
+        }
+    }
+
+    /// The cone-program settings of phase I (repair): the scheme's, always on Clarabel. The
+    /// banded method has no homogeneous embedding and its phase I programs diverge (see
+    /// [`crate::socp::banded`]): trying it first would only add a failed solve per program.
+    pub fn repair_socp(&self) -> SocpSettings {
+        SocpSettings {
+            backend: crate::socp::Backend::Clarabel,
+            ..self.scheme_socp()
         }
     }
 }
@@ -287,13 +292,13 @@ pub fn plan_with_observer(
         }
         None => built_in_start(mission, options),
     };
-    let start_energy_j = evaluate(mission, &start).energy_j;
+    let mut start_energy_j = evaluate(mission, &start).energy_j;
     let resolution = match options.scheme {
         Scheme::Exact | Scheme::BaselineExact => options.resolution,
         Scheme::Paper | Scheme::Baseline => ResolutionMode::Paper,
     };
     let mut solver = SocpSolver::new(options.scheme_socp());
-    let mut repair_solver = SocpSolver::new(options.scheme_socp());
+    let mut repair_solver = SocpSolver::new(options.repair_socp());
     // Every scheme needs a start that is feasible on the exact geometry, except the paper's
     // schemes started from a given path: that path is used as it is (its first (p5) is the
     // reproduction check).
@@ -304,7 +309,7 @@ pub fn plan_with_observer(
             options.init.is_none().then_some(ExactObjective::Energy)
         }
     };
-    let repair_tuning = ExactTuning {
+    let base = ExactTuning {
         resolution,
         ..ExactTuning::default()
     };
@@ -316,7 +321,7 @@ pub fn plan_with_observer(
                 mission,
                 start,
                 objective,
-                &repair_tuning,
+                &base,
                 &mut repair_solver,
                 observer,
                 exact_rules,
@@ -332,11 +337,13 @@ pub fn plan_with_observer(
                         "the given start cannot be repaired; planning from the built-in start"
                     );
                     init_replaced = Some(reason);
+                    let start = built_in_start(mission, options);
+                    start_energy_j = evaluate(mission, &start).energy_j;
                     make_feasible(
                         mission,
-                        built_in_start(mission, options),
+                        start,
                         objective,
-                        &repair_tuning,
+                        &base,
                         &mut repair_solver,
                         observer,
                         exact_rules,
@@ -348,10 +355,6 @@ pub fn plan_with_observer(
         None => (start, 0),
     };
     observer.on_phase("solve");
-    let base = ExactTuning {
-        resolution,
-        ..ExactTuning::default()
-    };
     let mut out = match options.scheme {
         Scheme::Exact => run_exact(
             mission,
@@ -525,15 +528,10 @@ fn coarse_start_from(
             None => vec![guidance_start(&coarse, options.resolution)],
         },
     };
-    let value = |ev: &Evaluation| match objective {
-        ExactObjective::Energy => ev.energy_j,
-        ExactObjective::Distance => ev.length_m,
-    };
     let mut best: Option<(f64, Trajectory)> = None;
     let mut stalled: Option<Trajectory> = None;
-    let single = starts.len() == 1;
     for start in starts {
-        let mut solver = SocpSolver::new(options.scheme_socp());
+        let mut solver = SocpSolver::new(options.repair_socp());
         let feasible = make_feasible(
             &coarse,
             start,
@@ -581,12 +579,11 @@ fn coarse_start_from(
                 energy_j = solved.evaluation.energy_j,
                 "coarse solve"
             );
-            (value(&solved.evaluation), solved.trajectory)
-        } else if single {
-            // nothing to compare (the comparison schemes always have one start)
-            (0.0, start)
+            (objective.true_value(&solved.evaluation), solved.trajectory)
         } else {
-            (value(&evaluate(&coarse, &start)), start)
+            // not optimised: the comparison schemes, which always have one start (two starts
+            // come only after a stalled level, which needs the exact scheme's optimisation)
+            (0.0, start)
         };
         if best.as_ref().is_none_or(|(b, _)| tr.0 < *b) {
             best = Some(tr);
@@ -670,10 +667,7 @@ fn make_feasible(
         return Ok((current, 0));
     }
     observer.on_phase("repair");
-    let value = |ev: &Evaluation| match objective {
-        ExactObjective::Distance => ev.length_m,
-        ExactObjective::Energy => ev.energy_j,
-    };
+    let value = |ev: &Evaluation| objective.true_value(ev);
     let mut weight = match objective {
         ExactObjective::Energy => 1000.0,
         ExactObjective::Distance => 100.0,
@@ -875,10 +869,7 @@ fn run_exact(
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
 ) -> Result<PlanResult, PlanError> {
-    let true_value = |ev: &Evaluation| match objective {
-        ExactObjective::Distance => ev.length_m,
-        _ => ev.energy_j,
-    };
+    let true_value = |ev: &Evaluation| objective.true_value(ev);
     let mut current = start;
     let mut ev = evaluate(mission, &current);
     let mut value = true_value(&ev);

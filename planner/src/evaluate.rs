@@ -44,7 +44,13 @@ impl ResolutionMode {
         Self::ALL
             .into_iter()
             .find(|r| r.name() == name)
-            .ok_or_else(|| format!("unknown resolution `{name}`; expected one of: paper, general"))
+            .ok_or_else(|| {
+                let names: Vec<&str> = Self::ALL.into_iter().map(Self::name).collect();
+                format!(
+                    "unknown resolution `{name}`; expected one of: {}",
+                    names.join(", ")
+                )
+            })
     }
 }
 

@@ -111,7 +111,8 @@ pub fn simulate_limited(
     let synth = setup.synthesizer(objects.clone())?;
     mkdir(&out.join("iq"))?;
     let spp = synth.samples_per_pulse();
-    let frame_pulses = (SIMULATE_FRAME_BYTES / (spp * 8).max(1)).clamp(1, 100);
+    let sample_bytes = crate::limits::IQ_SAMPLE_BYTES as usize;
+    let frame_pulses = (SIMULATE_FRAME_BYTES / (spp * sample_bytes).max(1)).clamp(1, 100);
     let total: u64 = aps.iter().map(|a| a.pulses() as u64).sum();
     let mut done = 0u64;
     let mut pulse_rows = Vec::new();

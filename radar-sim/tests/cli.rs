@@ -398,7 +398,7 @@ fn help_documents_the_exit_codes_and_the_required_scene() {
 #[test]
 fn service_seconds_beyond_a_duration_exit_2_naming_the_flag() {
     // 1e300 s passed the old "> 0 and finite" check and panicked converting to a Duration.
-    let scene = root().join("radar-sim/scenes/default.toml");
+    let scene = root().join("scenes/default.toml");
     for (cmd, flag) in [
         ("echo", "--status-interval-s"),
         ("process-service", "--status-interval-s"),

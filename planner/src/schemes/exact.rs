@@ -32,6 +32,10 @@ pub const SPEED_UNIT_MPS: f64 = 20.0;
 
 /// Safety margin on the sensing radius, m (solver tolerances stay inside it).
 pub const SENSING_MARGIN_M: f64 = 1e-3;
+/// The speed a landmark slot must keep ([`ExactTuning::speed_keep_fraction`] of the previous
+/// one) is capped at this fraction of the speed limit: a given path may be faster than the
+/// limit, and a floor above the limit would make the program infeasible.
+pub const KEEP_CAP_OF_LIMIT: f64 = 0.95;
 /// Safety margin on the speed limits, m/s.
 pub const SPEED_MARGIN_MPS: f64 = 1e-4;
 
@@ -44,11 +48,22 @@ pub enum ExactObjective {
     Distance,
 }
 
+impl ExactObjective {
+    /// The objective's true value of an evaluated trajectory: energy in J or distance in m.
+    pub fn true_value(self, ev: &crate::Evaluation) -> f64 {
+        match self {
+            ExactObjective::Energy => ev.energy_j,
+            ExactObjective::Distance => ev.length_m,
+        }
+    }
+}
+
 /// Tunables of one exact-SCA subproblem.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ExactTuning {
     /// Fraction of the previous speed below which a landmark slot's speed may not drop in one
-    /// iteration (keeps the centre-error bound finite).
+    /// iteration (keeps the centre-error bound finite); never above [`KEEP_CAP_OF_LIMIT`] of
+    /// the speed limit.
     pub speed_keep_fraction: f64,
     /// Optional trust radius on ‖v_t − u_t‖ in landmark slots, m (set after a rejected step).
     pub trust_radius_m: Option<f64>,
@@ -260,9 +275,7 @@ impl ExactSubproblem {
             let u_norm = v2::norm(l.step_m);
             let h = l.dir;
             let along = vx.clone().scaled(h[0]).plus_lin(&vy.clone().scaled(h[1]));
-            // (at most 95 % of the speed limit's step: a given path may be faster than the
-            // limit, and a floor above it would make the program infeasible)
-            let keep = (tuning.speed_keep_fraction * u_norm).min(0.95 * delta * v_max);
+            let keep = (tuning.speed_keep_fraction * u_norm).min(KEEP_CAP_OF_LIMIT * delta * v_max);
             let s_min = match sv.sigma {
                 None => (delta * v_min).max(keep),
                 Some(sig) => {

@@ -75,7 +75,7 @@ impl MissionContext {
         let setup = RadarSetup::new(mission.params(), scene)?;
         let apertures = setup.apertures(&mission)?;
         IqBudget::new(&setup, &apertures).check(&setup, limits)?;
-        let spp = setup.scene.radar.symbols_per_pulse * setup.num.fft_size;
+        let spp = setup.scene.radar.samples_per_pulse();
         let layout = FrameLayout::new(&apertures, spp, max_frame_bytes)?;
         let track = PlannedTrack::new(plan.result.trajectory.clone(), mission.params().altitude_m);
         Ok(MissionContext {
@@ -638,11 +638,11 @@ pub fn run_processor(args: &ProcessArgs, stop: &AtomicBool) -> ServiceResult<Pro
     if args.window == 0 {
         return Err(ServiceError::Flag("--window must be at least 1".into()));
     }
-    args.limits.limits()?;
+    let limits = args.limits.limits()?;
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
     let node = ZenohNode::open(args.zenoh.to_config()?, "processor", &args.instance)?;
-    let r = serve(args, &scene, &node, &env, stop);
+    let r = serve(args, limits, &scene, &node, &env, stop);
     if let Err(e) = node.close() {
         tracing::warn!(error = %e, "closing the Zenoh session");
     }
@@ -651,6 +651,7 @@ pub fn run_processor(args: &ProcessArgs, stop: &AtomicBool) -> ServiceResult<Pro
 
 fn serve(
     args: &ProcessArgs,
+    limits: IqLimits,
     scene: &SceneFile,
     node: &ZenohNode,
     env: &bridge::IoxEnv,
@@ -711,6 +712,7 @@ fn serve(
             .map_err(|e| ServiceError::Internal(format!("starting the requester: {e}")))?;
         let mut p = Proc {
             args,
+            limits,
             scene,
             node,
             cache: PlanCache::new(node, None)?,
@@ -934,6 +936,8 @@ fn receive_iox(
 
 struct Proc<'a> {
     args: &'a ProcessArgs,
+    /// `args.limits`, parsed once at start.
+    limits: IqLimits,
     scene: &'a SceneFile,
     node: &'a ZenohNode,
     cache: PlanCache,
@@ -1088,9 +1092,8 @@ impl Proc<'_> {
             return;
         }
         let plan = Arc::new(plan);
-        let limits = self.args.limits.limits().unwrap_or_default();
         let made =
-            MissionContext::with_limits(&plan, self.scene, self.args.max_frame_bytes, &limits)
+            MissionContext::with_limits(&plan, self.scene, self.args.max_frame_bytes, &self.limits)
                 .map(Arc::new)
                 .and_then(ProcContext::new);
         let ctx = match made {
