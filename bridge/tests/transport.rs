@@ -1105,7 +1105,7 @@ fn bridge_rejects_bad_configuration() {
         // printed once (not also through tracing), each cause once
         let lines: Vec<&str> = err.lines().filter(|l| l.contains(needle)).collect();
         assert_eq!(lines.len(), 1, "{args:?}: {err}");
-        assert!(lines[0].starts_with("cellsar-bridge: "), "{}", lines[0]);
+        assert!(lines[0].starts_with("error: "), "{}", lines[0]);
         let parts: Vec<&str> = lines[0].split(": ").collect();
         for (i, part) in parts.iter().enumerate() {
             assert!(

@@ -1,9 +1,11 @@
 //! # cellsar-error
 //!
-//! How every cellsar binary prints an error ([`error_chain`]) and sets up its log
-//! ([`init_logging`]). A crate of its own because the
+//! How every cellsar binary prints an error ([`error_chain`]), maps it to an exit code
+//! ([`exit`]) and sets up its log ([`init_logging`]). A crate of its own because the
 //! transport crate (`bridge`) needs it and cannot depend on the planner (the planner depends on
 //! it), while the planner also builds without the transport (for the FMU).
+
+pub mod exit;
 
 /// The message of `error` followed by each cause in its `source()` chain that the message
 /// does not already contain, joined by ": ".

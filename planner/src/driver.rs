@@ -235,6 +235,20 @@ pub enum PlanError {
     },
 }
 
+impl From<PlanError> for cellsar_error::exit::Failure {
+    /// An infeasible mission exits 3, a start trajectory that does not fit 2, a solver
+    /// failure 1.
+    fn from(e: PlanError) -> Self {
+        use cellsar_error::exit::FailureKind as K;
+        let kind = match &e {
+            PlanError::Infeasible(_) => K::Infeasible,
+            PlanError::InvalidInit(_) => K::BadInput,
+            PlanError::Solver { .. } => K::Runtime,
+        };
+        Self::new(kind, e)
+    }
+}
+
 /// Plans `mission` with `options`.
 pub fn plan(mission: &Mission, options: &PlanOptions) -> Result<PlanResult, PlanError> {
     plan_with_observer(mission, options, &mut NoObserver)

@@ -6,6 +6,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use cellsar_error::exit::Failure;
+
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -15,8 +17,8 @@ use planner::evaluate::ResolutionMode;
 use planner::report::{self, reproduce, Summary};
 use planner::socp::{Backend, SocpSettings};
 use planner::{
-    evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanError, PlanOptions,
-    Scheme, Trajectory,
+    evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanOptions, Scheme,
+    Trajectory,
 };
 
 #[derive(Parser, Debug)]
@@ -153,21 +155,8 @@ fn parse_scheme(s: &str) -> Result<Scheme, String> {
     parse_named(s, &Scheme::ALL, Scheme::name, "scheme")
 }
 
-/// How a command failed, for the exit code.
-enum Failure {
-    BadInput(anyhow::Error),
-    Infeasible(anyhow::Error),
-    Internal(anyhow::Error),
-}
-
-impl From<anyhow::Error> for Failure {
-    fn from(e: anyhow::Error) -> Self {
-        Failure::Internal(e)
-    }
-}
-
 fn bad(e: impl Into<anyhow::Error>) -> Failure {
-    Failure::BadInput(e.into())
+    Failure::bad_input(e)
 }
 
 /// An output directory must be a directory or not exist yet (bad input otherwise, before any
@@ -261,11 +250,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let pb = spinner();
             let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));
             pb.finish_and_clear();
-            let result = result.map_err(|e| match e {
-                PlanError::Infeasible(_) => Failure::Infeasible(e.into()),
-                PlanError::InvalidInit(_) => Failure::BadInput(e.into()),
-                PlanError::Solver { .. } => Failure::Internal(e.into()),
-            })?;
+            let result = result?;
             let files = report::write_plan_dir(&out, &m, &result)
                 .with_context(|| format!("writing {}", out.display()))?;
             let s = Summary::new(&m, &result);
@@ -340,12 +325,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
         }
         #[cfg(feature = "service")]
         Command::Serve { args } => {
-            let stop =
-                planner::service::stop_on_signals().map_err(|e| Failure::Internal(e.into()))?;
-            let report = planner::service::serve(&args, &stop).map_err(|e| match e {
-                planner::service::ServiceError::Config(_) => Failure::BadInput(e.into()),
-                _ => Failure::Internal(e.into()),
-            })?;
+            let stop = planner::service::stop_on_signals().map_err(Failure::runtime)?;
+            let report = planner::service::serve(&args, &stop).map_err(Failure::from)?;
             tracing::info!(?report, "plan service stopped");
             Ok(())
         }
@@ -387,17 +368,6 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::BadInput(e)) => {
-            eprintln!("error: {}", planner::error_chain(e.as_ref()));
-            ExitCode::from(2)
-        }
-        Err(Failure::Infeasible(e)) => {
-            eprintln!("error: {}", planner::error_chain(e.as_ref()));
-            ExitCode::from(3)
-        }
-        Err(Failure::Internal(e)) => {
-            eprintln!("error: {}", planner::error_chain(e.as_ref()));
-            ExitCode::from(1)
-        }
+        Err(f) => f.report(),
     }
 }

@@ -87,6 +87,25 @@ pub enum ServiceError {
     Internal(String),
 }
 
+impl ServiceError {
+    /// Whether the service could not start because of its flags or configuration (the
+    /// binaries' exit code 2), rather than failing at run time.
+    pub fn is_bad_input(&self) -> bool {
+        matches!(self, ServiceError::Config(_))
+    }
+}
+
+impl From<ServiceError> for cellsar_error::exit::Failure {
+    /// Bad flags or configuration exit 2 ([`ServiceError::is_bad_input`]), the rest 1.
+    fn from(e: ServiceError) -> Self {
+        if e.is_bad_input() {
+            Self::bad_input(e)
+        } else {
+            Self::runtime(e)
+        }
+    }
+}
+
 fn io_err(path: &Path, source: std::io::Error) -> ServiceError {
     ServiceError::Io {
         path: path.display().to_string(),

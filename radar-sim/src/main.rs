@@ -8,6 +8,8 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+use cellsar_error::exit::Failure;
 use std::time::Instant;
 
 use anyhow::Context;
@@ -16,7 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use radar_sim::config::SceneFile;
 use radar_sim::limits::{IqLimitArgs, IqLimits, DEFAULT_MAX_APERTURE_GIB};
 use radar_sim::pipeline::RadarSetup;
-use radar_sim::{run, RadarError};
+use radar_sim::run;
 
 const EXIT_CODES: &str = "Exit codes: 0 success; 2 bad input (missing or malformed file, \
 invalid scene, bad option, a run above --max-iq-gib / --max-aperture-gib); 3 the mission cannot \
@@ -123,54 +125,8 @@ fn bar(len: u64, what: &str) -> ProgressBar {
     b
 }
 
-/// How a command failed, for the exit code.
-enum Failure {
-    /// Bad input: a missing or malformed file, an invalid scene, a bad option (exit 2).
-    BadInput(anyhow::Error),
-    /// The mission cannot be flown (exit 3).
-    Infeasible(anyhow::Error),
-    /// `closed-loop` missed a landmark in view (exit 4).
-    Missed(anyhow::Error),
-    /// A runtime failure (exit 1).
-    Internal(anyhow::Error),
-}
-
-impl From<anyhow::Error> for Failure {
-    fn from(e: anyhow::Error) -> Self {
-        Failure::Internal(e)
-    }
-}
-
-impl From<RadarError> for Failure {
-    fn from(e: RadarError) -> Self {
-        if e.is_bad_input() {
-            Failure::BadInput(e.into())
-        } else {
-            Failure::Internal(e.into())
-        }
-    }
-}
-
-#[cfg(feature = "service")]
-impl From<radar_sim::service::ServiceError> for Failure {
-    fn from(e: radar_sim::service::ServiceError) -> Self {
-        use radar_sim::service::ServiceError as S;
-        let bad = match &e {
-            S::Radar(r) => r.is_bad_input(),
-            S::Config(_) | S::Flag(_) => true,
-            S::Planner(p) => matches!(p, planner::service::ServiceError::Config(_)),
-            _ => false,
-        };
-        if bad {
-            Failure::BadInput(e.into())
-        } else {
-            Failure::Internal(e.into())
-        }
-    }
-}
-
 fn bad(e: impl Into<anyhow::Error>) -> Failure {
-    Failure::BadInput(e.into())
+    Failure::bad_input(e)
 }
 
 type Result<T, E = Failure> = std::result::Result<T, E>;
@@ -259,20 +215,9 @@ fn closed_loop(
     let setup = RadarSetup::new(m.params(), &scene_file)?;
     radar_sim::limits::check_mission(&setup, &m, limits)?;
     let t = Instant::now();
-    let result = planner::plan(&m, plan_options).map_err(|e| {
-        let what = format!("planning {}", mission.display());
-        match e {
-            planner::PlanError::Infeasible(_) => {
-                Failure::Infeasible(anyhow::Error::new(e).context(what))
-            }
-            planner::PlanError::InvalidInit(_) => {
-                Failure::BadInput(anyhow::Error::new(e).context(what))
-            }
-            planner::PlanError::Solver { .. } => {
-                Failure::Internal(anyhow::Error::new(e).context(what))
-            }
-        }
-    })?;
+    let result = planner::plan(&m, plan_options)
+        .map_err(|e| Failure::from(e).context(format!("planning {}", mission.display())))?;
+
     println!(
         "planned {} slots in {:.1} s: energy {:.0} J, feasible {}",
         m.slots(),
@@ -348,15 +293,10 @@ fn resolution(out: &Path, bandwidths_mhz: &[f64]) -> Result<()> {
 }
 
 fn main() -> ExitCode {
-    let code = match run_cli() {
-        Ok(()) => return ExitCode::SUCCESS,
-        Err(Failure::BadInput(e)) => (2, e),
-        Err(Failure::Infeasible(e)) => (3, e),
-        Err(Failure::Missed(e)) => (4, e),
-        Err(Failure::Internal(e)) => (1, e),
-    };
-    eprintln!("error: {}", planner::error_chain(code.1.as_ref()));
-    ExitCode::from(code.0)
+    match run_cli() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => f.report(),
+    }
 }
 
 fn run_cli() -> Result<()> {
@@ -399,7 +339,7 @@ fn run_cli() -> Result<()> {
                 &limits.limits()?,
                 &plan_options,
             )? {
-                return Err(Failure::Missed(anyhow::anyhow!(
+                return Err(Failure::missed_landmark(anyhow::anyhow!(
                     "a landmark in view was not detected (see report.json)"
                 )));
             }

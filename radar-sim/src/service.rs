@@ -103,6 +103,25 @@ pub enum ServiceError {
     Internal(String),
 }
 
+impl From<ServiceError> for cellsar_error::exit::Failure {
+    /// Bad input (exit 2): the flags, the Zenoh configuration, a radar input that is bad
+    /// ([`crate::RadarError::is_bad_input`]) and the planner layer's bad input; the rest is a
+    /// failure at run time (exit 1).
+    fn from(e: ServiceError) -> Self {
+        let bad = match &e {
+            ServiceError::Radar(r) => r.is_bad_input(),
+            ServiceError::Config(_) | ServiceError::Flag(_) => true,
+            ServiceError::Planner(p) => p.is_bad_input(),
+            _ => false,
+        };
+        if bad {
+            Self::bad_input(e)
+        } else {
+            Self::runtime(e)
+        }
+    }
+}
+
 /// Result of the services.
 pub type ServiceResult<T> = std::result::Result<T, ServiceError>;
 

@@ -12,6 +12,7 @@
 //! configuration; the message names it, on one line), 1 a failure at run time (setting up
 //! Zenoh or iceoryx2, a forwarding thread that dies).
 
+use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -26,6 +27,7 @@ use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::query::Query;
 use bridge::zenoh::Wait;
 use bridge::{keys, Message, ZenohArgs, ZenohNode};
+use cellsar_error::exit::Failure;
 use clap::Parser;
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,20 +98,16 @@ struct Cli {
     iox: IoxArgs,
 }
 
-fn main() {
+fn main() -> ExitCode {
     init_tracing();
     let cli = Cli::parse();
-    // once, on stderr (tracing's own output also goes there)
-    let report = |e: anyhow::Error, code: i32| -> ! {
-        eprintln!("cellsar-bridge: {}", cellsar_error::error_chain(e.as_ref()));
-        std::process::exit(code);
-    };
-    let setup = match check(&cli) {
-        Ok(s) => s,
-        Err(e) => report(e, 2),
-    };
-    if let Err(e) = run(&cli, setup) {
-        report(e, 1);
+    // printed once, on stderr (tracing's own output also goes there)
+    let r = check(&cli)
+        .map_err(Failure::bad_input)
+        .and_then(|setup| run(&cli, setup).map_err(Failure::runtime));
+    match r {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => f.report(),
     }
 }
 

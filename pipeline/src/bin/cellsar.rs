@@ -54,20 +54,6 @@ fn init_tracing(default: &str) {
     bridge::iox::init_iceoryx_logging();
 }
 
-fn fail(f: Failure) -> ExitCode {
-    eprintln!("error: {f}");
-    ExitCode::from(f.exit_code())
-}
-
-/// Bad input unless the radar service failed at run time.
-fn radar_failure(e: radar_sim::service::ServiceError) -> Failure {
-    use radar_sim::service::ServiceError as E;
-    match e {
-        E::Flag(_) | E::Config(_) => Failure::bad_input(e),
-        _ => Failure::runtime(e),
-    }
-}
-
 /// What the radar services would refuse, checked before they start: the numbers, the scene,
 /// the Zenoh and iceoryx2 flags.
 fn check_radar_service(
@@ -95,7 +81,7 @@ fn main() -> ExitCode {
     });
     let stop = match planner::service::stop_on_signals() {
         Ok(s) => s,
-        Err(e) => return fail(Failure::runtime(e)),
+        Err(e) => return Failure::runtime(e).report(),
     };
     if !matches!(cli.command, Command::Run(_)) {
         pipeline::supervise::exit_with_launcher(&stop);
@@ -112,19 +98,14 @@ fn main() -> ExitCode {
                     eprintln!("interrupted; children stopped");
                     ExitCode::from(exit::INTERRUPTED)
                 }
-                Err(e) => fail(e),
+                Err(e) => e.report(),
             }
         }
         Command::Planner(a) => a
             .zenoh
             .to_config()
             .map_err(Failure::bad_input)
-            .and_then(|_| {
-                planner::service::serve(&a, &stop).map_err(|e| match e {
-                    planner::service::ServiceError::Config(_) => Failure::bad_input(e),
-                    _ => Failure::runtime(e),
-                })
-            })
+            .and_then(|_| planner::service::serve(&a, &stop).map_err(Failure::from))
             .map(|r| tracing::info!(?r, "plan service stopped")),
         Command::Echo(a) => check_radar_service(
             &[("--status-interval-s", a.status_interval_s)],
@@ -132,7 +113,7 @@ fn main() -> ExitCode {
             &a.zenoh,
             &a.iox,
         )
-        .and_then(|()| radar_sim::service::run_echo(&a, &stop).map_err(radar_failure))
+        .and_then(|()| radar_sim::service::run_echo(&a, &stop).map_err(Failure::from))
         .map(|r| tracing::info!(?r, "echo stopped")),
         Command::Process(a) => if a.window == 0 {
             Err(Failure::bad_input(anyhow::anyhow!(
@@ -149,14 +130,14 @@ fn main() -> ExitCode {
                 &a.iox,
             )
         }
-        .and_then(|()| radar_sim::service::run_processor(&a, &stop).map_err(radar_failure))
+        .and_then(|()| radar_sim::service::run_processor(&a, &stop).map_err(Failure::from))
         .map(|r| tracing::info!(?r, "processor stopped")),
         Command::Bridge(a) => roles::run_bridge(&a, &stop),
         Command::Router(a) => roles::run_router(&a, &stop),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => fail(e),
+        Err(e) => e.report(),
     }
 }
 
