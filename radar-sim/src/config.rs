@@ -516,20 +516,7 @@ impl RadarConfig {
             ));
         }
         if let Some(b) = self.bandwidth_hz {
-            positive("radar.bandwidth_hz", b)?;
-            let sc = (b / self.subcarrier_spacing_hz).round();
-            if sc < 2.0 || sc > (self.fft_size - 2) as f64 {
-                return Err(RadarError::config(
-                    "radar.bandwidth_hz",
-                    format!(
-                        "B = {b} Hz gives {sc} subcarriers of {} Hz; need 2..={} (fft_size − 2): \
-                         the band must lie within the sample rate {} Hz",
-                        self.subcarrier_spacing_hz,
-                        self.fft_size - 2,
-                        self.sample_rate_hz()
-                    ),
-                ));
-            }
+            self.subcarriers_for("radar.bandwidth_hz", b)?;
         }
         positive("radar.tx_power_w", self.tx_power_w)?;
         finite("radar.tx_gain_dbi", self.tx_gain_dbi)?;
@@ -552,6 +539,27 @@ impl RadarConfig {
     /// Sample rate f_s = N Δf, Hz.
     pub fn sample_rate_hz(&self) -> f64 {
         self.fft_size as f64 * self.subcarrier_spacing_hz
+    }
+
+    /// The number of subcarriers that occupy bandwidth `bandwidth_hz` (B / Δf, rounded): an
+    /// error naming `field` unless B is finite, > 0 and gives 2 ..= fft_size − 2 of them.
+    pub fn subcarriers_for(&self, field: &str, bandwidth_hz: f64) -> Result<usize> {
+        positive(field, bandwidth_hz)?;
+        let sc = (bandwidth_hz / self.subcarrier_spacing_hz).round();
+        if sc < 2.0 || sc > self.fft_size.saturating_sub(2) as f64 {
+            return Err(RadarError::config(
+                field,
+                format!(
+                    "B = {bandwidth_hz} Hz gives {sc} subcarriers of {} Hz; need 2..={} \
+                     (fft_size − 2): the band must lie within the sample rate {} Hz",
+                    self.subcarrier_spacing_hz,
+                    self.fft_size.saturating_sub(2),
+                    self.sample_rate_hz()
+                ),
+            ));
+        }
+        // in 2 ..= fft_size − 2, so a whole number that fits
+        Ok(sc as usize)
     }
 
     /// OFDM symbols the BS sends per second, f_s / (N + N_cp) (48 kHz at the defaults).

@@ -148,7 +148,7 @@ impl IqBudget {
             look_image_bytes,
         };
         for ap in apertures {
-            let pulses = (ap.looks as u64).saturating_mul(ap.pulses_per_look as u64);
+            let pulses = ap.pulses() as u64;
             let iq = pulses.saturating_mul(spp).saturating_mul(IQ_SAMPLE_BYTES);
             let images = if pc.save_complex {
                 (ap.looks as u64).saturating_mul(look_image_bytes)

@@ -733,7 +733,16 @@ pub fn loop_report(
 }
 
 /// Cuts `mission` to the windows that end within `horizon_s` and sets the horizon.
+///
+/// `horizon_s` must be a finite number > 0 that holds at least one whole landmark window
+/// (a [`RadarError::Config`] naming `horizon_s` otherwise).
 pub fn shorten(mission: &planner::Mission, horizon_s: f64) -> Result<planner::Mission> {
+    if !(horizon_s.is_finite() && horizon_s > 0.0) {
+        return Err(RadarError::config(
+            "horizon_s",
+            format!("{horizon_s}: must be a finite number > 0"),
+        ));
+    }
     let mut file = mission.to_file_struct();
     let keep: Vec<planner::LandmarkWindow> = mission
         .schedule()
@@ -759,7 +768,23 @@ pub fn shorten(mission: &planner::Mission, horizon_s: f64) -> Result<planner::Mi
 
 #[cfg(test)]
 mod tests {
-    use super::{LoopRow, IN_VIEW_MIN_FRACTION};
+    #![allow(clippy::unwrap_used)]
+    use super::{shorten, LoopRow, IN_VIEW_MIN_FRACTION};
+
+    #[test]
+    fn shorten_keeps_whole_windows_and_names_a_bad_horizon() {
+        let m = planner::Mission::preset(planner::Preset::Default, 30.0).unwrap();
+        let short = shorten(&m, 25.0).unwrap();
+        assert_eq!(short.schedule().landmarks.len(), 2);
+        assert_eq!(short.params().horizon_s, 25.0);
+        for bad in [f64::NAN, f64::INFINITY, -10.0, 0.0, 5.0] {
+            let e = shorten(&m, bad).unwrap_err();
+            assert!(e.is_bad_input(), "{bad}: {e:?}");
+            assert!(e.to_string().contains("horizon_s"), "{bad}: {e}");
+        }
+        let e = shorten(&m, f64::NAN).unwrap_err().to_string();
+        assert!(e.contains("finite"), "{e}");
+    }
 
     fn row(in_view_fraction: f64, detected: bool) -> LoopRow {
         LoopRow {

@@ -177,9 +177,9 @@ pub struct Aperture {
 }
 
 impl Aperture {
-    /// Total pulses.
+    /// Total pulses (saturating: the IQ budget refuses such an aperture by its size).
     pub fn pulses(&self) -> usize {
-        self.looks * self.pulses_per_look
+        self.looks.saturating_mul(self.pulses_per_look)
     }
 }
 

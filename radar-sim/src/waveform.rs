@@ -37,26 +37,13 @@ pub struct Numerology {
 }
 
 impl Numerology {
-    /// Resolves the numerology of `radar` for bandwidth `bandwidth_hz` and wavelength `λ_c`.
+    /// Resolves the numerology of `radar` for wavelength `λ_c` and its bandwidth: the scene's
+    /// `radar.bandwidth_hz` if set, else the mission's `bandwidth_hz`.
     pub fn new(radar: &RadarConfig, bandwidth_hz: f64, wavelength_m: f64) -> Result<Self> {
-        let b = radar.bandwidth_hz.unwrap_or(bandwidth_hz);
-        if !(b.is_finite() && b > 0.0) {
-            return Err(RadarError::config(
-                "radar.bandwidth_hz",
-                format!("{b} must be > 0"),
-            ));
-        }
-        let sc = (b / radar.subcarrier_spacing_hz).round() as usize;
-        if sc < 2 || sc > radar.fft_size - 2 {
-            return Err(RadarError::config(
-                "radar.bandwidth_hz",
-                format!(
-                    "B = {b} Hz gives {sc} subcarriers of {} Hz; need 2..={} (fft_size − 2)",
-                    radar.subcarrier_spacing_hz,
-                    radar.fft_size - 2
-                ),
-            ));
-        }
+        let sc = match radar.bandwidth_hz {
+            Some(b) => radar.subcarriers_for("radar.bandwidth_hz", b)?,
+            None => radar.subcarriers_for("params.bandwidth_hz", bandwidth_hz)?,
+        };
         if !(wavelength_m.is_finite() && wavelength_m > 0.0) {
             return Err(RadarError::config("params.wavelength_m", "must be > 0"));
         }
@@ -199,6 +186,29 @@ mod tests {
             ..RadarConfig::default()
         };
         Numerology::new(&r, 150e6, 0.1).unwrap()
+    }
+
+    #[test]
+    fn a_bad_bandwidth_names_where_it_came_from() {
+        let scene_b = RadarConfig {
+            bandwidth_hz: Some(300e6),
+            ..RadarConfig::default()
+        };
+        let e = Numerology::new(&scene_b, 150e6, 0.1).unwrap_err().to_string();
+        assert!(e.contains("radar.bandwidth_hz") && e.contains("245760000"), "{e}");
+        for b in [300e6, f64::NAN, -1.0, 10e3] {
+            let e = Numerology::new(&RadarConfig::default(), b, 0.1)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("params.bandwidth_hz"), "{b}: {e}");
+        }
+        // the scene's bandwidth wins over the mission's
+        let scene_b = RadarConfig {
+            bandwidth_hz: Some(50e6),
+            ..RadarConfig::default()
+        };
+        let n = Numerology::new(&scene_b, 300e6, 0.1).unwrap();
+        assert!((n.bandwidth_hz() - 50e6).abs() < 60e3, "{}", n.bandwidth_hz());
     }
 
     #[test]

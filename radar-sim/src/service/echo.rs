@@ -19,7 +19,7 @@ use planner::service::{Plan, PlanCache, StatusBoard, ALL_PLANS, MAX_PLAN_BYTES};
 use serde::{Deserialize, Serialize};
 
 use crate::config::SceneFile;
-use crate::limits::IqLimitArgs;
+use crate::limits::{IqLimitArgs, IqLimits};
 use crate::synth::{Components, Synthesizer};
 use crate::track::PulseMeta;
 
@@ -101,11 +101,11 @@ pub fn run_echo(args: &EchoArgs, stop: &AtomicBool) -> ServiceResult<EchoReport>
     // finite, > 0 and at most bridge::flags::MAX_SECONDS (1e300 panicked in Duration)
     bridge::flags::seconds("--status-interval-s", args.status_interval_s)
         .map_err(|e| ServiceError::Flag(e.to_string()))?;
-    args.limits.limits()?;
+    let limits = args.limits.limits()?;
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
     let node = ZenohNode::open(args.zenoh.to_config()?, "echo", &args.instance)?;
-    let r = Echo::new(args, scene, &node, &env).and_then(|mut e| e.run(stop));
+    let r = Echo::new(args, scene, limits, &node, &env).and_then(|mut e| e.run(stop));
     if let Err(e) = node.close() {
         tracing::warn!(error = %e, "closing the Zenoh session");
     }
@@ -115,6 +115,8 @@ pub fn run_echo(args: &EchoArgs, stop: &AtomicBool) -> ServiceResult<EchoReport>
 struct Echo<'a> {
     args: &'a EchoArgs,
     scene: SceneFile,
+    /// `--max-iq-gib` / `--max-aperture-gib`, parsed once at start.
+    limits: IqLimits,
     node: &'a ZenohNode,
     frames: FrameNode,
     cache: PlanCache,
@@ -128,6 +130,7 @@ impl<'a> Echo<'a> {
     fn new(
         args: &'a EchoArgs,
         scene: SceneFile,
+        limits: IqLimits,
         node: &'a ZenohNode,
         env: &bridge::IoxEnv,
     ) -> ServiceResult<Self> {
@@ -142,6 +145,7 @@ impl<'a> Echo<'a> {
         Ok(Echo {
             args,
             scene,
+            limits,
             node,
             frames,
             cache: PlanCache::new(node, None)?,
@@ -270,7 +274,7 @@ impl<'a> Echo<'a> {
             &plan,
             &self.scene,
             self.args.max_frame_bytes,
-            &self.args.limits.limits()?,
+            &self.limits,
         )?);
         let objects = ctx.setup.objects(&ctx.mission)?;
         let synth = ctx.setup.synthesizer(objects)?;
