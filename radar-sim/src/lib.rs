@@ -33,6 +33,7 @@ pub mod scoring;
 #[cfg(feature = "service")]
 pub mod service;
 pub mod synth;
+pub mod tally;
 pub mod track;
 pub mod waveform;
 

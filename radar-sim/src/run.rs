@@ -17,6 +17,7 @@ use crate::limits::{IqBudget, IqLimits};
 use crate::pipeline::{Processor, RadarSetup};
 use crate::scene::SceneObject;
 use crate::synth::Components;
+use crate::tally::{self, ApertureTally};
 use crate::track::{Aperture, PlannedTrack, PulseMeta};
 use crate::waveform::Numerology;
 
@@ -435,13 +436,7 @@ pub fn process_limited(
     let pulses_all = read_pulses(&input.join("pulses.csv"))?;
     mkdir(&out.join("images"))?;
     let pc = &meta.scene.processing;
-    let mut det_rows = Vec::new();
-    let mut summaries = Vec::new();
-    let (mut strong, mut strong_hit, mut all, mut all_hit) = (0usize, 0usize, 0usize, 0usize);
-    let mut errors = Vec::new();
-    let (mut fa, mut design_fa) = (0usize, 0.0);
-    let mut cancel = crate::cancel::CancelStats::default();
-    let mut best: Option<(f64, usize, usize)> = None; // (snr, aperture, look)
+    let mut tallies = Vec::with_capacity(meta.apertures.len());
     let total = meta.apertures.len() as u64;
     for (k, at) in meta.apertures.iter().enumerate() {
         let ap = &at.aperture;
@@ -472,7 +467,6 @@ pub fn process_limited(
         }
         let iq: Vec<Complex32> = rd.read_c8(0, pulses.len() * meta.samples_per_pulse)?;
         let r = proc.process_aperture(ap, &pulses, &iq, &truth)?;
-        cancel.add(&r.cancel);
         // images
         let mut w = NpyWriter::create(
             &out.join("images")
@@ -492,14 +486,7 @@ pub fn process_limited(
             w.write_c8(img)?;
             w.finish()?;
         }
-        let markers: Vec<(usize, usize)> = r
-            .detections
-            .iter()
-            .map(|d| {
-                let (x, y) = r.grid.index_of([d.x_m, d.y_m]);
-                (x.round().max(0.0) as usize, y.round().max(0.0) as usize)
-            })
-            .collect();
+        let markers = tally::detection_pixels(&r);
         write_png_db(
             &out.join("images")
                 .join(format!("aperture_{:03}.png", ap.index)),
@@ -509,63 +496,15 @@ pub fn process_limited(
             40.0,
             &markers,
         )?;
-        for (di, d) in r.detections.iter().enumerate() {
-            let m = r.score.outcomes.iter().find(|o| o.detection == Some(di));
-            det_rows.push(DetectionRow {
-                aperture: ap.index,
-                x_m: d.x_m,
-                y_m: d.y_m,
-                snr_db: d.snr_db,
-                pixels: d.pixels,
-                truth_id: m.map(|o| o.truth.id),
-                error_m: m.and_then(|o| o.error_m),
-            });
-        }
-        let mut lm_det = None;
-        let mut lm_snr = None;
-        for o in &r.score.outcomes {
-            all += 1;
-            if o.detection.is_some() {
-                all_hit += 1;
-            }
-            if o.truth.expected_snr_db >= 13.0 {
-                strong += 1;
-                if o.detection.is_some() {
-                    strong_hit += 1;
-                }
-            }
-            if let Some(e) = o.error_m {
-                errors.push(e);
-            }
-            if o.truth.landmark.is_some() && o.truth.landmark == ap.landmark {
-                lm_det = Some(o.detection.is_some());
-                lm_snr = Some(o.truth.expected_snr_db);
-                if best.is_none_or(|b| o.truth.expected_snr_db > b.0) {
-                    best = Some((o.truth.expected_snr_db, ap.index, ap.looks / 2));
-                }
-            }
-        }
-        fa += r.score.false_alarms.len();
-        design_fa += r.design_false_alarm_clusters(pc.pfa);
-        summaries.push(ApertureSummary {
-            aperture: ap.index,
-            landmark: ap.landmark,
-            landmark_detected: lm_det,
-            landmark_snr_db: lm_snr,
-            detections: r.detections.len(),
-            false_alarms: r.score.false_alarms.len(),
-            dpi_reduction_db: r.cancel.dp_reduction_db(),
-            residual_to_noise_db: 10.0
-                * (r.cancel.mean_output_power() / meta.noise_power_w).log10(),
-            worst_width_m: r.cell.worst_width_m,
-        });
+        tallies.push(ApertureTally::new(ap, &r, pc.pfa, meta.noise_power_w));
         progress(k as u64 + 1, total);
     }
+    let det_rows: Vec<DetectionRow> = tallies.iter().flat_map(|t| t.rows.clone()).collect();
+    write_detections(out, &det_rows)?;
+    let (mut metrics, best) = tally::fold(&tallies, meta.noise_power_w);
     // resolution on the strongest landmark: one look, exact evaluation
-    let (mut rr, mut ra, mut from) = (None, None, None);
-    if let Some((_, ai, look)) = best {
-        let at = &meta.apertures[ai];
-        let ap = &at.aperture;
+    if let Some(ap) = best.and_then(|(ai, _)| aps.iter().find(|a| a.index == ai)) {
+        let look = best.map_or(0, |(_, l)| l);
         let pulses: Vec<PulseMeta> = pulses_all
             .iter()
             .filter(|p| p.aperture == ap.index && p.look == look)
@@ -574,30 +513,19 @@ pub fn process_limited(
         let mut rd = NpyReader::open(&iq_path(input, ap.index))?;
         let first = look * ap.pulses_per_look * meta.samples_per_pulse;
         let iq = rd.read_c8(first, pulses.len() * meta.samples_per_pulse)?;
-        let grid = setup.grid(ap);
-        let c = proc.compress(
-            &grid,
-            &pulses,
-            &iq,
-            ap.pulses_per_look,
-            Some(ap.centre_m),
-            true,
-        )?;
-        if let Ok(rep) = proc.measure_resolution(&c, &pulses, 0..pulses.len(), ap.centre_m) {
-            rr = Some(MeasuredResolution {
-                measured_m: rep.range_measured_m,
-                predicted_general_m: rep.range_general_m,
-                paper_m: rep.range_paper_m,
-            });
-            ra = Some(MeasuredResolution {
-                measured_m: rep.azimuth_measured_m,
-                predicted_general_m: rep.azimuth_general_m,
-                paper_m: rep.azimuth_paper_m,
-            });
-            from = Some((ap.index, look));
+        if let Some((rr, ra)) = tally::measure_look(&proc, ap, &pulses, &iq)? {
+            metrics.range_resolution_m = Some(rr);
+            metrics.azimuth_resolution_m = Some(ra);
+            metrics.resolution_from = Some((ap.index, look));
         }
     }
-    let rows: Vec<Vec<String>> = det_rows
+    write_json(&out.join("metrics.json"), &metrics)?;
+    Ok(metrics)
+}
+
+/// Writes `detections.csv` and `detections.json` into `out`.
+pub fn write_detections(out: &Path, rows: &[DetectionRow]) -> Result<()> {
+    let csv: Vec<Vec<String>> = rows
         .iter()
         .map(|d| {
             vec![
@@ -616,32 +544,9 @@ pub fn process_limited(
         &[
             "aperture", "x_m", "y_m", "snr_db", "pixels", "truth_id", "error_m",
         ],
-        &rows,
+        &csv,
     )?;
-    write_json(&out.join("detections.json"), &det_rows)?;
-    let frac = |a: usize, b: usize| if b > 0 { a as f64 / b as f64 } else { f64::NAN };
-    let metrics = Metrics {
-        pd: frac(strong_hit, strong),
-        strong_objects: strong,
-        pd_all: frac(all_hit, all),
-        false_alarms: fa,
-        design_false_alarms: design_fa,
-        mean_position_error_m: if errors.is_empty() {
-            f64::NAN
-        } else {
-            errors.iter().sum::<f64>() / errors.len() as f64
-        },
-        dpi_reduction_db: cancel.dp_reduction_db(),
-        cancellation_db: cancel.cancellation_db(),
-        residual_to_noise_db: 10.0 * (cancel.mean_output_power() / meta.noise_power_w).log10(),
-        target_loss_db: cancel.target_loss_db(),
-        range_resolution_m: rr,
-        azimuth_resolution_m: ra,
-        resolution_from: from,
-        apertures: summaries,
-    };
-    write_json(&out.join("metrics.json"), &metrics)?;
-    Ok(metrics)
+    write_json(&out.join("detections.json"), &rows)
 }
 
 /// Closed-loop report row: one aperture.

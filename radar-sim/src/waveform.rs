@@ -194,8 +194,13 @@ mod tests {
             bandwidth_hz: Some(300e6),
             ..RadarConfig::default()
         };
-        let e = Numerology::new(&scene_b, 150e6, 0.1).unwrap_err().to_string();
-        assert!(e.contains("radar.bandwidth_hz") && e.contains("245760000"), "{e}");
+        let e = Numerology::new(&scene_b, 150e6, 0.1)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("radar.bandwidth_hz") && e.contains("245760000"),
+            "{e}"
+        );
         for b in [300e6, f64::NAN, -1.0, 10e3] {
             let e = Numerology::new(&RadarConfig::default(), b, 0.1)
                 .unwrap_err()
@@ -208,7 +213,11 @@ mod tests {
             ..RadarConfig::default()
         };
         let n = Numerology::new(&scene_b, 300e6, 0.1).unwrap();
-        assert!((n.bandwidth_hz() - 50e6).abs() < 60e3, "{}", n.bandwidth_hz());
+        assert!(
+            (n.bandwidth_hz() - 50e6).abs() < 60e3,
+            "{}",
+            n.bandwidth_hz()
+        );
     }
 
     #[test]

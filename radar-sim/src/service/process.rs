@@ -20,12 +20,12 @@ use bridge::{
 use planner::service::{Plan, PlanCache, StatusBoard, ALL_PLANS, MAX_PLAN_BYTES};
 use serde::{Deserialize, Serialize};
 
-use crate::cancel::CancelStats;
 use crate::config::SceneFile;
 use crate::limits::{IqBudget, IqLimitArgs, IqLimits};
 use crate::pipeline::{Processor, RadarSetup};
-use crate::run::{ApertureSummary, DetectionRow, MeasuredResolution, Metrics};
+use crate::run::{MeasuredResolution, Metrics};
 use crate::scene::SceneObject;
+use crate::tally::{self, ApertureTally};
 use crate::track::{Aperture, PlannedTrack, PulseMeta};
 
 use super::{
@@ -175,30 +175,8 @@ pub struct ProcessReport {
 pub struct ApertureOutcome {
     /// Aperture index.
     pub aperture: usize,
-    /// Rows of `detections.csv`.
-    pub rows: Vec<DetectionRow>,
-    /// The per-aperture summary of `metrics.json`.
-    pub summary: ApertureSummary,
-    /// Truth objects in the image.
-    pub objects: usize,
-    /// ... of which detected.
-    pub objects_detected: usize,
-    /// Objects with expected SNR ≥ 13 dB.
-    pub strong: usize,
-    /// ... of which detected.
-    pub strong_detected: usize,
-    /// Position errors of matched detections, m (in the scorer's order).
-    pub errors_m: Vec<f64>,
-    /// Unmatched detections.
-    pub false_alarms: usize,
-    /// Expected false-alarm clusters by design.
-    pub design_false_alarms: f64,
-    /// Canceller metrics.
-    pub cancel: CancelStats,
-    /// Expected SNRs of the truth objects that are this aperture's landmark (scorer order).
-    pub landmark_snrs_db: Vec<f64>,
-    /// The look used for the resolution measurement if this aperture is the best.
-    pub resolution_look: usize,
+    /// Its detections and what it adds to the mission's metrics.
+    pub tally: ApertureTally,
     /// The image.
     pub image: ApertureImage,
     /// Processing time, s.
@@ -302,77 +280,13 @@ impl ProcContext {
         let pulses = &self.pulses[k];
         let r = self.proc.process_aperture(ap, pulses, iq, &self.truth)?;
         let pc = &self.base.setup.scene.processing;
-        let markers: Vec<(u32, u32)> = r
-            .detections
-            .iter()
-            .map(|d| {
-                let (x, y) = r.grid.index_of([d.x_m, d.y_m]);
-                (x.round().max(0.0) as u32, y.round().max(0.0) as u32)
-            })
+        let markers = tally::detection_pixels(&r)
+            .into_iter()
+            .map(|(x, y)| (x as u32, y as u32))
             .collect();
-        let mut rows = Vec::new();
-        for (di, d) in r.detections.iter().enumerate() {
-            let m = r.score.outcomes.iter().find(|o| o.detection == Some(di));
-            rows.push(DetectionRow {
-                aperture: ap.index,
-                x_m: d.x_m,
-                y_m: d.y_m,
-                snr_db: d.snr_db,
-                pixels: d.pixels,
-                truth_id: m.map(|o| o.truth.id),
-                error_m: m.and_then(|o| o.error_m),
-            });
-        }
-        let (mut all, mut all_hit, mut strong, mut strong_hit) = (0, 0, 0, 0);
-        let mut errors_m = Vec::new();
-        let (mut lm_det, mut lm_snr) = (None, None);
-        let mut landmark_snrs_db = Vec::new();
-        for o in &r.score.outcomes {
-            all += 1;
-            if o.detection.is_some() {
-                all_hit += 1;
-            }
-            if o.truth.expected_snr_db >= 13.0 {
-                strong += 1;
-                if o.detection.is_some() {
-                    strong_hit += 1;
-                }
-            }
-            if let Some(e) = o.error_m {
-                errors_m.push(e);
-            }
-            if o.truth.landmark.is_some() && o.truth.landmark == ap.landmark {
-                lm_det = Some(o.detection.is_some());
-                lm_snr = Some(o.truth.expected_snr_db);
-                landmark_snrs_db.push(o.truth.expected_snr_db);
-            }
-        }
-        let summary = ApertureSummary {
-            aperture: ap.index,
-            landmark: ap.landmark,
-            landmark_detected: lm_det,
-            landmark_snr_db: lm_snr,
-            detections: r.detections.len(),
-            false_alarms: r.score.false_alarms.len(),
-            dpi_reduction_db: r.cancel.dp_reduction_db(),
-            residual_to_noise_db: 10.0
-                * (r.cancel.mean_output_power() / self.noise_power_w).log10(),
-            worst_width_m: r.cell.worst_width_m,
-        };
         Ok(ApertureOutcome {
             aperture: ap.index,
-            rows,
-            summary,
-            objects: all,
-            objects_detected: all_hit,
-            strong,
-            strong_detected: strong_hit,
-            errors_m,
-            false_alarms: r.score.false_alarms.len(),
-            design_false_alarms: r.design_false_alarm_clusters(pc.pfa),
-            cancel: r.cancel,
-            landmark_snrs_db,
-            resolution_look: ap.looks / 2,
+            tally: ApertureTally::new(ap, &r, pc.pfa, self.noise_power_w),
             image: ApertureImage {
                 mission_id: self.base.mission_id,
                 aperture: ap.index as u32,
@@ -404,33 +318,7 @@ impl ProcContext {
             .filter(|p| p.look == look)
             .copied()
             .collect();
-        let grid = self.base.setup.grid(ap);
-        let c = self.proc.compress(
-            &grid,
-            &pulses,
-            iq,
-            ap.pulses_per_look,
-            Some(ap.centre_m),
-            true,
-        )?;
-        Ok(self
-            .proc
-            .measure_resolution(&c, &pulses, 0..pulses.len(), ap.centre_m)
-            .ok()
-            .map(|rep| {
-                (
-                    MeasuredResolution {
-                        measured_m: rep.range_measured_m,
-                        predicted_general_m: rep.range_general_m,
-                        paper_m: rep.range_paper_m,
-                    },
-                    MeasuredResolution {
-                        measured_m: rep.azimuth_measured_m,
-                        predicted_general_m: rep.azimuth_general_m,
-                        paper_m: rep.azimuth_paper_m,
-                    },
-                )
-            }))
+        Ok(tally::measure_look(&self.proc, ap, &pulses, iq)?)
     }
 }
 
@@ -440,52 +328,7 @@ pub fn fold_metrics(
     outcomes: &[&ApertureOutcome],
     noise_power_w: f64,
 ) -> (Metrics, Option<(usize, usize)>) {
-    let (mut strong, mut strong_hit, mut all, mut all_hit) = (0usize, 0usize, 0usize, 0usize);
-    let mut errors = Vec::new();
-    let (mut fa, mut design_fa) = (0usize, 0.0);
-    let mut cancel = CancelStats::default();
-    let mut best: Option<(f64, usize, usize)> = None;
-    let mut summaries = Vec::new();
-    for o in outcomes {
-        cancel.add(&o.cancel);
-        all += o.objects;
-        all_hit += o.objects_detected;
-        strong += o.strong;
-        strong_hit += o.strong_detected;
-        errors.extend_from_slice(&o.errors_m);
-        for s in &o.landmark_snrs_db {
-            if best.is_none_or(|b| *s > b.0) {
-                best = Some((*s, o.aperture, o.resolution_look));
-            }
-        }
-        fa += o.false_alarms;
-        design_fa += o.design_false_alarms;
-        summaries.push(o.summary.clone());
-    }
-    let frac = |a: usize, b: usize| if b > 0 { a as f64 / b as f64 } else { f64::NAN };
-    (
-        Metrics {
-            pd: frac(strong_hit, strong),
-            strong_objects: strong,
-            pd_all: frac(all_hit, all),
-            false_alarms: fa,
-            design_false_alarms: design_fa,
-            mean_position_error_m: if errors.is_empty() {
-                f64::NAN
-            } else {
-                errors.iter().sum::<f64>() / errors.len() as f64
-            },
-            dpi_reduction_db: cancel.dp_reduction_db(),
-            cancellation_db: cancel.cancellation_db(),
-            residual_to_noise_db: 10.0 * (cancel.mean_output_power() / noise_power_w).log10(),
-            target_loss_db: cancel.target_loss_db(),
-            range_resolution_m: None,
-            azimuth_resolution_m: None,
-            resolution_from: None,
-            apertures: summaries,
-        },
-        best.map(|(_, a, l)| (a, l)),
-    )
+    tally::fold(outcomes.iter().map(|o| &o.tally), noise_power_w)
 }
 
 /// The detections message of an outcome.
@@ -499,11 +342,11 @@ pub fn detections_message(
         mission_id: id,
         aperture: o.aperture as u32,
         apertures: apertures as u32,
-        landmark: o.summary.landmark,
-        landmark_detected: o.summary.landmark_detected,
-        landmark_snr_db: o.summary.landmark_snr_db.filter(|v| v.is_finite()),
-        detections: o.rows.iter().map(Detection::from).collect(),
-        false_alarms: o.false_alarms,
+        landmark: o.tally.summary.landmark,
+        landmark_detected: o.tally.summary.landmark_detected,
+        landmark_snr_db: o.tally.summary.landmark_snr_db.filter(|v| v.is_finite()),
+        detections: o.tally.rows.iter().map(Detection::from).collect(),
+        false_alarms: o.tally.false_alarms,
         process_s: o.process_s,
         processor: processor.to_string(),
     }
@@ -1433,7 +1276,7 @@ impl Proc<'_> {
                         if let Some(d) = &run.dir {
                             store(d, &o)?;
                         }
-                        tracing::info!(mission = %id, aperture = k, detections = o.rows.len(),
+                        tracing::info!(mission = %id, aperture = k, detections = o.tally.rows.len(),
                             seconds = format!("{:.2}", o.process_s), "aperture done");
                         run.outcomes.insert(k, o);
                         self.report.apertures += 1;

@@ -86,7 +86,7 @@ fn aperture_processing_matches_the_file_pipeline() {
     assert!(!rows.is_empty(), "the landmark should be detected");
     assert_eq!(
         serde_json::to_string(&rows).unwrap(),
-        serde_json::to_string(&o.rows).unwrap()
+        serde_json::to_string(&o.tally.rows).unwrap()
     );
     let (mut m2, best) = fold_metrics(&[&o], ctx.noise_power_w);
     let (k, look) = best.unwrap();
