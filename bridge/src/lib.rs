@@ -11,8 +11,13 @@
 //! - [`iox`]: zero-copy frame services over iceoryx2 (explicit sizing, event wake-ups,
 //!   stale-resource cleanup, isolated roots for tests).
 //! - [`forward`]: the iceoryx2 <-> Zenoh forwarder behind the `cellsar-bridge` binary.
+//! - [`service`]: the bridge as a process (flags, checked set-up, run loop), shared by
+//!   `cellsar-bridge` and `cellsar bridge`.
+//! - [`refusal`]: the typed error reply of a queryable ([`Refusal`]: bad request, infeasible,
+//!   internal), decoded by queries into [`NetError::Refused`].
 //! - [`counters`], [`seq`]: what every endpoint counts; sequence gaps and duplicates.
-//! - [`flags`]: checks of numeric flags (seconds, rates) shared by the binaries.
+//! - [`flags`]: numeric flags (seconds, rates) shared by the binaries, checked once when parsed
+//!   ([`flags::Seconds`]).
 //!
 //! This crate knows no domain type: the planner and radar crates define their messages and
 //! implement [`Message`] for them.
@@ -27,7 +32,9 @@ pub mod frame;
 pub mod iox;
 pub mod keys;
 pub mod net;
+pub mod refusal;
 pub mod seq;
+pub mod service;
 pub mod stats;
 pub mod zconfig;
 
@@ -39,9 +46,10 @@ pub use iox::{
     IoxArgs, IoxEnv, IoxError,
 };
 pub use net::{
-    FrameSubscribeOptions, NetError, OwnedFrame, PendingQuery, PublishOptions, QueryOptions,
-    Received, SubscribeOptions, WireFormat, ZenohFrame, ZenohNode,
+    FrameSubscribeOptions, IncomingQuery, NetError, OwnedFrame, PendingQuery, PublishOptions,
+    QueryOptions, Received, SubscribeOptions, WireFormat, ZenohFrame, ZenohNode,
 };
+pub use refusal::{Refusal, RefusalKind};
 pub use seq::{SeqObservation, SeqTracker};
 pub use zconfig::ZenohArgs;
 

@@ -17,7 +17,7 @@ use zenoh::bytes::{Encoding, ZBytes};
 use zenoh::handlers::FifoChannelHandler;
 use zenoh::liveliness::LivelinessToken;
 use zenoh::qos::{CongestionControl, Priority};
-use zenoh::query::{Query, QueryTarget, Reply};
+use zenoh::query::{ConsolidationMode, Query, QueryTarget, Reply};
 use zenoh::sample::{Locality, Sample, SampleKind};
 use zenoh::{Config, Session, Wait};
 
@@ -25,6 +25,7 @@ use crate::counters::{BadPayloadLog, Counters};
 use crate::envelope::{self, CodecError, DecodeLimits, Envelope, Header, Message, Meta, MissionId};
 use crate::frame::{self, FrameHeader, WIRE_PREFIX_LEN};
 use crate::keys::{self, KeyError};
+use crate::refusal::Refusal;
 
 /// Errors of the Zenoh layer. Each names the key and the operation.
 #[derive(Debug, thiserror::Error)]
@@ -50,13 +51,22 @@ pub enum NetError {
         /// Codec error.
         source: CodecError,
     },
-    /// A queryable answered with an error.
+    /// A queryable answered with an error that is not a typed [`Refusal`] (a plain text from
+    /// an older or foreign queryable, or the queryable's own "bad request" / "server busy").
     #[error("query {key:?} answered with an error: {message}")]
     Remote {
         /// Key expression.
         key: String,
         /// The error text of the reply.
         message: String,
+    },
+    /// A queryable refused the request with a typed [`Refusal`] ([`IncomingQuery::refuse`]).
+    #[error("query {key:?} refused ({}): {}", refusal.kind, refusal.message)]
+    Refused {
+        /// Key expression.
+        key: String,
+        /// The refusal: its kind and message.
+        refusal: Refusal,
     },
     /// A query got no (good) reply before its timeout.
     #[error("query {key:?}: no reply within {timeout:?}")]
@@ -98,17 +108,42 @@ fn decode_reply<Rep: Message>(
                     source,
                 })
         }
-        Err(err) => {
-            let message = err
-                .payload()
-                .try_to_string()
-                .map(|s| s.into_owned())
-                .unwrap_or_else(|_| format!("{} bytes of non-UTF-8", err.payload().len()));
-            Err(NetError::Remote {
-                key: key.to_string(),
-                message,
-            })
-        }
+        Err(err) => Err(decode_error_reply(
+            key,
+            &err.payload().to_bytes(),
+            WireFormat::of(err.encoding()),
+            limits,
+        )),
+    }
+}
+
+/// What an error reply of a query means: a typed [`Refusal`] in the envelope (in `format`,
+/// the reply's encoding) is [`NetError::Refused`]; anything else is [`NetError::Remote`] with
+/// the reply's text (a payload that is not UTF-8 is described, with why it is no refusal).
+/// Both name `key`. Queries call it on each error reply; public for tests and raw Zenoh
+/// clients.
+pub fn decode_error_reply(
+    key: &str,
+    payload: &[u8],
+    format: WireFormat,
+    limits: &DecodeLimits,
+) -> NetError {
+    match format.decode::<Refusal>(payload, limits) {
+        Ok(env) => NetError::Refused {
+            key: key.to_string(),
+            refusal: env.message,
+        },
+        Err(codec) => NetError::Remote {
+            key: key.to_string(),
+            message: match std::str::from_utf8(payload) {
+                Ok(text) => text.to_string(),
+                Err(_) => format!(
+                    "{} bytes of non-UTF-8 that are no {}: {codec}",
+                    payload.len(),
+                    Refusal::NAME
+                ),
+            },
+        },
     }
 }
 
@@ -447,14 +482,15 @@ impl ZenohNode {
     }
 
     /// Sends a typed query and collects every reply until `opts.timeout` (or until all
-    /// queryables answered). Each reply is `Ok` (decoded) or `Err` (remote error or bad reply).
+    /// queryables answered). Each reply is `Ok` (decoded) or `Err` (a typed refusal
+    /// [`NetError::Refused`], another remote error [`NetError::Remote`], or a bad reply).
     pub fn query<Req: Message, Rep: Message>(
         &self,
         key: &str,
         request: &Req,
         opts: &QueryOptions,
     ) -> Result<Vec<Result<Received<Rep>, NetError>>, NetError> {
-        let replies = self.send_query(key, request, opts)?;
+        let replies = self.send_query(key, request, opts, ConsolidationMode::Auto)?;
         let mut out = Vec::new();
         while let Ok(reply) = replies.recv() {
             out.push(decode_reply::<Rep>(key, &reply, &opts.limits));
@@ -467,6 +503,7 @@ impl ZenohNode {
         key: &str,
         request: &Req,
         opts: &QueryOptions,
+        consolidation: ConsolidationMode,
     ) -> Result<FifoChannelHandler<Reply>, NetError> {
         let payload = opts
             .format
@@ -480,6 +517,7 @@ impl ZenohNode {
             .payload(payload)
             .encoding(opts.format.encoding::<Req>())
             .target(opts.target)
+            .consolidation(consolidation)
             .timeout(opts.timeout)
             .wait()
             .map_err(|e| zerr("get", key, e))
@@ -487,7 +525,9 @@ impl ZenohNode {
 
     /// Sends a typed query and returns at once: [`PendingQuery::poll`] then waits for its
     /// first good reply a little at a time, so that the caller can give up (drop it) at any
-    /// moment, on a signal for instance.
+    /// moment, on a signal for instance. Replies are not consolidated (Zenoh's default would
+    /// hold every reply back until the last queryable answered), so the first good reply is
+    /// seen as soon as it arrives.
     pub fn start_query<Req: Message, Rep: Message>(
         &self,
         key: &str,
@@ -496,7 +536,7 @@ impl ZenohNode {
     ) -> Result<PendingQuery<Rep>, NetError> {
         Ok(PendingQuery {
             key: key.to_string(),
-            replies: self.send_query(key, request, opts)?,
+            replies: self.send_query(key, request, opts, ConsolidationMode::None)?,
             limits: opts.limits,
             timeout: opts.timeout,
             first_err: None,
@@ -504,7 +544,9 @@ impl ZenohNode {
         })
     }
 
-    /// Sends a typed query and returns the first good reply; a remote error is returned as
+    /// Sends a typed query and waits for the first good reply (returning as soon as it
+    /// arrives, without waiting for the other queryables): as [`PendingQuery::poll`], a typed
+    /// refusal is returned as [`NetError::Refused`], another remote error as
     /// [`NetError::Remote`], no reply at all as [`NetError::NoReply`].
     pub fn query_one<Req: Message, Rep: Message>(
         &self,
@@ -512,19 +554,14 @@ impl ZenohNode {
         request: &Req,
         opts: &QueryOptions,
     ) -> Result<Received<Rep>, NetError> {
-        let mut first_err = None;
-        for r in self.query::<Req, Rep>(key, request, opts)? {
-            match r {
-                Ok(v) => return Ok(v),
-                Err(e) => {
-                    first_err.get_or_insert(e);
-                }
+        let mut pending = self.start_query::<Req, Rep>(key, request, opts)?;
+        loop {
+            // Zenoh ends the query (closes the channel) at its timeout at the latest; the
+            // bounded wait only keeps `Instant + wait` from overflowing
+            if let Some(r) = pending.poll(Duration::from_secs(1)) {
+                return r;
             }
         }
-        Err(first_err.unwrap_or(NetError::NoReply {
-            key: key.to_string(),
-            timeout: opts.timeout,
-        }))
     }
 
     /// Watches liveliness tokens matching `selector` (e.g. [`keys::ALIVE_ALL`]), including
@@ -932,7 +969,25 @@ impl<Req> IncomingQuery<Req> {
             .map_err(|e| zerr("reply", &self.key, e))
     }
 
-    /// Sends an error reply with a message for the querier.
+    /// Refuses the request with a typed [`Refusal`] (in the request's format), which the
+    /// querier receives as [`NetError::Refused`].
+    pub fn refuse(&self, refusal: &Refusal) -> Result<(), NetError> {
+        let bytes = self
+            .format
+            .encode(refusal, Meta::default())
+            .map_err(|source| NetError::Codec {
+                key: self.key.clone(),
+                source,
+            })?;
+        self.query
+            .reply_err(bytes)
+            .encoding(self.format.encoding::<Refusal>())
+            .wait()
+            .map_err(|e| zerr("reply_err", &self.key, e))
+    }
+
+    /// Sends an untyped error reply with a message for the querier (received as
+    /// [`NetError::Remote`]; prefer [`IncomingQuery::refuse`]).
     pub fn reply_err(&self, message: &str) -> Result<(), NetError> {
         self.query
             .reply_err(message.to_string())

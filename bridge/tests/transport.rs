@@ -19,7 +19,7 @@ use bridge::net::{
 use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::sample::Locality;
 use bridge::zenoh::Wait;
-use bridge::{Complex32, Message, MissionId, ZenohNode};
+use bridge::{Complex32, Message, MissionId, Refusal, RefusalKind, ZenohNode};
 use common::*;
 use serde::{Deserialize, Serialize};
 
@@ -210,6 +210,164 @@ fn query_reply_errors_and_wrong_kinds() {
     let (answered, c) = server.join().unwrap();
     assert_eq!(answered, 3);
     assert_eq!(c.malformed, 1);
+}
+
+/// A queryable's typed refusal reaches the querier as `NetError::Refused` with its kind and
+/// message, in both formats (and as `poll` returns it); a plain-text error reply (an older
+/// or foreign queryable) stays `NetError::Remote`, naming the key.
+#[test]
+fn typed_refusals_are_decoded_and_plain_errors_name_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = pair(dir.path(), "rf");
+    let key = "cellsar/test/refuse";
+    let q = a
+        .queryable::<PlanRequest>(key, SubscribeOptions::default())
+        .unwrap();
+    let server = std::thread::spawn(move || {
+        let deadline = Instant::now() + T;
+        let mut answered = 0;
+        while answered < 4 && Instant::now() < deadline {
+            if let Some(inq) = q.recv_timeout(Duration::from_millis(100)) {
+                let r = match inq.request.slots {
+                    1 => inq.refuse(&Refusal::new(
+                        RefusalKind::Infeasible,
+                        "mission cannot be flown: slot 23",
+                    )),
+                    2 => inq.refuse(&Refusal::new(
+                        RefusalKind::BadRequest,
+                        "options.tolerance: -1 must be > 0",
+                    )),
+                    _ => inq.reply_err("planning failed"),
+                };
+                r.unwrap();
+                answered += 1;
+            }
+        }
+        answered
+    });
+    let ask = |slots: u32, format: WireFormat| {
+        let req = PlanRequest {
+            mission: "m".into(),
+            slots,
+        };
+        let opts = QueryOptions {
+            timeout: Duration::from_secs(5),
+            format,
+            ..Default::default()
+        };
+        let deadline = Instant::now() + T;
+        loop {
+            match b.query_one::<PlanRequest, PlanSummary>(key, &req, &opts) {
+                Err(NetError::NoReply { .. }) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(50))
+                }
+                r => break r.unwrap_err(),
+            }
+        }
+    };
+    match ask(1, WireFormat::Bincode) {
+        NetError::Refused { key: k, refusal } => {
+            assert_eq!(k, key);
+            assert_eq!(refusal.kind, RefusalKind::Infeasible);
+            assert_eq!(refusal.message, "mission cannot be flown: slot 23");
+        }
+        e => panic!("{e:?}"),
+    }
+    let e = ask(2, WireFormat::Json);
+    assert!(
+        matches!(&e, NetError::Refused { refusal, .. } if refusal.kind == RefusalKind::BadRequest),
+        "{e:?}"
+    );
+    assert!(
+        e.to_string().contains("bad_request") && e.to_string().contains("options.tolerance"),
+        "{e}"
+    );
+    for format in [WireFormat::Bincode, WireFormat::Json] {
+        match ask(3, format) {
+            NetError::Remote { key: k, message } => {
+                assert_eq!(k, key);
+                assert_eq!(message, "planning failed");
+            }
+            e => panic!("{format:?}: {e:?}"),
+        }
+    }
+    assert_eq!(server.join().unwrap(), 4);
+}
+
+/// `query_one` returns as soon as the first good reply arrives: a second queryable that
+/// holds the query without answering does not make it wait for the query's timeout.
+#[test]
+fn query_one_returns_at_the_first_good_reply() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = pair(dir.path(), "q1");
+    let key = "cellsar/test/first";
+    let q = a
+        .queryable::<PlanRequest>(key, SubscribeOptions::default())
+        .unwrap();
+    // a queryable that keeps every query open (never answers) until the test ends
+    let held = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let h = held.clone();
+    let _silent = a
+        .session()
+        .declare_queryable(key)
+        .callback(move |query: bridge::zenoh::query::Query| h.lock().unwrap().push(query))
+        .wait()
+        .unwrap();
+    let server = std::thread::spawn(move || {
+        let deadline = Instant::now() + T + T;
+        while Instant::now() < deadline {
+            if let Some(inq) = q.recv_timeout(Duration::from_millis(100)) {
+                let rep = PlanSummary {
+                    mission: inq.request.mission.clone(),
+                    energy_j: f64::from(inq.request.slots),
+                    pos_m: vec![],
+                };
+                inq.reply(&rep, Meta::default()).unwrap();
+                if inq.request.slots == 2 {
+                    return;
+                }
+            }
+        }
+    });
+    let mut opts = QueryOptions {
+        timeout: Duration::from_secs(1),
+        target: bridge::zenoh::query::QueryTarget::All,
+        ..Default::default()
+    };
+    // until both queryables are known to the querier
+    let deadline = Instant::now() + T;
+    let req = |slots| PlanRequest {
+        mission: "m".into(),
+        slots,
+    };
+    loop {
+        let answered = b
+            .query_one::<PlanRequest, PlanSummary>(key, &req(1), &opts)
+            .is_ok();
+        if answered && !held.lock().unwrap().is_empty() {
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the queryables were never reached"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    opts.timeout = Duration::from_secs(20);
+    let t = Instant::now();
+    let rep = b
+        .query_one::<PlanRequest, PlanSummary>(key, &req(2), &opts)
+        .unwrap();
+    assert_eq!(rep.message.energy_j, 2.0);
+    assert!(
+        t.elapsed() < Duration::from_secs(10),
+        "query_one waited {:?} for the silent queryable",
+        t.elapsed()
+    );
+    let held_now = held.lock().unwrap().len();
+    assert!(held_now >= 2, "the silent queryable saw {held_now} queries");
+    server.join().unwrap();
+    held.lock().unwrap().clear();
 }
 
 /// A query started with `start_query` is polled a little at a time (the caller can stop

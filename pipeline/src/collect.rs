@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use bridge::MissionId;
-use radar_sim::io::{write_csv, write_json, write_png_db, NpyType, NpyWriter};
+use radar_sim::io::{write_json, write_png_db, NpyType, NpyWriter};
 use radar_sim::run::{DetectionRow, Metrics};
 use radar_sim::service::{ApertureDetections, ApertureImage, MissionMetrics};
 
@@ -152,7 +152,7 @@ impl Collector {
     /// `cellsar-radar-sim process`).
     pub fn write(&self) -> Result<()> {
         let rows = self.rows();
-        write_detections(&self.out, &rows)?;
+        radar_sim::run::write_detections(&self.out, &rows)?;
         if let Some(m) = &self.metrics {
             write_json(&self.out.join("metrics.json"), m)?;
         }
@@ -180,32 +180,5 @@ pub fn write_image(dir: &Path, img: &ApertureImage) -> Result<()> {
         40.0,
         &markers,
     )?;
-    Ok(())
-}
-
-/// Writes `detections.csv` and `detections.json`.
-pub fn write_detections(out: &Path, rows: &[DetectionRow]) -> Result<()> {
-    let csv: Vec<Vec<String>> = rows
-        .iter()
-        .map(|d| {
-            vec![
-                d.aperture.to_string(),
-                format!("{:.3}", d.x_m),
-                format!("{:.3}", d.y_m),
-                format!("{:.2}", d.snr_db),
-                d.pixels.to_string(),
-                d.truth_id.map(|v| v.to_string()).unwrap_or_default(),
-                d.error_m.map(|v| format!("{v:.3}")).unwrap_or_default(),
-            ]
-        })
-        .collect();
-    write_csv(
-        &out.join("detections.csv"),
-        &[
-            "aperture", "x_m", "y_m", "snr_db", "pixels", "truth_id", "error_m",
-        ],
-        &csv,
-    )?;
-    write_json(&out.join("detections.json"), &rows)?;
     Ok(())
 }

@@ -3,7 +3,8 @@
 //! 1. Checks the inputs before anything starts: every option a child would refuse, the Zenoh
 //!    and iceoryx2 flags, the mission and the scene (bad input: [`FailureKind::BadInput`],
 //!    exit code 2), and the mission's necessary conditions of feasibility
-//!    ([`FailureKind::Infeasible`], exit code 3).
+//!    ([`FailureKind::Infeasible`], exit code 3). (The seconds options were checked when
+//!    parsed, into [`Seconds`].)
 //! 2. Chooses the Zenoh network: by default an isolated mesh on loopback (the launcher listens on
 //!    a free port, every child connects to it; no multicast, no router); with `--router` a
 //!    router child and every process its client; with Zenoh flags, those flags for everyone.
@@ -14,8 +15,12 @@
 //!    together at most `--plan-timeout-s`), writes `plan/`, collects every aperture's detections and
 //!    image and the metrics (asking the processor again for what it missed), and writes the
 //!    same files as `cellsar-radar-sim closed-loop`, plus `pipeline.json` and `report.md`.
+//!    A planner that refuses the mission answers with a typed refusal ([`Refusal`]), whose
+//!    kind picks the exit code ([`PlanRefused::failure_kind`]: infeasible 3, bad request 2,
+//!    internal 1); an error reply that is no refusal is a failure at run time naming the key.
 //! 5. Stops every child (SIGTERM, then SIGKILL after a grace period) at the end, on SIGINT or
-//!    SIGTERM, or when a child keeps failing.
+//!    SIGTERM, or when a child keeps failing: one clean-up path for every ending, and an
+//!    `interrupted` event for every interrupted run (also while the Zenoh session opens).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -25,10 +30,12 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context, Result};
 use bridge::envelope::DecodeLimits;
-use bridge::flags;
+use bridge::flags::{self, Seconds};
 use bridge::net::{QueryOptions, SubscribeOptions, WireFormat};
 use bridge::zconfig::Mode;
-use bridge::{keys, FrameServiceSpec, IoxArgs, NetError, ZenohArgs, ZenohNode};
+use bridge::{
+    keys, FrameServiceSpec, IoxArgs, Message, NetError, Refusal, RefusalKind, ZenohArgs, ZenohNode,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 use planner::service::{
     Plan, PlanRequest, PlanRequestOptions, ServiceStatus, MAX_PLAN_BYTES, PLAN_KEY,
@@ -74,7 +81,7 @@ pub struct RunArgs {
     pub out: PathBuf,
     /// Keep only the landmark windows that end within this horizon, s.
     #[arg(long, value_parser = flags::parse_seconds)]
-    pub horizon_s: Option<f64>,
+    pub horizon_s: Option<Seconds>,
     /// The plan's resolution requirement: `paper` (the paper's δ_r, δ_a ≤ d_min) or `general`
     /// (the worst width of the true bistatic cell ≤ d_min in every landmark slot; top-level
     /// README, "Resolution"). Sent with the plan request; `cellsar-radar-sim closed-loop
@@ -105,19 +112,19 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 2)]
     pub window: usize,
     /// The processor asks again for an aperture after this many seconds without frames.
-    #[arg(long, default_value_t = 10.0, value_parser = flags::parse_seconds)]
-    pub resend_after_s: f64,
+    #[arg(long, default_value = "10", value_parser = flags::parse_seconds)]
+    pub resend_after_s: Seconds,
     /// Exit with code 4 when a landmark in view was not detected (default: report it in
     /// `report.md`/`report.json` and on stdout, exit 0 once the run completed).
     #[arg(long)]
     pub strict: bool,
     /// Give up after this many seconds (default: no limit).
     #[arg(long, value_parser = flags::parse_seconds)]
-    pub timeout_s: Option<f64>,
+    pub timeout_s: Option<Seconds>,
     /// Longest wait for the plan, s: waiting for a planner to appear (a local one starting,
     /// or an `--external planner`) and for its answer together; then the run fails (exit 1).
-    #[arg(long, default_value_t = 900.0, value_parser = flags::parse_seconds)]
-    pub plan_timeout_s: f64,
+    #[arg(long, default_value = "900", value_parser = flags::parse_seconds)]
+    pub plan_timeout_s: Seconds,
     /// Print events (children started/exited, liveliness, apertures) as JSON lines on stdout.
     #[arg(long)]
     pub events_json: bool,
@@ -171,22 +178,26 @@ fn absolute(p: &Path) -> Result<PathBuf> {
     }
 }
 
-/// The answer of the planner to a plan request was an error.
+/// The planner refused the plan request with a typed refusal ([`Refusal`], on the wire as
+/// `bridge.refusal`): its kind picks the exit code ([`PlanRefused::failure_kind`]).
 #[derive(Debug, thiserror::Error)]
-#[error("the planner refused the mission: {message}")]
+#[error("the planner on {key:?} refused the mission ({}): {}", refusal.kind, refusal.message)]
 pub struct PlanRefused {
-    /// The planner's message.
-    pub message: String,
+    /// The key the plan request went to.
+    pub key: String,
+    /// The planner's refusal: its kind and message.
+    pub refusal: Refusal,
 }
 
-/// The text the planner's error names a mission that cannot be flown with
-/// (`planner::init::Infeasibility`, also inside the plan service's answer).
-pub const INFEASIBLE_MARK: &str = "mission cannot be flown";
-
 impl PlanRefused {
-    /// Whether the planner found that the mission cannot be flown (rather than failing).
-    pub fn infeasible(&self) -> bool {
-        self.message.contains(INFEASIBLE_MARK)
+    /// What kind of failure the refusal is: a mission that cannot be flown exits 3, a request
+    /// the planner found invalid 2, a planner that failed 1.
+    pub fn failure_kind(&self) -> FailureKind {
+        match self.refusal.kind {
+            RefusalKind::Infeasible => FailureKind::Infeasible,
+            RefusalKind::BadRequest => FailureKind::BadInput,
+            RefusalKind::Internal => FailureKind::Runtime,
+        }
     }
 }
 
@@ -196,16 +207,7 @@ impl PlanRefused {
 /// need ([`FailureKind::BadInput`]), then the mission's necessary conditions of feasibility
 /// ([`FailureKind::Infeasible`]). Returns the mission to plan.
 pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
-    for (flag, v) in [
-        ("--timeout-s", args.timeout_s),
-        ("--plan-timeout-s", Some(args.plan_timeout_s)),
-        ("--resend-after-s", Some(args.resend_after_s)),
-        ("--horizon-s", args.horizon_s),
-    ] {
-        if let Some(v) = v {
-            flags::seconds(flag, v).map_err(Failure::bad_input)?;
-        }
-    }
+    // the seconds flags were checked when parsed (bridge::flags::Seconds)
     if args.window == 0 {
         return Err(Failure::bad_input(anyhow!(
             "--window 0: must be at least 1 (apertures the processor asks for at once)"
@@ -232,7 +234,7 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
         .with_context(|| format!("mission {}", args.mission.display()))
         .map_err(Failure::bad_input)?;
     if let Some(h) = args.horizon_s {
-        mission = radar_sim::run::shorten(&mission, h)
+        mission = radar_sim::run::shorten(&mission, h.as_secs_f64())
             .with_context(|| format!("--horizon-s {h}"))
             .map_err(Failure::bad_input)?;
     }
@@ -264,11 +266,25 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     Ok(mission)
 }
 
+/// The error of a plan query the planner answered with an error reply: a typed refusal is a
+/// [`PlanRefused`] (its kind picks the exit code, [`classify`]); an error reply that is no
+/// refusal (an older or foreign planner) a failure at run time, naming the key.
+fn plan_refusal(e: NetError) -> anyhow::Error {
+    match e {
+        NetError::Refused { key, refusal } => PlanRefused { key, refusal }.into(),
+        e => anyhow::Error::new(e).context(format!(
+            "the planner answered with an error that is no typed refusal ({} v{}; an older or \
+             foreign planner?)",
+            Refusal::NAME,
+            Refusal::SCHEMA_VERSION
+        )),
+    }
+}
+
 fn classify(e: anyhow::Error) -> Failure {
-    let kind = match e.downcast_ref::<PlanRefused>() {
-        Some(r) if r.infeasible() => FailureKind::Infeasible,
-        _ => FailureKind::Runtime,
-    };
+    let kind = e
+        .downcast_ref::<PlanRefused>()
+        .map_or(FailureKind::Runtime, PlanRefused::failure_kind);
     Failure { kind, error: e }
 }
 
@@ -354,36 +370,38 @@ fn launch(
             ("iox", json!(iox.to_cli_args())),
         ],
     );
-    let node = match open_with_retry(&net.launcher, &stop) {
-        Ok(n) => n,
-        Err(e) => {
-            stop_all(&mut children, Duration::from_secs(10), &events);
-            remove_shm(&iox);
-            return if stop.load(Ordering::Relaxed) {
-                Ok(Outcome::Interrupted)
-            } else {
-                Err(e)
-            };
+    // 3.-5. the run on the launcher's Zenoh session; then one clean-up, however it ended
+    // (SIGINT/SIGTERM while the session opens included)
+    let (node, result) = match open_with_retry(&net.launcher, &stop) {
+        Ok(node) => {
+            let result = run_on(
+                args,
+                mission,
+                &scene_path,
+                &out,
+                &state,
+                &node,
+                &net,
+                &iox,
+                &events,
+                &stop,
+                &mut children,
+                &spec,
+                wall,
+            );
+            (Some(node), result)
         }
+        Err(_) if stop.load(Ordering::Relaxed) => (None, Ok(Outcome::Interrupted)),
+        Err(e) => (None, Err(e)),
     };
-    let result = run_on(
-        args,
-        mission,
-        &scene_path,
-        &out,
-        &state,
-        &node,
-        &net,
-        &iox,
-        &events,
-        &stop,
-        &mut children,
-        &spec,
-        wall,
-    );
+    if matches!(result, Ok(Outcome::Interrupted)) {
+        events.emit("interrupted", &[]);
+    }
     stop_all(&mut children, Duration::from_secs(10), &events);
-    if let Err(e) = node.close() {
-        tracing::debug!(error = %e, "closing the launcher's session");
+    if let Some(node) = node {
+        if let Err(e) = node.close() {
+            tracing::debug!(error = %e, "closing the launcher's session");
+        }
     }
     remove_shm(&iox);
     if let Ok(o) = &result {
@@ -513,11 +531,8 @@ fn run_on(
         children.push(Supervised::start(spec("processor", xa), events)?);
     }
 
-    // checked in check_inputs; an unusable value here means "no limit" rather than a panic
-    let deadline = args
-        .timeout_s
-        .and_then(|t| flags::seconds("--timeout-s", t).ok())
-        .and_then(|d| wall.checked_add(d));
+    // a deadline past what an Instant can hold means "no limit" rather than a panic
+    let deadline = args.timeout_s.and_then(|t| wall.checked_add(t.duration()));
     let backoff = Duration::from_millis(500);
     let supervise = |children: &mut Vec<Supervised>| -> Result<()> {
         for c in children.iter_mut() {
@@ -570,7 +585,7 @@ fn run_on(
         },
     };
     let plan_started = Instant::now();
-    let plan_timeout = flags::seconds("--plan-timeout-s", args.plan_timeout_s)?;
+    let plan_timeout = args.plan_timeout_s.duration();
     let plan_deadline = plan_started.checked_add(plan_timeout);
     let plan_left = || {
         plan_deadline.map_or(plan_timeout, |d| {
@@ -642,10 +657,8 @@ fn run_on(
             };
             match answer {
                 Ok(r) => return Ok(Some(r.message)),
-                Err(NetError::Remote { message, .. })
-                    if !message.contains("stopped while planning") =>
-                {
-                    return Err(PlanRefused { message }.into())
+                Err(e @ (NetError::Refused { .. } | NetError::Remote { .. })) => {
+                    return Err(plan_refusal(e))
                 }
                 Err(e) if plan_left().is_zero() => {
                     return Err(anyhow::Error::new(e).context(no_plan("the planner did not answer")))
@@ -665,7 +678,6 @@ fn run_on(
     let plan = get_plan();
     spinner.finish_and_clear();
     let Some(plan) = plan? else {
-        events.emit("interrupted", &[]);
         return Ok(Outcome::Interrupted);
     };
     let plan_s = plan_started.elapsed().as_secs_f64();
@@ -853,7 +865,6 @@ fn run_on(
     };
     bar.finish_and_clear();
     if interrupted {
-        events.emit("interrupted", &[]);
         col.write()?;
         return Ok(Outcome::Interrupted);
     }
@@ -1096,27 +1107,52 @@ fn write_report_md(
 mod tests {
     use super::*;
 
-    /// The plan service answers with the planner's error text: a mission that cannot be flown
-    /// is told apart (exit code 3) from a planner that failed (exit code 1).
+    /// The plan service refuses with a typed refusal (bridge.refusal): the launcher decodes
+    /// it and maps its kind to the exit code — a mission that cannot be flown 3, a bad
+    /// request 2, a planner that failed 1 — whatever the message says. An error reply that
+    /// is no refusal (an older or foreign planner) is a failure at run time naming the key.
     #[test]
-    fn an_infeasible_refusal_is_told_apart() {
-        let e = planner::PlanError::Infeasible(planner::init::Infeasibility {
-            slot: 23,
-            t_s: 11.5,
-            reason: "no trajectory".into(),
-        });
-        // as the plan service words it (planner::service::plan_request)
-        let refused = PlanRefused {
-            message: format!("planning \"m\": {e}"),
-        };
-        assert!(refused.infeasible());
-        assert_eq!(classify(refused.into()).kind, FailureKind::Infeasible);
-        let failed = PlanRefused {
-            message: "planning \"m\": iteration 0: solver failed".into(),
-        };
-        assert!(!failed.infeasible());
-        let f = classify(anyhow::Error::new(failed).context("asking"));
+    fn refusals_are_decoded_and_classified_by_kind() {
+        use bridge::net::{decode_error_reply, WireFormat};
+        let limits = DecodeLimits::default();
+        let answer = |e: NetError| classify(plan_refusal(e));
+        for (kind, want) in [
+            (RefusalKind::Infeasible, FailureKind::Infeasible),
+            (RefusalKind::BadRequest, FailureKind::BadInput),
+            (RefusalKind::Internal, FailureKind::Runtime),
+        ] {
+            // the text no longer decides: an internal failure that mentions infeasibility
+            // stays a failure at run time
+            let r = Refusal::new(kind, "planning \"m\": mission cannot be flown: slot 23");
+            for format in [WireFormat::Bincode, WireFormat::Json] {
+                let bytes = format.encode(&r, Default::default()).unwrap();
+                let e = decode_error_reply(PLAN_KEY, &bytes, format, &limits);
+                let f = answer(e);
+                assert_eq!(f.kind, want, "{kind:?} {format:?}");
+                assert_eq!(f.exit_code(), want.exit_code());
+                let text = f.to_string();
+                assert!(
+                    text.contains(PLAN_KEY)
+                        && text.contains(kind.as_str())
+                        && text.contains("slot 23"),
+                    "{text}"
+                );
+            }
+        }
+        // an old planner's plain-text error: exit 1, naming the key
+        let e = decode_error_reply(
+            PLAN_KEY,
+            b"planning \"m\": mission cannot be flown: slot 23",
+            WireFormat::Bincode,
+            &limits,
+        );
+        assert!(matches!(e, NetError::Remote { .. }), "{e:?}");
+        let f = answer(e);
         assert_eq!(f.kind, FailureKind::Runtime);
+        assert!(f.to_string().contains(PLAN_KEY), "{f}");
+        // and bytes that are neither
+        let e = decode_error_reply(PLAN_KEY, &[0xff, 0xfe, 0x00], WireFormat::Bincode, &limits);
+        assert!(e.to_string().contains(PLAN_KEY), "{e}");
         assert_eq!(classify(anyhow!("other")).kind, FailureKind::Runtime);
     }
 }

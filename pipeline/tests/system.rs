@@ -107,6 +107,18 @@ fn sigint_stops_every_child() {
     signal(l.child.id(), "INT");
     let st = l.finish(Duration::from_secs(60));
     assert_eq!(st.code(), Some(130), "{}", l.stderr_tail());
+    // the event log says so, once, before the children are stopped
+    let interrupted = l.named("interrupted");
+    assert_eq!(interrupted.len(), 1, "{interrupted:?}");
+    let at = |name: &str| l.seen.iter().position(|e| e["event"] == name);
+    assert!(
+        at("interrupted") < at("child_stopped"),
+        "{:?}",
+        l.seen
+            .iter()
+            .filter(|e| e["event"] != "status")
+            .collect::<Vec<_>>()
+    );
     for p in pids {
         assert!(
             !running(p),
@@ -123,6 +135,31 @@ fn sigint_stops_every_child() {
     // what had arrived is written; the state is kept for a later run
     assert!(l.out.join("detections.csv").exists());
     assert!(l.out.join(".state").exists());
+}
+
+/// SIGINT while the launcher still tries to open its Zenoh session (here its `-l` endpoint is
+/// taken, so the open is retried) ends the run as interrupted too: exit 130, an "interrupted"
+/// event, the same clean-up as any other run (nothing left in /dev/shm).
+#[test]
+fn sigint_while_the_zenoh_session_opens_is_an_interrupted_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let ep = format!("tcp/127.0.0.1:{}", taken.local_addr().unwrap().port());
+    let mut l = Launch::start(dir.path(), H, &["-l", &ep, "--no-multicast-scouting"]);
+    l.event("network", Duration::from_secs(60));
+    std::thread::sleep(Duration::from_millis(500));
+    signal(l.child.id(), "INT");
+    let st = l.finish(Duration::from_secs(60));
+    assert_eq!(st.code(), Some(130), "{}", l.stderr_tail());
+    assert!(
+        l.stderr_tail().contains("interrupted"),
+        "{}",
+        l.stderr_tail()
+    );
+    assert_eq!(l.named("interrupted").len(), 1, "{:?}", l.seen);
+    assert!(l.named("child_started").is_empty(), "{:?}", l.seen);
+    assert!(shm_files(&format!("cs{}_", l.child.id())).is_empty());
+    drop(taken);
 }
 
 #[test]

@@ -2,7 +2,9 @@
 //! every cellsar service shares.
 //!
 //! ```text
-//! cellsar/plan                       queryable: PlanRequest -> Plan (or an error naming the field)
+//! cellsar/plan                       queryable: PlanRequest -> Plan, or a typed refusal
+//!                                    (bridge::Refusal: bad_request / infeasible / internal,
+//!                                    the message naming the field, slot or step)
 //! cellsar/<mission>/plan             each plan, published (bincode); also answered to queries
 //!                                    (PlanLookup) from the cache of every process that holds it
 //! cellsar/<mission>/plan/summary     the plan's summary (JSON, for tools without Rust)
@@ -26,10 +28,12 @@ use bridge::zenoh::key_expr::KeyExpr;
 use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::query::{Query, QueryTarget};
 use bridge::zenoh::Wait;
-use bridge::{keys, Message, MissionId, ZenohArgs, ZenohNode};
+use bridge::{keys, Message, MissionId, Refusal, RefusalKind, ZenohArgs, ZenohNode};
 use serde::{Deserialize, Serialize};
 
-use crate::driver::{plan_with_observer, IterationRecord, Observer, PlanOptions, PlanResult};
+use crate::driver::{
+    plan_with_observer, IterationRecord, Observer, PlanError, PlanOptions, PlanResult,
+};
 use crate::evaluate::ResolutionMode;
 use crate::report::Summary;
 use crate::{Mission, MissionFile, Scheme};
@@ -82,6 +86,15 @@ pub enum ServiceError {
     /// A request was invalid (the message names the field).
     #[error("{0}")]
     BadRequest(String),
+    /// Planning a valid mission failed: it cannot be flown, the start trajectory does not
+    /// fit, or the solver failed ([`PlanError`] says which).
+    #[error("planning {mission:?}: {error}")]
+    Plan {
+        /// The mission's name.
+        mission: String,
+        /// The planner's error.
+        error: PlanError,
+    },
     /// A worker thread failed.
     #[error("{0}")]
     Internal(String),
@@ -92,6 +105,26 @@ impl ServiceError {
     /// binaries' exit code 2), rather than failing at run time.
     pub fn is_bad_input(&self) -> bool {
         matches!(self, ServiceError::Config(_))
+    }
+
+    /// The typed refusal a plan request is answered with: a request that names a bad field
+    /// (or a start trajectory that does not fit) is `bad_request`, a mission that cannot be
+    /// flown `infeasible`, the rest (a solver or worker failure) `internal`; the message is
+    /// this error's.
+    pub fn refusal(&self) -> Refusal {
+        let kind = match self {
+            ServiceError::BadRequest(_)
+            | ServiceError::Plan {
+                error: PlanError::InvalidInit(_),
+                ..
+            } => RefusalKind::BadRequest,
+            ServiceError::Plan {
+                error: PlanError::Infeasible(_),
+                ..
+            } => RefusalKind::Infeasible,
+            _ => RefusalKind::Internal,
+        };
+        Refusal::new(kind, self.to_string())
     }
 }
 
@@ -669,8 +702,11 @@ pub fn plan_request(
     let mission = Mission::from_file_struct(&req.mission)
         .map_err(|e| ServiceError::BadRequest(format!("mission: {e}")))?;
     let options = req.options.to_plan_options()?;
-    let result = plan_with_observer(&mission, &options, observer)
-        .map_err(|e| ServiceError::BadRequest(format!("planning {:?}: {e}", mission.name())))?;
+    let result =
+        plan_with_observer(&mission, &options, observer).map_err(|error| ServiceError::Plan {
+            mission: mission.name().to_string(),
+            error,
+        })?;
     let file = mission.to_file_struct();
     Ok(Plan {
         mission_id: mission_id(&file),
@@ -762,7 +798,7 @@ fn serve_on(
             Err(e) => {
                 report.errors += 1;
                 tracing::warn!(error = %e, "plan request failed");
-                if let Err(e2) = q.reply_err(&e.to_string()) {
+                if let Err(e2) = q.refuse(&e.refusal()) {
                     tracing::warn!(error = %e2, "error reply failed");
                 }
             }
@@ -945,5 +981,58 @@ mod tests {
             serde_json::from_str::<PlanRequest>(r#"{"mission": {"landmarks": {}}, "optoins": {}}"#)
                 .unwrap_err();
         assert!(e.to_string().contains("optoins"), "{e}");
+    }
+
+    /// A refused plan request is answered with a typed refusal whose kind says why (what the
+    /// launcher maps to exit code 2, 3 or 1), readable by the querier in both formats.
+    #[test]
+    fn refusals_carry_their_kind() {
+        let mut req = PlanRequest {
+            mission: short_mission(),
+            options: PlanRequestOptions {
+                tolerance: Some(-1.0),
+                ..Default::default()
+            },
+        };
+        let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
+        assert_eq!(e.refusal().kind, RefusalKind::BadRequest);
+        // a landmark 50 km away 10 s after the first: no speed reaches it
+        req.options = PlanRequestOptions::default();
+        req.mission = MissionFile::from_toml_str(
+            "name = \"unreachable\"\n[params]\nhorizon_s = 20\nstart_m = [-1000.0, 0.0]\n\
+             [landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }, \
+             { x_m = 50000.0, y_m = 0.0, from_s = 10.0, to_s = 20.0 }]\n",
+        )
+        .unwrap();
+        let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
+        let r = e.refusal();
+        assert_eq!(r.kind, RefusalKind::Infeasible, "{e}");
+        assert_eq!(r.message, e.to_string());
+        assert!(
+            r.message.contains("\"unreachable\"") && r.message.contains("slot"),
+            "{r:?}"
+        );
+        assert_eq!(
+            ServiceError::Internal("the planning thread panicked".into())
+                .refusal()
+                .kind,
+            RefusalKind::Internal
+        );
+        // what the querier decodes from the error reply, in either format
+        for format in [WireFormat::Bincode, WireFormat::Json] {
+            let bytes = format.encode(&r, Meta::default()).unwrap();
+            match bridge::net::decode_error_reply(
+                PLAN_KEY,
+                &bytes,
+                format,
+                &DecodeLimits::default(),
+            ) {
+                bridge::NetError::Refused { key, refusal } => {
+                    assert_eq!(key, PLAN_KEY);
+                    assert_eq!(refusal, r);
+                }
+                other => panic!("{format:?}: {other:?}"),
+            }
+        }
     }
 }

@@ -19,6 +19,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context, Result};
 use bridge::envelope::now_unix_ns;
+use bridge::flags::Seconds;
 use bridge::frame::{self, FrameMeta, WIRE_PREFIX_LEN};
 use bridge::iox::{
     init_iceoryx_logging, Backpressure, FrameNode, FramePublisherOptions, FrameServiceSpec, IoxArgs,
@@ -64,11 +65,11 @@ struct RxArgs {
     #[arg(long, default_value_t = 100)]
     frames: u64,
     /// Give up after this many seconds.
-    #[arg(long, default_value_t = 60.0, value_parser = bridge::flags::parse_seconds)]
-    timeout_s: f64,
+    #[arg(long, default_value = "60", value_parser = bridge::flags::parse_seconds)]
+    timeout_s: Seconds,
     /// Stop when no frame arrived for this long after the first one, s.
-    #[arg(long, default_value_t = 3.0, value_parser = bridge::flags::parse_seconds)]
-    idle_s: f64,
+    #[arg(long, default_value = "3", value_parser = bridge::flags::parse_seconds)]
+    idle_s: Seconds,
     /// Verify each frame's CRC (reads the whole payload).
     #[arg(long)]
     verify: bool,
@@ -436,11 +437,11 @@ impl RxStats {
     }
     /// Enough frames, or out of time.
     fn done(&self, rx: &RxArgs, start: Instant) -> bool {
-        self.frames >= rx.frames || start.elapsed().as_secs_f64() > rx.timeout_s
+        self.frames >= rx.frames || start.elapsed() > rx.timeout_s.duration()
     }
     /// Nothing for `idle_s` since the last frame (checked only when nothing is pending).
     fn idle(&self, rx: &RxArgs) -> bool {
-        matches!(self.last, Some(l) if l.elapsed().as_secs_f64() > rx.idle_s)
+        matches!(self.last, Some(l) if l.elapsed() > rx.idle_s.duration())
     }
     fn report(mut self, missed: u64, duplicates: u64, malformed: u64) -> RxReport {
         self.lat_us.sort_by(f64::total_cmp);

@@ -9,10 +9,11 @@
 use std::process::ExitCode;
 
 use anyhow::Context;
+use bridge::service::BridgeArgs;
 use clap::{Parser, Subcommand};
 use pipeline::exit::{self, Failure};
 use pipeline::launch::{self, Outcome, RunArgs};
-use pipeline::roles::{self, BridgeArgs, RouterArgs};
+use pipeline::roles::{self, RouterArgs};
 
 const EXIT_CODES: &str = "Exit codes: 0 done; 1 failure at run time; 2 bad input (an option, the \
 mission or the scene file; nothing started); 3 the mission cannot be flown; 4 `run --strict`: a \
@@ -43,7 +44,7 @@ enum Command {
     Echo(radar_sim::service::EchoArgs),
     /// The processor service (as `cellsar-radar-sim process-service`).
     Process(radar_sim::service::ProcessArgs),
-    /// The iceoryx2 <-> Zenoh bridge (as `cellsar-bridge`).
+    /// The iceoryx2 <-> Zenoh bridge (as `cellsar-bridge`: the same code and flags).
     Bridge(BridgeArgs),
     /// A plain Zenoh router (what `zenohd` does without plugins).
     Router(RouterArgs),
@@ -54,17 +55,14 @@ fn init_tracing(default: &str) {
     bridge::iox::init_iceoryx_logging();
 }
 
-/// What the radar services would refuse, checked before they start: the numbers, the scene,
-/// the Zenoh and iceoryx2 flags.
+/// What the radar services would refuse, checked before they start: the scene, the Zenoh and
+/// iceoryx2 flags. (Their seconds flags the services check themselves, first thing, as bad
+/// input.)
 fn check_radar_service(
-    seconds: &[(&str, f64)],
     scene: &std::path::Path,
     zenoh: &bridge::ZenohArgs,
     iox: &bridge::IoxArgs,
 ) -> Result<(), Failure> {
-    for (flag, v) in seconds {
-        bridge::flags::seconds(flag, *v).map_err(Failure::bad_input)?;
-    }
     radar_sim::config::SceneFile::from_path(scene)
         .context("--scene")
         .map_err(Failure::bad_input)?;
@@ -107,32 +105,19 @@ fn main() -> ExitCode {
             .map_err(Failure::bad_input)
             .and_then(|_| planner::service::serve(&a, &stop).map_err(Failure::from))
             .map(|r| tracing::info!(?r, "plan service stopped")),
-        Command::Echo(a) => check_radar_service(
-            &[("--status-interval-s", a.status_interval_s)],
-            &a.scene,
-            &a.zenoh,
-            &a.iox,
-        )
-        .and_then(|()| radar_sim::service::run_echo(&a, &stop).map_err(Failure::from))
-        .map(|r| tracing::info!(?r, "echo stopped")),
+        Command::Echo(a) => check_radar_service(&a.scene, &a.zenoh, &a.iox)
+            .and_then(|()| radar_sim::service::run_echo(&a, &stop).map_err(Failure::from))
+            .map(|r| tracing::info!(?r, "echo stopped")),
         Command::Process(a) => if a.window == 0 {
             Err(Failure::bad_input(anyhow::anyhow!(
                 "--window 0: must be at least 1"
             )))
         } else {
-            check_radar_service(
-                &[
-                    ("--resend-after-s", a.resend_after_s),
-                    ("--status-interval-s", a.status_interval_s),
-                ],
-                &a.scene,
-                &a.zenoh,
-                &a.iox,
-            )
+            check_radar_service(&a.scene, &a.zenoh, &a.iox)
         }
         .and_then(|()| radar_sim::service::run_processor(&a, &stop).map_err(Failure::from))
         .map(|r| tracing::info!(?r, "processor stopped")),
-        Command::Bridge(a) => roles::run_bridge(&a, &stop),
+        Command::Bridge(a) => bridge::service::run(&a, &stop).map(|_| ()),
         Command::Router(a) => roles::run_router(&a, &stop),
     };
     match r {
@@ -177,6 +162,85 @@ mod tests {
             },
         ];
         assert_eq!(got, [want; 4]);
+    }
+
+    /// The seconds options are parsed once, by clap, into checked `Seconds` (the Duration the
+    /// launcher uses and the number it passes on to a child), defaults included.
+    #[test]
+    fn float_seconds_options_are_durations_once_parsed() {
+        let Command::Run(a) = parse(&[
+            "run",
+            "m.toml",
+            "--scene",
+            "s.toml",
+            "--out",
+            "o",
+            "--timeout-s",
+            "2.5",
+            "--horizon-s",
+            "30",
+        ]) else {
+            panic!("not run")
+        };
+        assert_eq!(
+            a.timeout_s.map(|t| t.duration()),
+            Some(std::time::Duration::from_millis(2500))
+        );
+        assert_eq!(a.horizon_s.map(|h| h.as_secs_f64()), Some(30.0));
+        assert_eq!(
+            a.plan_timeout_s.duration(),
+            std::time::Duration::from_secs(900)
+        );
+        assert_eq!(a.resend_after_s.to_string(), "10");
+        let Command::Bridge(b) = parse(&["bridge", "--service", "x"]) else {
+            panic!("not bridge")
+        };
+        assert_eq!(
+            b.stats_interval_s.duration(),
+            std::time::Duration::from_secs(5)
+        );
+    }
+
+    /// `cellsar bridge` is `cellsar-bridge`: the same flags and set-up
+    /// (`bridge::service::BridgeArgs`), not a subset of its own.
+    #[test]
+    fn bridge_role_takes_every_cellsar_bridge_flag() {
+        let Command::Bridge(a) = parse(&[
+            "bridge",
+            "--service",
+            "cellsar/m/echo@out",
+            "--max-subscribers",
+            "6",
+            "--max-publishers",
+            "3",
+            "--subscriber-buffer",
+            "4",
+            "--no-verify-checksum",
+            "--congestion",
+            "drop",
+            "--inbound-queue",
+            "0",
+            "--inbound-backpressure",
+            "block",
+        ]) else {
+            panic!("not bridge")
+        };
+        let s = a.setup().unwrap();
+        assert!(!s.config.verify_checksum);
+        assert_eq!(s.config.inbound_queue, 0);
+        assert_eq!(
+            s.config.inbound_backpressure,
+            bridge::iox::Backpressure::Block
+        );
+        let spec = &s.config.routes[0].service;
+        assert_eq!(
+            (
+                spec.max_subscribers,
+                spec.max_publishers,
+                spec.subscriber_buffer
+            ),
+            (6, 3, 4)
+        );
     }
 
     /// Seconds that are not a finite positive number are refused by clap, naming the option

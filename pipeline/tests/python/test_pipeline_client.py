@@ -7,7 +7,9 @@ iceoryx2 root). Then, with nothing but `eclipse-zenoh` and JSON:
 
 - waits for their liveliness tokens `cellsar/alive/<role>/<instance>`;
 - asks `cellsar/plan` for a plan with a JSON request (a mission as in a mission file) and
-  reads the JSON reply; a bad mission gets an error reply naming the field;
+  reads the JSON reply; a refused request gets a typed error reply, the JSON envelope of a
+  `bridge.refusal` (kind 0x1002) whose body says why (`bad_request` naming the field,
+  `infeasible` naming the slot, or `internal`);
 - reads the plan summary `cellsar/<mission>/plan/summary`, every aperture's detections
   `cellsar/<mission>/detections` and the services' status `cellsar/<mission>/status/<role>`
   as JSON (asking `cellsar/<mission>/results` again for anything published before it
@@ -138,14 +140,26 @@ class PipelineClientTest(unittest.TestCase):
                 self.session.declare_subscriber("cellsar/*/plan/summary", on_summary),
                 self.session.declare_subscriber("cellsar/*/status/*", on_status)]
 
-        # a bad mission: an error reply that names the field
+        # a bad mission, and one that cannot be flown: typed refusals (JSON bridge.refusal)
         bad = dict(MISSION, params={"horizon_s": 20.0, "altitude_m": -1.0})
-        replies = list(self.session.get("cellsar/plan", payload=envelope(0x0101, {"mission": bad}),
-                                        encoding="application/json;cellsar/planner.plan_request/v1",
-                                        timeout=60.0))
-        self.assertEqual(len(replies), 1)
-        self.assertIsNone(replies[0].ok)
-        self.assertIn("altitude_m", replies[0].err.payload.to_string())
+        far = {"name": "unreachable", "params": {"horizon_s": 20.0, "start_m": [-1000.0, 0.0]},
+               "landmarks": {"points": [
+                   {"x_m": 0.0, "y_m": 0.0, "from_s": 0.0, "to_s": 10.0},
+                   {"x_m": 50000.0, "y_m": 0.0, "from_s": 10.0, "to_s": 20.0}]}}
+        for mission, kind, needle in ((bad, "bad_request", "altitude_m"), (far, "infeasible", "slot")):
+            replies = list(self.session.get("cellsar/plan", payload=envelope(0x0101, {"mission": mission}),
+                                            encoding="application/json;cellsar/planner.plan_request/v1",
+                                            timeout=60.0))
+            self.assertEqual(len(replies), 1)
+            self.assertIsNone(replies[0].ok)
+            err = replies[0].err
+            self.assertTrue(str(err.encoding).startswith("application/json"), str(err.encoding))
+            refusal = json.loads(err.payload.to_bytes())
+            self.assertEqual(refusal["kind"], 0x1002)
+            self.assertEqual(refusal["kind_name"], "bridge.refusal")
+            self.assertEqual(refusal["schema_version"], 1)
+            self.assertEqual(refusal["body"]["kind"], kind, refusal)
+            self.assertIn(needle, refusal["body"]["message"])
 
         # the plan, as JSON
         replies = list(self.session.get("cellsar/plan", payload=envelope(0x0101, {"mission": MISSION}),
