@@ -22,6 +22,7 @@ use crate::config::SceneFile;
 use crate::limits::{IqLimitArgs, IqLimits};
 use crate::synth::{Components, Synthesizer};
 use crate::track::PulseMeta;
+use bridge::flags::Seconds;
 
 use super::process::MissionContext;
 use super::{
@@ -43,8 +44,8 @@ pub struct EchoArgs {
     #[arg(long, default_value_t = DEFAULT_MAX_FRAME_BYTES)]
     pub max_frame_bytes: usize,
     /// Seconds between status publications.
-    #[arg(long, default_value_t = 1.0)]
-    pub status_interval_s: f64,
+    #[arg(long, default_value = "1", value_parser = bridge::flags::parse_seconds)]
+    pub status_interval_s: Seconds,
     /// Requests the echo queues at most (more are refused as busy).
     #[arg(long, default_value_t = 64)]
     pub max_queue: usize,
@@ -98,9 +99,6 @@ struct Job {
 
 /// Runs the echo service until `stop` is set.
 pub fn run_echo(args: &EchoArgs, stop: &AtomicBool) -> ServiceResult<EchoReport> {
-    // finite, > 0 and at most bridge::flags::MAX_SECONDS (1e300 panicked in Duration)
-    bridge::flags::seconds("--status-interval-s", args.status_interval_s)
-        .map_err(|e| ServiceError::Flag(e.to_string()))?;
     let limits = args.limits.limits()?;
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
@@ -184,7 +182,7 @@ impl<'a> Echo<'a> {
             Err(e) => tracing::warn!(error = %e, "plan lookup at start failed"),
         }
         tracing::info!(instance = %self.args.instance, "echo ready");
-        let interval = Duration::from_secs_f64(self.args.status_interval_s);
+        let interval = self.args.status_interval_s.duration();
         let mut last_status = Instant::now();
         // a status goes out at once for every newly known mission (then every `interval`), so
         // that a watcher sees the echo's status even when a short mission ends within the

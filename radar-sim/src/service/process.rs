@@ -11,6 +11,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use bridge::envelope::{self, DecodeLimits, Meta};
+use bridge::flags::Seconds;
 use bridge::net::{
     FrameSubscribeOptions, PublishOptions, QueryOptions, SubscribeOptions, TypedPublisher,
 };
@@ -118,14 +119,14 @@ pub struct ProcessArgs {
     #[arg(long, default_value_t = 2)]
     pub window: usize,
     /// Ask again for an aperture when no frame of its mission arrived for this long, s.
-    #[arg(long, default_value_t = 10.0)]
-    pub resend_after_s: f64,
+    #[arg(long, default_value = "10", value_parser = bridge::flags::parse_seconds)]
+    pub resend_after_s: Seconds,
     /// Store finished apertures here; after a restart, resume with the next one.
     #[arg(long, value_name = "DIR")]
     pub state_dir: Option<PathBuf>,
     /// Seconds between status publications.
-    #[arg(long, default_value_t = 1.0)]
-    pub status_interval_s: f64,
+    #[arg(long, default_value = "1", value_parser = bridge::flags::parse_seconds)]
+    pub status_interval_s: Seconds,
     /// Limits on a mission's IQ and on one aperture's memory (a plan above them is refused).
     #[command(flatten)]
     pub limits: IqLimitArgs,
@@ -471,13 +472,6 @@ struct Run {
 
 /// Runs the processor service until `stop` is set.
 pub fn run_processor(args: &ProcessArgs, stop: &AtomicBool) -> ServiceResult<ProcessReport> {
-    for (flag, v) in [
-        ("--resend-after-s", args.resend_after_s),
-        ("--status-interval-s", args.status_interval_s),
-    ] {
-        // finite, > 0 and at most bridge::flags::MAX_SECONDS (1e300 panicked in Duration)
-        bridge::flags::seconds(flag, v).map_err(|e| ServiceError::Flag(e.to_string()))?;
-    }
     if args.window == 0 {
         return Err(ServiceError::Flag("--window must be at least 1".into()));
     }
@@ -838,7 +832,7 @@ impl Proc<'_> {
             Err(e) => tracing::warn!(error = %e, "plan lookup at start failed"),
         }
         tracing::info!(instance = %self.args.instance, frames = ?self.args.frames, "processor ready");
-        let interval = Duration::from_secs_f64(self.args.status_interval_s);
+        let interval = self.args.status_interval_s.duration();
         let mut last_status = Instant::now();
         while !stop.load(Ordering::Relaxed) {
             while let Some(p) = plans.try_recv() {
@@ -1120,7 +1114,7 @@ impl Proc<'_> {
     /// requests.
     fn drive_requests(&mut self) {
         let window = self.args.window;
-        let resend = Duration::from_secs_f64(self.args.resend_after_s);
+        let resend = self.args.resend_after_s.duration();
         let Some(i) = self
             .runs
             .iter()
