@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
+use serde_json::Value;
 
 use super::plot::{line_plot, trajectory_plot, Series, TrackStyle};
 use super::{circle_slots, create_dir, write_file, ReportError, Summary};
@@ -166,12 +167,50 @@ fn csv_write(path: &Path, header: &str, rows: &[Vec<f64>]) -> Result<(), ReportE
     write_file(path, &s.replace("NaN", "nan"))
 }
 
+/// The start of `missions/default-30m-far-start.toml`: the default mission's start moved to the
+/// far end of the heading arc that keeps the general bistatic resolution cell within d_min
+/// (README, "Resolution"), m.
+pub const FAR_START_M: [f64; 2] = [342.0, 940.0];
+
 const SCHEMES: [Scheme; 4] = [
     Scheme::Exact,
     Scheme::Paper,
     Scheme::Baseline,
     Scheme::BaselineExact,
 ];
+
+/// The resolution requirement a plan key names (`…/exact-general` plans keep the general
+/// cell, every other the paper's).
+fn resolution_of_key(key: &str) -> ResolutionMode {
+    if key.ends_with("/exact-general") {
+        ResolutionMode::General
+    } else {
+        ResolutionMode::Paper
+    }
+}
+
+/// One row of `plans.json`: the plan's key in the report (`plan`: the group, e.g. `random-7`
+/// or `bandwidth-50`, and `/` the scheme, as in the report's table), its resolution
+/// requirement, then either the plan's [`Summary`] fields or `error` for a plan that failed.
+fn plan_row(key: &str, resolution: ResolutionMode, outcome: Result<&Summary, &String>) -> Value {
+    let mut row = serde_json::Map::new();
+    row.insert("plan".into(), Value::from(key));
+    row.insert("resolution".into(), Value::from(resolution.name()));
+    match outcome {
+        Ok(s) => {
+            if let Ok(Value::Object(fields)) = serde_json::to_value(s) {
+                row.extend(fields);
+            }
+        }
+        Err(e) => {
+            let scheme = key.rsplit_once('/').map_or("", |(_, l)| l);
+            let scheme = scheme.strip_suffix("-general").unwrap_or(scheme);
+            row.insert("scheme".into(), Value::from(scheme));
+            row.insert("error".into(), Value::from(e.as_str()));
+        }
+    }
+    Value::Object(row)
+}
 
 /// Runs the selected figures into `out`; returns the path of `REPORT.md`.
 pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, ReportError> {
@@ -206,6 +245,18 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
         for s in [30.0, 200.0] {
             add(format!("default-{s}"), &default(s)?, &SCHEMES);
         }
+        // the default mission from the far end of the heading arc that keeps the general cell
+        // narrow (missions/default-30m-far-start.toml): there a general-resolution plan exists
+        let far = mission_of(
+            Preset::Default,
+            30.0,
+            0,
+            ParamsOverride {
+                start_m: Some(FAR_START_M),
+                ..Default::default()
+            },
+        )?;
+        add("default-30-far-start".into(), &far, &[Scheme::Exact]);
     }
     if figs.has(Figure::F8) || figs.has(Figure::F10) {
         let m = mission_of(Preset::Staircase, 30.0, 0, ParamsOverride::default())?;
@@ -331,7 +382,7 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
                     s.iterations,
                     s.solve_seconds
                 );
-                summary_rows.push(s);
+                summary_rows.push(plan_row(key, r.resolution, Ok(&s)));
             }
             Err(e) => {
                 let label = key.rsplit_once('/').map_or(key.as_str(), |(_, l)| l);
@@ -339,6 +390,7 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
                     table,
                     "| {group} | {label} | failed: {e} | | | | | | | | | |"
                 );
+                summary_rows.push(plan_row(key, resolution_of_key(key), Err(e)));
             }
         }
     }
@@ -837,6 +889,44 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
             )?;
             produced.push(format!("fig12/trajectory-{b}mhz.svg"));
         }
+        let _ = writeln!(report, "## Fig. 12 — bandwidth\n");
+        let d_min = Params::default().d_min_m;
+        let reference = get("default-200/exact");
+        for b in ["50", "100"] {
+            let Some(x) = get(&format!("bandwidth-{b}/exact")) else {
+                continue;
+            };
+            // the paper's range resolution over the landmark slots of the plan
+            let worst_paper_m = x
+                .evaluation
+                .slots
+                .iter()
+                .filter(|s| s.landmark_m.is_some())
+                .map(|s| s.range_resolution_paper_m)
+                .fold(0.0, f64::max);
+            let same = reference.map(|r| {
+                r.trajectory
+                    .pos_m
+                    .iter()
+                    .zip(&x.trajectory.pos_m)
+                    .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                    .fold(0.0, f64::max)
+            });
+            let _ = writeln!(
+                report,
+                "- B = {b} MHz: `exact` {:.0} J; the paper's range resolution δ_r along the plan is at most {worst_paper_m:.2} m ≤ d_min = {d_min} m{}; under the general cell {} landmark slots are unresolved ({} blind).",
+                x.evaluation.energy_j,
+                same.map_or(String::new(), |d| format!(
+                    "; the track differs from the 150 MHz one (Fig. 7) by at most {d:.3} m"
+                )),
+                x.evaluation.slots_unresolved,
+                x.evaluation.slots_blind
+            );
+        }
+        let _ = writeln!(
+            report,
+            "\nWith the paper's resolution model the bandwidth only enters through the range constraint, which is vacuous at 50–150 MHz with the defaults (SPEC.md §4 item 2: its right side c/(B d_min) − sin η is negative), so every scheme flies the same track at every bandwidth and Fig. 12's trajectories repeat Fig. 7's (the paper finds \"similar patterns\" to its Fig. 6). The bandwidth does matter for the true (general) bistatic cell: see \"The general resolution cell\" above and README \"Resolution\" (`--resolution general`).\n"
+        );
     }
     if figs.has(Figure::T3) {
         let d = fig_dir("table3")?;
@@ -878,4 +968,55 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
     let path = out.join("REPORT.md");
     write_file(&path, &report)?;
     Ok(path)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::{plan_row, resolution_of_key, FAR_START_M};
+    use crate::evaluate::ResolutionMode;
+
+    /// Each row of plans.json names its plan (group and scheme) and its resolution, and a
+    /// failed plan keeps its error instead of being left out.
+    #[test]
+    fn plans_json_rows_name_their_plan_and_keep_failures() {
+        let key = "random-7/exact-general";
+        assert_eq!(resolution_of_key(key), ResolutionMode::General);
+        assert_eq!(resolution_of_key("random-7/exact"), ResolutionMode::Paper);
+        let e = "mission cannot be flown: slot 3".to_string();
+        let row = plan_row(key, resolution_of_key(key), Err(&e));
+        assert_eq!(row["plan"], key);
+        assert_eq!(row["resolution"], "general");
+        assert_eq!(row["scheme"], "exact");
+        assert_eq!(row["error"], e.as_str());
+        let m = crate::Mission::from_file_struct(&crate::MissionFile::from_toml_str(
+            "name = \"short\"\n[params]\nhorizon_s = 20\n[landmarks]\npreset = \"default\"\nspacing_m = 30\n",
+        ).unwrap())
+        .unwrap();
+        let r = crate::plan(&m, &crate::PlanOptions::default()).unwrap();
+        let s = super::Summary::new(&m, &r);
+        let row = plan_row("default-30/exact", ResolutionMode::Paper, Ok(&s));
+        assert_eq!(row["plan"], "default-30/exact");
+        assert_eq!(row["resolution"], "paper");
+        assert_eq!(row["scheme"], "exact");
+        assert_eq!(row["energy_j"].as_f64(), Some(s.energy_j));
+        assert!(row.get("error").is_none());
+    }
+
+    /// The report's far-start plan is the mission file the README points to.
+    #[test]
+    fn far_start_is_the_mission_files() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../missions/default-30m-far-start.toml");
+        let m = crate::Mission::from_path(&path).unwrap();
+        assert_eq!(m.params().start_m, FAR_START_M);
+        let default = super::mission_of(
+            crate::Preset::Default,
+            30.0,
+            0,
+            crate::params::ParamsOverride::default(),
+        )
+        .unwrap();
+        assert_eq!(m.schedule(), default.schedule());
+    }
 }
