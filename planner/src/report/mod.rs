@@ -330,6 +330,7 @@ pub fn write_plan_dir(
             .collect(),
         markers: true,
         dashed: false,
+        colour: None,
     }];
     if matches!(result.scheme, Scheme::Exact | Scheme::Paper) {
         series.push(Series {
@@ -342,6 +343,7 @@ pub fn write_plan_dir(
                 .collect(),
             markers: true,
             dashed: true,
+            colour: None,
         });
     }
     line_plot(

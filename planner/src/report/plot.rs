@@ -10,17 +10,25 @@ use crate::geometry::sensing_centre_m;
 use crate::Mission;
 use crate::Trajectory;
 
-/// Colours used for successive series.
-pub const PALETTE: [RGBColor; 8] = [
-    RGBColor(220, 40, 40),
-    RGBColor(30, 100, 200),
-    RGBColor(20, 150, 70),
-    RGBColor(200, 120, 0),
-    RGBColor(140, 60, 170),
-    RGBColor(0, 160, 170),
-    RGBColor(120, 120, 120),
+/// Colours used for successive series (Tableau 10 and two more: twelve that are told apart;
+/// none is the base station's [`BS_COLOUR`]).
+pub const PALETTE: [RGBColor; 12] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
     RGBColor(0, 0, 0),
+    RGBColor(0, 0, 128),
+    RGBColor(128, 0, 0),
 ];
+
+/// The base station's marker colour in trajectory plots (not in [`PALETTE`]).
+pub const BS_COLOUR: RGBColor = RGBColor(227, 0, 180);
 
 /// One line of a line plot.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,10 +37,13 @@ pub struct Series {
     pub name: String,
     /// (x, y) points; NaN/∞ points are skipped.
     pub points: Vec<(f64, f64)>,
-    /// Draw markers at the points as well.
+    /// Draw markers at the points as well (always drawn for a series of one point).
     pub markers: bool,
     /// Dashed line.
     pub dashed: bool,
+    /// Index into [`PALETTE`] (several series of one group can share a colour and differ in
+    /// style); `None`: the series' position in the plot.
+    pub colour: Option<usize>,
 }
 
 impl Series {
@@ -43,6 +54,7 @@ impl Series {
             points,
             markers: false,
             dashed: false,
+            colour: None,
         }
     }
 }
@@ -69,6 +81,49 @@ fn pad(lo: f64, hi: f64, frac: f64) -> (f64, f64) {
     let span = (hi - lo).abs().max(1e-9 * (1.0 + lo.abs()));
     let span = if span < 1e-12 { 1.0 } else { span };
     (lo - frac * span, hi + frac * span)
+}
+
+/// The legend's sample of a series: a line (two dashes if dashed) with a dot if it has markers.
+fn legend_sample<'a, DB: DrawingBackend + 'a>(
+    x: i32,
+    y: i32,
+    color: RGBColor,
+    dashed: bool,
+    markers: bool,
+) -> impl IntoDynElement<'a, DB, (i32, i32)> {
+    let style = color.stroke_width(2);
+    // one solid line is two segments that meet
+    let (end_a, start_b) = if dashed { (7, 13) } else { (10, 10) };
+    EmptyElement::at((x, y))
+        + PathElement::new(vec![(0, 0), (end_a, 0)], style)
+        + PathElement::new(vec![(start_b, 0), (20, 0)], style)
+        + Circle::new((10, 0), if markers { 3 } else { 0 }, color.filled())
+}
+
+/// The corner of the plot where a legend of `entries` rows covers the fewest of `points`
+/// (given in plot fractions: 0..1 from the lower left).
+fn emptiest_corner(points: &[(f64, f64)], entries: usize) -> SeriesLabelPosition {
+    // the legend's size in plot fractions (about 22 px per row of a ~450 px high plot area,
+    // and a third of its width)
+    let h = (0.05 * entries as f64 + 0.04).min(0.9);
+    let w = 0.36;
+    let corners = [
+        (SeriesLabelPosition::UpperRight, 1.0 - w, 1.0, 1.0 - h, 1.0),
+        (SeriesLabelPosition::UpperLeft, 0.0, w, 1.0 - h, 1.0),
+        (SeriesLabelPosition::LowerRight, 1.0 - w, 1.0, 0.0, h),
+        (SeriesLabelPosition::LowerLeft, 0.0, w, 0.0, h),
+    ];
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+    for (pos, xa, xb, ya, yb) in corners {
+        let covered = points
+            .iter()
+            .filter(|(x, y)| *x >= xa && *x <= xb && *y >= ya && *y <= yb)
+            .count();
+        if covered < best.0 {
+            best = (covered, pos);
+        }
+    }
+    best.1
 }
 
 /// A line plot with a legend.
@@ -101,13 +156,15 @@ pub fn line_plot(
         .draw()
         .map_err(&e)?;
     for (i, s) in series.iter().enumerate() {
-        let color = PALETTE[i % PALETTE.len()];
+        let color = PALETTE[s.colour.unwrap_or(i) % PALETTE.len()];
         let pts: Vec<(f64, f64)> = s
             .points
             .iter()
             .copied()
             .filter(|(x, y)| x.is_finite() && y.is_finite())
             .collect();
+        // a lone point has no line to show: mark it
+        let markers = s.markers || pts.len() < 2;
         let style = ShapeStyle::from(&color).stroke_width(2);
         let anno = if s.dashed {
             chart
@@ -118,17 +175,23 @@ pub fn line_plot(
                 .draw_series(LineSeries::new(pts.clone(), style))
                 .map_err(&e)?
         };
-        anno.label(s.name.clone()).legend(move |(x, y)| {
-            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-        });
-        if s.markers {
+        let dashed = s.dashed;
+        anno.label(s.name.clone())
+            .legend(move |(x, y)| legend_sample(x, y, color, dashed, markers));
+        if markers {
             chart
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
                 .map_err(&e)?;
         }
     }
+    let all: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|s| s.points.iter().copied())
+        .map(|(x, y)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0)))
+        .collect();
     chart
         .configure_series_labels()
+        .position(emptiest_corner(&all, series.len()))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()
@@ -173,6 +236,12 @@ pub fn trajectory_plot(
     pts.push((p.start_m[0], p.start_m[1]));
     for tr in tracks {
         pts.extend(tr.traj.pos_m.iter().map(|q| (q[0], q[1])));
+        // the sensing centres lie ~1 km to the side of the track: keep them in the frame
+        let headings = tr.traj.headings_rad();
+        pts.extend((1..=tr.traj.slots()).map(|t| {
+            let c = sensing_centre_m(tr.traj.q(t), headings[t - 1], offset);
+            (c[0], c[1])
+        }));
     }
     let (x0, x1, y0, y1) = finite_bounds(pts.into_iter()).unwrap_or((0.0, 1.0, 0.0, 1.0));
     // equal scales: extend the shorter side
@@ -267,16 +336,35 @@ pub fn trajectory_plot(
         .map_err(&e)?
         .label("landmarks")
         .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
-    let green = RGBColor(0, 170, 0);
     chart
         .draw_series(std::iter::once(TriangleMarker::new(
             (p.bs_m[0], p.bs_m[1]),
             9,
-            green.filled(),
+            BS_COLOUR.filled(),
         )))
         .map_err(&e)?
         .label("base station")
-        .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 6, green.filled()));
+        .legend(|(x, y)| TriangleMarker::new((x + 10, y), 6, BS_COLOUR.filled()));
+    // what the per-track marks mean (legend entries only, in grey)
+    let grey = RGBColor(110, 110, 110);
+    chart
+        .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+        .map_err(&e)?
+        .label("true sensing centre (every 4th slot)")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 2, grey.filled()));
+    if tracks.iter().any(|t| !t.circle_slots.is_empty()) {
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(&e)?
+            .label(format!(
+                "UAV (▲) and its sensing disc (r_s = {r:.0} m) at chosen slots"
+            ))
+            .legend(move |(x, y)| {
+                EmptyElement::at((x, y))
+                    + TriangleMarker::new((4, 0), 4, grey.filled())
+                    + Circle::new((14, 0), 6, grey.stroke_width(1))
+            });
+    }
     chart
         .draw_series(std::iter::once(Rectangle::new(
             [
@@ -297,4 +385,69 @@ pub fn trajectory_plot(
         .map_err(&e)?;
     root.present().map_err(&e)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn the_legend_goes_where_the_data_are_not() {
+        // a curve falling from the upper left to the lower right leaves the other corners free
+        let falling: Vec<(f64, f64)> = (0..=100)
+            .map(|k| (k as f64 / 100.0, 1.0 - k as f64 / 100.0))
+            .collect();
+        let pos = emptiest_corner(&falling, 4);
+        assert!(
+            matches!(
+                pos,
+                SeriesLabelPosition::UpperRight | SeriesLabelPosition::LowerLeft
+            ),
+            "{pos:?}"
+        );
+        // data crowding the top: the legend goes to the bottom
+        let top: Vec<(f64, f64)> = (0..=100).map(|k| (k as f64 / 100.0, 0.95)).collect();
+        let pos = emptiest_corner(&top, 4);
+        assert!(
+            matches!(
+                pos,
+                SeriesLabelPosition::LowerRight | SeriesLabelPosition::LowerLeft
+            ),
+            "{pos:?}"
+        );
+    }
+
+    #[test]
+    fn a_lone_point_is_drawn_and_colours_can_be_shared() {
+        let dir = std::env::temp_dir().join(format!("cellsar-plot-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("p.svg");
+        let series = [
+            Series {
+                colour: Some(1),
+                ..Series::line("one point", vec![(1.0, 2.0)])
+            },
+            Series {
+                colour: Some(1),
+                dashed: true,
+                ..Series::line("line", vec![(0.0, 0.0), (2.0, 3.0)])
+            },
+        ];
+        line_plot(&path, "t", "x (m)", "y (m)", &series).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        // the lone point has a marker (a circle), in the shared colour
+        let c = PALETTE[1];
+        let hex = format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
+        let marks = svg
+            .match_indices("<circle")
+            .filter(|(i, _)| {
+                let tag = &svg[*i..svg[*i..].find('>').map_or(svg.len(), |j| i + j)];
+                tag.contains("r=\"3\"") && tag.to_uppercase().contains(&hex)
+            })
+            .count();
+        // its marker in the plot and in the legend; the line has none
+        assert_eq!(marks, 2, "{svg}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

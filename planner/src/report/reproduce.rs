@@ -492,18 +492,25 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
                 pr.push((r, vp));
                 mc.push((r, vm));
             }
-            series.push(Series::line(format!("N={n} correct"), c));
+            // one colour per N; the style tells the formula
+            let colour = Some(series.len() / 3);
+            series.push(Series {
+                colour,
+                ..Series::line(format!("N={n} correct"), c)
+            });
             series.push(Series {
                 name: format!("N={n} as printed"),
                 points: pr,
                 markers: false,
                 dashed: true,
+                colour,
             });
             series.push(Series {
                 name: format!("N={n} Monte Carlo"),
                 points: mc,
                 markers: true,
                 dashed: false,
+                colour,
             });
         }
         csv_write(
@@ -549,7 +556,9 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
                             *e,
                         ]);
                     }
+                    let colour = Some(series.len() / 2);
                     series.push(Series {
+                        colour,
                         name: format!("{scheme} {s} m: own objective"),
                         points: r
                             .objective_history
@@ -570,6 +579,7 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
                             .collect(),
                         markers: false,
                         dashed: true,
+                        colour,
                     });
                 }
             }
@@ -583,7 +593,7 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
             &d.join("convergence.svg"),
             "Fig. 4(b): convergence (default mission)",
             "iteration",
-            "J",
+            "own objective (solid) / true energy (dashed), J",
             &series,
         )?;
         let _ = writeln!(
