@@ -14,7 +14,7 @@
 //! - [`service`]: the bridge as a process (flags, checked set-up, run loop), shared by
 //!   `cellsar-bridge` and `cellsar bridge`.
 //! - [`refusal`]: the typed error reply of a queryable ([`Refusal`]: bad request, infeasible,
-//!   internal), decoded by queries into [`NetError::Refused`].
+//!   internal, busy), decoded by queries into [`NetError::Refused`].
 //! - [`counters`], [`seq`]: what every endpoint counts; sequence gaps and duplicates.
 //! - [`flags`]: numeric flags (seconds, rates) shared by the binaries, checked once when parsed
 //!   ([`flags::Seconds`]).

@@ -8,10 +8,10 @@
 
 use std::collections::BTreeSet;
 use std::marker::PhantomData;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, SyncSender, TrySendError};
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use zenoh::bytes::{Encoding, ZBytes};
 use zenoh::handlers::FifoChannelHandler;
@@ -25,7 +25,8 @@ use crate::counters::{BadPayloadLog, Counters};
 use crate::envelope::{self, CodecError, DecodeLimits, Envelope, Header, Message, Meta, MissionId};
 use crate::frame::{self, FrameHeader, WIRE_PREFIX_LEN};
 use crate::keys::{self, KeyError};
-use crate::refusal::Refusal;
+use crate::refusal::{Refusal, RefusalKind};
+use crate::zconfig;
 
 /// Errors of the Zenoh layer. Each names the key and the operation.
 #[derive(Debug, thiserror::Error)]
@@ -33,11 +34,20 @@ pub enum NetError {
     /// Zenoh refused an operation.
     #[error("zenoh {op} on {key:?} failed: {reason}")]
     Zenoh {
-        /// Operation (open, declare publisher, put, ...).
+        /// Operation (declare publisher, put, close, ...).
         op: &'static str,
-        /// Key expression concerned ("" for the session).
+        /// Key expression concerned (the liveliness token's key for the session itself).
         key: String,
         /// Zenoh's message.
+        reason: String,
+    },
+    /// The Zenoh session could not be opened (a listen endpoint taken, a configuration that
+    /// Zenoh refuses, no router or peer reachable within the configured connect timeout).
+    #[error("opening the Zenoh session ({session}) failed: {reason}")]
+    Open {
+        /// What was being opened: the mode and the endpoints ([`zconfig::describe`]).
+        session: String,
+        /// Zenoh's message, on one line.
         reason: String,
     },
     /// A key was invalid.
@@ -52,7 +62,7 @@ pub enum NetError {
         source: CodecError,
     },
     /// A queryable answered with an error that is not a typed [`Refusal`] (a plain text from
-    /// an older or foreign queryable, or the queryable's own "bad request" / "server busy").
+    /// an older or foreign queryable).
     #[error("query {key:?} answered with an error: {message}")]
     Remote {
         /// Key expression.
@@ -118,17 +128,17 @@ fn decode_reply<Rep: Message>(
 }
 
 /// What an error reply of a query means: a typed [`Refusal`] in the envelope (in `format`,
-/// the reply's encoding) is [`NetError::Refused`]; anything else is [`NetError::Remote`] with
-/// the reply's text (a payload that is not UTF-8 is described, with why it is no refusal).
-/// Both name `key`. Queries call it on each error reply; public for tests and raw Zenoh
-/// clients.
+/// the reply's encoding; any schema version this build reads, [`Refusal::decode`]) is
+/// [`NetError::Refused`]; anything else is [`NetError::Remote`] with the reply's text (a
+/// payload that is not UTF-8 is described, with why it is no refusal). Both name `key`.
+/// Queries call it on each error reply; public for tests and raw Zenoh clients.
 pub fn decode_error_reply(
     key: &str,
     payload: &[u8],
     format: WireFormat,
     limits: &DecodeLimits,
 ) -> NetError {
-    match format.decode::<Refusal>(payload, limits) {
+    match Refusal::decode(payload, format, limits) {
         Ok(env) => NetError::Refused {
             key: key.to_string(),
             refusal: env.message,
@@ -280,20 +290,30 @@ impl std::fmt::Debug for ZenohNode {
     }
 }
 
+/// How long [`ZenohNode::open_until`] waits before it says that it is still waiting.
+const OPEN_NOTICE_AFTER: Duration = Duration::from_secs(2);
+/// How often it says so again.
+const OPEN_NOTICE_EVERY: Duration = Duration::from_secs(30);
+/// How often it looks at its stop flag.
+const OPEN_POLL: Duration = Duration::from_millis(20);
+
 impl ZenohNode {
     /// Opens a session and declares its liveliness token.
+    ///
+    /// This blocks until Zenoh has opened the session: with `connect.timeout_ms: -1` (a
+    /// client that waits for its router, `pipeline/deploy/client.json5`) for as long as no
+    /// router is reachable. A process that must stay stoppable meanwhile uses
+    /// [`ZenohNode::open_until`].
     pub fn open(config: Config, role: &str, instance: &str) -> Result<Self, NetError> {
         let alive = keys::alive(role, instance)?;
+        let described = zconfig::describe(&config);
         let session = zenoh::open(config)
             .wait()
             // a configuration error comes back as Debug text with source paths: clean it
             // here, where users see it (not on the per-frame put path)
-            .map_err(|e| {
-                zerr(
-                    "open",
-                    "",
-                    crate::zconfig::clean_zenoh_message(&e.to_string()),
-                )
+            .map_err(|e| NetError::Open {
+                session: described,
+                reason: zconfig::clean_zenoh_message(&e.to_string()),
             })?;
         let token = session
             .liveliness()
@@ -307,6 +327,65 @@ impl ZenohNode {
             instance: instance.to_string(),
             _token: token,
         })
+    }
+
+    /// Opens a session as [`ZenohNode::open`] does, but gives up as soon as `stop` is set
+    /// (the flag SIGINT/SIGTERM set): `Ok(None)` then, `Ok(Some(node))` once the session is
+    /// open. Zenoh opens it on a thread of its own, which is left behind when `stop` is set
+    /// first (the process is about to exit). While no router or peer answers (a client
+    /// started before its router waits for it), it logs every 30 s, from 2 s on, what it
+    /// waits for; a stop is logged too.
+    pub fn open_until(
+        config: Config,
+        role: &str,
+        instance: &str,
+        stop: &AtomicBool,
+    ) -> Result<Option<Self>, NetError> {
+        keys::alive(role, instance)?;
+        let session = zconfig::describe(&config);
+        let (tx, rx) = mpsc::sync_channel(1);
+        let (r, i) = (role.to_string(), instance.to_string());
+        std::thread::Builder::new()
+            .name("zenoh-open".into())
+            .spawn(move || {
+                let _ = tx.send(ZenohNode::open(config, &r, &i));
+            })
+            .map_err(|e| NetError::Open {
+                session: session.clone(),
+                reason: format!("starting the thread that opens it: {e}"),
+            })?;
+        let started = Instant::now();
+        let mut notice_at = started + OPEN_NOTICE_AFTER;
+        loop {
+            if stop.load(Ordering::Relaxed) {
+                tracing::warn!(
+                    %session,
+                    waited_s = started.elapsed().as_secs(),
+                    "stopped before the Zenoh session opened"
+                );
+                return Ok(None);
+            }
+            match rx.recv_timeout(OPEN_POLL) {
+                Ok(opened) => return opened.map(Some),
+                Err(RecvTimeoutError::Timeout) => {
+                    if Instant::now() >= notice_at {
+                        notice_at += OPEN_NOTICE_EVERY;
+                        tracing::warn!(
+                            %session,
+                            waited_s = started.elapsed().as_secs(),
+                            "waiting for the Zenoh session to open: no router or peer \
+                             reachable yet (SIGINT/SIGTERM stops)"
+                        );
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => {
+                    return Err(NetError::Open {
+                        session,
+                        reason: "the thread that opened it ended without an answer".into(),
+                    })
+                }
+            }
+        }
     }
 
     /// The underlying session (for anything this wrapper does not cover).
@@ -427,17 +506,22 @@ impl ZenohNode {
             .declare_queryable(key.to_string())
             .callback(move |query: Query| {
                 let key = query.key_expr().as_str().to_string();
+                let format = query.encoding().map(WireFormat::of).unwrap_or_default();
                 let Some(payload) = query.payload() else {
                     c.on_received(0);
                     c.on_malformed();
                     let e = format!("empty request: expected a {} message", Req::NAME);
                     log.log(&key, 0, &e);
-                    let _ = query.reply_err(e).wait();
+                    let _ = refuse_query(
+                        &query,
+                        &key,
+                        format,
+                        &Refusal::new(RefusalKind::BadRequest, e),
+                    );
                     return;
                 };
                 c.on_received(payload.len());
                 let bytes = payload.to_bytes();
-                let format = query.encoding().map(WireFormat::of).unwrap_or_default();
                 match format.decode::<Req>(&bytes, &limits) {
                     Ok(env) => {
                         let q = IncomingQuery {
@@ -456,10 +540,19 @@ impl ZenohNode {
                         } else {
                             match tx.try_send(q) {
                                 Ok(()) => c.on_delivered(),
-                                Err(TrySendError::Full(q)) | Err(TrySendError::Disconnected(q)) => {
+                                Err(TrySendError::Full(q)) => {
                                     c.on_dropped(1);
-                                    let _ =
-                                        q.query.reply_err("server busy: request queue full").wait();
+                                    let _ = q.refuse(&Refusal::new(
+                                        RefusalKind::Busy,
+                                        "server busy: request queue full",
+                                    ));
+                                }
+                                Err(TrySendError::Disconnected(q)) => {
+                                    c.on_dropped(1);
+                                    let _ = q.refuse(&Refusal::new(
+                                        RefusalKind::Busy,
+                                        "server stopping: request not taken",
+                                    ));
                                 }
                             }
                         }
@@ -467,7 +560,12 @@ impl ZenohNode {
                     Err(e) => {
                         c.on_malformed();
                         log.log(&key, bytes.len(), &e);
-                        let _ = query.reply_err(format!("bad request: {e}")).wait();
+                        let _ = refuse_query(
+                            &query,
+                            &key,
+                            format,
+                            &Refusal::new(RefusalKind::BadRequest, format!("bad request: {e}")),
+                        );
                     }
                 }
             })
@@ -697,11 +795,35 @@ impl ZenohNode {
 
     /// Closes the session (undeclaring everything, liveliness token included).
     pub fn close(self) -> Result<(), NetError> {
+        let alive = keys::alive(&self.role, &self.instance).unwrap_or_default();
         self.session
             .close()
             .wait()
-            .map_err(|e| zerr("close", "", e))
+            .map_err(|e| zerr("close session", &alive, e))
     }
+}
+
+/// Answers `query` (to `key`) with a typed refusal in `format` ([`Refusal::encode`]: the
+/// lowest schema version that has its kind). For queryables declared on the raw session
+/// (plan lookups, bridge stats) as well as typed ones ([`IncomingQuery::refuse`]).
+pub fn refuse_query(
+    query: &Query,
+    key: &str,
+    format: WireFormat,
+    refusal: &Refusal,
+) -> Result<(), NetError> {
+    let (bytes, encoding) =
+        refusal
+            .encode(format, Meta::default())
+            .map_err(|source| NetError::Codec {
+                key: key.to_string(),
+                source,
+            })?;
+    query
+        .reply_err(bytes)
+        .encoding(encoding)
+        .wait()
+        .map_err(|e| zerr("reply_err", key, e))
 }
 
 fn deliver<T>(tx: &SyncSender<T>, item: T, block: bool, c: &Counters) {
@@ -972,18 +1094,7 @@ impl<Req> IncomingQuery<Req> {
     /// Refuses the request with a typed [`Refusal`] (in the request's format), which the
     /// querier receives as [`NetError::Refused`].
     pub fn refuse(&self, refusal: &Refusal) -> Result<(), NetError> {
-        let bytes = self
-            .format
-            .encode(refusal, Meta::default())
-            .map_err(|source| NetError::Codec {
-                key: self.key.clone(),
-                source,
-            })?;
-        self.query
-            .reply_err(bytes)
-            .encoding(self.format.encoding::<Refusal>())
-            .wait()
-            .map_err(|e| zerr("reply_err", &self.key, e))
+        refuse_query(&self.query, &self.key, self.format, refusal)
     }
 
     /// Sends an untyped error reply with a message for the querier (received as

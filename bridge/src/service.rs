@@ -23,7 +23,8 @@ use crate::flags::{self, Seconds};
 use crate::forward::{ForwardError, Forwarder, ForwarderConfig, Route};
 use crate::iox::{Backpressure, IoxArgs, IoxEnv, IoxError};
 use crate::keys::{self, KeyError};
-use crate::net::{NetError, PublishOptions, WireFormat, ZenohNode};
+use crate::net::{refuse_query, NetError, PublishOptions, WireFormat, ZenohNode};
+use crate::refusal::{Refusal, RefusalKind};
 use crate::stats::BridgeStats;
 use crate::zconfig::{ConfigError, ZenohArgs};
 
@@ -196,7 +197,9 @@ impl BridgeSetup {
     /// the forwarder, publishes its counters as JSON on `cellsar/bridge/<instance>/stats`
     /// (congestion `Drop`: a slow reader never stalls the bridge) every `stats_interval` and
     /// answers queries there, until `stop` is set or a forwarding thread ends. Logs the final
-    /// counters (`final_counters=true`) and returns them.
+    /// counters (`final_counters=true`) and returns them. A stop while the session is still
+    /// opening (a client waiting for its router) ends it at once, with empty counters
+    /// ([`ZenohNode::open_until`]).
     pub fn run(self, stop: &AtomicBool) -> Result<BridgeStats, BridgeError> {
         let BridgeSetup {
             config,
@@ -204,7 +207,14 @@ impl BridgeSetup {
             env,
             stats_interval,
         } = self;
-        let node = ZenohNode::open(zconfig, "bridge", &config.instance)?;
+        let Some(node) = ZenohNode::open_until(zconfig, "bridge", &config.instance, stop)? else {
+            tracing::info!(final_counters = true, "bridge stopped before it started");
+            return Ok(BridgeStats {
+                instance: config.instance.clone(),
+                uptime_s: 0.0,
+                routes: Vec::new(),
+            });
+        };
         let result = forward(&node, &env, &config, stats_interval, stop);
         match (result, node.close()) {
             (Ok(stats), Ok(())) => Ok(stats),
@@ -254,7 +264,12 @@ fn forward(
                         .wait();
                 }
                 Err(e) => {
-                    let _ = query.reply_err(e.to_string()).wait();
+                    let _ = refuse_query(
+                        &query,
+                        &qkey,
+                        WireFormat::Json,
+                        &Refusal::new(RefusalKind::Internal, format!("encoding the stats: {e}")),
+                    );
                 }
             }
         })

@@ -202,14 +202,220 @@ fn query_reply_errors_and_wrong_kinds() {
         "{msg}"
     );
 
-    // a request of the wrong kind is rejected by the queryable and counted
-    let err = b
-        .query_one::<PlanSummary, PlanSummary>(key, &summary(0), &opts)
-        .unwrap_err();
-    assert!(err.to_string().contains("bad request"), "{err}");
+    // a request of the wrong kind is refused by the queryable itself (a typed bad_request,
+    // in the request's format, naming the kinds) and counted
+    for o in [&opts, &json] {
+        match b
+            .query_one::<PlanSummary, PlanSummary>(key, &summary(0), o)
+            .unwrap_err()
+        {
+            NetError::Refused { key: k, refusal } => {
+                assert_eq!(k, key);
+                assert_eq!(refusal.kind, RefusalKind::BadRequest);
+                assert!(
+                    refusal.message.starts_with("bad request: ")
+                        && refusal.message.contains("test.plan_request"),
+                    "{refusal:?}"
+                );
+            }
+            e => panic!("{:?}: {e:?}", o.format),
+        }
+    }
     let (answered, c) = server.join().unwrap();
     assert_eq!(answered, 3);
-    assert_eq!(c.malformed, 1);
+    assert_eq!(c.malformed, 2);
+}
+
+/// A queryable whose request queue is full refuses the next request itself with a typed
+/// `busy` refusal (schema version 2), counted as dropped; an empty request is a typed
+/// `bad_request`.
+#[test]
+fn full_request_queue_is_a_busy_refusal() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = pair(dir.path(), "busy");
+    let key = "cellsar/test/busy";
+    let q = a
+        .queryable::<PlanRequest>(
+            key,
+            SubscribeOptions {
+                capacity: 1,
+                ..SubscribeOptions::default()
+            },
+        )
+        .unwrap();
+    let req = PlanRequest {
+        mission: "m".into(),
+        slots: 1,
+    };
+    let opts = QueryOptions {
+        timeout: Duration::from_secs(5),
+        ..Default::default()
+    };
+    // the first request fills the queue (nobody takes it) and waits; the next one is refused
+    // (asked again until the peers see each other: a query without a route ends unanswered)
+    let mut first: Option<bridge::PendingQuery<PlanSummary>> = None;
+    wait_until("the queue filled", T, || {
+        let ended = first
+            .as_mut()
+            .is_none_or(|f| f.poll(Duration::from_millis(50)).is_some());
+        if q.counters().snapshot().delivered == 1 {
+            return true;
+        }
+        if ended {
+            first = Some(
+                b.start_query::<PlanRequest, PlanSummary>(key, &req, &opts)
+                    .unwrap(),
+            );
+        }
+        false
+    });
+    for format in [WireFormat::Bincode, WireFormat::Json] {
+        let e = b
+            .query_one::<PlanRequest, PlanSummary>(key, &req, &QueryOptions { format, ..opts })
+            .unwrap_err();
+        match &e {
+            NetError::Refused { key: k, refusal } => {
+                assert_eq!(k, key);
+                assert_eq!(refusal.kind, RefusalKind::Busy, "{format:?}");
+                assert!(refusal.message.contains("queue full"), "{refusal:?}");
+            }
+            e => panic!("{format:?}: {e:?}"),
+        }
+        assert!(e.to_string().contains("busy"), "{e}");
+    }
+    assert_eq!(q.counters().snapshot().dropped, 2);
+    // the queued one is still answered
+    let inq = q.recv_timeout(T).expect("the queued request");
+    inq.reply(
+        &PlanSummary {
+            mission: "m".into(),
+            energy_j: 1.0,
+            pos_m: vec![],
+        },
+        Meta::default(),
+    )
+    .unwrap();
+    drop(inq);
+    let mut first = first.unwrap();
+    let got = loop {
+        if let Some(r) = first.poll(Duration::from_millis(100)) {
+            break r.unwrap();
+        }
+    };
+    assert_eq!(got.message.energy_j, 1.0);
+    // a request without a payload: a typed bad_request naming the expected message
+    let replies = b.session().get(key).timeout(T).wait().unwrap();
+    let reply = replies.recv().expect("a reply");
+    let err = reply.result().expect_err("an error reply");
+    match bridge::net::decode_error_reply(
+        key,
+        &err.payload().to_bytes(),
+        WireFormat::of(err.encoding()),
+        &Default::default(),
+    ) {
+        NetError::Refused { refusal, .. } => {
+            assert_eq!(refusal.kind, RefusalKind::BadRequest);
+            assert!(
+                refusal.message.contains("empty request")
+                    && refusal.message.contains("test.plan_request"),
+                "{refusal:?}"
+            );
+        }
+        e => panic!("{e:?}"),
+    }
+}
+
+/// A session that cannot open (a client whose router is not there, waiting for it as
+/// `pipeline/deploy/client.json5` does) is given up within a moment once the stop flag is
+/// set, and a description of what it waited for is at hand; without the flag it still
+/// waits.
+#[test]
+fn opening_a_session_stops_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("client.json5");
+    let port = free_port();
+    std::fs::write(
+        &cfg,
+        format!(
+            "{{ mode: 'client', connect: {{ endpoints: ['tcp/127.0.0.1:{port}'], timeout_ms: -1, \
+             exit_on_failure: false }}, scouting: {{ multicast: {{ enabled: false }} }} }}"
+        ),
+    )
+    .unwrap();
+    let config = bridge::ZenohArgs {
+        config: Some(cfg),
+        ..Default::default()
+    }
+    .to_config()
+    .unwrap();
+    assert_eq!(
+        bridge::zconfig::describe(&config),
+        format!("mode client, connect [tcp/127.0.0.1:{port}], listen []")
+    );
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let setter = {
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(1500));
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            Instant::now()
+        })
+    };
+    let opened = ZenohNode::open_until(config, "test", "waits", &stop).unwrap();
+    let stopped_at = setter.join().unwrap();
+    assert!(opened.is_none(), "no router, yet a session opened");
+    assert!(
+        stopped_at.elapsed() < Duration::from_millis(500),
+        "open_until returned {:?} after the stop",
+        stopped_at.elapsed()
+    );
+    // a stop that is already set returns at once
+    let t = Instant::now();
+    let config = z_connect(&format!("tcp/127.0.0.1:{port}"))
+        .to_config()
+        .unwrap();
+    assert!(ZenohNode::open_until(config, "test", "w2", &stop)
+        .unwrap()
+        .is_none());
+    assert!(
+        t.elapsed() < Duration::from_millis(500),
+        "{:?}",
+        t.elapsed()
+    );
+    // a session that opens is returned as usual, and a bad name is refused before anything
+    let go = std::sync::atomic::AtomicBool::new(false);
+    let node = ZenohNode::open_until(
+        z_listen("tcp/127.0.0.1:0").to_config().unwrap(),
+        "test",
+        "opens",
+        &go,
+    )
+    .unwrap()
+    .expect("a session");
+    node.close().unwrap();
+    assert!(ZenohNode::open_until(
+        z_listen("tcp/127.0.0.1:0").to_config().unwrap(),
+        "test",
+        "a/b",
+        &go
+    )
+    .is_err());
+}
+
+/// A failed open names what was being opened (mode and endpoints), not an empty key.
+#[test]
+fn a_failed_open_names_the_session() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let ep = format!("tcp/127.0.0.1:{}", taken.local_addr().unwrap().port());
+    let e = ZenohNode::open(z_listen(&ep).to_config().unwrap(), "test", "taken").unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with(&format!(
+            "opening the Zenoh session (mode peer, connect [], listen [{ep}]) failed: "
+        )),
+        "{msg}"
+    );
+    assert!(!msg.contains("\"\""), "{msg}");
 }
 
 /// A queryable's typed refusal reaches the querier as `NetError::Refused` with its kind and
@@ -1226,6 +1432,62 @@ fn bridge_survives_10k_malformed_payloads() {
         .count();
     assert_eq!(logged, 10_000, "each malformed payload logged once");
     assert!(log.contains("more rejected payloads were logged at DEBUG only"));
+}
+
+/// A bridge started before its router (a client config whose router is not there, as
+/// `pipeline/deploy/client.json5` with `connect.timeout_ms: -1`) says what it waits for and
+/// stops at once on SIGINT or SIGTERM, exit code 0, like a running bridge.
+#[test]
+fn bridge_waiting_for_its_router_stops_on_signals() {
+    let dir = tempfile::tempdir().unwrap();
+    let iso = Iso::new("norouter");
+    let cfg = dir.path().join("client.json5");
+    let port = free_port();
+    std::fs::write(
+        &cfg,
+        format!(
+            "{{ mode: 'client', connect: {{ endpoints: ['tcp/127.0.0.1:{port}'], timeout_ms: -1, \
+             exit_on_failure: false }}, scouting: {{ multicast: {{ enabled: false }} }} }}"
+        ),
+    )
+    .unwrap();
+    for sig in ["INT", "TERM"] {
+        let mut a = vec![
+            s("--service"),
+            s("cellsar/0123456789abcdef/echo@out"),
+            s("-c"),
+            cfg.display().to_string(),
+        ];
+        a.extend(iso.args());
+        // no RUST_LOG: the bridge's default level shows that it waits
+        let mut p =
+            Proc::spawn_with_env(&format!("bridge-{sig}"), bridge_exe(), &a, dir.path(), None);
+        wait_until("the bridge says that it waits", T, || {
+            p.stderr().contains("waiting for the Zenoh session")
+        });
+        assert!(p.is_running(), "{}", p.stderr_tail());
+        assert!(
+            p.stderr()
+                .contains(&format!("connect [tcp/127.0.0.1:{port}]")),
+            "{}",
+            p.stderr_tail()
+        );
+        p.signal(sig);
+        let t = Instant::now();
+        let st = p.wait(T);
+        assert!(
+            t.elapsed() < Duration::from_secs(3),
+            "SIG{sig}: exit took {:?}",
+            t.elapsed()
+        );
+        assert_eq!(st.code(), Some(0), "SIG{sig}: {}", p.stderr_tail());
+        assert!(
+            p.stderr()
+                .contains("stopped before the Zenoh session opened"),
+            "{}",
+            p.stderr_tail()
+        );
+    }
 }
 
 /// A bridge with a bad route or an unusable Zenoh flag fails at start (exit code 2: bad input)

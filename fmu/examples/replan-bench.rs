@@ -1,8 +1,11 @@
 //! Times receding-horizon re-plans of the default mission (a landmark moved by (40, 20) m in the
-//! middle of a window), with and without warm start from the rest of the current plan.
+//! middle of a window), with and without warm start from the rest of the current plan, and with
+//! the warm start repaired on a coarse grid first or on the mission's own slots. Each cell lists
+//! the re-plan's time, the spliced plan's true energy, the warm start's sensing excess, the start
+//! used, the transition slots and every planner call with its time.
 //!
 //! ```text
-//! cargo run --release -p fmu --example replan-bench
+//! cargo run --release -p fmu --example replan-bench [-- [T ...] [--offset DX,DY]]
 //! ```
 
 use anyhow::{Context, Result};
@@ -15,12 +18,24 @@ fn main() -> Result<()> {
     )?;
     let full = fmu::planning::plan(&mission, None).map_err(anyhow::Error::msg)?;
     println!("initial plan: {}", full.summary);
-    println!("| move at t [s] | slots re-planned | warm [s] | warm, 5 it [s] | cold [s] | cold, 5 it [s] |");
-    println!("|---|---|---|---|---|---|");
-    let times: Vec<f64> = std::env::args()
-        .skip(1)
-        .filter_map(|a| a.parse().ok())
-        .collect();
+    println!("| move at t [s] | slots re-planned | warm [s] | warm, 5 it [s] | warm, 5 it, fine repair [s] | cold [s] | cold, 5 it [s] |");
+    println!("|---|---|---|---|---|---|---|");
+    // arguments: move times in s (default: the six below) and `--offset DX,DY` in m (default 40,20)
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut offset = [40.0, 20.0];
+    let mut times: Vec<f64> = Vec::new();
+    let mut i = 0;
+    while i < args.len() {
+        if args[i] == "--offset" {
+            let v = args.get(i + 1).context("--offset needs DX,DY")?;
+            let (dx, dy) = v.split_once(',').context("--offset DX,DY")?;
+            offset = [dx.parse()?, dy.parse()?];
+            i += 2;
+        } else {
+            times.push(args[i].parse().context("a move time in s")?);
+            i += 1;
+        }
+    }
     let times = if times.is_empty() {
         vec![5.0, 65.0, 125.0, 185.0, 245.0, 295.0]
     } else {
@@ -30,30 +45,34 @@ fn main() -> Result<()> {
         let from = (t_move / 0.5_f64).round() as usize;
         let window = mission.schedule().slot_landmark[from].context("no landmark in that slot")?;
         let w = mission.schedule().landmarks[window];
-        let moved = [w.x_m + 40.0, w.y_m + 20.0];
+        let moved = [w.x_m + offset[0], w.y_m + offset[1]];
         let mut times = Vec::new();
         use fmu::planning::WarmStart::*;
-        for (warm_start, max_iterations, tolerance) in [
-            (Always, 200, 1e-4),
-            (Always, 5, 1e-3),
-            (Never, 200, 1e-4),
-            (Never, 5, 1e-3),
+        for (warm_start, max_iterations, tolerance, coarse) in [
+            (Always, 200, 1e-4, true),
+            (Always, 5, 1e-3, true),
+            (Always, 5, 1e-3, false),
+            (Never, 200, 1e-4, true),
+            (Never, 5, 1e-3, true),
         ] {
             let o = fmu::planning::ReplanOptions {
                 warm_start,
                 max_iterations,
                 tolerance,
+                coarse,
             };
             let r = fmu::planning::replan(&mission, &full.trajectory, from, window, moved, &o);
             times.push(match r {
                 Ok(re) => format!(
-                    "{:.3} ({} J, excess {:.1} m, {})",
+                    "{:.3} ({} J, excess {:.1} m, {}, {} transition slot(s), calls: {})",
                     re.solve_s,
                     planner::evaluate(&re.mission, &re.trajectory)
                         .energy_j
                         .round(),
                     re.start_excess_m,
-                    if re.warm { "warm" } else { "cold" }
+                    if re.warm { "warm" } else { "cold" },
+                    re.transition_slots,
+                    fmu::planning::describe_attempts(&re.attempts)
                 ),
                 Err(e) => format!("failed: {e:?}"),
             });

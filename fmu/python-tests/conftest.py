@@ -172,6 +172,24 @@ class Fmu:
         self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
         self.time = t + h
 
+    def step_status(self, h, t=None):
+        """doStep with the raw FMI status (0 OK, 1 Warning, 2 Discard, 3 Error, 4 Fatal): fmpy's
+        doStep raises only above Warning. The time advances unless the step failed."""
+        t = self.time if t is None else t
+        try:
+            if self.version == "fmi2":
+                status = self.fmu.fmi2DoStep(self.fmu.component, t, h, 1)
+            else:
+                from fmpy.fmi3 import fmi3Boolean, fmi3Float64
+                flags = [fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()]
+                status = self.fmu.fmi3DoStep(self.fmu.component, t, h, fmi3Boolean(True),
+                                             *[ctypes.byref(x) for x in flags])
+        except FMICallException as e:
+            return e.status
+        if status <= 2:
+            self.time = t + h
+        return status
+
     def free(self):
         if self.fmu.component:
             if self.version == "fmi2":

@@ -1,9 +1,11 @@
 """Bad use never crashes the process; reset, several instances, threads, memory, FMU states,
 logging."""
 
+import math
 import os
 import pathlib
 import threading
+import time
 
 import pytest
 
@@ -309,3 +311,116 @@ def test_fmpy_simulate_with_debug_logging(version, tmp_path, short_mission):
                  start_values={"mission_file": str(short_mission)}, debug_logging=True,
                  logger=logger)
     assert any("short test mission" in m for m in seen), seen
+
+
+def _init_mode(f):
+    if f.version == "fmi2":
+        f.fmu.setupExperiment(startTime=0)
+        f.fmu.enterInitializationMode()
+    else:
+        f.fmu.enterInitializationMode(startTime=0)
+
+
+def test_refused_multi_value_set_changes_nothing(version, short_mission):
+    """A set call with one bad value is refused as a whole (altitude_m was already set before)."""
+    f = Fmu(version)
+    assert f.instantiate()
+    set_real = f.fmu.setReal if version == "fmi2" else f.fmu.setFloat64
+    vrs = [f.vr("altitude_m"), f.vr("bandwidth_hz")]
+    assert status_of(set_real, vrs, [1100.0, float("nan")]) == ERROR
+    assert "bandwidth_hz" in f.messages()
+    # an unknown value reference after a good one
+    assert status_of(set_real, [f.vr("altitude_m"), 123456], [1100.0, 1.0]) == ERROR
+    set_string = f.fmu.setString
+    assert status_of(set_string, [f.vr("mission_file"), f.vr("altitude_m")],
+                     [str(short_mission), "x"]) == ERROR
+    set_int = f.fmu.setInteger if version == "fmi2" else f.fmu.setInt32
+    assert status_of(set_int, [DEBUG_INJECT_PANIC_VR, f.vr("replan_count")], [1, 0]) == ERROR
+    _init_mode(f)
+    assert f.get("altitude_m") == 1000.0
+    assert f.get("mission_file") in ("default_mission.toml", b"default_mission.toml")
+    f.set_string("mission_file", str(short_mission))
+    f.fmu.exitInitializationMode()
+    assert status_of(f.fmu.doStep, 0.0, 0.5) == 0  # the panic hook was not set either
+    f.unload()
+
+
+def test_bad_landmark_inputs_are_refused_and_named(version, short_mission):
+    """An infinite landmark input is refused at the set; one NaN and one finite coordinate are
+    refused at the doStep, which is not taken (both were silently "no move" before)."""
+    f = Fmu(version)
+    assert f.instantiate()
+    f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    with pytest.raises(Exception):
+        f.set(landmark_x_in_m=float("inf"))
+    assert "landmark_x_in_m" in f.messages() and "inf" in f.messages()
+    assert math.isnan(f.get("landmark_x_in_m"))
+    f.set(landmark_x_in_m=40.0)  # landmark_y_in_m stays NaN
+    n = len(f.logs)
+    assert f.step_status(0.5) == ERROR
+    text = "\n".join(m for _, _, m in f.logs[n:])
+    assert "landmark_x_in_m" in text and "landmark_y_in_m" in text and "NaN" in text, text
+    assert f.time == 0.0
+    f.set(landmark_x_in_m=float("nan"))
+    assert f.step_status(0.5, t=0.0) == 0
+    assert f.get("replan_count") == 0
+    f.unload()
+
+
+def test_bad_mover_parameters_are_refused_and_named(version):
+    """A negative hold_s meant "forever" silently; now it is refused, as are infinite inputs."""
+    m = Fmu(version, "LandmarkMover", name="mover")
+    assert m.instantiate()
+    with pytest.raises(Exception):
+        m.set(hold_s=-1.0)
+    assert "hold_s" in m.messages() and ">= 0" in m.messages()
+    with pytest.raises(Exception):
+        m.set(landmark_x_m=float("-inf"))
+    assert "landmark_x_m" in m.messages()
+    m.init(stop=20.0, params={"move_at_s": 1.0})
+    assert m.get("hold_s") == 0.0
+    m.set(landmark_x_m=1.0, landmark_y_m=float("nan"))
+    assert m.step_status(0.5) == ERROR
+    assert "landmark_y_m" in m.messages()
+    m.unload()
+
+
+def test_too_many_slots_are_refused_at_once(version, short_mission):
+    """slot_s = 1e-4 on a 20 s mission (200 000 slots) kept ExitInitializationMode busy for
+    minutes; the FMU refuses it at once, naming both parameters."""
+    f = Fmu(version)
+    assert f.instantiate()
+    if version == "fmi2":
+        f.fmu.setupExperiment(startTime=0)
+    f.set(slot_s=1e-4)
+    f.set_string("mission_file", str(short_mission))
+    if version == "fmi2":
+        f.fmu.enterInitializationMode()
+    else:
+        f.fmu.enterInitializationMode(startTime=0)
+    t0 = time.monotonic()
+    assert status_of(f.fmu.exitInitializationMode) == ERROR
+    assert time.monotonic() - t0 < 5.0
+    msg = f.messages()
+    assert "slot_s" in msg and "horizon_s" in msg and "200000 slots" in msg, msg
+    assert "0.0001" in msg
+    f.unload()
+
+
+def test_huge_and_tiny_numbers_are_short_in_messages(version):
+    """-1e308 was written with 309 digits and 1e-12 as 0.000000000001."""
+    f = Fmu(version)
+    assert f.instantiate()
+    if version == "fmi2":
+        assert status_of(f.fmu.setupExperiment, startTime=0.0, stopTime=-1e308) == ERROR
+    else:
+        assert status_of(f.fmu.enterInitializationMode, startTime=0.0, stopTime=-1e308) == ERROR
+    assert "stop time -1e308 must be finite" in f.messages(), f.messages()
+    with pytest.raises(Exception):
+        f.set(altitude_m=float("inf"))
+    assert "`altitude_m` = inf" in f.messages()
+    f.init(stop=300.0)
+    assert status_of(f.fmu.doStep, 0.0, -1e-12) == ERROR
+    assert "communication step size must be > 0, got -1e-12" in f.messages()
+    assert max(len(m) for _, _, m in f.logs) < 400
+    f.unload()

@@ -165,12 +165,14 @@ def drive(version, mission, stop, move=None, name="drive"):
 
 def test_moved_landmark_is_kept_in_view_from_the_next_window_on(version, short_mission):
     moved = (40.0, 20.0)
-    # the input holds the moved landmark from t = 5 s on: the rest of window 1 and window 2
+    # the input holds the moved landmark from t = 5 s on: the rest of window 0 and window 1.
+    # The input refers to the landmark the outputs show (SPEC: slot ceil(t/0.5)), so window 1's
+    # landmark moves at the doStep from 10.5 s, when its first slot (10, 10.5] is flown.
     rows, replans = drive(version, short_mission, 20.0,
                           move=lambda t: moved if t >= 5.0 else None)
-    assert replans >= 1
+    assert replans == 2
     for t, o in rows:
-        if t > 5.0:
+        if t > 5.0 and t != 10.5:
             assert (o["landmark_x_m"], o["landmark_y_m"]) == moved, t
         if t > 10.0:  # the next window on
             assert o["in_view"], t
@@ -263,4 +265,150 @@ def test_parameters_override_the_mission_file(version, tmp_path):
     f.step(0.5, t=0.0)
     assert math.isclose(math.hypot(f.get("xc_m") - f.get("x_m"), f.get("yc_m") - f.get("y_m")),
                         1100.0, rel_tol=1e-12)
+    f.unload()
+
+
+WARNING = 1
+
+
+def test_move_out_of_reach_leaves_the_window_out_with_a_warning(version, short_mission):
+    """A landmark moved 10 000 km away cannot be kept in view: the re-plan leaves its window out
+    and the step returns Warning naming the landmark and slots (it returned OK with nothing
+    logged); `slots_out_of_view` counts the slots. The next window is planned as usual."""
+    f = Fmu(version)
+    assert f.instantiate()
+    f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    for k in range(5):
+        assert f.step_status(0.5) == 0
+    assert f.get("slots_out_of_view") == 0
+    f.set(landmark_x_in_m=1e16, landmark_y_in_m=0.0)
+    n = len(f.logs)
+    assert f.step_status(0.5) == WARNING  # the doStep from t = 2.5 s
+    warnings = [m for c, s, m in f.logs[n:] if s == WARNING]
+    assert len(warnings) == 1, f.logs[n:]
+    assert "landmark 0" in warnings[0] and "slots 6..20" in warnings[0], warnings[0]
+    assert "to (1e16, 0) m" in warnings[0]  # not 17 digits
+    # the plan's slots 6..20 (t = 3..10 s) cannot see it; flown slots count against it too
+    assert f.get("slots_out_of_view") == 20
+    assert f.get("replan_count") == 1
+    f.set(landmark_x_in_m=float("nan"), landmark_y_in_m=float("nan"))
+    while f.time < 20.0 - 1e-9:
+        assert f.step_status(0.5) == 0
+        if f.time <= 10.0:
+            assert not f.get("in_view") and f.get("landmark_x_m") == 1e16, f.time
+        else:
+            assert f.get("in_view") and f.get("landmark_y_m") == 30.0, f.time
+    f.unload()
+
+
+def test_persistent_far_input_warns_at_every_window(version, short_mission):
+    """An input that keeps a landmark 10 000 km away re-plans each window without it, and each
+    such doStep returns Warning (every step returned OK before)."""
+    f = Fmu(version)
+    assert f.instantiate()
+    f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    statuses = []
+    while f.time < 20.0 - 1e-9:
+        if f.time >= 2.5:
+            f.set(landmark_x_in_m=1e7, landmark_y_in_m=0.0)
+        statuses.append((f.time, f.step_status(0.5)))
+    assert [t for t, s in statuses if s == WARNING] == [2.5, 10.5], statuses
+    assert all(s in (0, WARNING) for _, s in statuses)
+    assert f.get("replan_count") == 2
+    assert f.get("slots_out_of_view") == 40
+    f.unload()
+
+
+def test_mover_and_planner_agree_at_a_window_boundary(version, short_mission):
+    """LandmarkMover latches the landmark the planner reports at its move time; at a window
+    boundary (t = 10 s) that is window 0's (SPEC: slot 20 covers (9.5, 10] s), and the planner
+    applies the mover's output to that same window (it moved window 1's landmark before). Window
+    0 has no slot left, so nothing is re-planned and the step warns; window 1 is untouched."""
+    p = Fmu(version, name="planner")
+    m = Fmu(version, "LandmarkMover", name="mover")
+    assert p.instantiate() and m.instantiate()
+    p.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    m.init(stop=20.0, params={"move_at_s": 10.0, "offset_x_m": 40.0, "offset_y_m": 0.0,
+                              "hold_s": 0.5})
+    h, statuses = 0.5, {}
+    while p.time < 20.0 - 1e-9:
+        t = p.time
+        statuses[t] = p.step_status(h)
+        m.set(landmark_x_m=p.get("landmark_x_m"), landmark_y_m=p.get("landmark_y_m"))
+        m.step(h, t=t)
+        p.set(landmark_x_in_m=m.get("landmark_x_out_m"), landmark_y_in_m=m.get("landmark_y_out_m"))
+        if p.time > 10.0:
+            assert (p.get("landmark_x_m"), p.get("landmark_y_m")) == (0.0, 30.0), p.time
+    # fmpy's FMI 2 logger proxy is process-wide: the planner's messages may land in m.logs
+    moved = [msg for _, _, msg in p.logs + m.logs if "moved from" in msg]
+    assert len(moved) == 1 and "landmark 0 " in moved[0] and "to (40, 0) m" in moved[0], moved
+    assert statuses[10.0] == WARNING and "no slot left" in moved[0]
+    assert p.get("replan_count") == 0
+    p.unload()
+    m.unload()
+
+
+def test_mover_default_move_is_mid_window(version):
+    """The mover's default move time (65 s) lies inside a 10 s window of the default mission, so
+    its default co-simulation moves landmark 6 and re-plans (60 s was a window boundary)."""
+    m = Fmu(version, "LandmarkMover", name="mover")
+    assert m.instantiate()
+    m.init(stop=300.0)
+    assert m.get("move_at_s") == 65.0 and m.get("hold_s") == 0.0
+    m.unload()
+
+
+def test_parameter_array_elements_override_the_file_one_by_one(version, tmp_path):
+    """Setting one element of start_m (FMI 2: start_m[2]; FMI 3: the array with x at its start
+    value) keeps the mission file's other element (it was reset to the SPEC default)."""
+    mission = tmp_path / "m.toml"
+    mission.write_text(
+        "[params]\nhorizon_s = 20\nstart_m = [-1100.0, -450.0]\nbs_m = [10.0, 20.0]\n"
+        "[landmarks]\npoints = [\n  { x_m = 0, y_m = 0, from_s = 0, to_s = 10 },\n"
+        "  { x_m = 0, y_m = 30, from_s = 10, to_s = 20 },\n]\n", encoding="utf-8")
+    f = Fmu(version)
+    assert f.instantiate()
+    if version == "fmi2":
+        f.fmu.setupExperiment(startTime=0, stopTime=20)
+        f.fmu.setReal([f.vr("start_m[2]")], [-460.0])
+        f.fmu.setReal([f.vr("bs_m[1]")], [11.0])
+        f.set_string("mission_file", str(mission))
+        f.fmu.enterInitializationMode()
+        f.fmu.exitInitializationMode()
+        start = f.fmu.getReal([f.vr("start_m[1]"), f.vr("start_m[2]")])
+        bs = f.fmu.getReal([f.vr("bs_m[1]"), f.vr("bs_m[2]")])
+    else:
+        f.fmu.setFloat64([f.vr("start_m")], [-1000.0, -460.0])
+        f.fmu.setFloat64([f.vr("bs_m")], [11.0, -1000.0])  # y at its start value
+        f.set_string("mission_file", str(mission))
+        f.fmu.enterInitializationMode(startTime=0, stopTime=20)
+        f.fmu.exitInitializationMode()
+        start = f.fmu.getFloat64([f.vr("start_m")], nValues=2)
+        bs = f.fmu.getFloat64([f.vr("bs_m")], nValues=2)
+    assert list(start) == [-1100.0, -460.0]
+    assert list(bs) == [11.0, 20.0]
+    assert (f.get("x_m"), f.get("y_m")) == (-1100.0, -460.0)
+    f.unload()
+
+
+def test_replan_skips_planner_calls_that_cannot_succeed(version):
+    """The default mission's landmark moved by (40, 20) m at t = 65 s cannot be seen in the next
+    slot: the re-plan goes straight to a one-slot delay (one planner call; the planner spent
+    about 9 s failing on the zero delay before), and the debug log lists every call's time."""
+    f = Fmu(version)
+    assert f.instantiate(debug=True)
+    f.init(stop=300.0)
+    while f.time < 65.0 - 1e-9:
+        f.step(0.5)
+    f.set(landmark_x_in_m=f.get("landmark_x_m") + 40.0,
+          landmark_y_in_m=f.get("landmark_y_m") + 20.0)
+    n = len(f.logs)
+    assert f.step_status(0.5) == WARNING  # one transition slot out of view
+    replanned = [m for _, _, m in f.logs[n:] if m.startswith("re-planned:")]
+    assert len(replanned) == 1, f.logs[n:]
+    assert "1 planner call(s) (delay 1: " in replanned[0], replanned[0]
+    assert "1 transition slot(s)" in replanned[0]
+    warning = [m for _, s, m in f.logs[n:] if s == WARNING]
+    assert "1 re-planned slot(s) are out of view: landmark 6 in slot 131 " in warning[0], warning
+    assert f.get("replan_count") == 1
     f.unload()

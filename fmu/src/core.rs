@@ -48,6 +48,33 @@ impl FmuError {
     }
 }
 
+/// A number in a message: plain decimal when 1e-4 ≤ |x| < 1e15 (and 0), scientific notation
+/// otherwise (`-1e308`, `1e-12` instead of 309 or 14 digits), `NaN`, `inf` and `-inf` as Rust
+/// writes them. A precision (`{:.3}`) applies to both forms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        let plain = x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs());
+        match (plain, f.precision()) {
+            (true, None) => write!(f, "{x}"),
+            (true, Some(p)) => write!(f, "{x:.p$}"),
+            (false, None) => write!(f, "{x:e}"),
+            (false, Some(p)) => write!(f, "{x:.p$e}"),
+        }
+    }
+}
+
+/// Largest number of slots (`horizon_s` / `slot_s`) the planner FMU accepts. Initialisation
+/// plans the whole horizon within `ExitInitializationMode`, and the planner's time grows faster
+/// than linearly with the slot count (fmu/BENCHMARKS.md, "Initialisation time against the
+/// number of slots"), so the FMU refuses missions above this size with an error that names
+/// both parameters, instead of not returning for minutes. The planner's own limit
+/// (`planner::params::MAX_SLOTS`) is higher.
+pub const MAX_FMU_SLOTS: usize = 20_000;
+
 /// Where a core sends log messages.
 pub trait Log {
     /// Logs `message` under `category` with `status`.
@@ -209,7 +236,16 @@ impl Core {
         }
     }
 
-    /// Sets a Real element.
+    /// Checks that a Real element may be set to `value`, without setting it (multi-value sets
+    /// check every value first, so a refused set changes nothing).
+    pub fn check_real(&self, var: &Var, elem: usize, value: f64) -> Result<(), FmuError> {
+        match self {
+            Core::Planner(c) => c.check_real(var, elem, value),
+            Core::Mover(c) => c.check_real(var, value),
+        }
+    }
+
+    /// Sets a Real element (after [`Core::check_real`]; it checks again).
     pub fn set_real(&mut self, var: &Var, elem: usize, value: f64) -> Result<(), FmuError> {
         match self {
             Core::Planner(c) => c.set_real(var, elem, value),
@@ -219,26 +255,37 @@ impl Core {
 
     /// Reads an Integer.
     pub fn get_int(&self, var: &Var) -> Result<i32, FmuError> {
+        let count = |n: usize| i32::try_from(n).unwrap_or(i32::MAX);
         match (self, var.vr) {
             (Core::Planner(c), pv::REPLAN_COUNT) => Ok(c
                 .run
                 .as_ref()
                 .map_or(0, |r| i32::try_from(r.replans).unwrap_or(i32::MAX))),
+            (Core::Planner(c), pv::SLOTS_OUT_OF_VIEW) => Ok(c
+                .run
+                .as_ref()
+                .map_or(0, |r| count(r.eval.slots_out_of_view))),
             _ => Err(unknown(var)),
+        }
+    }
+
+    /// Checks that an Integer may be set by value reference, without setting it.
+    pub fn check_int(&self, vr: u32) -> Result<(), FmuError> {
+        match (self, vr) {
+            (Core::Planner(_), pv::DEBUG_INJECT_PANIC) => Ok(()),
+            _ => Err(FmuError::error(format!(
+                "value reference {vr} is not a settable Integer"
+            ))),
         }
     }
 
     /// Sets an Integer by value reference (also the hidden debug variable).
     pub fn set_int(&mut self, vr: u32, value: i32) -> Result<(), FmuError> {
-        match (self, vr) {
-            (Core::Planner(c), pv::DEBUG_INJECT_PANIC) => {
-                c.debug_panic = value;
-                Ok(())
-            }
-            _ => Err(FmuError::error(format!(
-                "value reference {vr} is not a settable Integer"
-            ))),
+        self.check_int(vr)?;
+        if let Core::Planner(c) = self {
+            c.debug_panic = value;
         }
+        Ok(())
     }
 
     /// Reads a Boolean at mission time `tau_s`.
@@ -253,6 +300,14 @@ impl Core {
     pub fn get_string(&self, var: &Var) -> Result<String, FmuError> {
         match (self, var.vr) {
             (Core::Planner(c), pv::MISSION_FILE) => Ok(c.mission_file.clone()),
+            _ => Err(unknown(var)),
+        }
+    }
+
+    /// Checks that a String may be set, without setting it.
+    pub fn check_string(&self, var: &Var) -> Result<(), FmuError> {
+        match (self, var.vr) {
+            (Core::Planner(_), pv::MISSION_FILE) => Ok(()),
             _ => Err(unknown(var)),
         }
     }
@@ -298,7 +353,7 @@ impl Core {
         match self {
             Core::Planner(c) => c.step(tau_s, log),
             Core::Mover(c) => {
-                c.step(tau_s + h_s);
+                c.step(tau_s + h_s)?;
                 Ok(StepReport::default())
             }
         }
@@ -347,7 +402,8 @@ pub struct PlannerCore {
     /// values in effect.
     params: Params,
     /// Names of the parameters set through FMI to a value other than their start value: they
-    /// override the mission file.
+    /// override the mission file. Array elements count one by one, under their FMI 2 names
+    /// (`start_m[1]`, `bs_m[2]`): setting one element keeps the file's other one.
     params_set: BTreeSet<String>,
     /// `mission_file`.
     mission_file: String,
@@ -403,8 +459,9 @@ pub struct Sample {
     pub worst_cell_width_m: f64,
 }
 
-/// The slot (1-based) whose values hold at mission time `tau_s`: slot t covers ((t−1)δ, tδ]; at
-/// τ ≤ 0 it is slot 1, past the horizon the last slot.
+/// The slot (1-based) whose values hold at mission time `tau_s`: slot t covers ((t−1)δ, tδ]
+/// (SPEC), so this is ⌈τ/δ⌉; at τ ≤ 0 it is slot 1, past the horizon the last slot. The outputs
+/// and the landmark inputs both use it ([`current_window`]).
 pub fn slot_at(tau_s: f64, slot_s: f64, slots: usize) -> usize {
     let x = (tau_s / slot_s - 1e-9).ceil();
     if x.is_nan() || x < 1.0 {
@@ -508,8 +565,43 @@ impl PlannerCore {
         })
     }
 
-    fn set_real(&mut self, var: &Var, elem: usize, value: f64) -> Result<(), FmuError> {
+    fn check_real(&self, var: &Var, elem: usize, value: f64) -> Result<(), FmuError> {
+        if matches!(var.vr, pv::LANDMARK_X_IN | pv::LANDMARK_Y_IN) {
+            // NaN means "the plan's own landmark"; an infinite coordinate is no landmark at all
+            return if value.is_infinite() {
+                Err(FmuError::error(format!(
+                    "input `{}` = {}: must be a finite number (a landmark position) or NaN (the plan's own landmark)",
+                    var.name,
+                    Num(value)
+                )))
+            } else {
+                Ok(())
+            };
+        }
+        if var.causality != crate::table::Causality::Parameter || var.ty != VarType::Real {
+            return Err(unknown(var));
+        }
+        if !value.is_finite() {
+            return Err(FmuError::error(format!(
+                "parameter `{}` = {}: must be a finite number",
+                crate::table::fmi2_name(var, elem),
+                Num(value)
+            )));
+        }
         match var.vr {
+            pv::START_M | pv::BS_M if elem < 2 => Ok(()),
+            pv::START_M | pv::BS_M => Err(unknown(var)),
+            _ if self.params.get_by_name(var.name).is_some() => Ok(()),
+            _ => Err(unknown(var)),
+        }
+    }
+
+    fn set_real(&mut self, var: &Var, elem: usize, value: f64) -> Result<(), FmuError> {
+        self.check_real(var, elem, value)?;
+        let d = Params::default();
+        // A parameter overrides the mission file only while it differs from its start value, so
+        // importers that write every start value back do not undo the file.
+        let at_start = match var.vr {
             pv::LANDMARK_X_IN => {
                 self.landmark_in_m[0] = value;
                 return Ok(());
@@ -518,37 +610,26 @@ impl PlannerCore {
                 self.landmark_in_m[1] = value;
                 return Ok(());
             }
-            _ => {}
-        }
-        if var.causality != crate::table::Causality::Parameter || var.ty != VarType::Real {
-            return Err(unknown(var));
-        }
-        if !value.is_finite() {
-            return Err(FmuError::error(format!(
-                "parameter `{}` = {value}: must be a finite number",
-                crate::table::fmi2_name(var, elem)
-            )));
-        }
-        match var.vr {
-            pv::START_M => self.params.start_m[elem.min(1)] = value,
-            pv::BS_M => self.params.bs_m[elem.min(1)] = value,
-            _ => self
-                .params
-                .set_by_name(var.name, value)
-                .map_err(|e| FmuError::error(e.to_string()))?,
-        }
-        // A parameter overrides the mission file only while it differs from its start value, so
-        // importers that write every start value back do not undo the file.
-        let d = Params::default();
-        let at_start = match var.vr {
-            pv::START_M => self.params.start_m == d.start_m,
-            pv::BS_M => self.params.bs_m == d.bs_m,
-            _ => self.params.get_by_name(var.name) == d.get_by_name(var.name),
+            pv::START_M => {
+                self.params.start_m[elem] = value;
+                value == d.start_m[elem]
+            }
+            pv::BS_M => {
+                self.params.bs_m[elem] = value;
+                value == d.bs_m[elem]
+            }
+            _ => {
+                self.params
+                    .set_by_name(var.name, value)
+                    .map_err(|e| FmuError::error(e.to_string()))?;
+                Some(value) == d.get_by_name(var.name)
+            }
         };
+        let key = crate::table::fmi2_name(var, elem);
         if at_start {
-            self.params_set.remove(var.name);
+            self.params_set.remove(&key);
         } else {
-            self.params_set.insert(var.name.to_string());
+            self.params_set.insert(key);
         }
         self.run = None;
         Ok(())
@@ -620,20 +701,65 @@ impl PlannerCore {
             let mut map = serde_json::to_value(&file.params)
                 .map_err(|e| FmuError::error(format!("mission file {shown}: {e}")))?;
             if let Some(obj) = map.as_object_mut() {
+                let d = Params::default();
                 for name in &self.params_set {
-                    let value = match name.as_str() {
-                        "start_m" => serde_json::json!(self.params.start_m),
-                        "bs_m" => serde_json::json!(self.params.bs_m),
-                        other => serde_json::json!(self.params.get_by_name(other)),
-                    };
-                    obj.insert(name.clone(), value);
+                    // array elements (`start_m[1]`) replace only that element of the file's
+                    // array (or of the SPEC default when the file has none)
+                    let array = [
+                        ("start_m", self.params.start_m, d.start_m),
+                        ("bs_m", self.params.bs_m, d.bs_m),
+                    ]
+                    .into_iter()
+                    .find_map(|(array, fmi, spec)| {
+                        let i = match name.strip_prefix(array)? {
+                            "[1]" => 0,
+                            "[2]" => 1,
+                            _ => return None,
+                        };
+                        Some((array, i, fmi[i], spec))
+                    });
+                    match array {
+                        Some((array, i, value, spec)) => {
+                            let mut v: [f64; 2] = obj
+                                .get(array)
+                                .and_then(|a| serde_json::from_value(a.clone()).ok())
+                                .unwrap_or(spec);
+                            v[i] = value;
+                            obj.insert(array.to_string(), serde_json::json!(v));
+                        }
+                        None => {
+                            obj.insert(
+                                name.clone(),
+                                serde_json::json!(self.params.get_by_name(name)),
+                            );
+                        }
+                    }
                 }
             }
             file.params = serde_json::from_value(map)
                 .map_err(|e| FmuError::error(format!("parameters set through FMI: {e}")))?;
         }
-        let mission = Mission::from_file_struct(&file)
-            .map_err(|e| FmuError::error(format!("mission {shown}: {e}")))?;
+        let mission = Mission::from_file_struct(&file).map_err(|e| {
+            let text = match &e {
+                // the planner writes the value in full decimal (309 digits for -1e308)
+                planner::MissionError::Param(planner::ParamError::Invalid {
+                    field,
+                    value,
+                    reason,
+                }) => format!("parameter `{field}` = {}: {reason}", Num(*value)),
+                other => other.to_string(),
+            };
+            FmuError::error(format!("mission {shown}: {text}"))
+        })?;
+        let slots = mission.slots();
+        if slots > MAX_FMU_SLOTS {
+            let p = mission.params();
+            return Err(FmuError::error(format!(
+                "mission {shown}: parameters `horizon_s` = {} s and `slot_s` = {} s give {slots} slots, more than the {MAX_FMU_SLOTS} this FMU plans at initialisation (raise `slot_s` or shorten `horizon_s`)",
+                Num(p.horizon_s),
+                Num(p.slot_s)
+            )));
+        }
         Ok((mission, path))
     }
 
@@ -650,7 +776,7 @@ impl PlannerCore {
                 mission.name(),
                 source.display(),
                 mission.slots(),
-                mission.params().slot_s,
+                Num(mission.params().slot_s),
                 mission.schedule().landmarks.len()
             ),
         );
@@ -694,50 +820,92 @@ impl PlannerCore {
         let Some(run) = self.run.as_mut() else {
             return Err(FmuError::error("doStep: the mission is not planned"));
         };
-        if !(input[0].is_finite() && input[1].is_finite()) {
-            return Ok(StepReport::default());
-        }
-        let p = run.mission.params();
-        let slot_s = p.slot_s;
-        let n = run.mission.slots();
-        // slots up to `from` are flown or committed (the UAV is on its way to q_from); the
-        // input refers to the window of the next slot to fly, from + 1
-        let from = slot_at_committed(tau_s, slot_s, n);
-        if from >= n {
-            return Ok(StepReport::default());
-        }
-        let sched = run.mission.schedule();
-        let Some(window) = sched.slot_landmark[from] else {
-            return Ok(StepReport::default());
-        };
-        let landmark = |w: usize| sched.landmarks.get(w).map(|l| l.pos_m());
-        let Some(planned) = landmark(window) else {
-            return Ok(StepReport::default());
-        };
-        let same = |a: [f64; 2], b: [f64; 2]| planner::geometry::v2::dist(a, b) <= 1e-6;
-        if same(input, planned) {
-            return Ok(StepReport::default());
-        }
-        // At a window boundary the outputs still show the previous slot's landmark: an input
-        // equal to it (and not moved by an input) is that output fed back, not a move.
-        let shown = slot_at(tau_s, slot_s, n);
-        if let Some(Some(w)) = sched.slot_landmark.get(shown - 1).copied() {
-            if w != window && landmark(w).is_some_and(|l| same(input, l)) && !run.moved.contains(&w)
-            {
-                return Ok(StepReport::default());
+        match (input[0].is_nan(), input[1].is_nan()) {
+            (true, true) => return Ok(StepReport::default()),
+            (false, false) if input.iter().all(|v| v.is_finite()) => {}
+            _ => {
+                return Err(FmuError::error(format!(
+                    "t = {} s: landmark input (`landmark_x_in_m`, `landmark_y_in_m`) = ({}, {}) m refused: set both to finite numbers (a move) or both to NaN (no move); the step was not taken",
+                    Num(tau_s),
+                    Num(input[0]),
+                    Num(input[1])
+                )))
             }
+        }
+        let slot_s = run.mission.params().slot_s;
+        let n = run.mission.slots();
+        // The input refers to the landmark the outputs report at τ (one rule for both, and for
+        // LandmarkMover, which reads those outputs): see `current_window`.
+        let current = slot_at(tau_s, slot_s, n);
+        let Some(window) = current_window(&run.mission, tau_s) else {
+            return Ok(StepReport::default());
+        };
+        let Some(w) = run.mission.schedule().landmarks.get(window).copied() else {
+            return Ok(StepReport::default());
+        };
+        let planned = w.pos_m();
+        if planner::geometry::v2::dist(input, planned) <= 1e-6 {
+            return Ok(StepReport::default());
+        }
+        // slots up to `from` are flown or committed (the UAV is on its way to q_from)
+        let from = slot_at_committed(tau_s, slot_s, n);
+        let has_later_slots = run
+            .mission
+            .schedule()
+            .slot_landmark
+            .get(from..)
+            .is_some_and(|l| l.contains(&Some(window)));
+        let what = format!(
+            "t = {} s: landmark {window} (window ({}, {}] s) moved from ({}, {}) m to ({}, {}) m",
+            Num(tau_s),
+            Num(w.from_s),
+            Num(w.to_s),
+            Num(planned[0]),
+            Num(planned[1]),
+            Num(input[0]),
+            Num(input[1])
+        );
+        let reject = |message: String| {
+            FmuError::error(format!(
+                "t = {} s: landmark input ({}, {}) m rejected: {message}",
+                Num(tau_s),
+                Num(input[0]),
+                Num(input[1])
+            ))
+        };
+        if !has_later_slots {
+            // the window ended with the current slot: nothing is left to re-plan, but the
+            // outputs report the moved landmark (and whether the current slot still sees it)
+            let mission = planning::moved_mission(&run.mission, window, input).map_err(reject)?;
+            log.log(
+                Category::Events,
+                Status::Ok,
+                &format!(
+                    "{what}; its window has no slot left (slot {current}, which ended at t = {} s, was its last): nothing re-planned",
+                    Num(current as f64 * slot_s)
+                ),
+            );
+            run.moved.insert(window);
+            run.eval = evaluate(&mission, &run.traj);
+            run.mission = mission;
+            let (count, _) = run.out_of_view_from(current);
+            let seen = if count > 0 {
+                format!("; slot {current} does not see it")
+            } else {
+                String::new()
+            };
+            return Ok(run.warn(
+                format!(
+                    "{what}: the move came when its window had no slot left (slot {current}, which ended at t = {} s, was its last), so nothing was re-planned{seen}",
+                    Num(current as f64 * slot_s)
+                ),
+                log,
+            ));
         }
         log.log(
             Category::Events,
             Status::Ok,
-            &format!(
-                "t = {tau_s} s: landmark {window} moved from ({}, {}) m to ({}, {}) m; re-planning slots {}..{n}",
-                planned[0],
-                planned[1],
-                input[0],
-                input[1],
-                from + 1
-            ),
+            &format!("{what}; re-planning slots {}..{n}", from + 1),
         );
         match planning::replan(
             &run.mission,
@@ -759,25 +927,128 @@ impl PlannerCore {
                     Status::Ok,
                     &format!("re-planned: {}", re.summary),
                 );
-                Ok(StepReport::default())
+                let (count, slots) = run.out_of_view_from(from + 1);
+                if count == 0 {
+                    return Ok(StepReport::default());
+                }
+                let why = if re.window_dropped {
+                    format!(
+                        "landmark {window} cannot be brought into view in any slot of its window that is left, so the rest of the horizon was re-planned without it"
+                    )
+                } else if re.transition_slots > 0 {
+                    format!(
+                        "the UAV needs {} transition slot(s) to bring landmark {window} into view",
+                        re.transition_slots
+                    )
+                } else {
+                    "the new plan does not keep every landmark in view".to_string()
+                };
+                Ok(run.warn(
+                    format!(
+                        "{what}: {why}; {count} re-planned slot(s) are out of view: {slots} (output `slots_out_of_view` = {})",
+                        run.eval.slots_out_of_view
+                    ),
+                    log,
+                ))
             }
-            Err(ReplanError::Mission(message)) => Err(FmuError::error(format!(
-                "t = {tau_s} s: landmark input ({}, {}) m rejected: {message}",
-                input[0], input[1]
-            ))),
-            Err(ReplanError::Planner { mission, message }) => {
+            Err(ReplanError::Mission(message)) => Err(reject(message)),
+            Err(ReplanError::Planner {
+                mission,
+                attempts,
+                solve_s,
+                ..
+            }) => {
                 run.moved.insert(window);
                 run.eval = evaluate(&mission, &run.traj);
                 run.mission = *mission;
-                let warning = format!(
-                    "t = {tau_s} s: re-plan for landmark {window} at ({}, {}) m failed, keeping the previous plan: {message}",
-                    input[0], input[1]
-                );
-                log.log(Category::Warning, Status::Warning, &warning);
-                Ok(StepReport {
-                    warning: Some(warning),
-                })
+                run.solve_s = solve_s;
+                let (count, slots) = run.out_of_view_from(from + 1);
+                let seen = if count > 0 {
+                    format!(
+                        "; {count} slot(s) after the current one are out of view: {slots} (output `slots_out_of_view` = {})",
+                        run.eval.slots_out_of_view
+                    )
+                } else {
+                    String::new()
+                };
+                Ok(run.warn(
+                    format!(
+                        "{what}: the re-plan failed, so the previous plan is kept ({} planner call(s) in {solve_s:.3} s: {}){seen}",
+                        attempts.len(),
+                        planning::describe_attempts(&attempts)
+                    ),
+                    log,
+                ))
             }
+        }
+    }
+}
+
+/// The landmark window (0-based, as `points[i]` of the mission file) current at mission time
+/// `tau_s`: the one sensed in slot ⌈τ/δ⌉ ([`slot_at`]). SPEC rule: slot t covers ((t−1)δ, tδ]
+/// and senses the landmark whose window holds tδ (from_s < tδ ≤ to_s). The outputs
+/// `landmark_x_m`/`landmark_y_m` report this landmark at τ, the inputs
+/// `landmark_x_in_m`/`landmark_y_in_m` of a doStep from τ move it, and `LandmarkMover`, which
+/// reads the outputs, shifts it; so at a window boundary τ = kδ all three mean the window that
+/// ends there. `None` when that slot senses no landmark.
+pub fn current_window(mission: &Mission, tau_s: f64) -> Option<usize> {
+    let k = slot_at(tau_s, mission.params().slot_s, mission.slots());
+    mission
+        .schedule()
+        .slot_landmark
+        .get(k.checked_sub(1)?)
+        .copied()
+        .flatten()
+}
+
+impl Run {
+    /// Slots from `first` (1-based) on whose landmark is not in view at the slot end: their
+    /// count and a description naming the landmarks and slots (at most four runs of consecutive
+    /// slots).
+    fn out_of_view_from(&self, first: usize) -> (usize, String) {
+        let slot_s = self.mission.params().slot_s;
+        let sched = self.mission.schedule();
+        // (landmark, first slot, last slot) of each run of consecutive out-of-view slots
+        let mut runs: Vec<(Option<usize>, usize, usize)> = Vec::new();
+        let mut count = 0;
+        for s in self.eval.slots.iter().skip(first.saturating_sub(1)) {
+            if s.in_view {
+                continue;
+            }
+            count += 1;
+            let landmark = sched.slot_landmark.get(s.t - 1).copied().flatten();
+            match runs.last_mut() {
+                Some((l, _, last)) if *l == landmark && *last + 1 == s.t => *last = s.t,
+                _ => runs.push((landmark, s.t, s.t)),
+            }
+        }
+        let mut text: Vec<String> = runs
+            .iter()
+            .take(4)
+            .map(|(l, a, b)| {
+                let name = l.map_or("no landmark".to_string(), |l| format!("landmark {l}"));
+                if a == b {
+                    format!("{name} in slot {a} (t = {} s)", Num(*a as f64 * slot_s))
+                } else {
+                    format!(
+                        "{name} in slots {a}..{b} (t = {}..{} s)",
+                        Num(*a as f64 * slot_s),
+                        Num(*b as f64 * slot_s)
+                    )
+                }
+            })
+            .collect();
+        if runs.len() > 4 {
+            text.push(format!("and {} more run(s) of slots", runs.len() - 4));
+        }
+        (count, text.join(", "))
+    }
+
+    /// Logs `warning` and returns it as the step's warning.
+    fn warn(&self, warning: String, log: &dyn Log) -> StepReport {
+        log.log(Category::Warning, Status::Warning, &warning);
+        StepReport {
+            warning: Some(warning),
         }
     }
 }
@@ -792,7 +1063,11 @@ fn slot_at_committed(tau_s: f64, slot_s: f64, slots: usize) -> usize {
     }
 }
 
-/// The landmark mover's state.
+/// The landmark mover's state. Its input is meant to be the planner's `landmark_x_m`/`landmark_y_m`
+/// (the landmark of [`current_window`]); at the end of the step that reaches `move_at_s` it
+/// latches that landmark plus the offset, and the planner applies its output, from the next
+/// doStep on, to [`current_window`] at that time: the same window (Gauss-Seidel coupling,
+/// planner first).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct MoverCore {
     move_at_s: f64,
@@ -806,7 +1081,9 @@ pub struct MoverCore {
 impl Default for MoverCore {
     fn default() -> Self {
         Self {
-            move_at_s: 60.0,
+            // mid-window on the default mission (windows of 10 s): a move at a window boundary
+            // would shift the landmark of the window that ends there, which has no slot left
+            move_at_s: 65.0,
             offset_m: [100.0, 0.0],
             hold_s: 0.0,
             input_m: [0.0, 0.0],
@@ -835,25 +1112,44 @@ impl MoverCore {
         })
     }
 
-    fn set_real(&mut self, var: &Var, value: f64) -> Result<(), FmuError> {
-        let param = |v: f64| {
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(FmuError::error(format!(
-                    "parameter `{}` = {v}: must be a finite number",
-                    var.name
-                )))
-            }
+    fn check_real(&self, var: &Var, value: f64) -> Result<(), FmuError> {
+        let bad = |why: &str| {
+            Err(FmuError::error(format!(
+                "{} `{}` = {}: {why}",
+                var.causality.name(),
+                var.name,
+                Num(value)
+            )))
         };
         match var.vr {
-            mover_vr::MOVE_AT => self.move_at_s = param(value)?,
-            mover_vr::OFFSET_X => self.offset_m[0] = param(value)?,
-            mover_vr::OFFSET_Y => self.offset_m[1] = param(value)?,
-            mover_vr::HOLD => self.hold_s = param(value)?,
+            mover_vr::MOVE_AT | mover_vr::OFFSET_X | mover_vr::OFFSET_Y if !value.is_finite() => {
+                bad("must be a finite number")
+            }
+            mover_vr::HOLD if !(value.is_finite() && value >= 0.0) => {
+                bad("must be a finite number >= 0 (0: until the end)")
+            }
+            mover_vr::IN_X | mover_vr::IN_Y if value.is_infinite() => {
+                bad("must be a finite number (the planner's landmark) or NaN (none)")
+            }
+            mover_vr::MOVE_AT
+            | mover_vr::OFFSET_X
+            | mover_vr::OFFSET_Y
+            | mover_vr::HOLD
+            | mover_vr::IN_X
+            | mover_vr::IN_Y => Ok(()),
+            _ => Err(unknown(var)),
+        }
+    }
+
+    fn set_real(&mut self, var: &Var, value: f64) -> Result<(), FmuError> {
+        self.check_real(var, value)?;
+        match var.vr {
+            mover_vr::MOVE_AT => self.move_at_s = value,
+            mover_vr::OFFSET_X => self.offset_m[0] = value,
+            mover_vr::OFFSET_Y => self.offset_m[1] = value,
+            mover_vr::HOLD => self.hold_s = value,
             mover_vr::IN_X => self.input_m[0] = value,
-            mover_vr::IN_Y => self.input_m[1] = value,
-            _ => return Err(unknown(var)),
+            _ => self.input_m[1] = value,
         }
         Ok(())
     }
@@ -865,8 +1161,16 @@ impl MoverCore {
         }
     }
 
-    /// At the end of a step: latch the moved landmark once the move time is reached.
-    fn step(&mut self, end_s: f64) {
+    /// At the end of a step: latch the moved landmark once the move time is reached. An input
+    /// with one NaN and one finite coordinate is refused (the step is not taken).
+    fn step(&mut self, end_s: f64) -> Result<(), FmuError> {
+        if self.input_m[0].is_nan() != self.input_m[1].is_nan() {
+            return Err(FmuError::error(format!(
+                "inputs (`landmark_x_m`, `landmark_y_m`) = ({}, {}) m refused: set both to finite numbers or both to NaN; the step was not taken",
+                Num(self.input_m[0]),
+                Num(self.input_m[1])
+            )));
+        }
         if self.latched.is_none()
             && end_s >= self.move_at_s - 1e-9
             && self.input_m.iter().all(|v| v.is_finite())
@@ -879,6 +1183,7 @@ impl MoverCore {
                 end_s,
             ));
         }
+        Ok(())
     }
 }
 
@@ -1005,5 +1310,212 @@ mod tests {
         let m = Mission::from_file_struct(&f).unwrap();
         assert_eq!(m.slots(), 600);
         assert_eq!(m.target_m(21), Some([0.0, 30.0]));
+    }
+
+    /// Collects log messages.
+    #[derive(Default)]
+    struct Collect(std::cell::RefCell<Vec<(Status, String)>>);
+
+    impl Log for Collect {
+        fn log(&self, _category: Category, status: Status, message: &str) {
+            self.0.borrow_mut().push((status, message.to_string()));
+        }
+    }
+
+    const SHORT: &str = r#"name = "short"
+[params]
+horizon_s = 20
+[landmarks]
+points = [
+  { x_m = 0, y_m = 0, from_s = 0, to_s = 10 },
+  { x_m = 0, y_m = 30, from_s = 10, to_s = 20 },
+]
+"#;
+
+    fn var(table: &'static [Var], name: &str) -> &'static Var {
+        table.iter().find(|v| v.name == name).unwrap()
+    }
+
+    /// A planner core for `mission` (TOML text), with `setup` applied before initialisation.
+    fn planned(
+        mission: &str,
+        setup: impl FnOnce(&mut Core),
+    ) -> (Core, tempfile::TempDir, Result<(), FmuError>) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.toml");
+        std::fs::write(&path, mission).unwrap();
+        let mut core = Core::new(ModelKind::Planner);
+        core.set_string(var(PLANNER_VARS, "mission_file"), path.to_str().unwrap())
+            .unwrap();
+        setup(&mut core);
+        let r = core.initialize(None, &Collect::default());
+        (core, dir, r)
+    }
+
+    fn set_input(core: &mut Core, x: f64, y: f64) {
+        core.set_real(var(PLANNER_VARS, "landmark_x_in_m"), 0, x)
+            .unwrap();
+        core.set_real(var(PLANNER_VARS, "landmark_y_in_m"), 0, y)
+            .unwrap();
+    }
+
+    fn landmarks(core: &Core) -> Vec<[f64; 2]> {
+        let Core::Planner(c) = core else {
+            panic!("not a planner")
+        };
+        let run = c.run.as_ref().unwrap();
+        run.mission
+            .schedule()
+            .landmarks
+            .iter()
+            .map(|w| w.pos_m())
+            .collect()
+    }
+
+    #[test]
+    fn numbers_in_messages_are_short() {
+        assert_eq!(Num(-1e308).to_string(), "-1e308");
+        assert_eq!(Num(1e-12).to_string(), "1e-12");
+        assert_eq!(Num(0.0001).to_string(), "0.0001");
+        assert_eq!(Num(0.5).to_string(), "0.5");
+        assert_eq!(Num(300.0).to_string(), "300");
+        assert_eq!(Num(1e15).to_string(), "1e15");
+        assert_eq!(Num(f64::NAN).to_string(), "NaN");
+        assert_eq!(Num(f64::NEG_INFINITY).to_string(), "-inf");
+        assert_eq!(format!("{:.3}", Num(1.23456)), "1.235");
+        assert_eq!(format!("{:.2}", Num(123456789e10)), "1.23e18");
+    }
+
+    #[test]
+    fn one_array_element_keeps_the_files_other_element() {
+        let mission = SHORT.replace(
+            "horizon_s = 20",
+            "horizon_s = 20\nstart_m = [-1100.0, -450.0]\nbs_m = [10.0, 20.0]",
+        );
+        // FMI 2 sets start_m[2] and bs_m[1] alone; bs_m[2] is written back at its start value
+        let (core, _dir, r) = planned(&mission, |c| {
+            c.set_real(var(PLANNER_VARS, "start_m"), 1, -460.0).unwrap();
+            c.set_real(var(PLANNER_VARS, "bs_m"), 0, 11.0).unwrap();
+            c.set_real(var(PLANNER_VARS, "bs_m"), 1, Params::default().bs_m[1])
+                .unwrap();
+        });
+        r.unwrap();
+        let get = |name, i| core.get_real(var(PLANNER_VARS, name), i, 0.0).unwrap();
+        assert_eq!([get("start_m", 0), get("start_m", 1)], [-1100.0, -460.0]);
+        assert_eq!([get("bs_m", 0), get("bs_m", 1)], [11.0, 20.0]);
+        assert_eq!([get("x_m", 0), get("y_m", 0)], [-1100.0, -460.0]);
+    }
+
+    #[test]
+    fn move_out_of_reach_warns_and_counts_slots_out_of_view() {
+        let (mut core, _dir, r) = planned(SHORT, |_| {});
+        r.unwrap();
+        let out_of_view = |c: &Core| c.get_int(var(PLANNER_VARS, "slots_out_of_view")).unwrap();
+        assert_eq!(out_of_view(&core), 0);
+        set_input(&mut core, 1e7, 0.0);
+        let log = Collect::default();
+        let report = core.step(2.5, 0.5, &log).unwrap();
+        let warning = report
+            .warning
+            .expect("a re-plan that drops a window must warn");
+        assert!(
+            warning.contains("landmark 0") && warning.contains("slots 6..20"),
+            "{warning}"
+        );
+        assert!(log
+            .0
+            .borrow()
+            .iter()
+            .any(|(s, m)| *s == Status::Warning && *m == warning));
+        // every slot of window 0 misses the moved landmark, window 1 is planned as usual
+        assert_eq!(out_of_view(&core), 20);
+        assert!(!core.get_bool(var(PLANNER_VARS, "in_view"), 5.0).unwrap());
+        assert!(core.get_bool(var(PLANNER_VARS, "in_view"), 15.0).unwrap());
+    }
+
+    #[test]
+    fn input_at_a_window_boundary_moves_the_window_that_ends_there() {
+        let (mut core, _dir, r) = planned(SHORT, |_| {});
+        r.unwrap();
+        // at t = 10 s the outputs show slot 20, window 0 (0, 10] s: the input moves that one
+        let lx = var(PLANNER_VARS, "landmark_x_m");
+        assert_eq!(core.get_real(lx, 0, 10.0).unwrap(), 0.0);
+        assert_eq!(
+            core.get_real(var(PLANNER_VARS, "landmark_y_m"), 0, 10.0)
+                .unwrap(),
+            0.0
+        );
+        set_input(&mut core, 40.0, 0.0);
+        let report = core.step(10.0, 0.5, &Collect::default()).unwrap();
+        assert_eq!(landmarks(&core), vec![[40.0, 0.0], [0.0, 30.0]]);
+        // window 0 has no slot left: nothing re-planned, and the step says so
+        assert!(report.warning.unwrap().contains("no slot left"));
+        assert_eq!(core.get_int(var(PLANNER_VARS, "replan_count")).unwrap(), 0);
+        // in the middle of window 1 the same input moves window 1 and re-plans
+        core.step(10.5, 0.5, &Collect::default()).unwrap();
+        assert_eq!(landmarks(&core), vec![[40.0, 0.0], [40.0, 0.0]]);
+        assert_eq!(core.get_int(var(PLANNER_VARS, "replan_count")).unwrap(), 1);
+        assert_eq!(
+            current_window(
+                &Mission::from_file_struct(&MissionFile::from_toml_str(SHORT).unwrap()).unwrap(),
+                10.0
+            ),
+            Some(0)
+        );
+    }
+
+    #[test]
+    fn bad_landmark_inputs_are_refused() {
+        let (mut core, _dir, r) = planned(SHORT, |_| {});
+        r.unwrap();
+        let x = var(PLANNER_VARS, "landmark_x_in_m");
+        let e = core.set_real(x, 0, f64::INFINITY).unwrap_err();
+        assert!(
+            e.message.contains("`landmark_x_in_m` = inf"),
+            "{}",
+            e.message
+        );
+        assert!(core.get_real(x, 0, 0.0).unwrap().is_nan());
+        // one coordinate NaN, the other finite: refused at the step, nothing changes
+        core.set_real(x, 0, 40.0).unwrap();
+        let e = core.step(2.5, 0.5, &Collect::default()).unwrap_err();
+        assert!(
+            e.message.contains("landmark_x_in_m") && e.message.contains("landmark_y_in_m"),
+            "{}",
+            e.message
+        );
+        assert_eq!(landmarks(&core), vec![[0.0, 0.0], [0.0, 30.0]]);
+    }
+
+    #[test]
+    fn bad_mover_values_are_refused() {
+        let mut core = Core::new(ModelKind::Mover);
+        let hold = var(MOVER_VARS, "hold_s");
+        let e = core.set_real(hold, 0, -1.0).unwrap_err();
+        assert!(e.message.contains("`hold_s` = -1"), "{}", e.message);
+        assert_eq!(core.get_real(hold, 0, 0.0).unwrap(), 0.0);
+        let e = core
+            .set_real(var(MOVER_VARS, "landmark_y_m"), 0, f64::INFINITY)
+            .unwrap_err();
+        assert!(e.message.contains("landmark_y_m"), "{}", e.message);
+        core.set_real(var(MOVER_VARS, "landmark_x_m"), 0, f64::NAN)
+            .unwrap();
+        assert!(core.step(0.0, 0.5, &Collect::default()).is_err());
+    }
+
+    #[test]
+    fn too_many_slots_are_refused_before_planning() {
+        let started = std::time::Instant::now();
+        let (_core, _dir, r) = planned(SHORT, |c| {
+            c.set_real(var(PLANNER_VARS, "slot_s"), 0, 1e-4).unwrap();
+        });
+        let e = r.unwrap_err();
+        assert!(
+            e.message
+                .contains("`horizon_s` = 20 s and `slot_s` = 0.0001 s give 200000 slots"),
+            "{}",
+            e.message
+        );
+        assert!(started.elapsed().as_secs_f64() < 5.0);
     }
 }

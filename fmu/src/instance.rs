@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::core::{guid, Core, FmiVersion, FmuError, Log, ModelKind, Status};
+use crate::core::{guid, Core, FmiVersion, FmuError, Log, ModelKind, Num, Status};
 use crate::table::{self, Category, Causality, Var, VarType, LOG_CATEGORIES};
 
 /// The FMI 2 logger: `void logger(env, instanceName, status, category, message, ...)`; the
@@ -414,12 +414,17 @@ impl Instance {
 
     fn set_experiment(&mut self, start: f64, stop: Option<f64>) -> Result<(), FmuError> {
         if !start.is_finite() {
-            return Err(FmuError::error(format!("start time {start} is not finite")));
+            return Err(FmuError::error(format!(
+                "start time {} is not finite",
+                Num(start)
+            )));
         }
         if let Some(s) = stop {
             if !(s.is_finite() && s >= start) {
                 return Err(FmuError::error(format!(
-                    "stop time {s} must be finite and not before the start time {start}"
+                    "stop time {} must be finite and not before the start time {}",
+                    Num(s),
+                    Num(start)
                 )));
             }
         }
@@ -460,8 +465,11 @@ impl Instance {
             if stop > end + 1e-9 * end.abs().max(1.0) {
                 self.mode = Mode::Error;
                 return Err(FmuError::error(format!(
-                    "stop time {stop} s lies after the end of the mission horizon ({h} s from the start time {} s, i.e. {end} s)",
-                    self.start_time
+                    "stop time {} s lies after the end of the mission horizon ({} s from the start time {} s, i.e. {} s)",
+                    Num(stop),
+                    Num(h),
+                    Num(self.start_time),
+                    Num(end)
                 )));
             }
         }
@@ -606,9 +614,10 @@ impl Instance {
         Ok(())
     }
 
-    /// Sets Real values.
+    /// Sets Real values, all or nothing: every value reference and value is checked before the
+    /// first one is set, so a refused call leaves the instance as it was.
     pub fn set_real(&mut self, func: &str, vrs: &[u32], values: &[f64]) -> Result<(), FmuError> {
-        let mut k = 0;
+        let mut todo = Vec::with_capacity(values.len());
         for &vr in vrs {
             let (var, elem) = self.lookup(func, vr)?;
             self.check_set(func, var, VarType::Real)?;
@@ -618,17 +627,23 @@ impl Instance {
                 1
             };
             for i in 0..n {
-                let v = *values.get(k).ok_or_else(|| too_few(func, values.len()))?;
-                self.core.set_real(var, elem + i, v)?;
-                k += 1;
+                let v = *values
+                    .get(todo.len())
+                    .ok_or_else(|| too_few(func, values.len()))?;
+                self.core.check_real(var, elem + i, v)?;
+                todo.push((var, elem + i, v));
             }
         }
-        if k != values.len() {
+        if todo.len() != values.len() {
             return Err(FmuError::error(format!(
-                "{func}: {} values given for {} value references (expected {k})",
+                "{func}: {} values given for {} value references (expected {})",
                 values.len(),
-                vrs.len()
+                vrs.len(),
+                todo.len()
             )));
+        }
+        for (var, elem, v) in todo {
+            self.core.set_real(var, elem, v)?;
         }
         Ok(())
     }
@@ -644,20 +659,21 @@ impl Instance {
         Ok(())
     }
 
-    /// Sets Integer values (also the hidden test variable).
+    /// Sets Integer values (also the hidden test variable), all or nothing.
     pub fn set_int(&mut self, func: &str, vrs: &[u32], values: &[i32]) -> Result<(), FmuError> {
         same_len(func, vrs.len(), values.len())?;
         self.require(
             func,
             &[Mode::Instantiated, Mode::Initialization, Mode::Step],
         )?;
-        for (&vr, &v) in vrs.iter().zip(values) {
-            if vr == table::planner_vr::DEBUG_INJECT_PANIC {
-                self.core.set_int(vr, v)?;
-                continue;
+        for &vr in vrs {
+            if vr != table::planner_vr::DEBUG_INJECT_PANIC {
+                let (var, _) = self.lookup(func, vr)?;
+                self.check_set(func, var, VarType::Integer)?;
             }
-            let (var, _) = self.lookup(func, vr)?;
-            self.check_set(func, var, VarType::Integer)?;
+            self.core.check_int(vr)?;
+        }
+        for (&vr, &v) in vrs.iter().zip(values) {
             self.core.set_int(vr, v)?;
         }
         Ok(())
@@ -705,7 +721,7 @@ impl Instance {
         Ok(())
     }
 
-    /// Sets String values.
+    /// Sets String values, all or nothing.
     pub fn set_string(
         &mut self,
         func: &str,
@@ -713,9 +729,14 @@ impl Instance {
         values: &[String],
     ) -> Result<(), FmuError> {
         same_len(func, vrs.len(), values.len())?;
-        for (&vr, v) in vrs.iter().zip(values) {
+        let mut todo = Vec::with_capacity(vrs.len());
+        for &vr in vrs {
             let (var, _) = self.lookup(func, vr)?;
             self.check_set(func, var, VarType::String)?;
+            self.core.check_string(var)?;
+            todo.push(var);
+        }
+        for (var, v) in todo.into_iter().zip(values) {
             self.core.set_string(var, v)?;
         }
         Ok(())
@@ -727,26 +748,32 @@ impl Instance {
         self.require(func, &[Mode::Step])?;
         if !(t.is_finite() && h.is_finite()) {
             return Err(FmuError::error(format!(
-                "{func}: communication point {t} and step size {h} must be finite"
+                "{func}: communication point {} and step size {} must be finite",
+                Num(t),
+                Num(h)
             )));
         }
         if h <= 0.0 {
             return Err(FmuError::error(format!(
-                "{func}: communication step size must be > 0, got {h}"
+                "{func}: communication step size must be > 0, got {}",
+                Num(h)
             )));
         }
         let eps = 1e-9 * (1.0 + self.time.abs());
         if (t - self.time).abs() > eps {
             return Err(FmuError::error(format!(
-                "{func}: communication point {t} s is not the current time {} s",
-                self.time
+                "{func}: communication point {} s is not the current time {} s",
+                Num(t),
+                Num(self.time)
             )));
         }
         let mut end = t + h;
         if let Some(stop) = self.stop_time {
             if end > stop + 1e-9 * (1.0 + stop.abs()) {
                 return Err(FmuError::error(format!(
-                    "{func}: the step to {end} s passes the stop time {stop} s"
+                    "{func}: the step to {} s passes the stop time {} s",
+                    Num(end),
+                    Num(stop)
                 )));
             }
         }
@@ -770,7 +797,10 @@ impl Instance {
             self.log(
                 Category::Warning,
                 Status::Discard,
-                &format!("{func}: the mission horizon ends at {end} s: the step stopped there"),
+                &format!(
+                    "{func}: the mission horizon ends at {} s: the step stopped there",
+                    Num(end)
+                ),
             );
         }
         Ok(StepOutcome {
@@ -897,5 +927,105 @@ mod tests {
         assert!(parse_resource_location("http://x/y").is_err());
         assert!(parse_resource_location("/does/not/exist").is_err());
         assert!(parse_resource_location("file:///a%zz").is_err());
+    }
+
+    fn instance(version: FmiVersion) -> Instance {
+        Instance::new(
+            version,
+            ModelKind::Planner,
+            "test",
+            None,
+            Logger::new(Callback::None, "test", false),
+        )
+    }
+
+    fn vr(name: &str) -> u32 {
+        table::PLANNER_VARS
+            .iter()
+            .find(|v| v.name == name)
+            .unwrap()
+            .vr
+    }
+
+    #[test]
+    fn refused_multi_value_sets_change_nothing() {
+        for version in [FmiVersion::Fmi2, FmiVersion::Fmi3] {
+            let mut inst = instance(version);
+            let (alt, bw) = (vr("altitude_m"), vr("bandwidth_hz"));
+            let e = inst
+                .set_real("set", &[alt, bw], &[1100.0, f64::NAN])
+                .unwrap_err();
+            assert!(e.message.contains("bandwidth_hz"), "{}", e.message);
+            assert!(inst
+                .set_real("set", &[alt, 999_999], &[1100.0, 1.0])
+                .is_err());
+            // too few values for the array start_m after a good value
+            if version == FmiVersion::Fmi3 {
+                assert!(inst
+                    .set_real("set", &[alt, vr("start_m")], &[1100.0, 1.0])
+                    .is_err());
+            }
+            assert!(inst
+                .set_string(
+                    "set",
+                    &[vr("mission_file"), alt],
+                    &["other.toml".to_string(), "x".to_string()]
+                )
+                .is_err());
+            assert!(inst
+                .set_int(
+                    "set",
+                    &[table::planner_vr::DEBUG_INJECT_PANIC, vr("replan_count")],
+                    &[1, 0]
+                )
+                .is_err());
+            inst.enter_initialization("enter", Some((0.0, None)))
+                .unwrap();
+            let mut out = [0.0];
+            inst.get_real("get", &[alt], &mut out).unwrap();
+            assert_eq!(out[0], 1000.0, "{version:?}");
+            let mut s = [std::ptr::null()];
+            inst.get_string("get", &[vr("mission_file")], &mut s)
+                .unwrap();
+            // SAFETY: get_string hands out NUL-terminated strings that live until the next call.
+            let text = unsafe { std::ffi::CStr::from_ptr(s[0]) };
+            assert_eq!(text.to_str().unwrap(), "default_mission.toml");
+            assert!(
+                matches!(&inst.core, Core::Planner(c) if format!("{c:?}").contains("debug_panic: 0"))
+            );
+            // a good multi-value set applies every value
+            inst.set_real("set", &[alt, bw], &[1100.0, 100e6]).unwrap();
+            inst.get_real("get", &[bw], &mut out).unwrap();
+            assert_eq!(out[0], 100e6);
+        }
+    }
+
+    #[test]
+    fn messages_write_extreme_numbers_short() {
+        let mut inst = instance(FmiVersion::Fmi2);
+        let e = inst.setup_experiment(0.0, Some(-1e308)).unwrap_err();
+        assert_eq!(
+            e.message,
+            "stop time -1e308 must be finite and not before the start time 0"
+        );
+        let e = inst
+            .set_real("set", &[vr("altitude_m")], &[f64::INFINITY])
+            .unwrap_err();
+        assert_eq!(
+            e.message,
+            "parameter `altitude_m` = inf: must be a finite number"
+        );
+        inst.mode = Mode::Step;
+        let e = inst.do_step("doStep", 0.0, -1e-12).unwrap_err();
+        assert_eq!(
+            e.message,
+            "doStep: communication step size must be > 0, got -1e-12"
+        );
+        let e = inst.do_step("doStep", 1e300, 1.0).unwrap_err();
+        assert!(
+            e.message.contains("communication point 1e300 s"),
+            "{}",
+            e.message
+        );
     }
 }

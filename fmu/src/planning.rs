@@ -3,7 +3,9 @@
 
 use std::time::Instant;
 
-use planner::{LandmarkWindow, LandmarksSpec, Mission, Trajectory};
+use planner::{LandmarkWindow, LandmarksSpec, Mission, Params, Trajectory};
+
+use crate::core::Num;
 
 /// A finished plan.
 #[derive(Debug, Clone)]
@@ -44,17 +46,24 @@ pub struct ReplanOptions {
     pub max_iterations: usize,
     /// Relative objective change that ends the re-plan.
     pub tolerance: f64,
+    /// `planner::PlanOptions::coarse`: repair an infeasible warm start on a coarse grid (slots of
+    /// about 2.5 s) first. Off, the warm start is repaired on the mission's own slots.
+    pub coarse: bool,
 }
 
 /// The defaults were chosen with `cargo run --release -p fmu --example replan-bench` (see
-/// BENCHMARKS.md): the warm start is fastest in most cases, and 5 iterations keep the energy
-/// within a few J of the converged re-plan.
+/// BENCHMARKS.md): the warm start is fastest in most cases, 5 iterations keep the energy
+/// within a few J of the converged re-plan, and repairing the warm start on the mission's own
+/// slots (`coarse: false`) is up to 4× faster than on the coarse grid: the coarse repair costs
+/// 0.3–1.3 s on the moves measured, and where transition slots are needed it stalls anyway, as a
+/// 2.5 s coarse slot must see the moved landmark over its whole length.
 impl Default for ReplanOptions {
     fn default() -> Self {
         Self {
             warm_start: WarmStart::Always,
             max_iterations: 5,
             tolerance: 1e-3,
+            coarse: false,
         }
     }
 }
@@ -83,6 +92,52 @@ pub fn plan_with(
     })
 }
 
+/// How one planner call of a re-plan treated the moved landmark's window.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WindowPlan {
+    /// The window starts at the earliest `delay` slots after the re-plan's start (0: the
+    /// mission's own window; slots of the window before that are not asked to see the landmark).
+    Delayed(usize),
+    /// The window was left out: the moved landmark is not asked to be in view in any of its slots.
+    Dropped,
+}
+
+/// One planner call of a re-plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Attempt {
+    /// How the moved landmark's window was treated.
+    pub window: WindowPlan,
+    /// Wall time of the call (building the sub-mission included), s.
+    pub solve_s: f64,
+    /// The planner's message when the call failed.
+    pub error: Option<String>,
+}
+
+impl std::fmt::Display for Attempt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.window {
+            WindowPlan::Delayed(d) => write!(f, "delay {d}")?,
+            WindowPlan::Dropped => write!(f, "window left out")?,
+        }
+        match &self.error {
+            None => write!(f, ": {:.3} s", self.solve_s),
+            Some(e) => write!(f, ": failed after {:.3} s ({e})", self.solve_s),
+        }
+    }
+}
+
+/// The attempts of a re-plan for a log line: "delay 0: failed after 9.512 s (…); delay 1: 0.210 s".
+pub fn describe_attempts(attempts: &[Attempt]) -> String {
+    if attempts.is_empty() {
+        return "no planner call".to_string();
+    }
+    attempts
+        .iter()
+        .map(Attempt::to_string)
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
 /// The outcome of a receding-horizon re-plan.
 #[derive(Debug, Clone)]
 pub struct Replanned {
@@ -90,11 +145,17 @@ pub struct Replanned {
     pub mission: Mission,
     /// The spliced trajectory: the old plan up to slot `from_slot`, the new plan after it.
     pub trajectory: Trajectory,
-    /// Slots of the moved window at the start of the new plan that could not keep the moved
-    /// landmark in view (the UAV first has to get there); 0 when it is in view at once.
+    /// Slots of the moved window after `from_slot` that the accepted plan was not asked to keep
+    /// the moved landmark in view in (the UAV first has to get there; all of them when
+    /// `window_dropped`); 0 when it is asked to be in view at once.
     pub transition_slots: usize,
+    /// The moved landmark could not be kept in view in any slot of its window: the accepted plan
+    /// leaves the window out (the other windows are planned as usual).
+    pub window_dropped: bool,
     /// Wall time of all planner calls, s.
     pub solve_s: f64,
+    /// Every planner call, in order (the last one is the accepted plan).
+    pub attempts: Vec<Attempt>,
     /// Sensing excess of the warm start on the sub-mission, summed over its slots, m.
     pub start_excess_m: f64,
     /// Whether the accepted plan started from the rest of the current plan.
@@ -124,16 +185,79 @@ pub enum ReplanError {
     Planner {
         /// The mission with the moved landmark.
         mission: Box<Mission>,
-        /// The planner's message.
+        /// The planner's message (of the last call).
         message: String,
+        /// Every planner call, in order.
+        attempts: Vec<Attempt>,
+        /// Wall time of all planner calls, s.
+        solve_s: f64,
     },
+}
+
+/// `mission` with the landmark of window `window` (0-based, as `points[window]` of a mission
+/// file) at `moved_m`. The error says why the moved mission is invalid.
+pub fn moved_mission(
+    mission: &Mission,
+    window: usize,
+    moved_m: [f64; 2],
+) -> Result<Mission, String> {
+    let mut windows = mission.schedule().landmarks.clone();
+    let count = windows.len();
+    let Some(w) = windows.get_mut(window) else {
+        return Err(format!(
+            "landmark window {window} does not exist (the mission has {count})"
+        ));
+    };
+    w.x_m = moved_m[0];
+    w.y_m = moved_m[1];
+    let spec = LandmarksSpec {
+        points: Some(windows),
+        ..Default::default()
+    };
+    Mission::new(mission.name(), mission.params().clone(), &spec).map_err(|e| e.to_string())
+}
+
+/// The earliest slot `t` in `first..=last` (1-based) at whose end a UAV that starts at
+/// `p.start_m` could have landmark `g_m` in view, or `None` when no slot of that range can.
+///
+/// This is a necessary condition only (it ignores everything but the speed limit and the
+/// sensing geometry), so a slot it rules out is certainly infeasible. After t − 1 slots the UAV is
+/// within V_m (t − 1) δ of the start; in slot t it moves by s ≤ V_m δ along its heading and the
+/// sensing centre lies H tan η to the right of that heading, so the centre lies within
+/// V_m (t − 1) δ + √((V_m δ)² + (H tan η)²) and beyond H tan η − V_m (t − 1) δ of the start. The
+/// planner's own pre-check allows a full slot of travel V_m δ towards the landmark in slot t as
+/// well, about 15 m on the default mission, so a landmark moved just out of reach of the next
+/// slot passes it and phase I then searches for seconds before it gives up.
+pub fn earliest_in_view_slot(
+    p: &Params,
+    g_m: [f64; 2],
+    first: usize,
+    last: usize,
+) -> Option<usize> {
+    // the planner accepts plans that violate speed and sensing by up to FEASIBILITY_TOL
+    let tol = planner::evaluate::FEASIBILITY_TOL;
+    let offset = p.centre_offset_m();
+    let v_step = (p.max_speed_mps + tol) * p.slot_s;
+    let r = p.sensing_radius_m + tol;
+    let d = planner::geometry::v2::dist(p.start_m, g_m);
+    let last_hop = v_step.hypot(offset);
+    let slack = 1e-9 * (1.0 + d + offset);
+    (first.max(1)..=last).find(|&t| {
+        let travel = v_step * (t - 1) as f64;
+        d <= travel + last_hop + r + slack && d + travel + r + slack >= offset
+    })
 }
 
 /// Moves landmark window `window` of `mission` to `moved_m` and re-plans the slots after
 /// `from_slot` (the slots up to `from_slot` are already flown or committed: the UAV is on its way
 /// to q_{from_slot}). The sub-mission starts at q_{from_slot} with the remaining windows shifted
-/// by `from_slot` slots. When the moved landmark cannot be reached in the very next slot, the
-/// start of its window is delayed (1, 2, 4, ... slots) until the planner finds a plan.
+/// by `from_slot` slots.
+///
+/// When the moved landmark cannot be in view in the first slots of its window, the start of the
+/// window is delayed: first to the earliest slot that [`earliest_in_view_slot`] allows, then by
+/// 1, 2, 4, … more slots until the planner finds a plan. When no delay works (or the landmark is
+/// out of reach in every slot of its window), the rest of the horizon is planned without that
+/// window ([`Replanned::window_dropped`]); the caller reports the slots out of view.
 pub fn replan(
     mission: &Mission,
     current: &Trajectory,
@@ -145,33 +269,22 @@ pub fn replan(
     let plan_options = planner::PlanOptions {
         max_iterations: options.max_iterations,
         tolerance: options.tolerance,
+        coarse: options.coarse,
         ..Default::default()
     };
     let started = Instant::now();
+    let moved = moved_mission(mission, window, moved_m).map_err(ReplanError::Mission)?;
     let p = mission.params().clone();
     let slot_s = p.slot_s;
     let n = mission.slots();
-    let mut windows = mission.schedule().landmarks.clone();
-    let Some(w) = windows.get_mut(window) else {
-        return Err(ReplanError::Mission(format!(
-            "landmark window {window} does not exist (the mission has {})",
-            mission.schedule().landmarks.len()
-        )));
-    };
-    w.x_m = moved_m[0];
-    w.y_m = moved_m[1];
-    let spec = LandmarksSpec {
-        points: Some(windows.clone()),
-        ..Default::default()
-    };
-    let moved_mission = Mission::new(mission.name(), p.clone(), &spec)
-        .map_err(|e| ReplanError::Mission(e.to_string()))?;
     if from_slot >= n {
         return Ok(Replanned {
-            mission: moved_mission,
+            mission: moved,
             trajectory: current.clone(),
             transition_slots: 0,
+            window_dropped: false,
             solve_s: 0.0,
+            attempts: Vec::new(),
             start_excess_m: 0.0,
             warm: false,
             summary: "the horizon is over: nothing to re-plan".into(),
@@ -179,11 +292,13 @@ pub fn replan(
     }
     let shift_s = from_slot as f64 * slot_s;
     let remaining = n - from_slot;
-    let sched = moved_mission.schedule();
-    let future: Vec<(usize, LandmarkWindow)> = windows
+    let sched = moved.schedule();
+    let later = sched.slot_landmark.get(from_slot..).unwrap_or(&[]);
+    let future: Vec<(usize, LandmarkWindow)> = sched
+        .landmarks
         .iter()
         .enumerate()
-        .filter(|(i, _)| sched.slot_landmark[from_slot..].contains(&Some(*i)))
+        .filter(|(i, _)| later.contains(&Some(*i)))
         .map(|(i, w)| {
             (
                 i,
@@ -204,33 +319,56 @@ pub fn replan(
         start_m: current.q(from_slot),
         pos_m: current.pos_m.get(from_slot..).unwrap_or(&[]).to_vec(),
     };
-    let moved_is_future = future.iter().any(|(i, _)| *i == window);
-    let mut delays = vec![0usize];
-    if moved_is_future {
-        let mut d = 1;
-        while d < remaining {
-            delays.push(d);
-            d *= 2;
+    // the moved window's slots in the sub-mission (1-based), when it has any left
+    let moved_slots = later
+        .iter()
+        .position(|l| *l == Some(window))
+        .zip(later.iter().rposition(|l| *l == Some(window)))
+        .map(|(a, b)| (a + 1, b + 1));
+    let mut plans = Vec::new();
+    let mut reach_note = String::new();
+    if let Some((first, last)) = moved_slots {
+        match earliest_in_view_slot(&sub_params, moved_m, first, last) {
+            Some(t) => {
+                let d0 = if t > first { t - 1 } else { 0 };
+                if d0 > 0 {
+                    reach_note = format!(
+                        ", the moved landmark is out of reach before sub-mission slot {t} (delays below {d0} skipped)"
+                    );
+                }
+                let mut extra = 0usize;
+                while d0 + extra < last {
+                    plans.push(WindowPlan::Delayed(d0 + extra));
+                    extra = if extra == 0 { 1 } else { extra * 2 };
+                }
+            }
+            None => {
+                reach_note =
+                    ", the moved landmark is out of reach in every slot of its window".to_string()
+            }
         }
+        plans.push(WindowPlan::Dropped);
+    } else {
+        plans.push(WindowPlan::Delayed(0));
     }
+    let mut attempts: Vec<Attempt> = Vec::new();
     let mut last_error = String::new();
-    let mut attempts = 0;
-    for delay in delays {
-        attempts += 1;
+    for plan in plans {
+        let call_started = Instant::now();
         let points: Vec<LandmarkWindow> = future
             .iter()
-            .filter_map(|(i, w)| {
-                if *i != window || delay == 0 {
-                    return Some(*w);
-                }
-                let from_s = w.from_s.max(delay as f64 * slot_s);
-                // keep the window only while a slot end remains in it
-                (from_s + slot_s <= w.to_s + 1e-9 * slot_s)
-                    .then_some(LandmarkWindow { from_s, ..*w })
+            .filter_map(|(i, w)| match plan {
+                _ if *i != window => Some(*w),
+                WindowPlan::Dropped => None,
+                WindowPlan::Delayed(0) => Some(*w),
+                WindowPlan::Delayed(d) => Some(LandmarkWindow {
+                    from_s: w.from_s.max(d as f64 * slot_s),
+                    ..*w
+                }),
             })
             .collect();
         let sub = match Mission::new(
-            format!("{} (re-plan from t = {shift_s} s)", mission.name()),
+            format!("{} (re-plan from t = {} s)", mission.name(), Num(shift_s)),
             sub_params.clone(),
             &LandmarksSpec {
                 points: Some(points),
@@ -240,6 +378,11 @@ pub fn replan(
             Ok(m) => m,
             Err(e) => {
                 last_error = e.to_string();
+                attempts.push(Attempt {
+                    window: plan,
+                    solve_s: call_started.elapsed().as_secs_f64(),
+                    error: Some(last_error.clone()),
+                });
                 continue;
             }
         };
@@ -251,34 +394,218 @@ pub fn replan(
         };
         match plan_with(&sub, warm.then(|| init.clone()), &plan_options) {
             Ok(planned) => {
-                let mut pos_m = current.pos_m[..from_slot].to_vec();
+                attempts.push(Attempt {
+                    window: plan,
+                    solve_s: call_started.elapsed().as_secs_f64(),
+                    error: None,
+                });
+                let mut pos_m = current.pos_m.get(..from_slot).unwrap_or(&[]).to_vec();
                 pos_m.extend_from_slice(&planned.trajectory.pos_m);
                 let solve_s = started.elapsed().as_secs_f64();
+                let (transition_slots, window_dropped) = match (plan, moved_slots) {
+                    (_, None) => (0, false),
+                    (WindowPlan::Dropped, Some((first, last))) => (last - first + 1, true),
+                    (WindowPlan::Delayed(d), Some((first, last))) => {
+                        ((d.min(last) + 1).saturating_sub(first), false)
+                    }
+                };
+                let outcome = if window_dropped {
+                    format!("landmark {window}'s window left out")
+                } else {
+                    format!("{transition_slots} transition slot(s)")
+                };
                 return Ok(Replanned {
-                    mission: moved_mission,
+                    mission: moved,
                     trajectory: Trajectory {
                         slot_s,
                         start_m: current.start_m,
                         pos_m,
                     },
-                    transition_slots: delay,
+                    transition_slots,
+                    window_dropped,
                     solve_s,
-                    start_excess_m: excess,
-                    warm,
                     summary: format!(
-                        "{} slots from t = {shift_s} s, {} start (sensing excess {excess:.1} m), {attempts} planner call(s), {} transition slot(s), {}",
-                        remaining,
+                        "{remaining} slots from t = {} s in {solve_s:.3} s, {} start (sensing excess {excess:.1} m){reach_note}, {} planner call(s) ({}), {outcome}, {}",
+                        Num(shift_s),
                         if warm { "warm" } else { "cold" },
-                        delay,
+                        attempts.len(),
+                        describe_attempts(&attempts),
                         planned.summary
                     ),
+                    attempts,
+                    start_excess_m: excess,
+                    warm,
                 });
             }
-            Err(e) => last_error = e,
+            Err(e) => {
+                attempts.push(Attempt {
+                    window: plan,
+                    solve_s: call_started.elapsed().as_secs_f64(),
+                    error: Some(e.clone()),
+                });
+                last_error = e;
+            }
         }
     }
     Err(ReplanError::Planner {
-        mission: Box::new(moved_mission),
+        mission: Box::new(moved),
         message: last_error,
+        attempts,
+        solve_s: started.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use planner::geometry::{sensing_centre_m, v2};
+
+    const SHORT: &str = r#"name = "short"
+[params]
+horizon_s = 20
+[landmarks]
+points = [
+  { x_m = 0, y_m = 0, from_s = 0, to_s = 10 },
+  { x_m = 0, y_m = 30, from_s = 10, to_s = 20 },
+]
+"#;
+
+    proptest::proptest! {
+        /// The reach bound is a necessary condition: wherever a trajectory within the speed
+        /// limit has a point in view at the end of slot t, the bound allows slot t (or earlier).
+        #[test]
+        fn earliest_in_view_slot_never_rules_out_a_reachable_slot(
+            steps in proptest::collection::vec((0.0f64..1.0, -3.2f64..3.2), 1..30),
+            pick in 0.0f64..1.0,
+            angle in -3.2f64..3.2,
+            radius in 0.0f64..1.0,
+        ) {
+            let p = Params::default();
+            let v_step = p.max_speed_mps * p.slot_s;
+            let mut q = p.start_m;
+            let pos_m: Vec<[f64; 2]> = steps
+                .iter()
+                .map(|(f, a)| {
+                    q = [q[0] + f * v_step * a.cos(), q[1] + f * v_step * a.sin()];
+                    q
+                })
+                .collect();
+            let traj = Trajectory { slot_s: p.slot_s, start_m: p.start_m, pos_m };
+            let headings = traj.headings_rad();
+            let t = 1 + ((pick * steps.len() as f64) as usize).min(steps.len() - 1);
+            let centre = sensing_centre_m(traj.q(t), headings[t - 1], p.centre_offset_m());
+            let r = radius * p.sensing_radius_m;
+            let g = [centre[0] + r * angle.cos(), centre[1] + r * angle.sin()];
+            proptest::prop_assert!(v2::dist(g, centre) <= p.sensing_radius_m + 1e-9);
+            let earliest = earliest_in_view_slot(&p, g, 1, t);
+            proptest::prop_assert!(earliest.is_some_and(|e| e <= t), "slot {t}: {earliest:?}");
+        }
+    }
+
+    #[test]
+    fn earliest_in_view_slot_is_tight_for_the_next_slot() {
+        let p = Params::default();
+        let v_step = p.max_speed_mps * p.slot_s;
+        let hop = v_step.hypot(p.centre_offset_m());
+        let d = hop + p.sensing_radius_m;
+        let at = |d: f64| [p.start_m[0] + d, p.start_m[1]];
+        // just within reach of the next slot's centre, and just beyond it
+        assert_eq!(earliest_in_view_slot(&p, at(d - 0.01), 1, 10), Some(1));
+        assert_eq!(earliest_in_view_slot(&p, at(d + 0.01), 1, 10), Some(2));
+        assert_eq!(
+            earliest_in_view_slot(&p, at(d + 1.5 * v_step), 1, 10),
+            Some(3)
+        );
+        assert_eq!(
+            earliest_in_view_slot(&p, at(d + 20.0 * v_step), 1, 10),
+            None
+        );
+        // too close: the centre lies H tan(eta) from the UAV
+        assert_eq!(earliest_in_view_slot(&p, p.start_m, 1, 10), None);
+        assert_eq!(earliest_in_view_slot(&p, at(d - 0.01), 4, 10), Some(4));
+    }
+
+    #[test]
+    fn replan_skips_delays_the_reach_bound_rules_out() {
+        let mission =
+            Mission::from_file_struct(&planner::MissionFile::from_toml_str(SHORT).unwrap())
+                .unwrap();
+        let current = plan(&mission, None).unwrap().trajectory;
+        let p = mission.params();
+        let from = 5;
+        // out of reach of the next two slots, within reach of the third
+        let q = current.q(from);
+        let hop = (p.max_speed_mps * p.slot_s).hypot(p.centre_offset_m());
+        let d = hop + p.sensing_radius_m + 1.5 * p.max_speed_mps * p.slot_s;
+        let g = current.q(from + 1);
+        let u = v2::scale(v2::sub(g, q), 1.0 / v2::dist(g, q));
+        let rot = [u[1], -u[0]]; // to the right of the track, where the centre is
+        let moved = v2::add(q, v2::scale(rot, d));
+        let re = replan(
+            &mission,
+            &current,
+            from,
+            0,
+            moved,
+            &ReplanOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(
+            re.attempts[0].window,
+            WindowPlan::Delayed(2),
+            "{}",
+            re.summary
+        );
+        assert!(
+            re.summary.contains("delays below 2 skipped"),
+            "{}",
+            re.summary
+        );
+        assert!(re.transition_slots >= 2);
+        assert!(re.summary.contains(&describe_attempts(&re.attempts)));
+    }
+
+    #[test]
+    fn replan_leaves_an_unreachable_window_out() {
+        let mission =
+            Mission::from_file_struct(&planner::MissionFile::from_toml_str(SHORT).unwrap())
+                .unwrap();
+        let current = plan(&mission, None).unwrap().trajectory;
+        let re = replan(
+            &mission,
+            &current,
+            5,
+            0,
+            [1e7, 0.0],
+            &ReplanOptions::default(),
+        )
+        .unwrap();
+        assert!(re.window_dropped);
+        assert_eq!(re.transition_slots, 15);
+        // no planner call for a delay: the window is out of reach in all its slots
+        assert_eq!(re.attempts.len(), 1);
+        assert_eq!(re.attempts[0].window, WindowPlan::Dropped);
+        let eval = planner::evaluate(&re.mission, &re.trajectory);
+        assert_eq!(eval.slots_out_of_view, 20);
+    }
+
+    #[test]
+    fn attempts_are_described_with_their_times() {
+        let a = [
+            Attempt {
+                window: WindowPlan::Delayed(0),
+                solve_s: 9.5124,
+                error: Some("infeasible".into()),
+            },
+            Attempt {
+                window: WindowPlan::Delayed(1),
+                solve_s: 0.21,
+                error: None,
+            },
+        ];
+        assert_eq!(
+            describe_attempts(&a),
+            "delay 0: failed after 9.512 s (infeasible); delay 1: 0.210 s"
+        );
+    }
 }

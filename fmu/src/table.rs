@@ -233,7 +233,7 @@ pub const LOG_CATEGORIES: &[LogCategory] = &[
     LogCategory {
         name: "logStatusWarning",
         description:
-            "Warnings, e.g. a re-plan that failed so the previous plan is kept (always reported).",
+            "Warnings, e.g. a re-plan that leaves slots out of view or failed so the previous plan is kept (always reported).",
     },
     LogCategory {
         name: "logEvents",
@@ -315,6 +315,8 @@ pub mod planner_vr {
     pub const WORST_WIDTH: u32 = 315;
     /// `replan_count`.
     pub const REPLAN_COUNT: u32 = 316;
+    /// `slots_out_of_view`.
+    pub const SLOTS_OUT_OF_VIEW: u32 = 317;
     /// `plan_solve_time_s` (local).
     pub const SOLVE_TIME: u32 = 400;
     /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests: setting it to
@@ -440,7 +442,7 @@ pub const PLANNER_VARS: &[Var] = &[
         variability: Variability::Continuous,
         len: 1,
         unit: Some("m"),
-        description: "Landmark of the current window, x (NaN: the plan's own). A finite value that differs from the plan's landmark moves it and re-plans the rest of the horizon.",
+        description: "Landmark of the current window, x: the window of slot ceil(t/slot_s), whose landmark landmark_x_m reports at the same time (NaN: the plan's own). A finite value (with landmark_y_in_m finite too) that differs from the plan's landmark moves it and re-plans the rest of the horizon. Infinite values are refused.",
     },
     Var {
         name: "landmark_y_in_m",
@@ -450,7 +452,7 @@ pub const PLANNER_VARS: &[Var] = &[
         variability: Variability::Continuous,
         len: 1,
         unit: Some("m"),
-        description: "Landmark of the current window, y (NaN: the plan's own)",
+        description: "Landmark of the current window, y (NaN: the plan's own; both inputs NaN or both finite)",
     },
     output("x_m", pv::X, VarType::Real, Some("m"), "UAV position x (linear within a slot)"),
     output("y_m", pv::Y, VarType::Real, Some("m"), "UAV position y (linear within a slot)"),
@@ -469,6 +471,7 @@ pub const PLANNER_VARS: &[Var] = &[
     output("azimuth_resolution_paper_m", pv::AZIMUTH_RES_PAPER, VarType::Real, Some("m"), "The paper's azimuth resolution at the true speed"),
     output("worst_cell_width_m", pv::WORST_WIDTH, VarType::Real, Some("m"), "Worst width of the resolution cell at the sensed point (SPEC 4.12)"),
     output("replan_count", pv::REPLAN_COUNT, VarType::Integer, None, "Receding-horizon re-plans so far"),
+    output("slots_out_of_view", pv::SLOTS_OUT_OF_VIEW, VarType::Integer, None, "Slots of the plan (whole horizon, flown ones included) whose landmark is not within r_s of the sensing centre at the slot end, against the landmarks in effect (moved ones included); 0 for a plan that keeps every landmark in view"),
     Var {
         name: "plan_solve_time_s",
         vr: pv::SOLVE_TIME,
@@ -477,7 +480,7 @@ pub const PLANNER_VARS: &[Var] = &[
         variability: Variability::Discrete,
         len: 1,
         unit: Some("s"),
-        description: "Wall time of the last plan or re-plan",
+        description: "Wall time of the last plan or re-plan, all its planner calls included",
     },
 ];
 
@@ -514,7 +517,7 @@ pub const MOVER_VARS: &[Var] = &[
         "move_at_s",
         mover_vr::MOVE_AT,
         Some("s"),
-        "Time of the move",
+        "Time of the move: at the end of the step that reaches it, the input landmark plus the offset is latched",
     ),
     param(
         "offset_x_m",
@@ -532,7 +535,7 @@ pub const MOVER_VARS: &[Var] = &[
         "hold_s",
         mover_vr::HOLD,
         Some("s"),
-        "How long the moved landmark is output (0: until the end)",
+        "How long the moved landmark is output (0: until the end; negative values are refused)",
     ),
     Var {
         name: "landmark_x_m",
@@ -542,7 +545,7 @@ pub const MOVER_VARS: &[Var] = &[
         variability: Variability::Continuous,
         len: 1,
         unit: Some("m"),
-        description: "The planner's current landmark, x",
+        description: "The planner's current landmark, x (connect landmark_x_m of CellsarPlanner; NaN: none)",
     },
     Var {
         name: "landmark_y_m",

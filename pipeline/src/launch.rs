@@ -191,12 +191,13 @@ pub struct PlanRefused {
 
 impl PlanRefused {
     /// What kind of failure the refusal is: a mission that cannot be flown exits 3, a request
-    /// the planner found invalid 2, a planner that failed 1.
+    /// the planner found invalid 2, a planner that failed 1, a planner that stayed busy (its
+    /// request queue full each time it was asked) 1.
     pub fn failure_kind(&self) -> FailureKind {
         match self.refusal.kind {
             RefusalKind::Infeasible => FailureKind::Infeasible,
             RefusalKind::BadRequest => FailureKind::BadInput,
-            RefusalKind::Internal => FailureKind::Runtime,
+            RefusalKind::Internal | RefusalKind::Busy => FailureKind::Runtime,
         }
     }
 }
@@ -373,7 +374,7 @@ fn launch(
     // 3.-5. the run on the launcher's Zenoh session; then one clean-up, however it ended
     // (SIGINT/SIGTERM while the session opens included)
     let (node, result) = match open_with_retry(&net.launcher, &stop) {
-        Ok(node) => {
+        Ok(Some(node)) => {
             let result = run_on(
                 args,
                 mission,
@@ -391,6 +392,7 @@ fn launch(
             );
             (Some(node), result)
         }
+        Ok(None) => (None, Ok(Outcome::Interrupted)),
         Err(_) if stop.load(Ordering::Relaxed) => (None, Ok(Outcome::Interrupted)),
         Err(e) => (None, Err(e)),
     };
@@ -412,14 +414,19 @@ fn launch(
     result
 }
 
-fn open_with_retry(z: &ZenohArgs, stop: &AtomicBool) -> Result<ZenohNode> {
+/// Opens the launcher's session: an open that fails (a listen endpoint still taken, say) is
+/// tried again for 15 s; one that waits (a client whose router is not up yet) waits for as
+/// long as it takes. `None` once `stop` is set (SIGINT/SIGTERM), also in the middle of an
+/// open ([`ZenohNode::open_until`]).
+fn open_with_retry(z: &ZenohArgs, stop: &AtomicBool) -> Result<Option<ZenohNode>> {
     let config = z.to_config()?;
     let instance = format!("launcher-{}", std::process::id());
     let deadline = Instant::now() + Duration::from_secs(15);
     loop {
-        match ZenohNode::open(config.clone(), "launcher", &instance) {
+        match ZenohNode::open_until(config.clone(), "launcher", &instance, stop) {
             Ok(n) => return Ok(n),
-            Err(e) if Instant::now() < deadline && !stop.load(Ordering::Relaxed) => {
+            Err(_) if stop.load(Ordering::Relaxed) => return Ok(None),
+            Err(e) if Instant::now() < deadline => {
                 tracing::debug!(error = %e, "opening the Zenoh session; retrying");
                 std::thread::sleep(Duration::from_millis(200));
             }
@@ -657,6 +664,23 @@ fn run_on(
             };
             match answer {
                 Ok(r) => return Ok(Some(r.message)),
+                // a busy planner (its request queue full) is asked again, as one that did not
+                // answer
+                Err(NetError::Refused { refusal, .. })
+                    if refusal.kind == RefusalKind::Busy
+                        && !plan_left().is_zero()
+                        && attempt < 1 + args.max_restarts =>
+                {
+                    tracing::warn!(message = %refusal.message, attempt, "the planner is busy; asking again");
+                    events.emit(
+                        "plan_retry",
+                        &[
+                            ("attempt", attempt.into()),
+                            ("error", refusal.message.clone().into()),
+                        ],
+                    );
+                    std::thread::sleep(Duration::from_millis(500));
+                }
                 Err(e @ (NetError::Refused { .. } | NetError::Remote { .. })) => {
                     return Err(plan_refusal(e))
                 }
@@ -1120,23 +1144,29 @@ mod tests {
             (RefusalKind::Infeasible, FailureKind::Infeasible),
             (RefusalKind::BadRequest, FailureKind::BadInput),
             (RefusalKind::Internal, FailureKind::Runtime),
+            (RefusalKind::Busy, FailureKind::Runtime),
         ] {
             // the text no longer decides: an internal failure that mentions infeasibility
             // stays a failure at run time
             let r = Refusal::new(kind, "planning \"m\": mission cannot be flown: slot 23");
             for format in [WireFormat::Bincode, WireFormat::Json] {
-                let bytes = format.encode(&r, Default::default()).unwrap();
-                let e = decode_error_reply(PLAN_KEY, &bytes, format, &limits);
-                let f = answer(e);
-                assert_eq!(f.kind, want, "{kind:?} {format:?}");
-                assert_eq!(f.exit_code(), want.exit_code());
-                let text = f.to_string();
-                assert!(
-                    text.contains(PLAN_KEY)
-                        && text.contains(kind.as_str())
-                        && text.contains("slot 23"),
-                    "{text}"
-                );
+                // as a planner sends it (the lowest schema version of its kind) and in the
+                // current schema version: both are decoded
+                let (sent, _) = r.encode(format, Default::default()).unwrap();
+                let current = format.encode(&r, Default::default()).unwrap();
+                for bytes in [sent, current] {
+                    let e = decode_error_reply(PLAN_KEY, &bytes, format, &limits);
+                    let f = answer(e);
+                    assert_eq!(f.kind, want, "{kind:?} {format:?}");
+                    assert_eq!(f.exit_code(), want.exit_code());
+                    let text = f.to_string();
+                    assert!(
+                        text.contains(PLAN_KEY)
+                            && text.contains(kind.as_str())
+                            && text.contains("slot 23"),
+                        "{text}"
+                    );
+                }
             }
         }
         // an old planner's plain-text error: exit 1, naming the key

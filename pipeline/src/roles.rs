@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{anyhow, Context, Result};
-use bridge::zconfig::Mode;
+use bridge::zconfig::{self, Mode};
 use bridge::{keys, ZenohArgs, ZenohNode};
 
 use crate::exit::Failure;
@@ -46,8 +46,19 @@ fn route(
     config: bridge::zenoh::Config,
     stop: &AtomicBool,
 ) -> Result<()> {
-    let node = ZenohNode::open(config, "router", &args.instance)?;
-    tracing::info!(instance = %args.instance, listen = ?z.listen, "router running");
+    // the endpoints as Zenoh uses them: from the flags or from the -c file
+    let mode = zconfig::effective_mode(&config);
+    let listen = zconfig::effective_endpoints(&config, "listen", &mode);
+    let connect = zconfig::effective_endpoints(&config, "connect", &mode);
+    let from = match (&z.config, z.listen.is_empty()) {
+        (Some(file), true) => format!("{}", file.display()),
+        _ => "flags".to_string(),
+    };
+    let Some(node) = ZenohNode::open_until(config, "router", &args.instance, stop)? else {
+        return Ok(());
+    };
+    tracing::info!(instance = %args.instance, %mode, listen = ?listen, connect = ?connect,
+        endpoints_from = %from, "router running");
     while !stop.load(Ordering::Relaxed) {
         std::thread::sleep(Duration::from_millis(50));
     }

@@ -416,3 +416,139 @@ fn resolution_general_reaches_the_planner() {
     assert_eq!(e.code, Some(2), "{}", e.stderr);
     assert!(e.stderr.contains("--resolution"), "{}", e.stderr);
 }
+
+/// A Zenoh client configuration file in `dir`, as `deploy/client.json5` (waits for its router:
+/// `connect.timeout_ms: -1`), whose router, at an unused loopback port, never comes.
+fn client_without_router(dir: &std::path::Path) -> std::path::PathBuf {
+    let file = dir.join("client.json5");
+    let text = std::fs::read_to_string(root().join("pipeline/deploy/client.json5"))
+        .unwrap()
+        .replace(
+            "tcp/192.168.1.10:7447",
+            &format!("tcp/127.0.0.1:{}", free_port()),
+        );
+    assert!(text.contains("timeout_ms: -1"), "{text}");
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
+/// Sends SIGINT to `pid` once `wait` has passed (from a thread of its own).
+fn interrupt_after(pid: u32, wait: Duration) {
+    std::thread::spawn(move || {
+        std::thread::sleep(wait);
+        signal(pid, "INT");
+    });
+}
+
+/// Every service started before its router (the deployment's client.json5, no router at its
+/// address) says what it waits for and stops within a moment of SIGINT, exit code 0, as a
+/// running one does: `cellsar planner|echo|process|bridge` (the code of `cellsar-planner
+/// serve`, `cellsar-radar-sim echo|process-service`, `cellsar-bridge`).
+#[test]
+fn services_waiting_for_their_router_stop_on_sigint() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = client_without_router(dir.path());
+    let cfg = cfg.to_str().unwrap();
+    let scene = scene();
+    let scene = scene.to_str().unwrap();
+    let iox_root = dir.path().join("iox");
+    let iox = [
+        "--iox-root",
+        iox_root.to_str().unwrap(),
+        "--iox-prefix",
+        "csnorouter_",
+    ];
+    let roles: Vec<(&str, Vec<&str>)> = vec![
+        ("planner", vec!["planner"]),
+        ("echo", [&["echo", "--scene", scene][..], &iox].concat()),
+        (
+            "process",
+            [&["process", "--scene", scene][..], &iox].concat(),
+        ),
+        (
+            "bridge",
+            [
+                &["bridge", "--service", "cellsar/0123456789abcdef/echo@out"][..],
+                &iox,
+            ]
+            .concat(),
+        ),
+    ];
+    let signal_after = Duration::from_millis(3000);
+    let ends: Vec<_> = roles
+        .into_iter()
+        .map(|(role, args)| {
+            let args: Vec<OsString> = args
+                .iter()
+                .copied()
+                .chain(["-c", cfg])
+                .map(OsString::from)
+                .collect();
+            let d = dir.path().join(role);
+            std::fs::create_dir_all(&d).unwrap();
+            std::thread::spawn(move || {
+                let e = cellsar_bounded(&args, &d, Duration::from_secs(30), |pid| {
+                    interrupt_after(pid, signal_after)
+                });
+                (role, e)
+            })
+        })
+        .collect();
+    for h in ends {
+        let (role, e) = h.join().unwrap();
+        assert_eq!(e.code, Some(0), "{role}: {}", e.stderr);
+        assert!(
+            e.elapsed < signal_after + Duration::from_secs(3),
+            "{role}: stopped {:?} after the start, SIGINT at {signal_after:?}",
+            e.elapsed
+        );
+        // the default log level (no RUST_LOG here) shows what it waited for, and the stop
+        for needle in [
+            "waiting for the Zenoh session to open",
+            "mode client, connect [tcp/127.0.0.1:",
+            "stopped before the Zenoh session opened",
+        ] {
+            assert!(
+                e.stderr.contains(needle),
+                "{role}: {needle:?} in\n{}",
+                e.stderr
+            );
+        }
+    }
+    assert!(shm_files("csnorouter_").is_empty());
+}
+
+/// The launcher of a deployment (`--external processor -c client.json5`) started before the
+/// router stops on SIGINT within a moment: exit 130, as documented, nothing left behind.
+#[test]
+fn launcher_waiting_for_its_router_exits_130_on_sigint() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = client_without_router(dir.path());
+    let signal_after = Duration::from_millis(3000);
+    let e = cellsar_bounded(
+        &run_args(
+            dir.path(),
+            "out",
+            &[
+                "--transport",
+                "zenoh",
+                "--external",
+                "processor",
+                "-c",
+                cfg.to_str().unwrap(),
+            ],
+        ),
+        dir.path(),
+        Duration::from_secs(40),
+        |pid| interrupt_after(pid, signal_after),
+    );
+    assert_eq!(e.code, Some(130), "{}", e.stderr);
+    assert!(
+        e.elapsed < signal_after + Duration::from_secs(3),
+        "stopped {:?} after the start, SIGINT at {signal_after:?}:\n{}",
+        e.elapsed,
+        e.stderr
+    );
+    assert!(e.stderr.contains("interrupted"), "{}", e.stderr);
+    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
+}

@@ -363,11 +363,56 @@ fn run(cli: Cli) -> Result<(), Failure> {
     }
 }
 
+/// The log level when `RUST_LOG` is not set: `info` for the long-running service (it says
+/// that it is ready, waits for its router, stops, with its counters, as `cellsar planner`,
+/// `cellsar-radar-sim echo|process-service` and `cellsar-bridge` do), `warn` for the one-shot
+/// commands.
+fn default_log_filter(command: &Command) -> &'static str {
+    match command {
+        #[cfg(feature = "service")]
+        Command::Serve { .. } => "info",
+        _ => "warn",
+    }
+}
+
 fn main() -> ExitCode {
-    planner::init_logging("warn");
     let cli = Cli::parse();
+    planner::init_logging(default_log_filter(&cli.command));
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => f.report(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// `serve` logs at info by default (so that it shows that it runs, like the other
+    /// services); the one-shot commands stay at warn.
+    #[test]
+    fn services_log_at_info_and_commands_at_warn() {
+        let level = |args: &[&str]| {
+            default_log_filter(
+                &Cli::try_parse_from(
+                    std::iter::once("cellsar-planner").chain(args.iter().copied()),
+                )
+                .unwrap()
+                .command,
+            )
+        };
+        #[cfg(feature = "service")]
+        assert_eq!(level(&["serve"]), "info");
+        assert_eq!(level(&["plan", "m.toml", "--out", "o"]), "warn");
+        assert_eq!(
+            level(&["evaluate", "m.toml", "--trajectory", "t.csv"]),
+            "warn"
+        );
+        assert_eq!(level(&["reproduce", "--out", "o"]), "warn");
+        assert_eq!(
+            level(&["dmin", "--radius-m", "5000", "--objects", "10"]),
+            "warn"
+        );
     }
 }

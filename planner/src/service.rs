@@ -4,7 +4,8 @@
 //! ```text
 //! cellsar/plan                       queryable: PlanRequest -> Plan, or a typed refusal
 //!                                    (bridge::Refusal: bad_request / infeasible / internal,
-//!                                    the message naming the field, slot or step)
+//!                                    the message naming the field, slot or step; busy when
+//!                                    its request queue is full)
 //! cellsar/<mission>/plan             each plan, published (bincode); also answered to queries
 //!                                    (PlanLookup) from the cache of every process that holds it
 //! cellsar/<mission>/plan/summary     the plan's summary (JSON, for tools without Rust)
@@ -147,7 +148,9 @@ fn io_err(path: &Path, source: std::io::Error) -> ServiceError {
 }
 
 /// Installs SIGINT and SIGTERM handlers that set the returned flag (services poll it and stop
-/// cleanly: liveliness token withdrawn, final counters logged, exit 0).
+/// cleanly: liveliness token withdrawn, final counters logged, exit 0). The services open
+/// their Zenoh session with [`ZenohNode::open_until`], so the flag also stops a service that
+/// still waits for its router.
 pub fn stop_on_signals() -> Result<Arc<AtomicBool>, ServiceError> {
     let stop = Arc::new(AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
@@ -444,7 +447,8 @@ pub fn mission_id(file: &MissionFile) -> MissionId {
 }
 
 /// Plans held by a process, answered to `cellsar/*/plan` lookups (so a process that joins late
-/// or restarts gets the plans without re-planning), optionally persisted in a directory.
+/// or restarts gets the plans without re-planning; a lookup that is no [`PlanLookup`] gets a
+/// typed `bad_request` refusal), optionally persisted in a directory.
 pub struct PlanCache {
     plans: Arc<Mutex<BTreeMap<MissionId, Arc<Plan>>>>,
     dir: Option<PathBuf>,
@@ -584,8 +588,12 @@ fn answer_lookup(
         let bytes = payload.to_bytes();
         if let Err(e) = format.decode::<PlanLookup>(&bytes, &DecodeLimits::default()) {
             malformed.fetch_add(1, Ordering::Relaxed);
-            log.log(query.key_expr().as_str(), bytes.len(), &e);
-            let _ = query.reply_err(format!("bad plan lookup: {e}")).wait();
+            let key = query.key_expr().as_str();
+            log.log(key, bytes.len(), &e);
+            let refusal = Refusal::new(RefusalKind::BadRequest, format!("bad plan lookup: {e}"));
+            if let Err(e) = bridge::net::refuse_query(query, key, format, &refusal) {
+                tracing::debug!(error = %e, "plan lookup refusal failed");
+            }
             return;
         }
     }
@@ -719,9 +727,14 @@ pub fn plan_request(
 }
 
 /// Runs the plan service until `stop` is set: answers `cellsar/plan`, publishes each plan and
-/// its summary, answers plan lookups from its cache (persisted in `--state-dir`).
+/// its summary, answers plan lookups from its cache (persisted in `--state-dir`). A stop while
+/// the Zenoh session still opens (a client waiting for its router) ends it at once with an
+/// empty report.
 pub fn serve(args: &ServeArgs, stop: &AtomicBool) -> Result<ServeReport, ServiceError> {
-    let node = ZenohNode::open(args.zenoh.to_config()?, "planner", &args.instance)?;
+    let config = args.zenoh.to_config()?;
+    let Some(node) = ZenohNode::open_until(config, "planner", &args.instance, stop)? else {
+        return Ok(ServeReport::default());
+    };
     let report = serve_on(&node, args, stop);
     if let Err(e) = node.close() {
         tracing::warn!(error = %e, "closing the Zenoh session");
@@ -917,6 +930,125 @@ fn plan_in_thread(
 mod tests {
     use super::*;
     use crate::NoObserver;
+
+    /// A Zenoh client configuration (JSON5 in `dir`) whose router at an unused loopback port
+    /// never comes, waiting for it as `pipeline/deploy/client.json5` does.
+    pub(crate) fn client_without_router(dir: &Path) -> ZenohArgs {
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .and_then(|l| l.local_addr())
+            .unwrap()
+            .port();
+        let file = dir.join("client.json5");
+        std::fs::write(
+            &file,
+            format!(
+                "{{ mode: 'client', connect: {{ endpoints: ['tcp/127.0.0.1:{port}'], \
+                 timeout_ms: -1, exit_on_failure: false }}, \
+                 scouting: {{ multicast: {{ enabled: false }} }} }}"
+            ),
+        )
+        .unwrap();
+        ZenohArgs {
+            config: Some(file),
+            ..ZenohArgs::default()
+        }
+    }
+
+    /// A service started before its router stops within a moment of its stop flag (what
+    /// SIGINT/SIGTERM set), with an empty report, instead of waiting for the router forever.
+    #[test]
+    fn serve_stops_while_waiting_for_the_router() {
+        let dir = tempfile_dir("serve-norouter");
+        let args = ServeArgs {
+            instance: "waits".into(),
+            state_dir: None,
+            zenoh: client_without_router(&dir),
+        };
+        let stop = Arc::new(AtomicBool::new(false));
+        let (tx, rx) = std::sync::mpsc::channel();
+        let s = stop.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(serve(&args, &s));
+        });
+        std::thread::sleep(Duration::from_millis(700));
+        assert!(rx.try_recv().is_err(), "serve returned without a router");
+        stop.store(true, Ordering::Relaxed);
+        let report = rx
+            .recv_timeout(Duration::from_secs(2))
+            .expect("serve did not stop within 2 s of the stop flag")
+            .unwrap();
+        assert_eq!(report, ServeReport::default());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    fn tempfile_dir(tag: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("cellsar-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// A plan lookup whose payload is not a `PlanLookup` is refused with a typed
+    /// `bad_request` (in the lookup's format), counted as malformed.
+    #[test]
+    fn bad_plan_lookups_get_a_typed_refusal() {
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .and_then(|l| l.local_addr())
+            .unwrap()
+            .port();
+        let ep = format!("tcp/127.0.0.1:{port}");
+        let a = ZenohNode::open(
+            ZenohArgs::isolated(std::slice::from_ref(&ep), &[])
+                .to_config()
+                .unwrap(),
+            "test",
+            "cache",
+        )
+        .unwrap();
+        let b = ZenohNode::open(
+            ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[ep])
+                .to_config()
+                .unwrap(),
+            "test",
+            "asker",
+        )
+        .unwrap();
+        let cache = PlanCache::new(&a, None).unwrap();
+        let deadline = Instant::now() + Duration::from_secs(10);
+        for format in [WireFormat::Bincode, WireFormat::Json] {
+            let opts = QueryOptions {
+                format,
+                timeout: Duration::from_secs(2),
+                ..QueryOptions::default()
+            };
+            let e = loop {
+                match b.query_one::<ServiceStatus, Plan>(
+                    "cellsar/0000000000000001/plan",
+                    &ServiceStatus::default(),
+                    &opts,
+                ) {
+                    Err(bridge::NetError::NoReply { .. }) if Instant::now() < deadline => {
+                        std::thread::sleep(Duration::from_millis(50));
+                    }
+                    r => break r.unwrap_err(),
+                }
+            };
+            match e {
+                bridge::NetError::Refused { refusal, .. } => {
+                    assert_eq!(refusal.kind, RefusalKind::BadRequest, "{format:?}");
+                    assert!(
+                        refusal.message.starts_with("bad plan lookup: ")
+                            && refusal.message.contains(PlanLookup::NAME),
+                        "{refusal:?}"
+                    );
+                }
+                e => panic!("{format:?}: {e:?}"),
+            }
+        }
+        assert_eq!(cache.malformed(), 2);
+        drop(cache);
+        a.close().unwrap();
+        b.close().unwrap();
+    }
 
     fn short_mission() -> MissionFile {
         MissionFile::from_toml_str(

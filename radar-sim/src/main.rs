@@ -294,11 +294,24 @@ fn main() -> ExitCode {
     }
 }
 
+/// The log level when `RUST_LOG` is not set: `info` for the long-running services (they say
+/// that they are ready, wait for their router, stop, with their counters, as
+/// `cellsar-planner serve`, `cellsar process` and `cellsar-bridge` do), `warn` for the
+/// one-shot commands.
+fn default_log_filter(cmd: &Cmd) -> &'static str {
+    match cmd {
+        #[cfg(feature = "service")]
+        Cmd::Echo { .. } | Cmd::ProcessService { .. } => "info",
+        _ => "warn",
+    }
+}
+
 fn run_cli() -> Result<()> {
-    planner::init_logging("warn");
+    let cli = Cli::parse();
+    planner::init_logging(default_log_filter(&cli.cmd));
     #[cfg(feature = "service")]
     bridge::iox::init_iceoryx_logging();
-    match Cli::parse().cmd {
+    match cli.cmd {
         Cmd::Simulate {
             plan,
             scene,
@@ -358,5 +371,41 @@ fn run_cli() -> Result<()> {
             tracing::info!(?report, "processor stopped");
             Ok(())
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// The services log at info by default (so that they show that they run, like
+    /// `cellsar process` and `cellsar-bridge`); the one-shot commands stay at warn.
+    #[test]
+    fn services_log_at_info_and_commands_at_warn() {
+        let level = |args: &[&str]| {
+            default_log_filter(
+                &Cli::try_parse_from(
+                    std::iter::once("cellsar-radar-sim").chain(args.iter().copied()),
+                )
+                .unwrap()
+                .cmd,
+            )
+        };
+        #[cfg(feature = "service")]
+        {
+            assert_eq!(level(&["echo", "--scene", "s.toml"]), "info");
+            assert_eq!(level(&["process-service", "--scene", "s.toml"]), "info");
+        }
+        assert_eq!(
+            level(&["simulate", "--plan", "p", "--scene", "s", "--out", "o"]),
+            "warn"
+        );
+        assert_eq!(level(&["process", "--in", "i", "--out", "o"]), "warn");
+        assert_eq!(
+            level(&["closed-loop", "m.toml", "--scene", "s", "--out", "o"]),
+            "warn"
+        );
+        assert_eq!(level(&["resolution", "--out", "o"]), "warn");
     }
 }

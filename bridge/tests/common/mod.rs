@@ -112,11 +112,27 @@ pub struct Proc {
 impl Proc {
     /// Starts `exe args` with stderr written to `<dir>/<name>.err`.
     pub fn spawn(name: &str, exe: &str, args: &[String], dir: &Path, rust_log: &str) -> Proc {
+        Proc::spawn_with_env(name, exe, args, dir, Some(rust_log))
+    }
+
+    /// As [`Proc::spawn`]; `RUST_LOG` is set to `rust_log`, or removed with `None` (the
+    /// binary's default log level).
+    pub fn spawn_with_env(
+        name: &str,
+        exe: &str,
+        args: &[String],
+        dir: &Path,
+        rust_log: Option<&str>,
+    ) -> Proc {
         let stderr_path = dir.join(format!("{name}.err"));
         let err = std::fs::File::create(&stderr_path).expect("stderr file");
-        let mut child = Command::new(exe)
+        let mut cmd = Command::new(exe);
+        match rust_log {
+            Some(l) => cmd.env("RUST_LOG", l),
+            None => cmd.env_remove("RUST_LOG"),
+        };
+        let mut child = cmd
             .args(args)
-            .env("RUST_LOG", rust_log)
             .stdout(Stdio::piped())
             .stderr(Stdio::from(err))
             .spawn()

@@ -12,8 +12,8 @@ use bridge::iox::FramePublisherOptions;
 use bridge::net::{IncomingQuery, PublishOptions, SubscribeOptions, TypedPublisher};
 use bridge::zenoh::qos::CongestionControl;
 use bridge::{
-    keys, FrameMeta, FrameNode, FramePublisher, FrameServiceSpec, IoxArgs, MissionId, ZenohArgs,
-    ZenohNode,
+    keys, FrameMeta, FrameNode, FramePublisher, FrameServiceSpec, IoxArgs, MissionId, Refusal,
+    RefusalKind, ZenohArgs, ZenohNode,
 };
 use planner::service::{Plan, PlanCache, StatusBoard, ALL_PLANS, MAX_PLAN_BYTES};
 use serde::{Deserialize, Serialize};
@@ -97,12 +97,16 @@ struct Job {
     next: usize,
 }
 
-/// Runs the echo service until `stop` is set.
+/// Runs the echo service until `stop` is set. A stop while the Zenoh session still opens (a
+/// client waiting for its router) ends it at once with an empty report.
 pub fn run_echo(args: &EchoArgs, stop: &AtomicBool) -> ServiceResult<EchoReport> {
     let limits = args.limits.limits()?;
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
-    let node = ZenohNode::open(args.zenoh.to_config()?, "echo", &args.instance)?;
+    let config = args.zenoh.to_config()?;
+    let Some(node) = ZenohNode::open_until(config, "echo", &args.instance, stop)? else {
+        return Ok(EchoReport::default());
+    };
     let r = Echo::new(args, scene, limits, &node, &env).and_then(|mut e| e.run(stop));
     if let Err(e) = node.close() {
         tracing::warn!(error = %e, "closing the Zenoh session");
@@ -332,47 +336,51 @@ impl<'a> Echo<'a> {
                     tracing::warn!(error = %e, "request reply failed");
                 }
             }
-            Err(msg) => {
+            Err(refusal) => {
                 self.report.refused += 1;
-                tracing::warn!(mission = %r.mission_id, aperture = r.aperture, requester = %r.requester, "request refused: {msg}");
-                if let Err(e) = q.reply_err(&msg) {
+                tracing::warn!(mission = %r.mission_id, aperture = r.aperture, requester = %r.requester,
+                    kind = %refusal.kind, "request refused: {}", refusal.message);
+                if let Err(e) = q.refuse(&refusal) {
                     tracing::warn!(error = %e, "error reply failed");
                 }
             }
         }
     }
 
-    fn accept(&mut self, r: &ApertureRequest) -> Result<RequestAck, String> {
+    /// Queues the request, or says why not: a typed refusal, `busy` when the queue is full
+    /// (ask again later), `bad_request` naming what does not fit this echo.
+    fn accept(&mut self, r: &ApertureRequest) -> Result<RequestAck, Refusal> {
+        let bad = |message: String| Refusal::new(RefusalKind::BadRequest, message);
         let Some(m) = self.missions.get(&r.mission_id) else {
-            return Err(format!(
+            return Err(bad(format!(
                 "unknown mission {}: this echo has no plan for it (is a planner running?)",
                 r.mission_id
-            ));
+            )));
         };
         let ctx = &m.ctx;
         let ap = r.aperture as usize;
         let Some(aperture) = ctx.apertures.get(ap) else {
-            return Err(format!(
+            return Err(bad(format!(
                 "aperture {ap} does not exist: mission {} has {} apertures",
                 r.mission_id,
                 ctx.apertures.len()
-            ));
+            )));
         };
         let look = r.look.map(|l| l as usize);
         if let Some(l) = look {
             if l >= aperture.looks {
-                return Err(format!(
+                return Err(bad(format!(
                     "look {l} of aperture {ap} does not exist: it has {} looks",
                     aperture.looks
-                ));
+                )));
             }
         }
         if r.frame_pulses as usize != ctx.layout.frame_pulses() {
-            return Err(format!(
+            return Err(bad(format!(
                 "frame layout mismatch: the requester expects {} pulses per frame, this echo sends {} (give both the same --max-frame-bytes)",
                 r.frame_pulses,
                 ctx.layout.frame_pulses()
-            ));
+            )));
         }
         let slots = ctx.layout.slots(ap, look);
         let seqs: Vec<u64> = slots.iter().map(|(s, _)| *s).collect();
@@ -382,9 +390,9 @@ impl<'a> Echo<'a> {
         let queued_before = self.queue.len() as u32;
         if !dup {
             if self.queue.len() >= self.args.max_queue {
-                return Err(format!(
-                    "busy: {} requests queued (--max-queue)",
-                    self.queue.len()
+                return Err(Refusal::new(
+                    RefusalKind::Busy,
+                    format!("busy: {} requests queued (--max-queue)", self.queue.len()),
                 ));
             }
             self.queue.push_back(Job {

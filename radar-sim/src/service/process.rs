@@ -470,7 +470,8 @@ struct Run {
     started: Instant,
 }
 
-/// Runs the processor service until `stop` is set.
+/// Runs the processor service until `stop` is set. A stop while the Zenoh session still
+/// opens (a client waiting for its router) ends it at once with an empty report.
 pub fn run_processor(args: &ProcessArgs, stop: &AtomicBool) -> ServiceResult<ProcessReport> {
     if args.window == 0 {
         return Err(ServiceError::Flag("--window must be at least 1".into()));
@@ -478,7 +479,10 @@ pub fn run_processor(args: &ProcessArgs, stop: &AtomicBool) -> ServiceResult<Pro
     let limits = args.limits.limits()?;
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
-    let node = ZenohNode::open(args.zenoh.to_config()?, "processor", &args.instance)?;
+    let config = args.zenoh.to_config()?;
+    let Some(node) = ZenohNode::open_until(config, "processor", &args.instance, stop)? else {
+        return Ok(ProcessReport::default());
+    };
     let r = serve(args, limits, &scene, &node, &env, stop);
     if let Err(e) = node.close() {
         tracing::warn!(error = %e, "closing the Zenoh session");

@@ -159,3 +159,100 @@ fn detections_survive_json_with_nan() {
         .message;
     assert!(back.process_s.is_infinite());
 }
+
+/// A Zenoh client configuration file in `dir` whose router (an unused loopback port) never
+/// comes, waiting for it as `pipeline/deploy/client.json5` does (`connect.timeout_ms: -1`).
+fn client_without_router(dir: &Path) -> String {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .unwrap()
+        .port();
+    let file = dir.join("client.json5");
+    std::fs::write(
+        &file,
+        format!(
+            "{{ mode: 'client', connect: {{ endpoints: ['tcp/127.0.0.1:{port}'], \
+             timeout_ms: -1, exit_on_failure: false }}, \
+             scouting: {{ multicast: {{ enabled: false }} }} }}"
+        ),
+    )
+    .unwrap();
+    file.display().to_string()
+}
+
+/// The echo and the processor started before their router stop within a moment of their stop
+/// flag (what SIGINT/SIGTERM set), with an empty report, instead of waiting for the router
+/// forever.
+#[test]
+fn services_stop_while_waiting_for_the_router() {
+    use clap::Parser;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::time::Duration;
+
+    #[derive(clap::Parser)]
+    struct EchoCli {
+        #[command(flatten)]
+        args: EchoArgs,
+    }
+    #[derive(clap::Parser)]
+    struct ProcessCli {
+        #[command(flatten)]
+        args: ProcessArgs,
+    }
+
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, SMALL_SCENE).unwrap();
+    let common = |role: &str| -> Vec<String> {
+        vec![
+            role.to_string(),
+            "--scene".into(),
+            scene.display().to_string(),
+            "-c".into(),
+            client_without_router(dir.path()),
+            "--iox-root".into(),
+            dir.path().join("iox").display().to_string(),
+            "--iox-prefix".into(),
+            format!("rsw{}_", std::process::id()),
+        ]
+    };
+    let echo = EchoCli::try_parse_from(common("echo")).unwrap().args;
+    let process = ProcessCli::try_parse_from(common("process")).unwrap().args;
+    type Run = Box<dyn FnOnce(&AtomicBool) -> Result<String, String> + Send>;
+    // each returns its report (Debug): the empty one
+    let runs: Vec<(&str, String, Run)> = vec![
+        (
+            "echo",
+            format!("{:?}", EchoReport::default()),
+            Box::new(move |stop| {
+                run_echo(&echo, stop)
+                    .map(|r| format!("{r:?}"))
+                    .map_err(|e| e.to_string())
+            }),
+        ),
+        (
+            "processor",
+            format!("{:?}", ProcessReport::default()),
+            Box::new(move |stop| {
+                run_processor(&process, stop)
+                    .map(|r| format!("{r:?}"))
+                    .map_err(|e| e.to_string())
+            }),
+        ),
+    ];
+    for (role, empty, run) in runs {
+        let stop = Arc::new(AtomicBool::new(false));
+        let (tx, rx) = std::sync::mpsc::channel();
+        let s = stop.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(run(&s));
+        });
+        std::thread::sleep(Duration::from_millis(700));
+        assert!(rx.try_recv().is_err(), "{role} returned without a router");
+        stop.store(true, Ordering::Relaxed);
+        let r = rx
+            .recv_timeout(Duration::from_secs(2))
+            .unwrap_or_else(|_| panic!("{role} did not stop within 2 s of the stop flag"));
+        assert_eq!(r, Ok(empty), "{role}");
+    }
+}
