@@ -105,12 +105,6 @@ impl From<Seconds> for Duration {
     }
 }
 
-/// `v` seconds as a [`Duration`]: finite, > 0 and at most [`MAX_SECONDS`] (for a number
-/// that did not come through [`parse_seconds`]; see [`Seconds::new`]).
-pub fn seconds(flag: &str, v: f64) -> Result<Duration, FlagError> {
-    Seconds::new(flag, v).map(Seconds::duration)
-}
-
 /// `v` when it is finite and >= 0 (a rate where 0 means "unlimited", for instance).
 pub fn non_negative(flag: &str, v: f64) -> Result<f64, FlagError> {
     match non_negative_reason(v) {
@@ -133,11 +127,7 @@ pub fn parse_seconds(s: &str) -> Result<Seconds, String> {
 
 /// clap value parser of a finite number >= 0 (see [`non_negative`]).
 pub fn parse_non_negative(s: &str) -> Result<f64, String> {
-    let v = parse_f64(s)?;
-    match non_negative_reason(v) {
-        Some(reason) => Err(reason),
-        None => Ok(v),
-    }
+    non_negative("", parse_f64(s)?).map_err(|e| e.reason)
 }
 
 #[cfg(test)]
@@ -146,9 +136,12 @@ mod tests {
 
     #[test]
     fn seconds_must_be_finite_positive_and_bounded() {
-        assert_eq!(seconds("--t", 2.5).unwrap(), Duration::from_millis(2500));
+        assert_eq!(
+            Seconds::new("--t", 2.5).unwrap().duration(),
+            Duration::from_millis(2500)
+        );
         for bad in [f64::NAN, f64::INFINITY, -1.0, 0.0, -0.0, 1e10, 1e300] {
-            let e = seconds("--timeout-s", bad).unwrap_err();
+            let e = Seconds::new("--timeout-s", bad).unwrap_err();
             assert_eq!(e.flag, "--timeout-s");
             assert!(e.to_string().starts_with("--timeout-s "), "{e}");
             assert!(e.to_string().len() < 80, "{e}");

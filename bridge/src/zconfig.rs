@@ -176,6 +176,17 @@ impl ZenohArgs {
     }
 }
 
+/// The Zenoh configuration (JSON5) of a client that connects to `endpoint` and, like
+/// `pipeline/deploy/client.json5`, waits for it as long as it takes: `connect.timeout_ms: -1`,
+/// no exit on a failed connection, no multicast scouting (what the tests of a service started
+/// before its router use).
+pub fn waiting_client_json5(endpoint: &str) -> String {
+    format!(
+        "{{ mode: 'client', connect: {{ endpoints: ['{endpoint}'], timeout_ms: -1, \
+         exit_on_failure: false }}, scouting: {{ multicast: {{ enabled: false }} }} }}"
+    )
+}
+
 /// A one-line description of the session `config` opens, for messages and logs: its mode and
 /// the endpoints it connects to and listens on as Zenoh will use them (those of a `--config`
 /// file included; a mode-dependent list resolved for the mode), e.g. `mode client, connect
@@ -508,6 +519,25 @@ mod tests {
 
     /// What a session is described by in messages: the mode and the effective endpoints,
     /// those of a configuration file included (mode-dependent lists resolved).
+    #[test]
+    fn the_waiting_client_configuration_is_a_client_of_its_endpoint() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("c.json5");
+        std::fs::write(&p, waiting_client_json5("tcp/127.0.0.1:17448")).unwrap();
+        let c = ZenohArgs {
+            config: Some(p),
+            ..Default::default()
+        }
+        .to_config()
+        .unwrap();
+        assert_eq!(
+            describe(&c),
+            "mode client, connect [tcp/127.0.0.1:17448], listen []"
+        );
+        let timeout = c.get_json("connect/timeout_ms").unwrap();
+        assert!(timeout.contains("-1"), "{timeout}");
+    }
+
     #[test]
     fn sessions_are_described_by_mode_and_endpoints() {
         let a = ZenohArgs {

@@ -336,10 +336,7 @@ fn opening_a_session_stops_when_asked() {
     let port = free_port();
     std::fs::write(
         &cfg,
-        format!(
-            "{{ mode: 'client', connect: {{ endpoints: ['tcp/127.0.0.1:{port}'], timeout_ms: -1, \
-             exit_on_failure: false }}, scouting: {{ multicast: {{ enabled: false }} }} }}"
-        ),
+        bridge::zconfig::waiting_client_json5(&format!("tcp/127.0.0.1:{port}")),
     )
     .unwrap();
     let config = bridge::ZenohArgs {
@@ -1445,10 +1442,7 @@ fn bridge_waiting_for_its_router_stops_on_signals() {
     let port = free_port();
     std::fs::write(
         &cfg,
-        format!(
-            "{{ mode: 'client', connect: {{ endpoints: ['tcp/127.0.0.1:{port}'], timeout_ms: -1, \
-             exit_on_failure: false }}, scouting: {{ multicast: {{ enabled: false }} }} }}"
-        ),
+        bridge::zconfig::waiting_client_json5(&format!("tcp/127.0.0.1:{port}")),
     )
     .unwrap();
     for sig in ["INT", "TERM"] {

@@ -90,6 +90,16 @@ impl Failure {
         Self::new(FailureKind::Runtime, e)
     }
 
+    /// Bad input (exit code 2) when `bad_input`, else a failure at run time (exit code 1): how
+    /// an error that knows whether its cause was the input classifies itself.
+    pub fn bad_input_or_runtime(bad_input: bool, e: impl Into<anyhow::Error>) -> Self {
+        if bad_input {
+            Self::bad_input(e)
+        } else {
+            Self::runtime(e)
+        }
+    }
+
     /// The same failure with `context` in front of its message.
     #[must_use]
     pub fn context(self, context: impl fmt::Display + Send + Sync + 'static) -> Self {

@@ -28,6 +28,15 @@ pub fn error_chain(error: &(dyn std::error::Error + 'static)) -> String {
     msg
 }
 
+/// The default log filter of a one-shot command (a plan, a simulation, a run): warnings and
+/// errors only, so that its own output stays readable.
+pub const COMMAND_LOG_FILTER: &str = "warn";
+
+/// The default log filter of a long-running service (`serve`, `echo`, `process-service`, the
+/// bridge, the router): also info, so that it shows that it runs, what it serves and its
+/// counters.
+pub const SERVICE_LOG_FILTER: &str = "info";
+
 /// Sets up `tracing` for a binary: the filter from `RUST_LOG`, else `default_filter` (e.g.
 /// `"warn"`); output to stderr, with ANSI colours only when stderr is a terminal (no escape
 /// codes in redirected logs). Call once, first thing in `main`.

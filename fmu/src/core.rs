@@ -1322,15 +1322,7 @@ mod tests {
         }
     }
 
-    const SHORT: &str = r#"name = "short"
-[params]
-horizon_s = 20
-[landmarks]
-points = [
-  { x_m = 0, y_m = 0, from_s = 0, to_s = 10 },
-  { x_m = 0, y_m = 30, from_s = 10, to_s = 20 },
-]
-"#;
+    use crate::planning::tests::{short_mission, SHORT};
 
     fn var(table: &'static [Var], name: &str) -> &'static Var {
         table.iter().find(|v| v.name == name).unwrap()
@@ -1455,13 +1447,7 @@ points = [
         core.step(10.5, 0.5, &Collect::default()).unwrap();
         assert_eq!(landmarks(&core), vec![[40.0, 0.0], [40.0, 0.0]]);
         assert_eq!(core.get_int(var(PLANNER_VARS, "replan_count")).unwrap(), 1);
-        assert_eq!(
-            current_window(
-                &Mission::from_file_struct(&MissionFile::from_toml_str(SHORT).unwrap()).unwrap(),
-                10.0
-            ),
-            Some(0)
-        );
+        assert_eq!(current_window(&short_mission(), 10.0), Some(0));
     }
 
     #[test]

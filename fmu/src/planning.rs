@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use planner::{LandmarkWindow, LandmarksSpec, Mission, Params, Trajectory};
+use planner::{LandmarkWindow, LandmarksSpec, Mission, Trajectory};
 
 use crate::core::Num;
 
@@ -217,44 +217,13 @@ pub fn moved_mission(
     Mission::new(mission.name(), mission.params().clone(), &spec).map_err(|e| e.to_string())
 }
 
-/// The earliest slot `t` in `first..=last` (1-based) at whose end a UAV that starts at
-/// `p.start_m` could have landmark `g_m` in view, or `None` when no slot of that range can.
-///
-/// This is a necessary condition only (it ignores everything but the speed limit and the
-/// sensing geometry), so a slot it rules out is certainly infeasible. After t − 1 slots the UAV is
-/// within V_m (t − 1) δ of the start; in slot t it moves by s ≤ V_m δ along its heading and the
-/// sensing centre lies H tan η to the right of that heading, so the centre lies within
-/// V_m (t − 1) δ + √((V_m δ)² + (H tan η)²) and beyond H tan η − V_m (t − 1) δ of the start. The
-/// planner's own pre-check allows a full slot of travel V_m δ towards the landmark in slot t as
-/// well, about 15 m on the default mission, so a landmark moved just out of reach of the next
-/// slot passes it and phase I then searches for seconds before it gives up.
-pub fn earliest_in_view_slot(
-    p: &Params,
-    g_m: [f64; 2],
-    first: usize,
-    last: usize,
-) -> Option<usize> {
-    // the planner accepts plans that violate speed and sensing by up to FEASIBILITY_TOL
-    let tol = planner::evaluate::FEASIBILITY_TOL;
-    let offset = p.centre_offset_m();
-    let v_step = (p.max_speed_mps + tol) * p.slot_s;
-    let r = p.sensing_radius_m + tol;
-    let d = planner::geometry::v2::dist(p.start_m, g_m);
-    let last_hop = v_step.hypot(offset);
-    let slack = 1e-9 * (1.0 + d + offset);
-    (first.max(1)..=last).find(|&t| {
-        let travel = v_step * (t - 1) as f64;
-        d <= travel + last_hop + r + slack && d + travel + r + slack >= offset
-    })
-}
-
 /// Moves landmark window `window` of `mission` to `moved_m` and re-plans the slots after
 /// `from_slot` (the slots up to `from_slot` are already flown or committed: the UAV is on its way
 /// to q_{from_slot}). The sub-mission starts at q_{from_slot} with the remaining windows shifted
 /// by `from_slot` slots.
 ///
 /// When the moved landmark cannot be in view in the first slots of its window, the start of the
-/// window is delayed: first to the earliest slot that [`earliest_in_view_slot`] allows, then by
+/// window is delayed: first to the earliest slot that [`planner::init::earliest_in_view_slot`] allows, then by
 /// 1, 2, 4, … more slots until the planner finds a plan. When no delay works (or the landmark is
 /// out of reach in every slot of its window), the rest of the horizon is planned without that
 /// window ([`Replanned::window_dropped`]); the caller reports the slots out of view.
@@ -328,7 +297,7 @@ pub fn replan(
     let mut plans = Vec::new();
     let mut reach_note = String::new();
     if let Some((first, last)) = moved_slots {
-        match earliest_in_view_slot(&sub_params, moved_m, first, last) {
+        match planner::init::earliest_in_view_slot(&sub_params, moved_m, first, last) {
             Some(t) => {
                 let d0 = if t > first { t - 1 } else { 0 };
                 if d0 > 0 {
@@ -456,11 +425,12 @@ pub fn replan(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use planner::geometry::{sensing_centre_m, v2};
+    use planner::geometry::v2;
 
-    const SHORT: &str = r#"name = "short"
+    /// A 20 s mission of two landmark windows, for the tests of this crate.
+    pub(crate) const SHORT: &str = r#"name = "short"
 [params]
 horizon_s = 20
 [landmarks]
@@ -470,66 +440,14 @@ points = [
 ]
 "#;
 
-    proptest::proptest! {
-        /// The reach bound is a necessary condition: wherever a trajectory within the speed
-        /// limit has a point in view at the end of slot t, the bound allows slot t (or earlier).
-        #[test]
-        fn earliest_in_view_slot_never_rules_out_a_reachable_slot(
-            steps in proptest::collection::vec((0.0f64..1.0, -3.2f64..3.2), 1..30),
-            pick in 0.0f64..1.0,
-            angle in -3.2f64..3.2,
-            radius in 0.0f64..1.0,
-        ) {
-            let p = Params::default();
-            let v_step = p.max_speed_mps * p.slot_s;
-            let mut q = p.start_m;
-            let pos_m: Vec<[f64; 2]> = steps
-                .iter()
-                .map(|(f, a)| {
-                    q = [q[0] + f * v_step * a.cos(), q[1] + f * v_step * a.sin()];
-                    q
-                })
-                .collect();
-            let traj = Trajectory { slot_s: p.slot_s, start_m: p.start_m, pos_m };
-            let headings = traj.headings_rad();
-            let t = 1 + ((pick * steps.len() as f64) as usize).min(steps.len() - 1);
-            let centre = sensing_centre_m(traj.q(t), headings[t - 1], p.centre_offset_m());
-            let r = radius * p.sensing_radius_m;
-            let g = [centre[0] + r * angle.cos(), centre[1] + r * angle.sin()];
-            proptest::prop_assert!(v2::dist(g, centre) <= p.sensing_radius_m + 1e-9);
-            let earliest = earliest_in_view_slot(&p, g, 1, t);
-            proptest::prop_assert!(earliest.is_some_and(|e| e <= t), "slot {t}: {earliest:?}");
-        }
-    }
-
-    #[test]
-    fn earliest_in_view_slot_is_tight_for_the_next_slot() {
-        let p = Params::default();
-        let v_step = p.max_speed_mps * p.slot_s;
-        let hop = v_step.hypot(p.centre_offset_m());
-        let d = hop + p.sensing_radius_m;
-        let at = |d: f64| [p.start_m[0] + d, p.start_m[1]];
-        // just within reach of the next slot's centre, and just beyond it
-        assert_eq!(earliest_in_view_slot(&p, at(d - 0.01), 1, 10), Some(1));
-        assert_eq!(earliest_in_view_slot(&p, at(d + 0.01), 1, 10), Some(2));
-        assert_eq!(
-            earliest_in_view_slot(&p, at(d + 1.5 * v_step), 1, 10),
-            Some(3)
-        );
-        assert_eq!(
-            earliest_in_view_slot(&p, at(d + 20.0 * v_step), 1, 10),
-            None
-        );
-        // too close: the centre lies H tan(eta) from the UAV
-        assert_eq!(earliest_in_view_slot(&p, p.start_m, 1, 10), None);
-        assert_eq!(earliest_in_view_slot(&p, at(d - 0.01), 4, 10), Some(4));
+    /// [`SHORT`] as a mission.
+    pub(crate) fn short_mission() -> Mission {
+        Mission::from_file_struct(&planner::MissionFile::from_toml_str(SHORT).unwrap()).unwrap()
     }
 
     #[test]
     fn replan_skips_delays_the_reach_bound_rules_out() {
-        let mission =
-            Mission::from_file_struct(&planner::MissionFile::from_toml_str(SHORT).unwrap())
-                .unwrap();
+        let mission = short_mission();
         let current = plan(&mission, None).unwrap().trajectory;
         let p = mission.params();
         let from = 5;
@@ -567,9 +485,7 @@ points = [
 
     #[test]
     fn replan_leaves_an_unreachable_window_out() {
-        let mission =
-            Mission::from_file_struct(&planner::MissionFile::from_toml_str(SHORT).unwrap())
-                .unwrap();
+        let mission = short_mission();
         let current = plan(&mission, None).unwrap().trajectory;
         let re = replan(
             &mission,

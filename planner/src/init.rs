@@ -21,6 +21,37 @@ pub struct Infeasibility {
     pub reason: String,
 }
 
+/// The earliest slot `t` in `first..=last` (1-based) at whose end a UAV that starts at
+/// `p.start_m` could have landmark `g_m` in view, or `None` when no slot of that range can.
+///
+/// This is a necessary condition only (it ignores everything but the speed limit and the
+/// sensing geometry), so a slot it rules out is certainly infeasible. After t − 1 slots the UAV is
+/// within V_m (t − 1) δ of the start; in slot t it moves by s ≤ V_m δ along its heading and the
+/// sensing centre lies H tan η to the right of that heading, so the centre lies within
+/// V_m (t − 1) δ + √((V_m δ)² + (H tan η)²) and beyond H tan η − V_m (t − 1) δ of the start. The
+/// [`precheck`] uses it for the first landmark slot (a looser bound of a full slot of travel
+/// V_m δ towards the landmark, about 15 m more on the default mission, let landmarks just out
+/// of reach through, and phase I then searched for seconds before it gave up).
+pub fn earliest_in_view_slot(
+    p: &crate::Params,
+    g_m: [f64; 2],
+    first: usize,
+    last: usize,
+) -> Option<usize> {
+    // the planner accepts plans that violate speed and sensing by up to FEASIBILITY_TOL
+    let tol = crate::evaluate::FEASIBILITY_TOL;
+    let offset = p.centre_offset_m();
+    let v_step = (p.max_speed_mps + tol) * p.slot_s;
+    let r = p.sensing_radius_m + tol;
+    let d = v2::dist(p.start_m, g_m);
+    let last_hop = v_step.hypot(offset);
+    let slack = 1e-9 * (1.0 + d + offset);
+    (first.max(1)..=last).find(|&t| {
+        let travel = v_step * (t - 1) as f64;
+        d <= travel + last_hop + r + slack && d + travel + r + slack >= offset
+    })
+}
+
 /// Checks necessary conditions: the azimuth requirement within the speed limit, the range
 /// requirement attainable, each landmark reachable from the start and from the previous landmark
 /// slot at the maximum speed. Passing does not prove feasibility; failing proves infeasibility.
@@ -29,7 +60,6 @@ pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
     let offset = p.centre_offset_m();
     let r = p.sensing_radius_m;
     let outer = offset + r;
-    let inner = (offset - r).max(0.0);
     let fail = |slot: usize, reason: String| Infeasibility {
         slot,
         t_s: slot as f64 * p.slot_s,
@@ -81,18 +111,19 @@ pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
     }
     // reachability from the start
     let (t0, g0) = landmark_slots[0];
-    let d = v2::dist(p.start_m, g0);
-    let gap = (d - outer).max(inner - d).max(0.0);
-    let reach = t0 as f64 * p.slot_s * p.max_speed_mps;
-    if gap > reach {
+    if earliest_in_view_slot(p, g0, t0, t0).is_none() {
+        let travel = (t0 - 1) as f64 * p.slot_s * p.max_speed_mps;
+        let far = travel + (p.slot_s * p.max_speed_mps).hypot(offset) + r;
+        let near = (offset - travel - r).max(0.0);
         return Err(fail(
             t0,
             format!(
-                "landmark ({}, {}) m is out of reach in time: the UAV must be between {inner:.1} \
-                 and {outer:.1} m from it, {gap:.1} m from the start, but covers at most \
-                 {reach:.1} m by t = {} s at max_speed_mps = {}",
+                "landmark ({}, {}) m is out of reach in time: it lies {:.1} m from the start, \
+                 but by t = {} s at max_speed_mps = {} the sensing disc can only cover points \
+                 between {near:.1} and {far:.1} m from it",
                 g0[0],
                 g0[1],
+                v2::dist(p.start_m, g0),
                 t0 as f64 * p.slot_s,
                 p.max_speed_mps
             ),
@@ -257,6 +288,7 @@ pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajecto
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::sensing_centre_m;
     use crate::landmarks::{LandmarkWindow, LandmarksSpec, Preset};
     use crate::{evaluate, Params};
 
@@ -340,5 +372,60 @@ mod tests {
         let m = Mission::new("jump", p, &spec).unwrap();
         let e = precheck(&m).unwrap_err();
         assert_eq!(e.slot, 21);
+    }
+
+    proptest::proptest! {
+        /// The reach bound is a necessary condition: wherever a trajectory within the speed
+        /// limit has a point in view at the end of slot t, the bound allows slot t (or earlier).
+        #[test]
+        fn earliest_in_view_slot_never_rules_out_a_reachable_slot(
+            steps in proptest::collection::vec((0.0f64..1.0, -3.2f64..3.2), 1..30),
+            pick in 0.0f64..1.0,
+            angle in -3.2f64..3.2,
+            radius in 0.0f64..1.0,
+        ) {
+            let p = Params::default();
+            let v_step = p.max_speed_mps * p.slot_s;
+            let mut q = p.start_m;
+            let pos_m: Vec<[f64; 2]> = steps
+                .iter()
+                .map(|(f, a)| {
+                    q = [q[0] + f * v_step * a.cos(), q[1] + f * v_step * a.sin()];
+                    q
+                })
+                .collect();
+            let traj = Trajectory { slot_s: p.slot_s, start_m: p.start_m, pos_m };
+            let headings = traj.headings_rad();
+            let t = 1 + ((pick * steps.len() as f64) as usize).min(steps.len() - 1);
+            let centre = sensing_centre_m(traj.q(t), headings[t - 1], p.centre_offset_m());
+            let r = radius * p.sensing_radius_m;
+            let g = [centre[0] + r * angle.cos(), centre[1] + r * angle.sin()];
+            proptest::prop_assert!(v2::dist(g, centre) <= p.sensing_radius_m + 1e-9);
+            let earliest = earliest_in_view_slot(&p, g, 1, t);
+            proptest::prop_assert!(earliest.is_some_and(|e| e <= t), "slot {t}: {earliest:?}");
+        }
+    }
+
+    #[test]
+    fn earliest_in_view_slot_is_tight_for_the_next_slot() {
+        let p = Params::default();
+        let v_step = p.max_speed_mps * p.slot_s;
+        let hop = v_step.hypot(p.centre_offset_m());
+        let d = hop + p.sensing_radius_m;
+        let at = |d: f64| [p.start_m[0] + d, p.start_m[1]];
+        // just within reach of the next slot's centre, and just beyond it
+        assert_eq!(earliest_in_view_slot(&p, at(d - 0.01), 1, 10), Some(1));
+        assert_eq!(earliest_in_view_slot(&p, at(d + 0.01), 1, 10), Some(2));
+        assert_eq!(
+            earliest_in_view_slot(&p, at(d + 1.5 * v_step), 1, 10),
+            Some(3)
+        );
+        assert_eq!(
+            earliest_in_view_slot(&p, at(d + 20.0 * v_step), 1, 10),
+            None
+        );
+        // too close: the centre lies H tan(eta) from the UAV
+        assert_eq!(earliest_in_view_slot(&p, p.start_m, 1, 10), None);
+        assert_eq!(earliest_in_view_slot(&p, at(d - 0.01), 4, 10), Some(4));
     }
 }

@@ -370,8 +370,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
 fn default_log_filter(command: &Command) -> &'static str {
     match command {
         #[cfg(feature = "service")]
-        Command::Serve { .. } => "info",
-        _ => "warn",
+        Command::Serve { .. } => cellsar_error::SERVICE_LOG_FILTER,
+        _ => cellsar_error::COMMAND_LOG_FILTER,
     }
 }
 
@@ -403,16 +403,22 @@ mod tests {
             )
         };
         #[cfg(feature = "service")]
-        assert_eq!(level(&["serve"]), "info");
-        assert_eq!(level(&["plan", "m.toml", "--out", "o"]), "warn");
+        assert_eq!(level(&["serve"]), cellsar_error::SERVICE_LOG_FILTER);
+        assert_eq!(
+            level(&["plan", "m.toml", "--out", "o"]),
+            cellsar_error::COMMAND_LOG_FILTER
+        );
         assert_eq!(
             level(&["evaluate", "m.toml", "--trajectory", "t.csv"]),
-            "warn"
+            cellsar_error::COMMAND_LOG_FILTER
         );
-        assert_eq!(level(&["reproduce", "--out", "o"]), "warn");
+        assert_eq!(
+            level(&["reproduce", "--out", "o"]),
+            cellsar_error::COMMAND_LOG_FILTER
+        );
         assert_eq!(
             level(&["dmin", "--radius-m", "5000", "--objects", "10"]),
-            "warn"
+            cellsar_error::COMMAND_LOG_FILTER
         );
     }
 }

@@ -132,11 +132,7 @@ impl ServiceError {
 impl From<ServiceError> for cellsar_error::exit::Failure {
     /// Bad flags or configuration exit 2 ([`ServiceError::is_bad_input`]), the rest 1.
     fn from(e: ServiceError) -> Self {
-        if e.is_bad_input() {
-            Self::bad_input(e)
-        } else {
-            Self::runtime(e)
-        }
+        Self::bad_input_or_runtime(e.is_bad_input(), e)
     }
 }
 
@@ -941,11 +937,7 @@ mod tests {
         let file = dir.join("client.json5");
         std::fs::write(
             &file,
-            format!(
-                "{{ mode: 'client', connect: {{ endpoints: ['tcp/127.0.0.1:{port}'], \
-                 timeout_ms: -1, exit_on_failure: false }}, \
-                 scouting: {{ multicast: {{ enabled: false }} }} }}"
-            ),
+            bridge::zconfig::waiting_client_json5(&format!("tcp/127.0.0.1:{port}")),
         )
         .unwrap();
         ZenohArgs {
@@ -1105,6 +1097,7 @@ mod tests {
         };
         let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
         assert!(e.to_string().contains("options.tolerance"), "{e}");
+        assert_eq!(e.refusal().kind, RefusalKind::BadRequest);
         req.options = PlanRequestOptions::default();
         req.mission.params.altitude_m = Some(-5.0);
         let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
@@ -1119,23 +1112,17 @@ mod tests {
     /// launcher maps to exit code 2, 3 or 1), readable by the querier in both formats.
     #[test]
     fn refusals_carry_their_kind() {
-        let mut req = PlanRequest {
-            mission: short_mission(),
-            options: PlanRequestOptions {
-                tolerance: Some(-1.0),
-                ..Default::default()
-            },
-        };
-        let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
-        assert_eq!(e.refusal().kind, RefusalKind::BadRequest);
-        // a landmark 50 km away 10 s after the first: no speed reaches it
-        req.options = PlanRequestOptions::default();
-        req.mission = MissionFile::from_toml_str(
-            "name = \"unreachable\"\n[params]\nhorizon_s = 20\nstart_m = [-1000.0, 0.0]\n\
+        // a landmark 50 km away 10 s after the first: no speed reaches it (a bad request is
+        // `bad_request`: bad_requests_name_the_field)
+        let req = PlanRequest {
+            options: PlanRequestOptions::default(),
+            mission: MissionFile::from_toml_str(
+                "name = \"unreachable\"\n[params]\nhorizon_s = 20\nstart_m = [-1000.0, 0.0]\n\
              [landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }, \
              { x_m = 50000.0, y_m = 0.0, from_s = 10.0, to_s = 20.0 }]\n",
-        )
-        .unwrap();
+            )
+            .unwrap(),
+        };
         let e = plan_request(&req, "t", &mut NoObserver).unwrap_err();
         let r = e.refusal();
         assert_eq!(r.kind, RefusalKind::Infeasible, "{e}");

@@ -115,11 +115,7 @@ impl RadarError {
 impl From<RadarError> for cellsar_error::exit::Failure {
     /// Bad input ([`RadarError::is_bad_input`]) exits 2, the rest 1.
     fn from(e: RadarError) -> Self {
-        if e.is_bad_input() {
-            Self::bad_input(e)
-        } else {
-            Self::runtime(e)
-        }
+        Self::bad_input_or_runtime(e.is_bad_input(), e)
     }
 }
 

@@ -301,8 +301,8 @@ fn main() -> ExitCode {
 fn default_log_filter(cmd: &Cmd) -> &'static str {
     match cmd {
         #[cfg(feature = "service")]
-        Cmd::Echo { .. } | Cmd::ProcessService { .. } => "info",
-        _ => "warn",
+        Cmd::Echo { .. } | Cmd::ProcessService { .. } => cellsar_error::SERVICE_LOG_FILTER,
+        _ => cellsar_error::COMMAND_LOG_FILTER,
     }
 }
 
@@ -394,18 +394,30 @@ mod tests {
         };
         #[cfg(feature = "service")]
         {
-            assert_eq!(level(&["echo", "--scene", "s.toml"]), "info");
-            assert_eq!(level(&["process-service", "--scene", "s.toml"]), "info");
+            assert_eq!(
+                level(&["echo", "--scene", "s.toml"]),
+                cellsar_error::SERVICE_LOG_FILTER
+            );
+            assert_eq!(
+                level(&["process-service", "--scene", "s.toml"]),
+                cellsar_error::SERVICE_LOG_FILTER
+            );
         }
         assert_eq!(
             level(&["simulate", "--plan", "p", "--scene", "s", "--out", "o"]),
-            "warn"
+            cellsar_error::COMMAND_LOG_FILTER
         );
-        assert_eq!(level(&["process", "--in", "i", "--out", "o"]), "warn");
+        assert_eq!(
+            level(&["process", "--in", "i", "--out", "o"]),
+            cellsar_error::COMMAND_LOG_FILTER
+        );
         assert_eq!(
             level(&["closed-loop", "m.toml", "--scene", "s", "--out", "o"]),
-            "warn"
+            cellsar_error::COMMAND_LOG_FILTER
         );
-        assert_eq!(level(&["resolution", "--out", "o"]), "warn");
+        assert_eq!(
+            level(&["resolution", "--out", "o"]),
+            cellsar_error::COMMAND_LOG_FILTER
+        );
     }
 }

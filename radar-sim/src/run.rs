@@ -503,8 +503,8 @@ pub fn process_limited(
     write_detections(out, &det_rows)?;
     let (mut metrics, best) = tally::fold(&tallies, meta.noise_power_w);
     // resolution on the strongest landmark: one look, exact evaluation
-    if let Some(ap) = best.and_then(|(ai, _)| aps.iter().find(|a| a.index == ai)) {
-        let look = best.map_or(0, |(_, l)| l);
+    let best = best.and_then(|(ai, look)| Some((aps.iter().find(|a| a.index == ai)?, look)));
+    if let Some((ap, look)) = best {
         let pulses: Vec<PulseMeta> = pulses_all
             .iter()
             .filter(|p| p.aperture == ap.index && p.look == look)

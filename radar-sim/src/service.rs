@@ -114,11 +114,7 @@ impl From<ServiceError> for cellsar_error::exit::Failure {
             ServiceError::Planner(p) => p.is_bad_input(),
             _ => false,
         };
-        if bad {
-            Self::bad_input(e)
-        } else {
-            Self::runtime(e)
-        }
+        Self::bad_input_or_runtime(bad, e)
     }
 }
 

@@ -229,7 +229,7 @@ struct TxReport {
 }
 
 fn main() {
-    cellsar_error::init_logging("warn");
+    cellsar_error::init_logging(cellsar_error::COMMAND_LOG_FILTER);
     init_iceoryx_logging();
     if let Err(e) = run(Cli::parse()) {
         eprintln!(

@@ -56,7 +56,7 @@ fn stop_on_signals() -> Result<Arc<AtomicBool>, Failure> {
 }
 
 fn init_tracing() {
-    cellsar_error::init_logging("info");
+    cellsar_error::init_logging(cellsar_error::SERVICE_LOG_FILTER);
     init_iceoryx_logging();
 }
 

@@ -74,8 +74,8 @@ fn check_radar_service(
 fn main() -> ExitCode {
     let cli = Cli::parse();
     init_tracing(match cli.command {
-        Command::Run(_) => "warn",
-        _ => "info",
+        Command::Run(_) => cellsar_error::COMMAND_LOG_FILTER,
+        _ => cellsar_error::SERVICE_LOG_FILTER,
     });
     let stop = match planner::service::stop_on_signals() {
         Ok(s) => s,

@@ -284,5 +284,7 @@ pub struct StoredOutcome {
 impl Message for StoredOutcome {
     const KIND: u16 = 0x0309;
     const NAME: &'static str = "radar.stored_outcome";
-    const SCHEMA_VERSION: u16 = 1;
+    /// 2: the outcome nests its tally and no longer repeats the aperture index (a version-1
+    /// file in a state directory is ignored, and that aperture processed again).
+    const SCHEMA_VERSION: u16 = 2;
 }

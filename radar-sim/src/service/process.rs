@@ -174,14 +174,19 @@ pub struct ProcessReport {
 /// One processed aperture: everything `cellsar-radar-sim process` derives from it.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ApertureOutcome {
-    /// Aperture index.
-    pub aperture: usize,
     /// Its detections and what it adds to the mission's metrics.
     pub tally: ApertureTally,
     /// The image.
     pub image: ApertureImage,
     /// Processing time, s.
     pub process_s: f64,
+}
+
+impl ApertureOutcome {
+    /// Aperture index.
+    pub fn aperture(&self) -> usize {
+        self.tally.summary.aperture
+    }
 }
 
 /// The pulse as `cellsar-radar-sim simulate` writes it to `pulses.csv` and `process` reads it
@@ -286,7 +291,6 @@ impl ProcContext {
             .map(|(x, y)| (x as u32, y as u32))
             .collect();
         Ok(ApertureOutcome {
-            aperture: ap.index,
             tally: ApertureTally::new(ap, &r, pc.pfa, self.noise_power_w),
             image: ApertureImage {
                 mission_id: self.base.mission_id,
@@ -341,7 +345,7 @@ pub fn detections_message(
 ) -> ApertureDetections {
     ApertureDetections {
         mission_id: id,
-        aperture: o.aperture as u32,
+        aperture: o.aperture() as u32,
         apertures: apertures as u32,
         landmark: o.tally.summary.landmark,
         landmark_detected: o.tally.summary.landmark_detected,
@@ -1270,7 +1274,7 @@ impl Proc<'_> {
                 let k = run.in_worker.take();
                 match *outcome {
                     Ok(o) => {
-                        let k = o.aperture;
+                        let k = o.aperture();
                         if let Some(d) = &run.dir {
                             store(d, &o)?;
                         }
@@ -1520,11 +1524,11 @@ fn store(dir: &Path, o: &ApertureOutcome) -> ServiceResult<()> {
     })?;
     let bytes = envelope::encode(&StoredOutcome { outcome: o.clone() }, Meta::default()).map_err(
         |source| ServiceError::Codec {
-            what: format!("aperture {}", o.aperture),
+            what: format!("aperture {}", o.aperture()),
             source,
         },
     )?;
-    planner::service::write_atomic(&outcome_path(dir, o.aperture), &bytes)?;
+    planner::service::write_atomic(&outcome_path(dir, o.aperture()), &bytes)?;
     Ok(())
 }
 
@@ -1562,7 +1566,7 @@ fn restore(dir: &Path, apertures: usize) -> ServiceResult<Restored> {
             source,
         })?;
         match envelope::decode::<StoredOutcome>(&bytes, &limits) {
-            Ok(e) if e.message.outcome.aperture == k => {
+            Ok(e) if e.message.outcome.aperture() == k => {
                 out.insert(k, e.message.outcome);
             }
             Ok(_) => {

@@ -170,11 +170,7 @@ fn client_without_router(dir: &Path) -> String {
     let file = dir.join("client.json5");
     std::fs::write(
         &file,
-        format!(
-            "{{ mode: 'client', connect: {{ endpoints: ['tcp/127.0.0.1:{port}'], \
-             timeout_ms: -1, exit_on_failure: false }}, \
-             scouting: {{ multicast: {{ enabled: false }} }} }}"
-        ),
+        bridge::zconfig::waiting_client_json5(&format!("tcp/127.0.0.1:{port}")),
     )
     .unwrap();
     file.display().to_string()
