@@ -1,7 +1,7 @@
 //! The planning driver: feasibility pre-check, start trajectory (with phase-I repair), the SCA /
 //! BCD iterations of each scheme, the stopping rule and the observer.
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
@@ -87,9 +87,54 @@ pub struct PlanOptions {
     /// Resolution requirement of the exact-geometry schemes (the paper's schemes always use the
     /// paper's, as printed).
     pub resolution: ResolutionMode,
+    /// Wall-time limit of the whole run, s (`None`: none). The coarse levels are skipped once it
+    /// has passed; the iterations stop at the first check after it with
+    /// [`TerminationReason::TimeLimit`] and return the last accepted iterate (feasible on the
+    /// exact geometry for the exact-geometry schemes); a phase I that has not found a feasible
+    /// start by then fails with [`PlanError::TimeLimit`]. A check comes before every cone
+    /// program, so the run ends within about one program's time (~0.1 s at 600 slots) after it.
+    pub time_limit_s: Option<f64>,
+    /// When a given start ([`PlanOptions::init`]) cannot be repaired, plan from the built-in
+    /// start instead (saying so in [`PlanResult::init_replaced`]); when false, fail with phase
+    /// I's error.
+    pub replace_unrepairable_init: bool,
 }
 
 impl PlanOptions {
+    /// Checks the numeric options; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        let bad = |field, value, reason| {
+            Err(PlanError::InvalidOption {
+                field,
+                value,
+                reason,
+            })
+        };
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return bad("tolerance", self.tolerance, "must be a finite number > 0");
+        }
+        if !(self.min_kappa_scale.is_finite()
+            && self.min_kappa_scale > 0.0
+            && self.min_kappa_scale <= 1.0)
+        {
+            return bad(
+                "min_kappa_scale",
+                self.min_kappa_scale,
+                "must lie in (0, 1]",
+            );
+        }
+        if let Some(limit) = self.time_limit_s {
+            if !(limit.is_finite() && limit > 0.0) {
+                return bad(
+                    "time_limit_s",
+                    limit,
+                    "must be a finite number of seconds > 0",
+                );
+            }
+        }
+        Ok(())
+    }
+
     /// The cone-program settings of this run's scheme.
     pub fn scheme_socp(&self) -> SocpSettings {
         match self.scheme {
@@ -122,7 +167,35 @@ impl Default for PlanOptions {
             coarse: true,
             over_relaxation: true,
             resolution: ResolutionMode::Paper,
+            time_limit_s: None,
+            replace_unrepairable_init: true,
         }
+    }
+}
+
+/// When a planning run must stop: [`PlanOptions::time_limit_s`] after it started.
+#[derive(Debug, Clone, Copy)]
+struct Deadline {
+    at: Option<Instant>,
+    /// The limit, s (for messages; infinite without one).
+    limit_s: f64,
+}
+
+impl Deadline {
+    /// `limit_s` after `started` (a limit too large to represent is no limit).
+    fn after(started: Instant, limit_s: Option<f64>) -> Self {
+        let at = limit_s
+            .and_then(|s| Duration::try_from_secs_f64(s).ok())
+            .and_then(|d| started.checked_add(d));
+        Self {
+            at,
+            limit_s: limit_s.unwrap_or(f64::INFINITY),
+        }
+    }
+
+    /// Whether it has passed.
+    fn passed(self) -> bool {
+        self.at.is_some_and(|at| Instant::now() >= at)
     }
 }
 
@@ -138,6 +211,8 @@ pub enum TerminationReason {
     SubproblemFailed(String),
     /// Steps kept being rejected by the exact-geometry check; the last accepted iterate is returned.
     NoProgress,
+    /// [`PlanOptions::time_limit_s`] passed; the last accepted iterate is returned.
+    TimeLimit,
 }
 
 /// One iteration as seen by an [`Observer`].
@@ -233,17 +308,40 @@ pub enum PlanError {
         /// The solver's error.
         error: SolveError,
     },
+    /// [`PlanOptions::time_limit_s`] passed before a feasible start was found.
+    #[error(
+        "time limit of {limit_s} s reached after {iterations} phase I iterations without a \
+         feasible start (largest sensing violation {sensing_violation_m:.2} m)"
+    )]
+    TimeLimit {
+        /// The limit, s.
+        limit_s: f64,
+        /// Phase I iterations run on the mission's own grid.
+        iterations: usize,
+        /// Largest sensing violation of the last accepted repair iterate, m.
+        sensing_violation_m: f64,
+    },
+    /// An option is out of range.
+    #[error("option `{field}` = {value}: {reason}")]
+    InvalidOption {
+        /// The option's name (its field of [`PlanOptions`]).
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What it must satisfy.
+        reason: &'static str,
+    },
 }
 
 impl From<PlanError> for cellsar_error::exit::Failure {
-    /// An infeasible mission exits 3, a start trajectory that does not fit 2, a solver
-    /// failure 1.
+    /// An infeasible mission exits 3, a start trajectory that does not fit or a bad option 2, a
+    /// solver failure or a time limit 1.
     fn from(e: PlanError) -> Self {
         use cellsar_error::exit::FailureKind as K;
         let kind = match &e {
             PlanError::Infeasible(_) => K::Infeasible,
-            PlanError::InvalidInit(_) => K::BadInput,
-            PlanError::Solver { .. } => K::Runtime,
+            PlanError::InvalidInit(_) | PlanError::InvalidOption { .. } => K::BadInput,
+            PlanError::Solver { .. } | PlanError::TimeLimit { .. } => K::Runtime,
         };
         Self::new(kind, e)
     }
@@ -261,6 +359,8 @@ pub fn plan_with_observer(
     observer: &mut dyn Observer,
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
+    options.validate()?;
+    let deadline = Deadline::after(started, options.time_limit_s);
     precheck(mission)?;
     let p = mission.params();
     let start = match &options.init {
@@ -297,14 +397,14 @@ pub fn plan_with_observer(
                     if options.coarse
                         && !evaluate(mission, tr).is_feasible_for(options.resolution) =>
                 {
-                    coarse_start_from(mission, obj, true, options, Some(tr), 0)
+                    coarse_start_from(mission, obj, true, options, deadline, Some(tr), 0)
                         .and_then(LevelStart::solved)
                         .unwrap_or_else(|| tr.clone())
                 }
                 _ => tr.clone(),
             }
         }
-        None => built_in_start(mission, options),
+        None => built_in_start(mission, options, deadline),
     };
     let mut start_energy_j = evaluate(mission, &start).energy_j;
     let resolution = match options.scheme {
@@ -339,19 +439,25 @@ pub fn plan_with_observer(
                 &mut repair_solver,
                 observer,
                 exact_rules,
+                deadline,
             ) {
                 Ok(repaired) => repaired,
                 // A given path phase I cannot repair (far outside the speed limits, or so far
                 // from the landmarks that the elastic program is numerically infeasible): plan
-                // from the built-in start rather than fail, and say so.
-                Err(failure) if options.init.is_some() => {
+                // from the built-in start rather than fail, and say so (unless told not to, or
+                // out of time).
+                Err(failure)
+                    if options.init.is_some()
+                        && options.replace_unrepairable_init
+                        && !matches!(failure.error, PlanError::TimeLimit { .. }) =>
+                {
                     let reason = failure.error.to_string();
                     tracing::warn!(
                         error = %reason,
                         "the given start cannot be repaired; planning from the built-in start"
                     );
                     init_replaced = Some(reason);
-                    let start = built_in_start(mission, options);
+                    let start = built_in_start(mission, options, deadline);
                     start_energy_j = evaluate(mission, &start).energy_j;
                     make_feasible(
                         mission,
@@ -361,6 +467,7 @@ pub fn plan_with_observer(
                         &mut repair_solver,
                         observer,
                         exact_rules,
+                        deadline,
                     )?
                 }
                 Err(failure) => return Err(failure.into()),
@@ -376,6 +483,7 @@ pub fn plan_with_observer(
             ExactObjective::Energy,
             &base,
             options,
+            deadline,
             &mut solver,
             observer,
         )?,
@@ -385,6 +493,7 @@ pub fn plan_with_observer(
             ExactObjective::Distance,
             &base,
             options,
+            deadline,
             &mut solver,
             observer,
         )?,
@@ -393,6 +502,7 @@ pub fn plan_with_observer(
             start,
             PaperObjective::Energy,
             options,
+            deadline,
             &mut solver,
             observer,
         )?,
@@ -401,6 +511,7 @@ pub fn plan_with_observer(
             start,
             PaperObjective::Distance,
             options,
+            deadline,
             &mut solver,
             observer,
         )?,
@@ -418,17 +529,14 @@ pub fn plan_with_observer(
 /// The built-in start: the guidance law on a coarse grid made feasible there (phase I); for the
 /// exact-geometry schemes also optimised there. The paper's schemes get the plain feasible path,
 /// as Algorithm 1's step 1 asks ("a feasible initial flight path").
-fn built_in_start(mission: &Mission, options: &PlanOptions) -> Trajectory {
-    match options.scheme {
-        Scheme::Exact => coarse_start(mission, ExactObjective::Energy, options.coarse, options),
-        Scheme::BaselineExact => {
-            coarse_start(mission, ExactObjective::Distance, options.coarse, options)
-        }
-        Scheme::Paper | Scheme::Baseline => {
-            coarse_start(mission, ExactObjective::Energy, false, options)
-        }
-    }
-    .unwrap_or_else(|| guidance_start(mission, options.resolution))
+fn built_in_start(mission: &Mission, options: &PlanOptions, deadline: Deadline) -> Trajectory {
+    let (objective, optimise) = match options.scheme {
+        Scheme::Exact => (ExactObjective::Energy, options.coarse),
+        Scheme::BaselineExact => (ExactObjective::Distance, options.coarse),
+        Scheme::Paper | Scheme::Baseline => (ExactObjective::Energy, false),
+    };
+    coarse_start(mission, objective, optimise, options, deadline)
+        .unwrap_or_else(|| guidance_start(mission, options.resolution))
 }
 
 /// Slot lengths of the coarse levels, finest first, s: the mission is first solved on slots of
@@ -476,8 +584,10 @@ fn coarse_start(
     objective: ExactObjective,
     optimise: bool,
     options: &PlanOptions,
+    deadline: Deadline,
 ) -> Option<Trajectory> {
-    coarse_start_from(mission, objective, optimise, options, None, 0).and_then(LevelStart::solved)
+    coarse_start_from(mission, objective, optimise, options, deadline, None, 0)
+        .and_then(LevelStart::solved)
 }
 
 /// What a coarse level hands to the next finer one, interpolated to that one's slots.
@@ -516,9 +626,13 @@ fn coarse_start_from(
     objective: ExactObjective,
     optimise: bool,
     options: &PlanOptions,
+    deadline: Deadline,
     warm: Option<&Trajectory>,
     level: usize,
 ) -> Option<LevelStart> {
+    if deadline.passed() {
+        return None;
+    }
     let n = mission.slots();
     let delta = mission.params().slot_s;
     let target = coarse_levels(options, optimise).get(level)?;
@@ -536,7 +650,15 @@ fn coarse_start_from(
             start_m: w.start_m,
             pos_m: (1..=coarse.slots()).map(|k| w.q(k * factor)).collect(),
         }],
-        None => match coarse_start_from(&coarse, objective, optimise, options, None, level + 1) {
+        None => match coarse_start_from(
+            &coarse,
+            objective,
+            optimise,
+            options,
+            deadline,
+            None,
+            level + 1,
+        ) {
             Some(LevelStart::Solved(t)) => vec![t],
             Some(LevelStart::Stalled(t)) => vec![t, guidance_start(&coarse, options.resolution)],
             None => vec![guidance_start(&coarse, options.resolution)],
@@ -554,6 +676,7 @@ fn coarse_start_from(
             &mut solver,
             &mut NoObserver,
             exact_rules,
+            deadline,
         );
         let start = match feasible {
             Ok((start, _)) => start,
@@ -578,6 +701,7 @@ fn coarse_start_from(
                 objective,
                 &tuning,
                 &sub_options,
+                deadline,
                 &mut solver,
                 &mut NoObserver,
             ) {
@@ -665,6 +789,7 @@ fn total_violation(
 /// and a step rejected at the proven centre bound shortens the next one (trust region) instead
 /// of repeating the same subproblem. The comparison schemes keep the earlier rules, so that
 /// their starts, and the results compared with the paper, do not change.
+#[allow(clippy::too_many_arguments)] // private: the run's state, passed explicitly
 fn make_feasible(
     mission: &Mission,
     start: Trajectory,
@@ -673,6 +798,7 @@ fn make_feasible(
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
     exact_rules: bool,
+    deadline: Deadline,
 ) -> Result<(Trajectory, usize), PhaseOneFailure> {
     let mode = base.resolution;
     let mut current = start;
@@ -696,6 +822,16 @@ fn make_feasible(
     let mut best_violation = violation_of(&ev);
     let mut stalls = 0;
     for it in 1..=100 {
+        if deadline.passed() {
+            return Err(PhaseOneFailure {
+                error: PlanError::TimeLimit {
+                    limit_s: deadline.limit_s,
+                    iterations: it - 1,
+                    sensing_violation_m: ev.violations.sensing_m,
+                },
+                stalled: Some(current),
+            });
+        }
         tuning.elastic_weight = Some(weight);
         let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
         let sol = match solver.solve(&sub.builder) {
@@ -874,12 +1010,14 @@ fn finish(
 
 /// The exact-geometry SCA loop (monotone: a step is accepted only if it is feasible on the exact
 /// geometry and does not increase the true objective; otherwise a trust region is tightened).
+#[allow(clippy::too_many_arguments)] // private: the run's state, passed explicitly
 fn run_exact(
     mission: &Mission,
     start: Trajectory,
     objective: ExactObjective,
     base: &ExactTuning,
     options: &PlanOptions,
+    deadline: Deadline,
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
 ) -> Result<PlanResult, PlanError> {
@@ -896,6 +1034,10 @@ fn run_exact(
     let mut programs = 0;
     let mut termination = TerminationReason::MaxIterations;
     for it in 1..=options.max_iterations {
+        if deadline.passed() {
+            termination = TerminationReason::TimeLimit;
+            break;
+        }
         let t0 = Instant::now();
         let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
         programs += 1;
@@ -1036,6 +1178,7 @@ fn run_paper(
     start: Trajectory,
     objective: PaperObjective,
     options: &PlanOptions,
+    deadline: Deadline,
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
 ) -> Result<PlanResult, PlanError> {
@@ -1048,6 +1191,10 @@ fn run_paper(
     let mut programs = 0;
     let mut traj = start;
     for it in 1..=options.max_iterations {
+        if deadline.passed() {
+            termination = TerminationReason::TimeLimit;
+            break;
+        }
         let t0 = Instant::now();
         let p5 = state.solve_p5(mission, objective, solver);
         programs += 1;

@@ -52,6 +52,24 @@ pub fn earliest_in_view_slot(
     })
 }
 
+/// Whether a UAV that has landmark `g1_m` in view at the end of some slot can have `g2_m` in
+/// view at the end of the slot `slots` (≥ 1) later: a necessary condition only, with the same
+/// argument as [`earliest_in_view_slot`]. At the first slot the UAV lies within H tan η + r_s of
+/// `g1_m` (its centre within r_s, the centre H tan η from it); it then flies at most
+/// V_m δ (slots − 1) before the last slot, in which it moves by s ≤ V_m δ and its centre ends
+/// √(s² + (H tan η)²) from where it was. So the landmarks can lie at most
+/// 2 r_s + H tan η + √((V_m δ)² + (H tan η)²) + V_m δ (slots − 1) apart, about V_m δ − 0.2 m
+/// less on the default mission than the bound 2 (H tan η + r_s) + V_m δ slots of two annuli.
+pub fn reachable_between(p: &crate::Params, g1_m: [f64; 2], g2_m: [f64; 2], slots: usize) -> bool {
+    let tol = crate::evaluate::FEASIBILITY_TOL;
+    let offset = p.centre_offset_m();
+    let v_step = (p.max_speed_mps + tol) * p.slot_s;
+    let r = p.sensing_radius_m + tol;
+    let d = v2::dist(g1_m, g2_m);
+    let reach = 2.0 * r + offset + v_step.hypot(offset) + v_step * slots.saturating_sub(1) as f64;
+    d <= reach + 1e-9 * (1.0 + d + offset)
+}
+
 /// Checks necessary conditions: the azimuth requirement within the speed limit, the range
 /// requirement attainable, each landmark reachable from the start and from the previous landmark
 /// slot at the maximum speed. Passing does not prove feasibility; failing proves infeasibility.
@@ -59,7 +77,6 @@ pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
     let p = mission.params();
     let offset = p.centre_offset_m();
     let r = p.sensing_radius_m;
-    let outer = offset + r;
     let fail = |slot: usize, reason: String| Infeasibility {
         slot,
         t_s: slot as f64 * p.slot_s,
@@ -131,18 +148,23 @@ pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
     }
     for w in landmark_slots.windows(2) {
         let ((t1, g1), (t2, g2)) = (w[0], w[1]);
-        let gap = (v2::dist(g1, g2) - 2.0 * outer).max(0.0);
-        let reach = (t2 - t1) as f64 * p.slot_s * p.max_speed_mps;
-        if gap > reach {
+        if !reachable_between(p, g1, g2, t2 - t1) {
+            let reach = (t2 - t1 - 1) as f64 * p.slot_s * p.max_speed_mps
+                + (p.slot_s * p.max_speed_mps).hypot(offset)
+                + offset
+                + 2.0 * r;
             return Err(fail(
                 t2,
                 format!(
                     "landmark ({}, {}) m is out of reach in time from the landmark ({}, {}) m of \
-                     slot {t1}: at least {gap:.1} m to cover in {} s at max_speed_mps = {}",
+                     slot {t1}: they lie {:.1} m apart, but in {} s at max_speed_mps = {} the \
+                     sensing centre can move at most {reach:.1} m from one sensing disc to the \
+                     other",
                     g2[0],
                     g2[1],
                     g1[0],
                     g1[1],
+                    v2::dist(g1, g2),
                     (t2 - t1) as f64 * p.slot_s,
                     p.max_speed_mps
                 ),
@@ -403,6 +425,72 @@ mod tests {
             proptest::prop_assert!(v2::dist(g, centre) <= p.sensing_radius_m + 1e-9);
             let earliest = earliest_in_view_slot(&p, g, 1, t);
             proptest::prop_assert!(earliest.is_some_and(|e| e <= t), "slot {t}: {earliest:?}");
+        }
+    }
+
+    proptest::proptest! {
+        /// The bound between landmarks is a necessary condition: any two points in view of a
+        /// trajectory within the speed limit, at the ends of slots t1 < t2, pass it.
+        #[test]
+        fn reachable_between_never_rules_out_a_flown_pair(
+            steps in proptest::collection::vec((0.0f64..1.0, -3.2f64..3.2), 2..30),
+            picks in (0.0f64..1.0, 0.0f64..1.0),
+            angles in (-3.2f64..3.2, -3.2f64..3.2),
+            radii in (0.0f64..1.0, 0.0f64..1.0),
+        ) {
+            let p = Params::default();
+            let v_step = p.max_speed_mps * p.slot_s;
+            let mut q = p.start_m;
+            let pos_m: Vec<[f64; 2]> = steps
+                .iter()
+                .map(|(f, a)| {
+                    q = [q[0] + f * v_step * a.cos(), q[1] + f * v_step * a.sin()];
+                    q
+                })
+                .collect();
+            let n = pos_m.len();
+            let traj = Trajectory { slot_s: p.slot_s, start_m: p.start_m, pos_m };
+            let headings = traj.headings_rad();
+            let t1 = 1 + ((picks.0 * (n - 1) as f64) as usize).min(n - 2);
+            let t2 = t1 + 1 + ((picks.1 * (n - t1) as f64) as usize).min(n - t1 - 1);
+            let in_view = |t: usize, angle: f64, radius: f64| {
+                let c = sensing_centre_m(traj.q(t), headings[t - 1], p.centre_offset_m());
+                let r = radius * p.sensing_radius_m;
+                [c[0] + r * angle.cos(), c[1] + r * angle.sin()]
+            };
+            let g1 = in_view(t1, angles.0, radii.0);
+            let g2 = in_view(t2, angles.1, radii.1);
+            proptest::prop_assert!(reachable_between(&p, g1, g2, t2 - t1), "{t1} -> {t2}");
+        }
+    }
+
+    /// The bound is attained: at the first slot the UAV heads −y with its centre between it and
+    /// g1 (r from g1), then flies +x at V_m, and the last step turns so that the centre lands on
+    /// the x axis, r before g2; a landmark 1 m beyond that fails.
+    #[test]
+    fn reachable_between_is_tight() {
+        let p = Params::default();
+        let offset = p.centre_offset_m();
+        let v_step = p.max_speed_mps * p.slot_s;
+        let r = p.sensing_radius_m;
+        for slots in [1usize, 2, 7] {
+            let reach = 2.0 * r + offset + v_step.hypot(offset) + v_step * (slots - 1) as f64;
+            let g1 = [0.0, 0.0];
+            assert!(reachable_between(&p, g1, [reach - 0.05, 0.0], slots));
+            assert!(!reachable_between(&p, g1, [reach + 1.0, 0.0], slots));
+            // realised: UAV at distance offset + r from g1 (heading −y, centre between them)
+            let q1 = [r + offset, 0.0];
+            let q_before = [q1[0] + v_step * (slots - 1) as f64, 0.0];
+            // last step of length v_step at heading φ puts the centre at q_before +
+            // v_step (cos φ, sin φ) + offset (sin φ, −cos φ); choose φ with its y = 0
+            let phi = (offset / v_step).atan();
+            let c = [
+                q_before[0] + v_step * phi.cos() + offset * phi.sin(),
+                q_before[1] + v_step * phi.sin() - offset * phi.cos(),
+            ];
+            assert!(c[1].abs() < 1e-9);
+            let g2 = [c[0] + r, 0.0];
+            assert!((g2[0] - reach).abs() < 1e-6, "{} vs {reach}", g2[0]);
         }
     }
 

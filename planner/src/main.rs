@@ -72,6 +72,15 @@ enum Command {
         /// answer; experimental, see BENCHMARKS.md).
         #[arg(long, default_value = "clarabel", value_parser = parse_backend)]
         socp_backend: Backend,
+        /// Wall-time limit of the whole run, s: the iterations stop at the first check after it
+        /// and the last accepted (feasible) iterate is written, with termination `time_limit`;
+        /// a run still repairing its start then fails (exit 1).
+        #[arg(long)]
+        time_limit_s: Option<f64>,
+        /// With --init: fail when the given path cannot be repaired, instead of planning from
+        /// the built-in start (the default, noted as `init_replaced` in summary.json).
+        #[arg(long)]
+        no_init_fallback: bool,
     },
     /// Evaluate a trajectory of a mission on the exact geometry (true energy, violations).
     Evaluate {
@@ -212,14 +221,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
             plain_sca,
             resolution,
             socp_backend,
+            time_limit_s,
+            no_init_fallback,
         } => {
             let m = Mission::from_path(&mission).map_err(bad)?;
             check_out_dir(&out)?;
-            if !(tolerance.is_finite() && tolerance > 0.0) {
-                return Err(bad(anyhow::anyhow!(
-                    "--tolerance {tolerance}: must be a finite number > 0"
-                )));
-            }
             let p = m.params();
             let init = match init {
                 Some(path) => Some(
@@ -245,8 +251,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     backend: socp_backend,
                     ..SocpSettings::exact_geometry()
                 },
+                time_limit_s,
+                replace_unrepairable_init: !no_init_fallback,
                 ..PlanOptions::default()
             };
+            options.validate()?;
             let pb = spinner();
             let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));
             pb.finish_and_clear();

@@ -193,6 +193,21 @@ scalar_fields! {
     uav_mass_kg: Range::Positive,
 }
 
+/// `x` with at most six significant digits and no trailing zeros (`1.5708`, `600.001`, `2`),
+/// for limits and derived values in messages; the offending value itself is printed in full.
+fn short(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x}");
+    }
+    let digits = 6 - 1 - x.abs().log10().floor() as i32;
+    let text = format!("{:.*}", digits.max(0) as usize, x);
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
 /// Largest number of slots a mission may have (keeps memory and solve time bounded).
 pub const MAX_SLOTS: usize = 200_000;
 
@@ -241,7 +256,11 @@ impl Params {
                 Range::Positive if value <= 0.0 => return Err(bad("must be > 0")),
                 Range::NonNegative if value < 0.0 => return Err(bad("must be >= 0")),
                 Range::Open(lo, hi) if !(value > lo && value < hi) => {
-                    return Err(bad(&format!("must lie in the open interval ({lo}, {hi})")))
+                    return Err(bad(&format!(
+                        "must lie in the open interval ({}, {})",
+                        short(lo),
+                        short(hi)
+                    )))
                 }
                 _ => {}
             }
@@ -264,8 +283,9 @@ impl Params {
                 field: "horizon_s",
                 value: self.horizon_s,
                 reason: format!(
-                    "must be a whole, non-zero number of slots of slot_s = {} s (ratio {ratio})",
-                    self.slot_s
+                    "must be a whole, non-zero number of slots of slot_s = {} s (ratio {})",
+                    self.slot_s,
+                    short(ratio)
                 ),
             });
         }
@@ -368,18 +388,39 @@ mod tests {
     fn observation_angle_must_be_inside_open_interval() {
         let mut p = Params::default();
         p.observation_angle_rad = std::f64::consts::FRAC_PI_2;
-        assert!(p
-            .validate()
-            .unwrap_err()
-            .to_string()
-            .contains("observation_angle_rad"));
+        let msg = p.validate().unwrap_err().to_string();
+        assert_eq!(
+            msg,
+            "parameter `observation_angle_rad` = 1.5707963267948966: must lie in the open \
+             interval (0, 1.5708)"
+        );
     }
 
     #[test]
     fn horizon_must_be_whole_number_of_slots() {
         let mut p = Params::default();
         p.horizon_s = 300.2;
-        assert!(p.validate().unwrap_err().to_string().contains("horizon_s"));
+        let msg = p.validate().unwrap_err().to_string();
+        assert!(
+            msg.contains("horizon_s") && msg.ends_with("(ratio 600.4)"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn short_numbers() {
+        for (x, s) in [
+            (std::f64::consts::FRAC_PI_2, "1.5708"),
+            (600.0000001, "600"),
+            (600.4, "600.4"),
+            (2.0, "2"),
+            (0.0, "0"),
+            (-1.25e-7, "-0.000000125"),
+            (123_456_789.0, "123456789"),
+            (f64::NAN, "NaN"),
+        ] {
+            assert_eq!(short(x), s, "{x}");
+        }
     }
 
     #[test]

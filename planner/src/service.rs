@@ -116,7 +116,7 @@ impl ServiceError {
         let kind = match self {
             ServiceError::BadRequest(_)
             | ServiceError::Plan {
-                error: PlanError::InvalidInit(_),
+                error: PlanError::InvalidInit(_) | PlanError::InvalidOption { .. },
                 ..
             } => RefusalKind::BadRequest,
             ServiceError::Plan {
@@ -656,6 +656,11 @@ pub struct ServeArgs {
     /// Keep the plans in this directory and answer lookups for them after a restart.
     #[arg(long, value_name = "DIR")]
     pub state_dir: Option<PathBuf>,
+    /// Wall-time limit of each plan, s: the planner stops iterating at the limit and answers
+    /// with its last accepted (feasible) iterate, termination `time_limit` in the summary; a
+    /// request whose start is still being repaired then is refused (`internal`). Default: none.
+    #[arg(long, value_name = "SECONDS", value_parser = bridge::flags::parse_seconds)]
+    pub plan_time_limit_s: Option<bridge::flags::Seconds>,
     /// Zenoh flags.
     #[command(flatten)]
     pub zenoh: ZenohArgs,
@@ -703,9 +708,22 @@ pub fn plan_request(
     instance: &str,
     observer: &mut dyn Observer,
 ) -> Result<Plan, ServiceError> {
+    plan_request_within(req, instance, None, observer)
+}
+
+/// [`plan_request`] with a wall-time limit ([`PlanOptions::time_limit_s`]).
+pub fn plan_request_within(
+    req: &PlanRequest,
+    instance: &str,
+    time_limit_s: Option<f64>,
+    observer: &mut dyn Observer,
+) -> Result<Plan, ServiceError> {
     let mission = Mission::from_file_struct(&req.mission)
         .map_err(|e| ServiceError::BadRequest(format!("mission: {e}")))?;
-    let options = req.options.to_plan_options()?;
+    let options = PlanOptions {
+        time_limit_s,
+        ..req.options.to_plan_options()?
+    };
     let result =
         plan_with_observer(&mission, &options, observer).map_err(|error| ServiceError::Plan {
             mission: mission.name().to_string(),
@@ -774,7 +792,10 @@ fn serve_on(
                 tracing::info!(mission = %p.mission_id, "plan request answered from the cache");
                 Ok(p)
             }
-            None => plan_in_thread(node, &board, &req, &args.instance, stop).map(Arc::new),
+            None => {
+                let limit = args.plan_time_limit_s.map(|s| s.as_secs_f64());
+                plan_in_thread(node, &board, &req, &args.instance, limit, stop).map(Arc::new)
+            }
         };
         if stop.load(Ordering::Relaxed) {
             break;
@@ -879,6 +900,7 @@ fn plan_in_thread(
     board: &StatusBoard,
     req: &PlanRequest,
     instance: &str,
+    time_limit_s: Option<f64>,
     stop: &AtomicBool,
 ) -> Result<Plan, ServiceError> {
     let provisional = Mission::from_file_struct(&req.mission)
@@ -895,7 +917,7 @@ fn plan_in_thread(
                 phase: String::new(),
                 last: Instant::now(),
             };
-            let _ = done_tx.send(plan_request(&req, &instance, &mut obs));
+            let _ = done_tx.send(plan_request_within(&req, &instance, time_limit_s, &mut obs));
         })
         .map_err(|e| ServiceError::Internal(format!("starting the planning thread: {e}")))?;
     let mut status = board.status(provisional, "planning");
@@ -954,6 +976,7 @@ mod tests {
         let args = ServeArgs {
             instance: "waits".into(),
             state_dir: None,
+            plan_time_limit_s: None,
             zenoh: client_without_router(&dir),
         };
         let stop = Arc::new(AtomicBool::new(false));

@@ -199,6 +199,34 @@ fn out_that_is_a_file_exits_2_before_planning() {
 }
 
 #[test]
+fn bad_time_limit_exits_2_and_names_the_option() {
+    let out = tmp("timelimit");
+    for (value, needle) in [("0", "time_limit_s"), ("nan", "time_limit_s")] {
+        let o = bin()
+            .arg("plan")
+            .arg(repo().join("missions/explicit.toml"))
+            .args(["--time-limit-s", value, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{value}: {err}");
+        assert!(err.contains(needle), "{value}: {err}");
+        assert!(!out.join("summary.json").exists());
+    }
+    // a tolerance that is not a number > 0 is named the same way
+    let o = bin()
+        .arg("plan")
+        .arg(repo().join("missions/explicit.toml"))
+        .args(["--tolerance=-1", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("tolerance"));
+}
+
+#[test]
 fn dmin_prints_the_three_values() {
     let o = bin()
         .args([

@@ -388,3 +388,160 @@ fn bad_init_is_rejected_with_a_message() {
     .unwrap_err();
     assert!(e.to_string().contains("120 slots"), "{e}");
 }
+
+#[test]
+fn time_limit_returns_the_last_feasible_iterate() {
+    // A feasible given start and a limit that has passed before the first iteration: the plan is
+    // that start, unchanged, stopped by the limit (not an error, not an unchecked iterate).
+    let m = short_mission();
+    let start = plan(
+        &m,
+        &PlanOptions {
+            max_iterations: 1,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(start.evaluation.is_feasible());
+    let r = plan(
+        &m,
+        &PlanOptions {
+            init: Some(start.trajectory.clone()),
+            time_limit_s: Some(1e-9),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(r.termination, TerminationReason::TimeLimit);
+    assert_eq!(r.iterations, 0);
+    assert!(!r.converged);
+    assert_eq!(r.trajectory.pos_m, start.trajectory.pos_m);
+    assert_feasible_on_exact_geometry(&check(&m, &r.trajectory));
+    // the same for the paper's scheme, from the same path
+    let r = plan(
+        &m,
+        &PlanOptions {
+            scheme: Scheme::Paper,
+            init: Some(start.trajectory),
+            time_limit_s: Some(1e-9),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(r.termination, TerminationReason::TimeLimit);
+    assert_eq!(r.iterations, 0);
+}
+
+#[test]
+fn time_limit_during_repair_is_an_error_that_says_so() {
+    // An infeasible given start (parked 1 km from the start) and a limit already passed: phase I
+    // cannot run, and the error says why instead of planning from another start.
+    let m = short_mission();
+    let parked = Trajectory {
+        slot_s: 0.5,
+        start_m: m.params().start_m,
+        pos_m: vec![[100.0, 0.0]; m.slots()],
+    };
+    let e = plan(
+        &m,
+        &PlanOptions {
+            init: Some(parked),
+            time_limit_s: Some(1e-9),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, planner::PlanError::TimeLimit { iterations: 0, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("time limit"), "{e}");
+    // a generous limit changes nothing
+    let r = plan(
+        &m,
+        &PlanOptions {
+            time_limit_s: Some(1e6),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(r.termination, TerminationReason::Converged);
+}
+
+#[test]
+fn bad_options_are_named() {
+    let m = short_mission();
+    for (options, field) in [
+        (
+            PlanOptions {
+                time_limit_s: Some(f64::NAN),
+                ..Default::default()
+            },
+            "time_limit_s",
+        ),
+        (
+            PlanOptions {
+                time_limit_s: Some(0.0),
+                ..Default::default()
+            },
+            "time_limit_s",
+        ),
+        (
+            PlanOptions {
+                tolerance: -1.0,
+                ..Default::default()
+            },
+            "tolerance",
+        ),
+        (
+            PlanOptions {
+                min_kappa_scale: 2.0,
+                ..Default::default()
+            },
+            "min_kappa_scale",
+        ),
+    ] {
+        let e = plan(&m, &options).unwrap_err();
+        assert!(
+            matches!(e, planner::PlanError::InvalidOption { field: f, .. } if f == field),
+            "{e}"
+        );
+        assert!(e.to_string().contains(field), "{e}");
+    }
+}
+
+#[test]
+fn unrepairable_init_falls_back_only_when_allowed() {
+    // Parked 3 km away: the first step is 4 km in 0.5 s and every later step is zero, so the
+    // repair programs are numerically infeasible (Clarabel: primal infeasible).
+    let m = short_mission();
+    let parked = Trajectory {
+        slot_s: 0.5,
+        start_m: m.params().start_m,
+        pos_m: vec![[3000.0, 0.0]; m.slots()],
+    };
+    let r = plan(
+        &m,
+        &PlanOptions {
+            init: Some(parked.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let reason = r
+        .init_replaced
+        .as_deref()
+        .expect("the built-in start was used");
+    assert!(reason.contains("iteration 0"), "{reason}");
+    assert_feasible_on_exact_geometry(&check(&m, &r.trajectory));
+    let e = plan(
+        &m,
+        &PlanOptions {
+            init: Some(parked),
+            replace_unrepairable_init: false,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert_eq!(e.to_string(), reason);
+}
