@@ -1072,6 +1072,38 @@ mod tests {
         .unwrap()
     }
 
+    /// The service's time limit reaches the planner: a limit that has passed gives either the
+    /// start, stopped by the limit, or (start not yet feasible) an `internal` refusal that says
+    /// so; a generous one changes nothing.
+    #[test]
+    fn plan_time_limit_reaches_the_planner() {
+        let req = PlanRequest {
+            mission: short_mission(),
+            options: PlanRequestOptions::default(),
+        };
+        match plan_request_within(&req, "t", Some(1e-9), &mut NoObserver) {
+            Ok(plan) => {
+                assert_eq!(plan.result.termination, crate::TerminationReason::TimeLimit);
+                assert_eq!(plan.result.iterations, 0);
+            }
+            Err(e) => {
+                assert!(
+                    matches!(
+                        e,
+                        ServiceError::Plan {
+                            error: PlanError::TimeLimit { .. },
+                            ..
+                        }
+                    ),
+                    "{e}"
+                );
+                assert_eq!(e.refusal().kind, RefusalKind::Internal);
+            }
+        }
+        let plan = plan_request_within(&req, "t", Some(1e6), &mut NoObserver).unwrap();
+        assert!(plan.result.converged);
+    }
+
     #[test]
     fn plans_round_trip_in_both_forms() {
         let req = PlanRequest {
