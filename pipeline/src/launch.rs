@@ -943,7 +943,7 @@ fn run_on(
                 r.aperture,
                 r.landmark.map(|l| l.to_string()).unwrap_or_default(),
                 r.in_view_fraction,
-                r.detected,
+                r.detected_label(),
                 r.snr_db.unwrap_or(f64::NAN)
             ),
         );
@@ -1072,16 +1072,8 @@ fn write_report_md(
         pipeline["imaging_s"].as_f64().unwrap_or(f64::NAN),
         pipeline["wall_s"].as_f64().unwrap_or(f64::NAN)
     );
-    let _ = writeln!(
-        s,
-        "- detection: Pd {:.3} over {} objects ≥ 13 dB, {} false alarms (design {:.2}), mean position error {:.2} m",
-        m.pd, m.strong_objects, m.false_alarms, m.design_false_alarms, m.mean_position_error_m
-    );
-    let _ = writeln!(
-        s,
-        "- canceller: direct-path reduction {:.1} dB, residual {:.2} dB over noise",
-        m.dpi_reduction_db, m.residual_to_noise_db
-    );
+    let _ = writeln!(s, "- detection: {}", m.detection_summary());
+    let _ = writeln!(s, "- canceller: {}", m.canceller_summary());
     let _ = writeln!(
         s,
         "- every landmark in view detected: {}",
@@ -1116,7 +1108,11 @@ fn write_report_md(
             r.aperture,
             r.landmark.map(|l| l.to_string()).unwrap_or_default(),
             r.in_view_fraction,
-            if r.detected { "yes" } else { "no" },
+            match r.detected {
+                Some(true) => "yes",
+                Some(false) => "no",
+                None => "not scored",
+            },
             r.snr_db.unwrap_or(f64::NAN),
             w,
             if w > d_min { " (> d_min)" } else { "" }

@@ -254,6 +254,46 @@ impl Weighting {
         s4 / (s2 * s2)
     }
 
+    /// The taper as `a0 − a1 cos(2πx)`, x ∈ [0, 1] across the band (or the aperture).
+    fn cosine_coefficients(self) -> (f64, f64) {
+        match self {
+            Weighting::None => (1.0, 0.0),
+            Weighting::Hann => (0.5, 0.5),
+            Weighting::Hamming => (0.54, 0.46),
+        }
+    }
+
+    /// Amplitude of the point response at `u` resolution units (1/bandwidth) from its peak,
+    /// normalised to 1 at the peak (continuous taper): `(a0 sinc u + a1/2 (sinc(u−1) +
+    /// sinc(u+1))) / a0`, first null at 1 (none) or 2 (Hann, Hamming).
+    pub fn amplitude_response(self, u: f64) -> f64 {
+        let sinc = |x: f64| {
+            if x.abs() < 1e-12 {
+                1.0
+            } else {
+                let px = std::f64::consts::PI * x;
+                px.sin() / px
+            }
+        };
+        let (a0, a1) = self.cosine_coefficients();
+        (a0 * sinc(u) + 0.5 * a1 * (sinc(u - 1.0) + sinc(u + 1.0))) / a0
+    }
+
+    /// Second moment `∫ x² w(x)² dx / ∫ w(x)² dx` (x ∈ [−1/2, 1/2]) of the squared taper, the
+    /// noise's power spectrum across the band: `4π²` times it is the curvature −ρ''(0) of the
+    /// noise's correlation in resolution units (1/12 for none, 0.0200 for Hann).
+    pub fn spectral_second_moment(self) -> f64 {
+        let n = 4096;
+        let w = self.weights(n);
+        let (mut s0, mut s2) = (0.0, 0.0);
+        for (i, v) in w.iter().enumerate() {
+            let x = (i as f64 + 0.5) / n as f64 - 0.5;
+            s0 += v * v;
+            s2 += x * x * v * v;
+        }
+        s2 / s0
+    }
+
     /// −3 dB main-lobe width in units of 1/bandwidth (0.886 for none).
     pub fn mainlobe_factor(self) -> f64 {
         match self {

@@ -43,23 +43,23 @@ pub(crate) fn int_lag_sums(
     out
 }
 
-/// [`int_lag_sums`] of up to three spectra at once (shared phasors): `out[v][l]` =
+/// [`int_lag_sums`] of `V` spectra at once (shared phasors): `out[v][l]` =
 /// `Σ_i xs[v]_i e^{j2π (k0 + i) lags[l] / N}`.
-pub(crate) fn int_lag_sums3(
-    xs: [&[Complex64]; 3],
+pub(crate) fn int_lag_sums_many<const V: usize>(
+    xs: [&[Complex64]; V],
     k0: i64,
     lags: &[i64],
     tw: &[Complex64],
-) -> [Vec<Complex64>; 3] {
+) -> [Vec<Complex64>; V] {
     #[inline(always)]
-    fn kernel(
-        xs: [&[Complex64]; 3],
+    fn kernel<const V: usize>(
+        xs: [&[Complex64]; V],
         mut pr: [f64; LANES],
         mut pi: [f64; LANES],
         st_re: [f64; LANES],
         st_im: [f64; LANES],
-    ) -> [[f64; 2 * LANES]; 3] {
-        let mut acc = [[0.0; 2 * LANES]; 3];
+    ) -> [[f64; 2 * LANES]; V] {
+        let mut acc = [[0.0; 2 * LANES]; V];
         let len = xs.iter().map(|x| x.len()).min().unwrap_or(0); // equal lengths (callers)
         for i in 0..len {
             for (v, x) in xs.iter().enumerate() {
@@ -79,28 +79,28 @@ pub(crate) fn int_lag_sums3(
     }
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn k512(
-        xs: [&[Complex64]; 3],
+    fn k512<const V: usize>(
+        xs: [&[Complex64]; V],
         a: [f64; LANES],
         b: [f64; LANES],
         c: [f64; LANES],
         d: [f64; LANES],
-    ) -> [[f64; 2 * LANES]; 3] {
+    ) -> [[f64; 2 * LANES]; V] {
         kernel(xs, a, b, c, d)
     }
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn k256(
-        xs: [&[Complex64]; 3],
+    fn k256<const V: usize>(
+        xs: [&[Complex64]; V],
         a: [f64; LANES],
         b: [f64; LANES],
         c: [f64; LANES],
         d: [f64; LANES],
-    ) -> [[f64; 2 * LANES]; 3] {
+    ) -> [[f64; 2 * LANES]; V] {
         kernel(xs, a, b, c, d)
     }
     let n = tw.len() as i64;
-    let mut out: [Vec<Complex64>; 3] = Default::default();
+    let mut out: [Vec<Complex64>; V] = std::array::from_fn(|_| Vec::with_capacity(lags.len()));
     for chunk in lags.chunks(LANES) {
         let mut ph_re = [0.0; LANES];
         let mut ph_im = [0.0; LANES];
@@ -344,7 +344,7 @@ mod tests {
         }
         let y: Vec<Complex64> = x.iter().map(|v| v * Complex64::new(0.3, -1.1)).collect();
         let z: Vec<Complex64> = x.iter().rev().copied().collect();
-        let three = int_lag_sums3([&x, &y, &z], -101, &lags, &tw);
+        let three = int_lag_sums_many([&x, &y, &z], -101, &lags, &tw);
         for (v, xv) in [&x, &y, &z].iter().enumerate() {
             for (s, g) in lags.iter().zip(&three[v]) {
                 let w = brute(xv, -101.0, n, *s as f64);

@@ -171,21 +171,13 @@ fn process(input: &Path, out: &Path, limits: &IqLimits) -> Result<run::Metrics> 
     b.finish();
     let m = m?;
     println!(
-        "processed in {:.1} s: Pd {:.3} ({} objects ≥ 13 dB), {} false alarms (design {:.2}), mean error {:.2} m, DP reduction {:.1} dB, residual {:.2} dB over noise",
+        "processed in {:.1} s: {}",
         t.elapsed().as_secs_f64(),
-        m.pd,
-        m.strong_objects,
-        m.false_alarms,
-        m.design_false_alarms,
-        m.mean_position_error_m,
-        m.dpi_reduction_db,
-        m.residual_to_noise_db
+        m.detection_summary()
     );
-    if let (Some(r), Some(a)) = (&m.range_resolution_m, &m.azimuth_resolution_m) {
-        println!(
-            "resolution: range {:.3} m (general {:.3}, paper {:.3}), azimuth {:.3} m (general {:.3}, paper {:.3})",
-            r.measured_m, r.predicted_general_m, r.paper_m, a.measured_m, a.predicted_general_m, a.paper_m
-        );
+    println!("canceller: {}", m.canceller_summary());
+    if let Some(line) = m.resolution_summary() {
+        println!("{line}");
     }
     Ok(m)
 }
@@ -244,13 +236,15 @@ fn closed_loop(
             r.aperture,
             r.landmark.map(|l| l.to_string()).unwrap_or_default(),
             r.in_view_fraction,
-            r.detected,
+            r.detected_label(),
             r.snr_db.unwrap_or(f64::NAN)
         );
     }
     println!(
         "every landmark in view detected: {}",
-        if report.all_in_view_detected {
+        if report.landmarks_scored == 0 {
+            "not scored (no landmark is a truth object of the scene)"
+        } else if report.all_in_view_detected {
             "yes"
         } else {
             "NO"

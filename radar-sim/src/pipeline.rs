@@ -17,7 +17,7 @@ use rustfft::{Fft, FftPlanner};
 use crate::antenna::Antenna;
 use crate::backproject::{backproject, profile_windows, BpGeometry, BpPulse, Grid};
 use crate::cancel::{CancelStats, Canceller, SymbolWindow};
-use crate::cfar::{ca_cfar, cluster, CfarParams, Detection};
+use crate::cfar::{ca_cfar, cluster, expected_peaks_per_m2, CfarParams, Detection, ResponseModel};
 use crate::compress::RangeCompressor;
 use crate::config::{CancellerKind, RangeFilter, SceneFile};
 use crate::error::{RadarError, Result};
@@ -187,12 +187,42 @@ pub struct ApertureResult {
     pub score: Score,
     /// Canceller metrics.
     pub cancel: CancelStats,
-    /// CFAR exceedance pixels away from every truth object.
+    /// CFAR exceedance pixels among the clear pixels.
     pub false_alarm_pixels: usize,
-    /// Pixels tested away from every truth object.
+    /// Clear pixels: outside every truth object's gate, where the objects' predicted responses
+    /// sum to less than [`CLEAR_SIGNAL`] of the thermal noise, and in no exceedance region that
+    /// reaches an object's gate.
     pub clear_pixels: usize,
-    /// Predicted resolution cell at the image centre (general geometry).
+    /// Expected CFAR exceedance pixels on noise over the clear pixels: P_fa × `clear_pixels`.
+    pub design_false_alarm_pixels: f64,
+    /// Expected false-alarm detections (noise peaks the CFAR passes) outside every truth
+    /// object's gate, by design: the Euler-characteristic density of the multilook noise field
+    /// at the CFAR's threshold ([`crate::cfar::expected_peaks_per_m2`]) times that area.
+    pub design_false_alarms: f64,
+    /// Pixels tested against the image-wide noise estimate (too few training cells of their
+    /// own); no pixel is left untested.
+    pub cfar_fallback_pixels: usize,
+    /// Predicted resolution cell at the image centre (general geometry, the unweighted
+    /// 1/B and 1/T cell the planner constrains).
     pub cell: pg::ResolutionCell,
+    /// −3 dB main-lobe factors of the (range, azimuth) weightings: the cell's widths times
+    /// these are the −3 dB widths of the image's response.
+    pub mainlobe_factors: [f64; 2],
+    /// Predicted echo power per sample at the receiver, mean over the aperture's pulses
+    /// (the link budget of the truth objects), W.
+    pub echo_power_w: f64,
+    /// Predicted power per sample after cancellation without any direct path left: the echo
+    /// power plus the thermal noise that the projection keeps
+    /// ([`crate::cancel::CancelStats::noise_retained`]), W.
+    pub predicted_floor_w: f64,
+    /// Whether the scene has a direct path.
+    pub direct_path: bool,
+    /// The image's noise floor as the CFAR estimated it ([`crate::cfar::image_floor`]), in
+    /// units of the thermal noise.
+    pub image_floor: f64,
+    /// The floor predicted from the truth: thermal noise plus the echoes' inter-symbol
+    /// interference ([`Processor::isi_power_w`]), in units of the thermal noise.
+    pub predicted_image_floor: f64,
     /// The matching gate used, m.
     pub gate_m: f64,
     /// Per-look noise variance of the complex image, W.
@@ -202,15 +232,30 @@ pub struct ApertureResult {
 }
 
 impl ApertureResult {
-    /// Expected number of false-alarm pixels by design (P_fa × clear pixels).
-    pub fn design_false_alarm_pixels(&self, pfa: f64) -> f64 {
-        pfa * self.clear_pixels as f64
+    /// Worst −3 dB width of the image's response at the centre: the cell's principal chords
+    /// times the weightings' main-lobe factors, max(f_r × cross-track, f_a × iso-range), m.
+    pub fn worst_width_mainlobe_m(&self) -> f64 {
+        (self.mainlobe_factors[0] * self.cell.cross_track_width_m)
+            .max(self.mainlobe_factors[1] * self.cell.iso_range_width_m)
     }
+}
 
-    /// Expected number of false-alarm clusters by design (one per exceeding independent cell).
-    pub fn design_false_alarm_clusters(&self, pfa: f64) -> f64 {
-        pfa * self.grid.pixels() as f64 / self.pixels_per_cell
-    }
+/// A pixel counts as clear (noise only, for the pixel-level false-alarm count) where the truth
+/// objects' predicted responses sum to less than this, in units of the thermal noise (−10 dB),
+/// and it is in no exceedance region that reaches an object's gate.
+pub const CLEAR_SIGNAL: f64 = 0.1;
+
+/// Objects within this many grid half-widths outside the grid are counted for the clear pixels
+/// (their responses reach into the image).
+pub const NEAR_OBJECT_REACH: f64 = 2.0;
+
+/// Coherent amplitude factor of a path `delay_samples` into a CP-free window of `n` samples
+/// with `cp` samples of cyclic prefix: the fraction of the window that still holds the
+/// symbol's own data, `max(0, 1 − (max(Δ − N_cp, 0) + max(−Δ, 0)) / N)` (the rest carries the
+/// neighbouring symbol, uncorrelated with the reference).
+pub fn cp_overlap_factor(delay_samples: f64, n: usize, cp: usize) -> f64 {
+    let spill = (delay_samples - cp as f64).max(0.0) + (-delay_samples).max(0.0);
+    (1.0 - spill / n as f64).max(0.0)
 }
 
 /// CFAR guard half-widths (x, y) in pixels and pixels per coherence area for the response at
@@ -220,7 +265,9 @@ impl ApertureResult {
 /// intensity-correlation area is `c_r c_a δ_r δ_a / sin ψ` (c: the weighting's
 /// [`crate::config::Weighting::coherence_factor`], δ_r = c/(B|g|), δ_a = 1/(T|d|)); the guard is
 /// the bounding box of the parallelogram |g·x| ≤ c_r c/B, |d·x| ≤ c_a/T (the main lobe out to
-/// its first nulls), capped at 200 pixels.
+/// its first nulls), at most `max_guard_px` (x, y): bounded by the grid, so that the pixels
+/// of the image's centre keep training cells (censoring keeps a strong return's main lobe out
+/// of them where the guard is short of it).
 pub fn cfar_geometry(
     g: [f64; 2],
     d: [f64; 2],
@@ -228,6 +275,7 @@ pub fn cfar_geometry(
     look_s: f64,
     pc: &crate::config::ProcessingConfig,
     pixel_m: f64,
+    max_guard_px: (usize, usize),
 ) -> (usize, usize, f64) {
     let cr = pc.range_weighting.coherence_factor();
     let ca = pc.azimuth_weighting.coherence_factor();
@@ -247,8 +295,19 @@ pub fn cfar_geometry(
     let eb = cr * dr / s;
     let x = ea * e1[0].abs() + eb * e2[0].abs();
     let y = ea * e1[1].abs() + eb * e2[1].abs();
-    let px = |v: f64| ((v / pixel_m).ceil() as usize).clamp(1, 200);
-    (px(x), px(y), (area / (pixel_m * pixel_m)).max(1.0))
+    let px = |v: f64, max: usize| {
+        let p = (v / pixel_m).ceil();
+        if p.is_finite() {
+            (p.max(1.0) as usize).clamp(1, max.max(1))
+        } else {
+            max.max(1)
+        }
+    };
+    (
+        px(x, max_guard_px.0),
+        px(y, max_guard_px.1),
+        (area / (pixel_m * pixel_m)).max(1.0),
+    )
 }
 
 /// CFAR output of one aperture's multilook image.
@@ -264,6 +323,8 @@ pub struct Detected {
     pub cell: pg::ResolutionCell,
     /// Pixels per coherence area used by the CFAR.
     pub pixels_per_cell: f64,
+    /// The point-response model used for sidelobe editing and the design false-alarm count.
+    pub model: ResponseModel,
 }
 
 /// The processor of one setup.
@@ -350,15 +411,74 @@ impl Processor {
         self.profile_noise_var() * w.iter().map(|x| (*x as f64).powi(2)).sum::<f64>()
     }
 
-    /// Expected per-look image SNR of `obj` over `pulses` (one look), dB: (Σ w √P)² / (Σ w² σ_p²).
+    /// Expected per-look image SNR of `obj` over `pulses` (one look), dB:
+    /// (Σ w f √P)² / (Σ w² σ_p²), with f the [`cp_overlap_factor`] of the echo's delay in the
+    /// pulse's window (1 inside the cyclic prefix; an echo beyond it shares the window with the
+    /// previous symbol and loses that fraction of its coherent gain).
     pub fn expected_snr_db(&self, obj: &SceneObject, pulses: &[PulseMeta]) -> f64 {
         let w = self.look_weights(pulses.len());
+        let geom = self.setup.geometry();
+        let (n, cp) = (self.setup.num.fft_size, self.setup.num.cp_samples);
         let amp: f64 = pulses
             .iter()
             .zip(&w)
-            .map(|(p, w)| *w as f64 * self.link.echo_power_w(obj, p.pos_m, p.heading).sqrt())
+            .map(|(p, w)| {
+                let delay = geom.delay_samples(obj.pos_m(), p.pos_m, p.window_delay_samples);
+                *w as f64
+                    * cp_overlap_factor(delay, n, cp)
+                    * self.link.echo_power_w(obj, p.pos_m, p.heading).sqrt()
+            })
             .sum();
         10.0 * (amp * amp / self.look_noise_var(pulses.len())).log10()
+    }
+
+    /// Predicted echo power per sample at the receiver, W: the link budget of `objects`
+    /// summed, mean over `pulses`.
+    pub fn echo_power_w(&self, objects: &[SceneObject], pulses: &[PulseMeta]) -> f64 {
+        if pulses.is_empty() {
+            return 0.0;
+        }
+        pulses
+            .iter()
+            .map(|p| {
+                objects
+                    .iter()
+                    .map(|o| self.link.echo_power_w(o, p.pos_m, p.heading))
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
+            / pulses.len() as f64
+    }
+
+    /// Predicted power per sample of the echoes' inter-symbol interference, W, mean over
+    /// `pulses`: an echo with [`cp_overlap_factor`] f < 1 leaves `P (1 − f²)` of its power
+    /// uncorrelated with the reference (the neighbouring symbol's data), which range
+    /// compression spreads like white noise, raising the image's floor.
+    pub fn isi_power_w(&self, objects: &[SceneObject], pulses: &[PulseMeta]) -> f64 {
+        if pulses.is_empty() {
+            return 0.0;
+        }
+        let geom = self.setup.geometry();
+        let (n, cp) = (self.setup.num.fft_size, self.setup.num.cp_samples);
+        pulses
+            .iter()
+            .map(|p| {
+                objects
+                    .iter()
+                    .map(|o| {
+                        let delay = geom.delay_samples(o.pos_m(), p.pos_m, p.window_delay_samples);
+                        let f = cp_overlap_factor(delay, n, cp);
+                        self.link.echo_power_w(o, p.pos_m, p.heading) * (1.0 - f * f)
+                    })
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
+            / pulses.len() as f64
+    }
+
+    /// Thermal noise power per complex sample at the receiver, W.
+    pub fn noise_power_w(&self) -> f64 {
+        self.link.noise_power_w()
     }
 
     /// Cancels and range-compresses `pulses` (IQ: pulses × samples) for imaging on `grid`.
@@ -610,6 +730,7 @@ impl Processor {
             azimuth_general_m: az_general,
             azimuth_paper_m: pg::azimuth_resolution_paper_m(params, v2::norm(vel)),
             mainlobe_factor: fr,
+            azimuth_mainlobe_factor: fa,
             bistatic_angle_deg: pg::bistatic_angle_rad(params, uc, target_m).to_degrees(),
             psi_deg: cell.psi_rad.to_degrees(),
         })
@@ -776,9 +897,51 @@ impl Processor {
             }
         }
         let det = self.detect(ap, pulses, &multilook)?;
+        let echo_power_w = self.echo_power_w(objects, pulses);
+        let floor_w =
+            echo_power_w + self.noise_power_w() * c.cancel.noise_retained(self.setup.num.fft_size);
+        let image_floor_pred = 1.0 + self.isi_power_w(objects, pulses) / self.noise_power_w();
         self.score_aperture(
-            ap, pulses, multilook, looks, det, c.cancel, noise_var, objects,
+            ap,
+            pulses,
+            multilook,
+            looks,
+            det,
+            (c.cancel, echo_power_w, floor_w, image_floor_pred),
+            noise_var,
+            objects,
         )
+    }
+
+    /// Per look of `ap` (from its own pulses: the middle one's position, the velocity over the
+    /// look): the range cells per metre `g B / c` and the Doppler cells per metre `∇f_D T` at
+    /// ground point `point_m` (a [`ResponseModel`]'s looks).
+    pub fn look_gradients(
+        &self,
+        ap: &Aperture,
+        pulses: &[PulseMeta],
+        point_m: [f64; 2],
+    ) -> Vec<([f64; 2], [f64; 2])> {
+        let b = self.setup.num.bandwidth_hz();
+        let params = &self.setup.params;
+        pulses
+            .chunks(ap.pulses_per_look.max(1))
+            .filter(|c| c.len() >= 2)
+            .map(|c| {
+                let (a, z) = (&c[0], &c[c.len() - 1]);
+                let m = &c[c.len() / 2];
+                let v = v2::scale(
+                    [z.pos_m[0] - a.pos_m[0], z.pos_m[1] - a.pos_m[1]],
+                    1.0 / (z.t_s - a.t_s).max(1e-9),
+                );
+                let u = [m.pos_m[0], m.pos_m[1]];
+                let t = c.len() as f64 / self.setup.scene.radar.prf_hz;
+                (
+                    v2::scale(pg::bistatic_range_gradient(params, u, point_m), b / C_MPS),
+                    v2::scale(pg::doppler_gradient(params, u, v, point_m), t),
+                )
+            })
+            .collect()
     }
 
     /// CFAR detection and clustering on the multilook image of aperture `ap` (mean over its
@@ -815,13 +978,19 @@ impl Processor {
         params.integration_time_s = self.setup.look_s;
         let cell = pg::ResolutionCell::new(&params, [mid.pos_m[0], mid.pos_m[1]], vel, ap.centre_m);
         let uc = [mid.pos_m[0], mid.pos_m[1]];
+        let g = pg::bistatic_range_gradient(&params, uc, ap.centre_m);
+        let d = pg::doppler_gradient(&params, uc, vel, ap.centre_m);
+        let b = self.setup.num.bandwidth_hz();
+        // the guard stays inside the grid: every pixel keeps a training band on each side
+        let max_guard = |n: usize| ((n.saturating_sub(1)) / 2).saturating_sub(pc.cfar_train_px);
         let (gx, gy, ppc) = cfar_geometry(
-            pg::bistatic_range_gradient(&params, uc, ap.centre_m),
-            pg::doppler_gradient(&params, uc, vel, ap.centre_m),
-            self.setup.num.bandwidth_hz(),
+            g,
+            d,
+            b,
             self.setup.look_s,
             pc,
             grid.spacing_m,
+            (max_guard(grid.nx), max_guard(grid.ny)),
         );
         let cfar = CfarParams {
             pfa: pc.pfa,
@@ -830,8 +999,17 @@ impl Processor {
             train_px: pc.cfar_train_px,
             looks: ap.looks,
             pixels_per_cell: ppc,
+            // the image is normalised to the per-look thermal noise variance
+            known_floor: Some(1.0),
         };
         let map = ca_cfar(multilook, grid.nx, grid.ny, &cfar);
+        let per_look = self.look_gradients(ap, pulses, ap.centre_m);
+        let per_look = if per_look.is_empty() {
+            vec![(v2::scale(g, b / C_MPS), v2::scale(d, self.setup.look_s))]
+        } else {
+            per_look
+        };
+        let model = ResponseModel::new(per_look, pc.range_weighting, pc.azimuth_weighting);
         let d_min = self.setup.params.d_min_m;
         let detections = cluster(
             multilook,
@@ -839,6 +1017,7 @@ impl Processor {
             &grid,
             pc.cluster_radius_m.unwrap_or(d_min / 2.0),
             ap.index,
+            Some(&model),
         );
         Ok(Detected {
             detections,
@@ -846,6 +1025,7 @@ impl Processor {
             cfar,
             cell,
             pixels_per_cell: ppc,
+            model,
         })
     }
 
@@ -857,7 +1037,12 @@ impl Processor {
         multilook: Vec<f32>,
         looks: Vec<Vec<Complex32>>,
         det: Detected,
-        cancel: CancelStats,
+        (cancel, echo_power_w, predicted_floor_w, predicted_image_floor): (
+            CancelStats,
+            f64,
+            f64,
+            f64,
+        ),
         noise_var: f64,
         objects: &[SceneObject],
     ) -> Result<ApertureResult> {
@@ -871,51 +1056,99 @@ impl Processor {
             cfar,
             cell,
             pixels_per_cell: ppc,
+            model,
         } = det;
         let gate = pc.match_radius_m.unwrap_or(d_min / 2.0);
-        // truth inside the grid (one pixel margin)
+        // truth inside the grid (one pixel margin), and the objects near enough for their
+        // responses to reach into it, with the mean over looks of the expected per-look SNR
         let margin = grid.spacing_m;
         let half_x = (grid.nx as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
         let half_y = (grid.ny as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
-        let truth: Vec<TruthInImage> = objects
+        let snr_lin = |o: &SceneObject| -> f64 {
+            (0..ap.looks)
+                .map(|l| {
+                    10f64.powf(self.expected_snr_db(o, &pulses[l * ppl..(l + 1) * ppl]) / 10.0)
+                })
+                .sum::<f64>()
+                / ap.looks as f64
+        };
+        let reach = NEAR_OBJECT_REACH * half_x.max(half_y);
+        let near: Vec<(&SceneObject, f64)> = objects
             .iter()
             .filter(|o| {
+                (o.x_m - grid.centre_m[0]).abs() <= half_x + reach
+                    && (o.y_m - grid.centre_m[1]).abs() <= half_y + reach
+            })
+            .map(|o| (o, snr_lin(o)))
+            .collect();
+        // each object's response linearised at the object itself
+        let models: Vec<ResponseModel> = near
+            .iter()
+            .map(|(o, _)| {
+                ResponseModel::new(
+                    self.look_gradients(ap, pulses, o.pos_m()),
+                    pc.range_weighting,
+                    pc.azimuth_weighting,
+                )
+            })
+            .collect();
+        let truth: Vec<TruthInImage> = near
+            .iter()
+            .filter(|(o, _)| {
                 (o.x_m - grid.centre_m[0]).abs() <= half_x
                     && (o.y_m - grid.centre_m[1]).abs() <= half_y
             })
-            .map(|o| {
-                // mean over looks of the expected per-look SNR (linear)
-                let lin: f64 = (0..ap.looks)
-                    .map(|l| {
-                        10f64.powf(self.expected_snr_db(o, &pulses[l * ppl..(l + 1) * ppl]) / 10.0)
-                    })
-                    .sum::<f64>()
-                    / ap.looks as f64;
-                TruthInImage {
-                    id: o.id,
-                    pos_m: o.pos_m(),
-                    expected_snr_db: 10.0 * lin.log10(),
-                    landmark: o.landmark,
-                }
+            .map(|(o, lin)| TruthInImage {
+                id: o.id,
+                pos_m: o.pos_m(),
+                expected_snr_db: 10.0 * lin.log10(),
+                landmark: o.landmark,
             })
             .collect();
         let sc = score(&truth, &dets, gate);
-        // pixel-level false alarms away from the truth: outside every object's gate and main
-        // lobe (the CFAR guard box)
-        let (bx, by) = (
-            cfar.guard_x_px as f64 * grid.spacing_m,
-            cfar.guard_y_px as f64 * grid.spacing_m,
-        );
+        // pixel-level false alarms where the image is noise: outside every object's gate, and
+        // where the objects' predicted responses (expected SNR × the response envelope, incl.
+        // sidelobes) stay below CLEAR_SIGNAL of the thermal noise
         let mut fa_px = 0;
         let mut clear = 0;
+        // pixels outside every object's gate: where a detection is a false alarm
+        let mut outside_gates = 0usize;
+        let in_gate = |x: f64, y: f64| {
+            near.iter()
+                .any(|(o, _)| (o.x_m - x).hypot(o.y_m - y) <= gate)
+        };
+        // exceedance regions that reach an object's gate are its response (where the linear
+        // response model misses it: near-blind geometry)
+        let (label, sizes) = crate::cfar::components(&map.hits, grid.nx, grid.ny);
+        let mut signal_region = vec![false; sizes.len()];
+        for (i, l) in label.iter().enumerate() {
+            if *l != usize::MAX
+                && !signal_region[*l]
+                && in_gate(grid.x(i % grid.nx), grid.y(i / grid.nx))
+            {
+                signal_region[*l] = true;
+            }
+        }
         for iy in 0..grid.ny {
             for ix in 0..grid.nx {
                 let (x, y) = (grid.x(ix), grid.y(iy));
-                let near = objects.iter().any(|o| {
-                    (o.x_m - x).hypot(o.y_m - y) <= gate
-                        || ((o.x_m - x).abs() <= bx && (o.y_m - y).abs() <= by)
-                });
-                if !near {
+                if in_gate(x, y) {
+                    continue;
+                }
+                let l = label[iy * grid.nx + ix];
+                if l != usize::MAX && signal_region[l] {
+                    outside_gates += 1;
+                    continue;
+                }
+                outside_gates += 1;
+                let mut signal = 0.0;
+                for ((o, lin), m) in near.iter().zip(&models) {
+                    signal += lin * m.envelope([x - o.x_m, y - o.y_m]);
+                    if signal >= CLEAR_SIGNAL {
+                        break;
+                    }
+                }
+                if signal < CLEAR_SIGNAL {
                     clear += 1;
                     if map.hits[iy * grid.nx + ix] {
                         fa_px += 1;
@@ -923,6 +1156,14 @@ impl Processor {
                 }
             }
         }
+        let area_m2 = outside_gates as f64 * grid.spacing_m * grid.spacing_m;
+        let design_false_alarms = area_m2
+            * expected_peaks_per_m2(
+                cfar.pfa,
+                map.median_cells,
+                cfar.looks,
+                model.noise_curvature_per_m2(),
+            );
         Ok(ApertureResult {
             aperture: ap.clone(),
             grid,
@@ -933,7 +1174,19 @@ impl Processor {
             cancel,
             false_alarm_pixels: fa_px,
             clear_pixels: clear,
+            design_false_alarm_pixels: cfar.pfa * clear as f64,
+            design_false_alarms,
+            cfar_fallback_pixels: map.fallback_pixels,
             cell,
+            mainlobe_factors: [
+                pc.range_weighting.mainlobe_factor(),
+                pc.azimuth_weighting.mainlobe_factor(),
+            ],
+            echo_power_w,
+            predicted_floor_w,
+            direct_path: self.setup.scene.radar.direct_path,
+            image_floor: map.floor,
+            predicted_image_floor,
             gate_m: gate,
             noise_var,
             pixels_per_cell: ppc,

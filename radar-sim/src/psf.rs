@@ -117,7 +117,8 @@ pub struct ReportRow {
 }
 
 /// Measures every case at every bandwidth and writes `resolution.json`, `RESOLUTION.md` (a
-/// table: measured principal widths beside the predictions and the paper's δ_r, δ_a) and one
+/// table: measured principal widths beside the predictions and the paper's δ_r, δ_a, all as
+/// −3 dB widths, and the planner's worst cell without the factor) and one
 /// SVG per case (`psf_<B>MHz_<k>.svg`: measured −3 dB region and predicted cell) into `out`.
 pub fn write_report(
     out: &Path,
@@ -133,11 +134,15 @@ pub fn write_report(
 Measured: the −3 dB region of one noise-free look (T_d = 1 s, 20 m/s, unweighted) traced in 40 \
 directions through the peak. *range* and *along-track* are the region's extents along the range \
 gradient g and along the Doppler gradient (the track); *cross-track* and *iso-range* are its \
-chords along the iso-Doppler and iso-range lines (SPEC.md §4 item 12). Predictions are the \
-planner's `ResolutionCell` widths × 0.886 (main lobe of the unweighted response); the paper's \
-δ_r, δ_a (no factor) for reference. Errors are measured/predicted − 1.\n\n\
-| B / MHz | geometry | β / ° | ψ / ° | range (pred) / m | along-track (pred) / m | cross-track (pred) / m | iso-range (pred) / m | worst (pred) / m | max error | paper δ_r, δ_a / m |\n\
-|---|---|---|---|---|---|---|---|---|---|---|\n",
+chords along the iso-Doppler and iso-range lines (SPEC.md §4 item 12). Every width in the \
+table is a −3 dB width, one definition for every pair: the predictions are the planner's \
+`ResolutionCell` widths × 0.886 (the main-lobe factor of the unweighted response), and the \
+paper's δ_r, δ_a are shown × 0.886 too. The last column is the planner's worst width without \
+the factor (the 1/B, 1/T cell its `--resolution general` guarantee bounds by d_min); a Hann \
+weighting (the main job's scene) would multiply every −3 dB width by 1.44 instead. Errors are \
+measured/predicted − 1.\n\n\
+| B / MHz | geometry | β / ° | ψ / ° | range (pred) / m | along-track (pred) / m | cross-track (pred) / m | iso-range (pred) / m | worst (pred) / m | max error | paper δ_r, δ_a × 0.886 / m | planner worst cell (no factor) / m |\n\
+|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for &b in bandwidths_hz {
         let params = planner::Params {
@@ -149,7 +154,7 @@ planner's `ResolutionCell` widths × 0.886 (main lobe of the unweighted response
             let e = cell.errors();
             let max_err = e.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             md += &format!(
-                "| {:.0} | {} | {:.1} | {:.1} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.1} ({:.1}) | {:.1}% | {:.2}, {:.2} |\n",
+                "| {:.0} | {} | {:.1} | {:.1} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.1} ({:.1}) | {:.1}% | {:.2}, {:.2} | {:.1} |\n",
                 b / 1e6,
                 case.label,
                 cell.bistatic_angle_deg,
@@ -165,8 +170,9 @@ planner's `ResolutionCell` widths × 0.886 (main lobe of the unweighted response
                 cell.worst_width_m,
                 cell.worst_width_pred_m,
                 100.0 * max_err,
-                cell.paper_range_m,
-                cell.paper_azimuth_m,
+                cell.mainlobe_factors[0] * cell.paper_range_m,
+                cell.mainlobe_factors[1] * cell.paper_azimuth_m,
+                cell.planner_worst_width_m,
             );
             let svg = cell.svg(&format!("B = {:.0} MHz, {}", b / 1e6, case.label));
             let path = out.join(format!("psf_{:.0}MHz_{k}.svg", b / 1e6));

@@ -60,8 +60,10 @@ pub struct ResolutionReport {
     pub azimuth_general_m: f64,
     /// The paper's δ_a, m (no main-lobe factor).
     pub azimuth_paper_m: f64,
-    /// Main-lobe factor used.
+    /// Main-lobe factor of the range weighting (the general range prediction's factor).
     pub mainlobe_factor: f64,
+    /// Main-lobe factor of the azimuth weighting.
+    pub azimuth_mainlobe_factor: f64,
     /// Bistatic angle at the aperture centre, deg.
     pub bistatic_angle_deg: f64,
     /// Angle between g and the Doppler gradient, deg.

@@ -22,6 +22,8 @@ pub struct ApertureTally {
     pub rows: Vec<DetectionRow>,
     /// The per-aperture summary of `metrics.json`.
     pub summary: ApertureSummary,
+    /// Per truth object in the image: (id, expected SNR ≥ [`STRONG_SNR_DB`], detected).
+    pub object_outcomes: Vec<(usize, bool, bool)>,
     /// Truth objects in the image.
     pub objects: usize,
     /// ... of which detected.
@@ -34,10 +36,23 @@ pub struct ApertureTally {
     pub errors_m: Vec<f64>,
     /// Unmatched detections.
     pub false_alarms: usize,
-    /// Expected false-alarm clusters by design.
+    /// Expected false-alarm detections on noise by design.
     pub design_false_alarms: f64,
+    /// CFAR exceedance pixels among the clear pixels (noise only, see
+    /// [`ApertureResult::clear_pixels`]).
+    pub false_alarm_pixels: usize,
+    /// P_fa × the clear pixels.
+    pub design_false_alarm_pixels: f64,
+    /// Pixels tested against the image-wide noise estimate.
+    pub cfar_fallback_pixels: usize,
+    /// Pixels of the image (all tested).
+    pub pixels: usize,
     /// Canceller metrics.
     pub cancel: CancelStats,
+    /// Σ over the aperture's windows of the predicted echo + noise floor after cancellation, W.
+    pub floor_power: f64,
+    /// Whether the scene has a direct path.
+    pub direct_path: bool,
     /// Expected SNRs of the truth objects that are this aperture's landmark (scorer order).
     pub landmark_snrs_db: Vec<f64>,
     /// The look used for the resolution measurement if this aperture is the best.
@@ -45,9 +60,9 @@ pub struct ApertureTally {
 }
 
 impl ApertureTally {
-    /// The tally of aperture `ap` processed into `r`, with the scene's `pfa` and the receiver's
-    /// noise power per complex sample `noise_power_w`.
-    pub fn new(ap: &Aperture, r: &ApertureResult, pfa: f64, noise_power_w: f64) -> Self {
+    /// The tally of aperture `ap` processed into `r`, with the receiver's noise power per
+    /// complex sample `noise_power_w`.
+    pub fn new(ap: &Aperture, r: &ApertureResult, noise_power_w: f64) -> Self {
         let rows = r
             .detections
             .iter()
@@ -69,7 +84,13 @@ impl ApertureTally {
         let mut errors_m = Vec::new();
         let (mut lm_det, mut lm_snr) = (None, None);
         let mut landmark_snrs_db = Vec::new();
+        let mut object_outcomes = Vec::with_capacity(r.score.outcomes.len());
         for o in &r.score.outcomes {
+            object_outcomes.push((
+                o.truth.id,
+                o.truth.expected_snr_db >= STRONG_SNR_DB,
+                o.detection.is_some(),
+            ));
             all += 1;
             if o.detection.is_some() {
                 all_hit += 1;
@@ -89,6 +110,7 @@ impl ApertureTally {
                 landmark_snrs_db.push(o.truth.expected_snr_db);
             }
         }
+        let floor_power = r.predicted_floor_w * r.cancel.windows as f64;
         let summary = ApertureSummary {
             aperture: ap.index,
             landmark: ap.landmark,
@@ -96,21 +118,36 @@ impl ApertureTally {
             landmark_snr_db: lm_snr,
             detections: r.detections.len(),
             false_alarms: r.score.false_alarms.len(),
-            dpi_reduction_db: r.cancel.dp_reduction_db(),
+            design_false_alarms: r.design_false_alarms,
+            false_alarm_pixels: r.false_alarm_pixels,
+            clear_pixels: r.clear_pixels,
+            cfar_fallback_pixels: r.cfar_fallback_pixels,
+            image_floor_db: 10.0 * r.image_floor.log10(),
+            predicted_image_floor_db: 10.0 * r.predicted_image_floor.log10(),
+            dp_suppression_db: r.direct_path.then(|| r.cancel.dp_suppression_db()),
+            residual_over_floor_db: 10.0 * (r.cancel.output_power / floor_power).log10(),
             residual_to_noise_db: 10.0 * (r.cancel.mean_output_power() / noise_power_w).log10(),
             worst_width_m: r.cell.worst_width_m,
+            worst_width_mainlobe_m: r.worst_width_mainlobe_m(),
         };
         ApertureTally {
             rows,
             summary,
+            object_outcomes,
             objects: all,
             objects_detected: all_hit,
             strong,
             strong_detected: strong_hit,
             errors_m,
             false_alarms: r.score.false_alarms.len(),
-            design_false_alarms: r.design_false_alarm_clusters(pfa),
+            design_false_alarms: r.design_false_alarms,
+            false_alarm_pixels: r.false_alarm_pixels,
+            design_false_alarm_pixels: r.design_false_alarm_pixels,
+            cfar_fallback_pixels: r.cfar_fallback_pixels,
+            pixels: r.grid.pixels(),
             cancel: r.cancel,
+            floor_power,
+            direct_path: r.direct_path,
             landmark_snrs_db,
             resolution_look: ap.looks / 2,
         }
@@ -139,6 +176,12 @@ pub fn fold<'a>(
     let (mut strong, mut strong_hit, mut all, mut all_hit) = (0usize, 0usize, 0usize, 0usize);
     let mut errors = Vec::new();
     let (mut fa, mut design_fa) = (0usize, 0.0);
+    let (mut fa_px, mut design_fa_px, mut fallback, mut pixels) = (0usize, 0.0, 0usize, 0usize);
+    let mut floor_power = 0.0;
+    let mut direct_path = false;
+    // per distinct object: (strong in some image, detected in an image where it is strong)
+    let mut distinct: std::collections::BTreeMap<usize, (bool, bool)> =
+        std::collections::BTreeMap::new();
     let mut cancel = CancelStats::default();
     let mut best: Option<(f64, usize, usize)> = None;
     let mut summaries = Vec::new();
@@ -156,22 +199,44 @@ pub fn fold<'a>(
         }
         fa += t.false_alarms;
         design_fa += t.design_false_alarms;
+        fa_px += t.false_alarm_pixels;
+        design_fa_px += t.design_false_alarm_pixels;
+        fallback += t.cfar_fallback_pixels;
+        pixels += t.pixels;
+        floor_power += t.floor_power;
+        direct_path |= t.direct_path;
+        for &(id, strong, detected) in &t.object_outcomes {
+            let e = distinct.entry(id).or_insert((false, false));
+            e.0 |= strong;
+            e.1 |= strong && detected;
+        }
         summaries.push(t.summary.clone());
     }
+    let strong_distinct = distinct.values().filter(|v| v.0).count();
+    let strong_distinct_hit = distinct.values().filter(|v| v.1).count();
     let frac = |a: usize, b: usize| if b > 0 { a as f64 / b as f64 } else { f64::NAN };
     (
         Metrics {
             pd: frac(strong_hit, strong),
             strong_objects: strong,
             pd_all: frac(all_hit, all),
+            strong_distinct_objects: strong_distinct,
+            pd_distinct: frac(strong_distinct_hit, strong_distinct),
             false_alarms: fa,
             design_false_alarms: design_fa,
+            false_alarm_pixels: fa_px,
+            design_false_alarm_pixels: design_fa_px,
+            cfar_fallback_pixels: fallback,
+            cfar_pixels: pixels,
             mean_position_error_m: if errors.is_empty() {
                 f64::NAN
             } else {
                 errors.iter().sum::<f64>() / errors.len() as f64
             },
-            dpi_reduction_db: cancel.dp_reduction_db(),
+            dp_suppression_db: direct_path.then(|| cancel.dp_suppression_db()),
+            dp_over_floor_db: direct_path
+                .then(|| 10.0 * (cancel.dp_mf_before / floor_power).log10()),
+            residual_over_floor_db: 10.0 * (cancel.output_power / floor_power).log10(),
             cancellation_db: cancel.cancellation_db(),
             residual_to_noise_db: 10.0 * (cancel.mean_output_power() / noise_power_w).log10(),
             target_loss_db: cancel.target_loss_db(),
@@ -206,17 +271,103 @@ pub fn measure_look(
         .measure_resolution(&c, look_pulses, 0..look_pulses.len(), ap.centre_m)
         .ok()
         .map(|rep| {
+            let (fr, fa) = (rep.mainlobe_factor, rep.azimuth_mainlobe_factor);
             (
                 MeasuredResolution {
                     measured_m: rep.range_measured_m,
+                    mainlobe_factor: fr,
                     predicted_general_m: rep.range_general_m,
-                    paper_m: rep.range_paper_m,
+                    paper_mainlobe_m: fr * rep.range_paper_m,
+                    general_cell_m: rep.range_general_m / fr,
+                    paper_cell_m: rep.range_paper_m,
                 },
                 MeasuredResolution {
                     measured_m: rep.azimuth_measured_m,
+                    mainlobe_factor: fa,
                     predicted_general_m: rep.azimuth_general_m,
-                    paper_m: rep.azimuth_paper_m,
+                    paper_mainlobe_m: fa * rep.azimuth_paper_m,
+                    general_cell_m: rep.azimuth_general_m / fa,
+                    paper_cell_m: rep.azimuth_paper_m,
                 },
             )
         }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tally of one aperture whose image holds `objects` (id, strong, detected).
+    fn tally(aperture: usize, objects: &[(usize, bool, bool)]) -> ApertureTally {
+        let strong = objects.iter().filter(|o| o.1).count();
+        let strong_detected = objects.iter().filter(|o| o.1 && o.2).count();
+        ApertureTally {
+            rows: Vec::new(),
+            summary: ApertureSummary {
+                aperture,
+                landmark: None,
+                landmark_detected: None,
+                landmark_snr_db: None,
+                detections: 0,
+                false_alarms: 0,
+                design_false_alarms: 0.0,
+                false_alarm_pixels: 0,
+                clear_pixels: 0,
+                cfar_fallback_pixels: 0,
+                image_floor_db: 0.0,
+                predicted_image_floor_db: 0.0,
+                dp_suppression_db: None,
+                residual_over_floor_db: 0.0,
+                residual_to_noise_db: 0.0,
+                worst_width_m: 10.0,
+                worst_width_mainlobe_m: 14.4,
+            },
+            object_outcomes: objects.to_vec(),
+            objects: objects.len(),
+            objects_detected: objects.iter().filter(|o| o.2).count(),
+            strong,
+            strong_detected,
+            errors_m: Vec::new(),
+            false_alarms: 0,
+            design_false_alarms: 0.0,
+            false_alarm_pixels: 0,
+            design_false_alarm_pixels: 0.0,
+            cfar_fallback_pixels: 0,
+            pixels: 100,
+            cancel: CancelStats {
+                windows: 1,
+                input_power: 2.0,
+                output_power: 1.0,
+                ..Default::default()
+            },
+            floor_power: 1.0,
+            direct_path: false,
+            landmark_snrs_db: Vec::new(),
+            resolution_look: 0,
+        }
+    }
+
+    /// Pd over object-aperture pairs counts an object once per image that holds it; Pd per
+    /// distinct object counts it once, detected if detected in an image where it is strong.
+    #[test]
+    fn pd_per_pair_and_per_distinct_object() {
+        // object 1 in three images (missed in two), object 2 in one, object 3 weak everywhere
+        let a = tally(0, &[(1, true, true), (2, true, true), (3, false, false)]);
+        let b = tally(1, &[(1, true, false), (3, false, true)]);
+        let c = tally(2, &[(1, true, false)]);
+        let (m, _) = fold([&a, &b, &c], 1.0);
+        assert_eq!(m.strong_objects, 4);
+        assert!((m.pd - 0.5).abs() < 1e-12);
+        assert_eq!(m.strong_distinct_objects, 2);
+        assert!((m.pd_distinct - 1.0).abs() < 1e-12);
+        // no direct path: nothing to report on it
+        assert_eq!(m.dp_suppression_db, None);
+        assert!(m.detection_summary().contains("4 object-aperture pairs"));
+        assert!(m
+            .detection_summary()
+            .contains("per distinct object: 1.000 of 2"));
+        let (m, _) = fold([&b, &c], 1.0);
+        assert_eq!(m.strong_distinct_objects, 1);
+        assert_eq!(m.pd_distinct, 0.0);
+    }
 }

@@ -67,17 +67,55 @@ fn closed_loop_on_shortened_default_mission() {
             .unwrap();
     for k in [
         "pd",
+        "pd_distinct",
         "false_alarms",
+        "design_false_alarms",
         "mean_position_error_m",
-        "dpi_reduction_db",
+        "dp_suppression_db",
+        "residual_over_floor_db",
         "range_resolution_m",
         "azimuth_resolution_m",
     ] {
         assert!(!m[k].is_null(), "metrics.json lacks {k}");
     }
-    let r = &m["range_resolution_m"];
-    let rel = r["measured_m"].as_f64().unwrap() / r["predicted_general_m"].as_f64().unwrap() - 1.0;
-    assert!(rel.abs() < 0.15, "{r}");
+    // Pd counts object-aperture pairs (the two landmarks are in both images), and distinct objects
+    let (pairs, distinct) = (
+        m["strong_objects"].as_u64().unwrap(),
+        m["strong_distinct_objects"].as_u64().unwrap(),
+    );
+    assert!(
+        distinct < pairs,
+        "{distinct} distinct objects, {pairs} pairs"
+    );
+    assert!(
+        text.contains(&format!("{pairs} object-aperture pairs")),
+        "{text}"
+    );
+    // the canceller's line: its own suppression, the residual on the predicted floor
+    assert!(text.contains("direct-path suppression"), "{text}");
+    assert!(
+        m["residual_over_floor_db"].as_f64().unwrap().abs() < 0.1,
+        "{m}"
+    );
+    // every resolution pair uses one definition: −3 dB widths (× the main-lobe factor) against
+    // −3 dB widths, cells against cells
+    for k in ["range_resolution_m", "azimuth_resolution_m"] {
+        let r = &m[k];
+        let f = |n: &str| r[n].as_f64().unwrap();
+        assert!((f("mainlobe_factor") - 1.44).abs() < 1e-3, "{r}"); // Hann in the scene
+        assert!((f("paper_mainlobe_m") / f("paper_cell_m") - f("mainlobe_factor")).abs() < 1e-9);
+        assert!(
+            (f("predicted_general_m") / f("general_cell_m") - f("mainlobe_factor")).abs() < 1e-9
+        );
+        assert!(
+            (f("measured_m") / f("predicted_general_m") - 1.0).abs() < 0.15,
+            "{r}"
+        );
+    }
+    for a in m["apertures"].as_array().unwrap() {
+        let w = a["worst_width_m"].as_f64().unwrap();
+        assert!((a["worst_width_mainlobe_m"].as_f64().unwrap() / w - 1.44).abs() < 1e-3);
+    }
 
     // process again from the recording: same detections (deterministic)
     let again = dir.path().join("again");
@@ -368,6 +406,43 @@ fn a_missed_landmark_exits_4_and_redirected_logs_have_no_colour() {
         !e.contains('\u{1b}'),
         "ANSI codes in redirected stderr: {e}"
     );
+}
+
+/// A scene without landmark objects (`include_landmarks = false`): the landmarks are not
+/// scored, so none is missed (exit 0, not 4).
+#[test]
+fn landmarks_that_are_no_objects_are_not_scored() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_with(dir.path(), "nolm.toml", "include_landmarks", "false");
+    let o = bin()
+        .arg("closed-loop")
+        .arg(root().join("missions/default.toml"))
+        .arg("--scene")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.path().join("loop"))
+        .args(["--horizon-s", "10"])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{out}\n{e}");
+    assert!(
+        out.contains("every landmark in view detected: not scored"),
+        "{out}"
+    );
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("loop/report.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(report["landmarks_scored"], 0);
+    assert_eq!(report["all_in_view_detected"], true);
+    let rows = report["rows"].as_array().unwrap();
+    assert!(!rows.is_empty());
+    for r in rows {
+        assert!(r["in_view_fraction"].as_f64().unwrap() >= 0.5);
+        assert!(r["detected"].is_null(), "{r}");
+    }
 }
 
 #[test]

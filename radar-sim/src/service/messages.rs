@@ -236,7 +236,10 @@ pub struct MissionMetrics {
 impl Message for MissionMetrics {
     const KIND: u16 = 0x0306;
     const NAME: &'static str = "radar.mission_metrics";
-    const SCHEMA_VERSION: u16 = 1;
+    /// 2: the metrics of the physics review (direct-path suppression and the residual over the
+    /// predicted floor instead of `dpi_reduction_db`, per-object Pd, pixel-level and
+    /// Euler-characteristic false-alarm designs, resolution pairs with one definition).
+    const SCHEMA_VERSION: u16 = 2;
 }
 
 /// Ask the processor to publish the results of some apertures again (and the metrics); sent as
@@ -285,6 +288,7 @@ impl Message for StoredOutcome {
     const KIND: u16 = 0x0309;
     const NAME: &'static str = "radar.stored_outcome";
     /// 2: the outcome nests its tally and no longer repeats the aperture index (a version-1
-    /// file in a state directory is ignored, and that aperture processed again).
-    const SCHEMA_VERSION: u16 = 2;
+    /// file in a state directory is ignored, and that aperture processed again). 3: the tally
+    /// carries the physics review's metrics (an older file is ignored the same way).
+    const SCHEMA_VERSION: u16 = 3;
 }

@@ -285,13 +285,12 @@ impl ProcContext {
             })?;
         let pulses = &self.pulses[k];
         let r = self.proc.process_aperture(ap, pulses, iq, &self.truth)?;
-        let pc = &self.base.setup.scene.processing;
         let markers = tally::detection_pixels(&r)
             .into_iter()
             .map(|(x, y)| (x as u32, y as u32))
             .collect();
         Ok(ApertureOutcome {
-            tally: ApertureTally::new(ap, &r, pc.pfa, self.noise_power_w),
+            tally: ApertureTally::new(ap, &r, self.noise_power_w),
             image: ApertureImage {
                 mission_id: self.base.mission_id,
                 aperture: ap.index as u32,
