@@ -396,6 +396,38 @@ mod tests {
         assert_eq!(e.slot, 21);
     }
 
+    /// A path from the start whose step t has length `f` V_m δ and heading `a` (rad).
+    fn flown(p: &Params, steps: &[(f64, f64)]) -> Trajectory {
+        let v_step = p.max_speed_mps * p.slot_s;
+        let mut q = p.start_m;
+        let pos_m = steps
+            .iter()
+            .map(|(f, a)| {
+                q = [q[0] + f * v_step * a.cos(), q[1] + f * v_step * a.sin()];
+                q
+            })
+            .collect();
+        Trajectory {
+            slot_s: p.slot_s,
+            start_m: p.start_m,
+            pos_m,
+        }
+    }
+
+    /// A point at `radius` × r_s and `angle` from the sensing centre of slot t, and the centre.
+    fn in_view(
+        p: &Params,
+        traj: &Trajectory,
+        t: usize,
+        angle: f64,
+        radius: f64,
+    ) -> ([f64; 2], [f64; 2]) {
+        let heading = traj.headings_rad()[t - 1];
+        let c = sensing_centre_m(traj.q(t), heading, p.centre_offset_m());
+        let r = radius * p.sensing_radius_m;
+        ([c[0] + r * angle.cos(), c[1] + r * angle.sin()], c)
+    }
+
     proptest::proptest! {
         /// The reach bound is a necessary condition: wherever a trajectory within the speed
         /// limit has a point in view at the end of slot t, the bound allows slot t (or earlier).
@@ -407,21 +439,9 @@ mod tests {
             radius in 0.0f64..1.0,
         ) {
             let p = Params::default();
-            let v_step = p.max_speed_mps * p.slot_s;
-            let mut q = p.start_m;
-            let pos_m: Vec<[f64; 2]> = steps
-                .iter()
-                .map(|(f, a)| {
-                    q = [q[0] + f * v_step * a.cos(), q[1] + f * v_step * a.sin()];
-                    q
-                })
-                .collect();
-            let traj = Trajectory { slot_s: p.slot_s, start_m: p.start_m, pos_m };
-            let headings = traj.headings_rad();
+            let traj = flown(&p, &steps);
             let t = 1 + ((pick * steps.len() as f64) as usize).min(steps.len() - 1);
-            let centre = sensing_centre_m(traj.q(t), headings[t - 1], p.centre_offset_m());
-            let r = radius * p.sensing_radius_m;
-            let g = [centre[0] + r * angle.cos(), centre[1] + r * angle.sin()];
+            let (g, centre) = in_view(&p, &traj, t, angle, radius);
             proptest::prop_assert!(v2::dist(g, centre) <= p.sensing_radius_m + 1e-9);
             let earliest = earliest_in_view_slot(&p, g, 1, t);
             proptest::prop_assert!(earliest.is_some_and(|e| e <= t), "slot {t}: {earliest:?}");
@@ -439,27 +459,12 @@ mod tests {
             radii in (0.0f64..1.0, 0.0f64..1.0),
         ) {
             let p = Params::default();
-            let v_step = p.max_speed_mps * p.slot_s;
-            let mut q = p.start_m;
-            let pos_m: Vec<[f64; 2]> = steps
-                .iter()
-                .map(|(f, a)| {
-                    q = [q[0] + f * v_step * a.cos(), q[1] + f * v_step * a.sin()];
-                    q
-                })
-                .collect();
-            let n = pos_m.len();
-            let traj = Trajectory { slot_s: p.slot_s, start_m: p.start_m, pos_m };
-            let headings = traj.headings_rad();
+            let traj = flown(&p, &steps);
+            let n = steps.len();
             let t1 = 1 + ((picks.0 * (n - 1) as f64) as usize).min(n - 2);
             let t2 = t1 + 1 + ((picks.1 * (n - t1) as f64) as usize).min(n - t1 - 1);
-            let in_view = |t: usize, angle: f64, radius: f64| {
-                let c = sensing_centre_m(traj.q(t), headings[t - 1], p.centre_offset_m());
-                let r = radius * p.sensing_radius_m;
-                [c[0] + r * angle.cos(), c[1] + r * angle.sin()]
-            };
-            let g1 = in_view(t1, angles.0, radii.0);
-            let g2 = in_view(t2, angles.1, radii.1);
+            let (g1, _) = in_view(&p, &traj, t1, angles.0, radii.0);
+            let (g2, _) = in_view(&p, &traj, t2, angles.1, radii.1);
             proptest::prop_assert!(reachable_between(&p, g1, g2, t2 - t1), "{t1} -> {t2}");
         }
     }

@@ -170,6 +170,19 @@ fn far_plan(dir: &Path) -> std::path::PathBuf {
     plan
 }
 
+/// `closed-loop` of the default mission's first 10 s with `scene`, writing to `dir/loop`.
+fn short_closed_loop(dir: &Path, scene: &Path) -> Command {
+    let mut c = bin();
+    c.arg("closed-loop")
+        .arg(root().join("missions/default.toml"))
+        .arg("--scene")
+        .arg(scene)
+        .arg("--out")
+        .arg(dir.join("loop"))
+        .args(["--horizon-s", "10"]);
+    c
+}
+
 /// The default scene with `key = value` set in its table.
 fn scene_with(dir: &Path, name: &str, key: &str, value: &str) -> std::path::PathBuf {
     let text = std::fs::read_to_string(root().join("scenes/default.toml")).unwrap();
@@ -386,15 +399,8 @@ fn a_missed_landmark_exits_4_and_redirected_logs_have_no_colour() {
     let dir = tempfile::tempdir().unwrap();
     // a landmark too faint to be detected, in view of the plan
     let scene = scene_with(dir.path(), "faint.toml", "landmark_rcs_m2", "1e-9");
-    let o = bin()
+    let o = short_closed_loop(dir.path(), &scene)
         .env("RUST_LOG", "planner=debug")
-        .arg("closed-loop")
-        .arg(root().join("missions/default.toml"))
-        .arg("--scene")
-        .arg(&scene)
-        .arg("--out")
-        .arg(dir.path().join("loop"))
-        .args(["--horizon-s", "10"])
         .output()
         .unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
@@ -414,16 +420,7 @@ fn a_missed_landmark_exits_4_and_redirected_logs_have_no_colour() {
 fn landmarks_that_are_no_objects_are_not_scored() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene_with(dir.path(), "nolm.toml", "include_landmarks", "false");
-    let o = bin()
-        .arg("closed-loop")
-        .arg(root().join("missions/default.toml"))
-        .arg("--scene")
-        .arg(&scene)
-        .arg("--out")
-        .arg(dir.path().join("loop"))
-        .args(["--horizon-s", "10"])
-        .output()
-        .unwrap();
+    let o = short_closed_loop(dir.path(), &scene).output().unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{out}\n{e}");
