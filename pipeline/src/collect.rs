@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use bridge::MissionId;
-use radar_sim::io::{write_json, write_png_db, NpyType, NpyWriter};
+use radar_sim::io::{
+    write_image_svg, write_json, write_png_db, ImageFrame, NpyType, NpyWriter, IMAGE_RANGE_DB,
+};
 use radar_sim::run::{DetectionRow, Metrics};
 use radar_sim::service::{ApertureDetections, ApertureImage, MissionMetrics};
 
@@ -160,7 +162,8 @@ impl Collector {
     }
 }
 
-/// Writes `aperture_NNN.npy` (f32 multilook) and `.png` (dB, 40 dB range, detections marked).
+/// Writes `aperture_NNN.npy` (f32 multilook), `.png` (dB, [`IMAGE_RANGE_DB`] range, detections
+/// marked) and `.svg` (the PNG with ground axes and a colour bar).
 pub fn write_image(dir: &Path, img: &ApertureImage) -> Result<()> {
     let (nx, ny) = (img.nx as usize, img.ny as usize);
     let stem = format!("aperture_{:03}", img.aperture);
@@ -177,8 +180,21 @@ pub fn write_image(dir: &Path, img: &ApertureImage) -> Result<()> {
         &img.multilook,
         nx,
         ny,
-        40.0,
+        IMAGE_RANGE_DB,
         &markers,
+    )?;
+    write_image_svg(
+        &dir.join(format!("{stem}.svg")),
+        &format!("{stem}.png"),
+        &ImageFrame {
+            aperture: img.aperture as usize,
+            centre_m: img.centre_m,
+            spacing_m: img.spacing_m,
+            nx,
+            ny,
+        },
+        &img.multilook,
+        IMAGE_RANGE_DB,
     )?;
     Ok(())
 }

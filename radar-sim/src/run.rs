@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 use crate::config::SceneFile;
 use crate::error::{RadarError, Result};
 use crate::io::{
-    csv_f64, read_csv, write_csv, write_json, write_png_db, NpyReader, NpyType, NpyWriter,
+    csv_f64, read_csv, write_csv, write_image_svg, write_json, write_png_db, ImageFrame, NpyReader,
+    NpyType, NpyWriter, IMAGE_RANGE_DB,
 };
 use crate::limits::{IqBudget, IqLimits};
 use crate::pipeline::{Processor, RadarSetup};
@@ -600,14 +601,28 @@ pub fn process_limited(
             w.finish()?;
         }
         let markers = tally::detection_pixels(&r);
+        let png_name = format!("aperture_{:03}.png", ap.index);
         write_png_db(
-            &out.join("images")
-                .join(format!("aperture_{:03}.png", ap.index)),
+            &out.join("images").join(&png_name),
             &r.multilook,
             r.grid.nx,
             r.grid.ny,
-            40.0,
+            IMAGE_RANGE_DB,
             &markers,
+        )?;
+        write_image_svg(
+            &out.join("images")
+                .join(format!("aperture_{:03}.svg", ap.index)),
+            &png_name,
+            &ImageFrame {
+                aperture: ap.index,
+                centre_m: r.grid.centre_m,
+                spacing_m: r.grid.spacing_m,
+                nx: r.grid.nx,
+                ny: r.grid.ny,
+            },
+            &r.multilook,
+            IMAGE_RANGE_DB,
         )?;
         tallies.push(ApertureTally::new(ap, &r, meta.noise_power_w));
         progress(k as u64 + 1, total);

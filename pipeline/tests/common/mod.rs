@@ -88,7 +88,7 @@ pub fn assert_same_as_reference(out: &Path, reference: &Path) {
     let mut n = 0;
     for e in std::fs::read_dir(&imgs).unwrap().flatten() {
         let name = e.file_name().to_string_lossy().to_string();
-        if name.ends_with(".npy") || name.ends_with(".png") {
+        if name.ends_with(".npy") || name.ends_with(".png") || name.ends_with(".svg") {
             let x = std::fs::read(out.join("images").join(&name))
                 .unwrap_or_else(|e| panic!("images/{name}: {e}"));
             assert!(
@@ -99,6 +99,13 @@ pub fn assert_same_as_reference(out: &Path, reference: &Path) {
         }
     }
     assert!(n >= 2, "no images compared");
+    // each image comes as .npy, .png and the annotated .svg
+    let svgs = std::fs::read_dir(&imgs)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".svg"))
+        .count();
+    assert!(svgs >= 1, "no annotated SVG images");
 }
 
 /// Detections per aperture in a detections.csv.
