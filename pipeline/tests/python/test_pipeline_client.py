@@ -228,7 +228,7 @@ class PipelineClientTest(unittest.TestCase):
                     "cellsar/alive/processor/processor"):
             wait_for(lambda: key in self.alive(), key)
         try:
-            run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+            run = subprocess.run([sys.executable, "-u", "-c", code], capture_output=True, text=True,
                                  timeout=TIMEOUT_S)
         except subprocess.TimeoutExpired as e:
             self.fail("the README example did not exit within %.0f s; stdout:\n%s" % (TIMEOUT_S, e.stdout))
