@@ -255,7 +255,6 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 replace_unrepairable_init: !no_init_fallback,
                 ..PlanOptions::default()
             };
-            options.validate()?;
             let pb = spinner();
             let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));
             pb.finish_and_clear();

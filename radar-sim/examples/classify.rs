@@ -12,45 +12,51 @@
 //!
 //! `cargo run --release -p radar-sim --example classify -- DIR`
 
-#![allow(clippy::unwrap_used, clippy::expect_used)]
-
 use std::path::Path;
+
+use anyhow::{Context, Result};
 
 use radar_sim::io::NpyReader;
 use radar_sim::pipeline::{Processor, RadarSetup};
 use radar_sim::run::{read_pulses, read_truth, DetectionRow, Metrics, RecordingMeta};
 use radar_sim::synth::Components;
 
-fn main() {
-    let dir = std::env::args().nth(1).expect("usage: classify DIR");
+/// Reads and parses a JSON file, naming it in the error.
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
+}
+
+fn main() -> Result<()> {
+    let dir = std::env::args()
+        .nth(1)
+        .context("usage: classify DIR (a closed-loop output directory)")?;
     let dir = Path::new(&dir);
     let rec = dir.join("recording");
     let out = dir.join("processed");
-    let meta: RecordingMeta =
-        serde_json::from_str(&std::fs::read_to_string(rec.join("meta.json")).unwrap()).unwrap();
-    let metrics: Metrics =
-        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
-    let dets: Vec<DetectionRow> =
-        serde_json::from_str(&std::fs::read_to_string(out.join("detections.json")).unwrap())
-            .unwrap();
-    let truth = read_truth(&rec.join("truth.csv")).unwrap();
-    let pulses_all = read_pulses(&rec.join("pulses.csv")).unwrap();
+    let meta: RecordingMeta = read_json(&rec.join("meta.json"))?;
+    let metrics: Metrics = read_json(&out.join("metrics.json"))?;
+    let dets: Vec<DetectionRow> = read_json(&out.join("detections.json"))?;
+    let truth = read_truth(&rec.join("truth.csv"))?;
+    let pulses_all = read_pulses(&rec.join("pulses.csv"))?;
     let mut scene = meta.scene.clone();
     scene.radar.thermal_noise = false;
     scene.radar.direct_path = false;
-    let setup = RadarSetup::new(&meta.params, &scene).unwrap();
-    let proc = Processor::new(setup.clone()).unwrap();
+    let setup = RadarSetup::new(&meta.params, &scene)?;
+    let proc = Processor::new(setup.clone())?;
     for (k, at) in meta.apertures.iter().enumerate() {
         let ap = &at.aperture;
         let grid = setup.grid(ap);
-        let summary = &metrics.apertures[k];
+        let summary = metrics
+            .apertures
+            .get(k)
+            .with_context(|| format!("metrics.json has no aperture {k}"))?;
         let img = NpyReader::open(
             &out.join("images")
                 .join(format!("aperture_{:03}.npy", ap.index)),
-        )
-        .unwrap()
-        .read_f4(0, grid.pixels())
-        .unwrap();
+        )?
+        .read_f4(0, grid.pixels())?;
         let half = (grid.nx as f64 - 1.0) / 2.0 * grid.spacing_m - grid.spacing_m;
         let rel = |p: [f64; 2]| [p[0] - ap.centre_m[0], p[1] - ap.centre_m[1]];
         let inside = |p: [f64; 2]| rel(p)[0].abs() <= half && rel(p)[1].abs() <= half;
@@ -120,26 +126,15 @@ fn main() {
         let mut alone = Vec::new();
         for o in &near {
             let iq = setup
-                .synthesizer(vec![**o])
-                .unwrap()
-                .synthesize_frame(&pulses, Components::ALL)
-                .unwrap();
-            alone.push(
-                proc.process_aperture(ap, &pulses, &iq, &[])
-                    .unwrap()
-                    .multilook,
-            );
+                .synthesizer(vec![**o])?
+                .synthesize_frame(&pulses, Components::ALL)?;
+            alone.push(proc.process_aperture(ap, &pulses, &iq, &[])?.multilook);
         }
         // every object of the scene together, noise-free
         let iq = setup
-            .synthesizer(truth.clone())
-            .unwrap()
-            .synthesize_frame(&pulses, Components::ALL)
-            .unwrap();
-        let together = proc
-            .process_aperture(ap, &pulses, &iq, &[])
-            .unwrap()
-            .multilook;
+            .synthesizer(truth.clone())?
+            .synthesize_frame(&pulses, Components::ALL)?;
+        let together = proc.process_aperture(ap, &pulses, &iq, &[])?.multilook;
         for d in fas {
             let (x, y) = pixel([d.x_m, d.y_m]);
             let i = y as usize * grid.nx + x as usize;
@@ -182,4 +177,5 @@ fn main() {
             );
         }
     }
+    Ok(())
 }

@@ -288,6 +288,23 @@ impl Canceller {
         })
     }
 
+    /// The taps' response W_k = Σ_a w_a e^{−j2πk t_a/N} on the `nsc` subcarriers from `k0`: the
+    /// taps as paths of delay t_a and amplitude w_a.
+    fn tap_spectrum(&self, weights: &[Complex64], k0: i64, nsc: usize) -> Vec<Complex64> {
+        let taps: Vec<crate::synth::Path> = self
+            .taps
+            .iter()
+            .zip(weights)
+            .map(|(&t, &w)| crate::synth::Path {
+                amp: w,
+                delay_samples: t as f64,
+                doppler_hz: 0.0,
+            })
+            .collect();
+        let refs: Vec<&crate::synth::Path> = taps.iter().collect();
+        crate::synth::path_sums(&refs, 1, k0 as f64, self.num.fft_size, nsc)
+    }
+
     /// Frequency-domain ECA without Doppler bins. The Gram matrix of the delayed references is
     /// Toeplitz, `G[a][b] = g(t_a − t_b)` with `g(δ) = (1/N) Σ_k |U_k|² e^{j2πkδ/N}`, and the
     /// correlations are `c[a] = (1/N) Σ_k U_k* Y_k e^{j2πk t_a/N}` (products summed over the
@@ -359,19 +376,7 @@ impl Canceller {
         let c: Vec<Complex64> = self.taps.iter().map(|&t| at(&cs, t)).collect();
         let mut gw = g.clone();
         let wts = self.loaded_solve(&mut gw, &c, "cancel (ECA, frequency domain)")?;
-        // W_k = Σ_a w_a e^{−j2πk t_a/N}: the taps as paths of delay t_a and amplitude w_a
-        let taps: Vec<crate::synth::Path> = self
-            .taps
-            .iter()
-            .zip(&wts)
-            .map(|(&t, &w)| crate::synth::Path {
-                amp: w,
-                delay_samples: t as f64,
-                doppler_hz: 0.0,
-            })
-            .collect();
-        let refs: Vec<&crate::synth::Path> = taps.iter().collect();
-        let wk = crate::synth::path_sums(&refs, 1, k0 as f64, num.fft_size, nsc);
+        let wk = self.tap_spectrum(&wts, k0, nsc);
         for (w, u) in windows.iter_mut().zip(us) {
             for ((ui, wi), &b) in u.iter().zip(&wk).zip(&self.bins) {
                 w.spectrum[b] -= ui * wi;
@@ -381,18 +386,7 @@ impl Canceller {
         let cdt: Vec<Complex64> = self.taps.iter().map(|&t| at(&ds, t)).collect();
         let mut gd = g.clone();
         let wd = self.loaded_solve(&mut gd, &cdt, "cancel (direct-path residual)")?;
-        let dtaps: Vec<crate::synth::Path> = self
-            .taps
-            .iter()
-            .zip(&wd)
-            .map(|(&t, &w)| crate::synth::Path {
-                amp: w,
-                delay_samples: t as f64,
-                doppler_hz: 0.0,
-            })
-            .collect();
-        let drefs: Vec<&crate::synth::Path> = dtaps.iter().collect();
-        let wdk = crate::synth::path_sums(&drefs, 1, k0 as f64, num.fft_size, nsc);
+        let wdk = self.tap_spectrum(&wd, k0, nsc);
         for (d, u) in dps.iter().zip(us) {
             st.dp_residual += d
                 .iter()

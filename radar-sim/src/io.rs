@@ -411,6 +411,23 @@ pub fn viridis(t: f64) -> [u8; 3] {
     o
 }
 
+/// `Err` naming `path` unless `power` holds a non-empty `ny × nx` image.
+fn check_image_shape(path: &Path, power: &[f32], nx: usize, ny: usize) -> Result<()> {
+    if power.len() != nx * ny || power.is_empty() {
+        return Err(RadarError::Shape {
+            what: format!("image {}", path.display()),
+            expected: format!("{ny} × {nx} (non-empty)"),
+            found: power.len().to_string(),
+        });
+    }
+    Ok(())
+}
+
+/// The image's peak in dB (of the power's unit), the top of its colour mapping.
+fn peak_db(power: &[f32]) -> f64 {
+    10.0 * (power.iter().cloned().fold(f32::MIN_POSITIVE, f32::max) as f64).log10()
+}
+
 /// Writes a power image (ny × nx, row 0 = south) as PNG in dB: the top `range_db` below the
 /// peak mapped through [`viridis`], north up, with optional marker pixels (white crosses).
 pub fn write_png_db(
@@ -421,15 +438,8 @@ pub fn write_png_db(
     range_db: f64,
     markers: &[(usize, usize)],
 ) -> Result<()> {
-    if power.len() != nx * ny {
-        return Err(RadarError::Shape {
-            what: format!("image {}", path.display()),
-            expected: format!("{ny} × {nx}"),
-            found: power.len().to_string(),
-        });
-    }
-    let peak = power.iter().cloned().fold(f32::MIN_POSITIVE, f32::max) as f64;
-    let top = 10.0 * peak.log10();
+    check_image_shape(path, power, nx, ny)?;
+    let top = peak_db(power);
     let mut rgb = vec![0u8; nx * ny * 3];
     for y in 0..ny {
         for x in 0..nx {
@@ -526,15 +536,8 @@ pub fn write_image_svg(
 ) -> Result<()> {
     use std::fmt::Write as _;
     let (nx, ny) = (frame.nx, frame.ny);
-    if power.len() != nx * ny || nx == 0 || ny == 0 {
-        return Err(RadarError::Shape {
-            what: format!("image {}", path.display()),
-            expected: format!("{ny} × {nx} (non-empty)"),
-            found: power.len().to_string(),
-        });
-    }
-    let peak = power.iter().cloned().fold(f32::MIN_POSITIVE, f32::max) as f64;
-    let top_db = 10.0 * peak.log10();
+    check_image_shape(path, power, nx, ny)?;
+    let top_db = peak_db(power);
     // the pixels' extent on the ground (half a pixel beyond the outer centres)
     let half_x = nx as f64 * frame.spacing_m / 2.0;
     let half_y = ny as f64 * frame.spacing_m / 2.0;
