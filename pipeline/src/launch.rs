@@ -168,6 +168,62 @@ fn user_gave_zenoh(z: &ZenohArgs) -> bool {
     z.config.is_some() || z.mode.is_some() || !z.connect.is_empty() || !z.listen.is_empty()
 }
 
+/// The Zenoh flags of the children when the user gave the launcher's: the same flags, except
+/// that the launcher's own listen endpoints become endpoints every child connects to (on
+/// loopback when the launcher listens on every address), and a child that connects to the
+/// launcher listens on a free loopback port of its own so that the children find each other
+/// (gossip) without multicast scouting. A client launcher cannot listen, and a listen port 0
+/// cannot be told to the children: both are refused naming `--listen`.
+pub fn children_zenoh(user: &ZenohArgs) -> std::result::Result<ZenohArgs, String> {
+    let mut child = user.clone();
+    child.listen.clear();
+    if user.listen.is_empty() {
+        return Ok(child);
+    }
+    if user.mode == Some(Mode::Client) {
+        return Err(format!(
+            "--listen {}: a client (-m client) cannot listen; give the router with -e instead",
+            user.listen[0]
+        ));
+    }
+    for ep in &user.listen {
+        child.connect.push(reachable_endpoint(ep)?);
+    }
+    // children are peers of the launcher (a router launcher routes for them)
+    child.mode = Some(Mode::Peer);
+    child.listen.push("tcp/127.0.0.1:0".to_string());
+    Ok(child)
+}
+
+/// The endpoint a child on this host connects to for a listen endpoint: an unspecified address
+/// (`0.0.0.0`, `[::]`) becomes loopback; port 0 is refused (the port is not known in advance).
+fn reachable_endpoint(listen: &str) -> std::result::Result<String, String> {
+    let (proto, rest) = listen
+        .split_once('/')
+        .ok_or_else(|| format!("--listen {listen}: expected PROTOCOL/ADDRESS, e.g. tcp/127.0.0.1:7447"))?;
+    if proto == "unixsock-stream" {
+        return Ok(listen.to_string());
+    }
+    let (addr, meta) = match rest.split_once(['?', '#']) {
+        Some((a, _)) => (a, &rest[a.len()..]),
+        None => (rest, ""),
+    };
+    let (host, port) = addr
+        .rsplit_once(':')
+        .ok_or_else(|| format!("--listen {listen}: no port"))?;
+    if port == "0" {
+        return Err(format!(
+            "--listen {listen}: port 0 cannot be passed on to the children; give a port"
+        ));
+    }
+    let host = match host {
+        "0.0.0.0" => "127.0.0.1",
+        "[::]" => "[::1]",
+        h => h,
+    };
+    Ok(format!("{proto}/{host}:{port}{meta}"))
+}
+
 fn absolute(p: &Path) -> Result<PathBuf> {
     if p.is_absolute() {
         Ok(p.to_path_buf())
@@ -217,6 +273,12 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     tracing_subscriber::EnvFilter::try_new(&args.child_log)
         .map_err(|e| Failure::bad_input(anyhow!("--child-log {:?}: {e}", args.child_log)))?;
     args.zenoh.to_config().map_err(Failure::bad_input)?;
+    if !args.router && user_gave_zenoh(&args.zenoh) {
+        children_zenoh(&args.zenoh)
+            .map_err(|e| Failure::bad_input(anyhow!(e)))?
+            .to_config()
+            .map_err(Failure::bad_input)?;
+    }
     // the iceoryx2 configuration file and prefix as every child reads them (the root is
     // created by the children)
     IoxArgs {
@@ -350,11 +412,9 @@ fn launch(
             child: client,
         }
     } else if user_gave_zenoh(&args.zenoh) {
-        let mut child = args.zenoh.clone();
-        child.listen.clear();
         Net {
             launcher: args.zenoh.clone(),
-            child,
+            child: children_zenoh(&args.zenoh).map_err(|e| anyhow!(e))?,
         }
     } else {
         let hub = format!("tcp/127.0.0.1:{}", free_port()?);

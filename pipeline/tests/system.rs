@@ -95,6 +95,41 @@ fn run_over_zenoh_through_the_bridge_matches_closed_loop() {
     );
 }
 
+/// A user-given listen endpoint with multicast scouting off: the children connect to the
+/// launcher's endpoint (they were started with no endpoint at all and never met it) and the run
+/// ends with the same outputs as `closed-loop`.
+#[test]
+fn listen_endpoint_without_scouting_forms_the_mesh() {
+    let reference = reference(H);
+    let dir = tempfile::tempdir().unwrap();
+    let ep = format!("tcp/127.0.0.1:{}", free_port());
+    let mut l = Launch::start(dir.path(), H, &["-l", &ep, "--no-multicast-scouting"]);
+    let net = l.event("network", Duration::from_secs(60));
+    let children: Vec<String> = serde_json::from_value(net["children"].clone()).unwrap();
+    assert!(children.windows(2).any(|w| w[0] == "--connect" && w[1] == ep), "{children:?}");
+    let st = l.finish(Duration::from_secs(240));
+    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, &reference);
+}
+
+/// Listen flags the children could not be pointed at are refused before anything starts.
+#[test]
+fn listen_endpoints_children_cannot_reach_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (flags, named) in [
+        (vec!["-l", "tcp/127.0.0.1:0"], "port 0"),
+        (vec!["-m", "client", "-e", "tcp/127.0.0.1:9", "-l", "tcp/127.0.0.1:7447"], "-m client"),
+    ] {
+        let o = Command::new(exe())
+            .args(run_args(dir.path(), "out", &flags))
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flags:?}: {e}");
+        assert!(e.contains("--listen") && e.contains(named), "{flags:?}: {e}");
+    }
+}
+
 #[test]
 fn sigint_stops_every_child() {
     let dir = tempfile::tempdir().unwrap();
