@@ -57,7 +57,7 @@ fn fmpy_test_suite() {
         "build",
         "--release",
         "-p",
-        "planner",
+        "pipeline",
         "--bin",
         "cellsar-planner",
     ]));

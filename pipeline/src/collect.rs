@@ -5,13 +5,13 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use crate::protocol::{ApertureDetections, ApertureImage, MissionMetrics};
 use anyhow::{Context, Result};
 use bridge::MissionId;
 use radar_sim::io::{
     write_image_svg, write_json, write_png_db, ImageFrame, NpyType, NpyWriter, IMAGE_RANGE_DB,
 };
 use radar_sim::run::{DetectionRow, Metrics};
-use radar_sim::service::{ApertureDetections, ApertureImage, MissionMetrics};
 
 /// Results of one mission as they arrive.
 #[derive(Debug)]

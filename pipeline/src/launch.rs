@@ -37,14 +37,13 @@ use bridge::{
     keys, FrameServiceSpec, IoxArgs, Message, NetError, Refusal, RefusalKind, ZenohArgs, ZenohNode,
 };
 use indicatif::{ProgressBar, ProgressStyle};
-use planner::service::{
-    Plan, PlanRequest, PlanRequestOptions, ServiceStatus, MAX_PLAN_BYTES, PLAN_KEY,
-};
 use radar_sim::config::SceneFile;
-use radar_sim::service::{
-    ApertureDetections, ApertureImage, FrameLayout, MissionContext, MissionMetrics, ResultAck,
-    ResultRequest,
+
+use crate::protocol::{
+    self, ApertureDetections, ApertureImage, FrameLayout, MissionMetrics, Plan, PlanRequest,
+    PlanRequestOptions, ResultAck, ResultRequest, ServiceStatus, MAX_PLAN_BYTES,
 };
+use crate::services::process::MissionContext;
 use serde_json::{json, Value};
 
 use crate::collect::{Added, Collector};
@@ -198,9 +197,9 @@ pub fn children_zenoh(user: &ZenohArgs) -> std::result::Result<ZenohArgs, String
 /// The endpoint a child on this host connects to for a listen endpoint: an unspecified address
 /// (`0.0.0.0`, `[::]`) becomes loopback; port 0 is refused (the port is not known in advance).
 fn reachable_endpoint(listen: &str) -> std::result::Result<String, String> {
-    let (proto, rest) = listen
-        .split_once('/')
-        .ok_or_else(|| format!("--listen {listen}: expected PROTOCOL/ADDRESS, e.g. tcp/127.0.0.1:7447"))?;
+    let (proto, rest) = listen.split_once('/').ok_or_else(|| {
+        format!("--listen {listen}: expected PROTOCOL/ADDRESS, e.g. tcp/127.0.0.1:7447")
+    })?;
     if proto == "unixsock-stream" {
         return Ok(listen.to_string());
     }
@@ -317,9 +316,12 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
         .map_err(Failure::bad_input)?;
     // the frame service every process opens, and the frames of one pulse at least
     let mfb = args.max_frame_bytes;
-    FrameServiceSpec::new("cellsar/0000000000000000/echo", mfb)
-        .validate()
-        .map_err(|e| Failure::bad_input(anyhow!("--max-frame-bytes {mfb}: {e}")))?;
+    FrameServiceSpec::new(
+        &protocol::keys::echo(bridge::MissionId(0)).unwrap_or_default(),
+        mfb,
+    )
+    .validate()
+    .map_err(|e| Failure::bad_input(anyhow!("--max-frame-bytes {mfb}: {e}")))?;
     FrameLayout::new(&[], setup.scene.radar.samples_per_pulse(), mfb)
         .with_context(|| format!("scene {}", args.scene.display()))
         .map_err(Failure::bad_input)?;
@@ -525,24 +527,24 @@ fn run_on(
     let alive = node.watch_liveliness(keys::ALIVE_ALL)?;
     let limits = DecodeLimits::default();
     let detections = node.subscriber::<ApertureDetections>(
-        "cellsar/*/detections",
+        protocol::keys::ALL_DETECTIONS,
         SubscribeOptions {
             capacity: 1024,
             ..SubscribeOptions::default()
         },
     )?;
     let images = node.subscriber::<ApertureImage>(
-        "cellsar/*/image/*",
+        protocol::keys::ALL_IMAGES,
         SubscribeOptions {
             capacity: 256,
             limits,
             ..SubscribeOptions::default()
         },
     )?;
-    let metrics =
-        node.subscriber::<MissionMetrics>("cellsar/*/metrics", SubscribeOptions::default())?;
+    let metrics = node
+        .subscriber::<MissionMetrics>(protocol::keys::ALL_METRICS, SubscribeOptions::default())?;
     let statuses = node.subscriber::<ServiceStatus>(
-        "cellsar/*/status/*",
+        protocol::keys::ALL_STATUS,
         SubscribeOptions {
             capacity: 1024,
             ..SubscribeOptions::default()
@@ -694,7 +696,7 @@ fn run_on(
                 std::thread::sleep(Duration::from_millis(20));
             }
             let mut query = node.start_query::<PlanRequest, Plan>(
-                PLAN_KEY,
+                protocol::keys::PLAN,
                 &request,
                 &QueryOptions {
                     timeout: plan_left(),
@@ -768,7 +770,7 @@ fn run_on(
     let id = plan.mission_id;
     let resolved = plan.mission()?;
     let plan_dir = out.join("plan");
-    planner::report::write_plan_dir(&plan_dir, &resolved, &plan.result)
+    crate::report::write_plan_dir(&plan_dir, &resolved, &plan.result)
         .with_context(|| format!("writing {}", plan_dir.display()))?;
     let scene = SceneFile::from_path(scene_path)?;
     let ctx = MissionContext::new(&Arc::new(plan.clone()), &scene, args.max_frame_bytes)?;
@@ -795,7 +797,7 @@ fn run_on(
         let mut ba = vec![
             "bridge".to_string(),
             "--service".into(),
-            format!("{}@out", keys::mission(id, "echo")?),
+            protocol::keys::echo_route_out(id)?,
             "--max-frame-bytes".into(),
             frames,
         ];
@@ -929,7 +931,7 @@ fn run_on(
                     metrics: want_metrics,
                 };
                 match node.query_one::<ResultRequest, ResultAck>(
-                    &keys::mission(id, "results")?,
+                    &protocol::keys::results(id)?,
                     &req,
                     &QueryOptions {
                         timeout: Duration::from_secs(2),
@@ -1211,13 +1213,13 @@ mod tests {
                 let (sent, _) = r.encode(format, Default::default()).unwrap();
                 let current = format.encode(&r, Default::default()).unwrap();
                 for bytes in [sent, current] {
-                    let e = decode_error_reply(PLAN_KEY, &bytes, format, &limits);
+                    let e = decode_error_reply(protocol::keys::PLAN, &bytes, format, &limits);
                     let f = answer(e);
                     assert_eq!(f.kind, want, "{kind:?} {format:?}");
                     assert_eq!(f.exit_code(), want.exit_code());
                     let text = f.to_string();
                     assert!(
-                        text.contains(PLAN_KEY)
+                        text.contains(protocol::keys::PLAN)
                             && text.contains(kind.as_str())
                             && text.contains("slot 23"),
                         "{text}"
@@ -1227,7 +1229,7 @@ mod tests {
         }
         // an old planner's plain-text error: exit 1, naming the key
         let e = decode_error_reply(
-            PLAN_KEY,
+            protocol::keys::PLAN,
             b"planning \"m\": mission cannot be flown: slot 23",
             WireFormat::Bincode,
             &limits,
@@ -1235,10 +1237,15 @@ mod tests {
         assert!(matches!(e, NetError::Remote { .. }), "{e:?}");
         let f = answer(e);
         assert_eq!(f.kind, FailureKind::Runtime);
-        assert!(f.to_string().contains(PLAN_KEY), "{f}");
+        assert!(f.to_string().contains(protocol::keys::PLAN), "{f}");
         // and bytes that are neither
-        let e = decode_error_reply(PLAN_KEY, &[0xff, 0xfe, 0x00], WireFormat::Bincode, &limits);
-        assert!(e.to_string().contains(PLAN_KEY), "{e}");
+        let e = decode_error_reply(
+            protocol::keys::PLAN,
+            &[0xff, 0xfe, 0x00],
+            WireFormat::Bincode,
+            &limits,
+        );
+        assert!(e.to_string().contains(protocol::keys::PLAN), "{e}");
         assert_eq!(classify(anyhow!("other")).kind, FailureKind::Runtime);
     }
 }

@@ -1,16 +1,19 @@
-//! # cellsar pipeline: the launcher
+//! # cellsar pipeline: processes and apps
 //!
-//! `cellsar run MISSION --scene SCENE --out DIR` runs the mission as separate processes: the
-//! planner service, the echo simulator and the processor (and, when frames go over Zenoh, the
-//! bridge; with `--router`, a Zenoh router), supervises them and writes the same outputs as
-//! `cellsar-radar-sim closed-loop`.
+//! Everything that runs: the protocol the processes speak, the services, the launcher, the
+//! reports, and the binaries `cellsar`, `cellsar-planner` and `cellsar-radar-sim`. The maths
+//! lives in the `planner` and `radar-sim` crates, the transport in `bridge`.
 //!
-//! - [`launch`]: the run itself (network set-up, children, plan, collection, outputs);
-//! - [`supervise`]: child processes (start, restart within a bound, stop, reap);
-//! - [`collect`]: results de-duplicated by mission and aperture, and the output files;
-//! - [`roles`]: the bridge and router roles of the `cellsar` binary;
-//! - [`events`]: the event log (`pipeline.json`, `--events-json`);
-//! - [`exit`]: the exit codes of the `cellsar` binary and the failures that carry them.
+//! - [`protocol`]: every message and key expression of the pipeline, defined once;
+//! - [`services`]: the plan service, the echo simulator and the processor;
+//! - [`launch`]: `cellsar run`, the pipeline as supervised processes (network set-up,
+//!   children, plan, collection, outputs); [`supervise`]: child processes (start, restart
+//!   within a bound, stop, reap); [`collect`]: results de-duplicated by mission and aperture,
+//!   and the output files; [`roles`]: the bridge and router roles of `cellsar`; [`events`]:
+//!   the event log (`pipeline.json`, `--events-json`);
+//! - [`report`]: a plan directory (files and plots) and `cellsar-planner reproduce` (the
+//!   paper's figures);
+//! - [`args`]: flags shared by several binaries; [`exit`]: the exit codes of `cellsar`.
 //!
 //! The `cellsar` binary is also every child: `cellsar planner` is `cellsar-planner serve`,
 //! `cellsar echo` is `cellsar-radar-sim echo`, `cellsar process` is
@@ -19,9 +22,13 @@
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod args;
 pub mod collect;
 pub mod events;
 pub mod exit;
 pub mod launch;
+pub mod protocol;
+pub mod report;
 pub mod roles;
+pub mod services;
 pub mod supervise;

@@ -15,7 +15,8 @@ use bridge::zenoh::query::QueryTarget;
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohArgs, ZenohNode};
 use common::*;
-use radar_sim::service::{ApertureRequest, RequestAck};
+use pipeline::protocol::keys as pkeys;
+use pipeline::protocol::{ApertureRequest, RequestAck};
 use serde_json::Value;
 
 /// 6 apertures of the small scene.
@@ -163,7 +164,7 @@ fn frozen_processor_does_not_stall_the_echo() {
         };
         let ack = node
             .query_one::<ApertureRequest, RequestAck>(
-                &format!("cellsar/{m}/echo/request"),
+                &pkeys::echo_request(m).unwrap(),
                 &req,
                 &QueryOptions {
                     timeout: Duration::from_secs(30),
@@ -353,21 +354,20 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     );
     let z = join(&mut l);
     let planned = l.event("planned", Duration::from_secs(120));
-    let m = planned["mission_id"].as_str().unwrap().to_string();
+    let m = MissionId::parse_hex(planned["mission_id"].as_str().unwrap()).unwrap();
     let node = ZenohNode::open(z.to_config().unwrap(), "tester", "flood").unwrap();
     for role in ["planner", "processor", "launcher"] {
         wait_sees(&node, role, &l);
     }
-    let k = |s: &str| format!("cellsar/{m}/{s}");
-    flood_get(&node, "cellsar/plan", 0x0101);
-    flood_put(&node, &k("plan"), 0x0102);
-    flood_get(&node, &k("plan"), 0x0103);
-    flood_get(&node, &k("results"), 0x0307);
-    flood_put(&node, &k("echo"), 0x0200);
-    flood_put(&node, &k("detections"), 0x0304);
-    flood_put(&node, &k("image/0"), 0x0305);
-    flood_put(&node, &k("metrics"), 0x0306);
-    flood_put(&node, &k("status/processor"), 0x0110);
+    flood_get(&node, pkeys::PLAN, 0x0101);
+    flood_put(&node, &pkeys::plan(m).unwrap(), 0x0102);
+    flood_get(&node, &pkeys::plan(m).unwrap(), 0x0103);
+    flood_get(&node, &pkeys::results(m).unwrap(), 0x0307);
+    flood_put(&node, &pkeys::echo(m).unwrap(), 0x0200);
+    flood_put(&node, &pkeys::detections(m).unwrap(), 0x0304);
+    flood_put(&node, &pkeys::image(m, 0).unwrap(), 0x0305);
+    flood_put(&node, &pkeys::metrics(m).unwrap(), 0x0306);
+    flood_put(&node, &pkeys::status(m, "processor").unwrap(), 0x0110);
     // now the echo, flooded as soon as it is up (while the mission runs)
     let net = l.event("network", Duration::from_secs(1));
     let mut ea: Vec<String> = vec![
@@ -389,9 +389,9 @@ fn ten_thousand_malformed_payloads_on_every_key() {
         e["event"] == "status" && e["role"] == "echo"
     });
     wait_sees(&node, "echo", &l);
-    flood_get(&node, &k("echo/request"), 0x0301);
-    flood_put(&node, &k("plan"), 0x0102);
-    flood_get(&node, &k("plan"), 0x0103);
+    flood_get(&node, &pkeys::echo_request(m).unwrap(), 0x0301);
+    flood_put(&node, &pkeys::plan(m).unwrap(), 0x0102);
+    flood_get(&node, &pkeys::plan(m).unwrap(), 0x0103);
     expect_exit(&mut l, &reference);
     assert!(echo.stop(Duration::from_secs(20)).success());
     node.close().unwrap();
@@ -424,7 +424,7 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     }
     // and they were logged (rate-limited WARN lines naming the key)
     assert!(
-        p.contains(&k("results")) && p.contains("WARN"),
+        p.contains(&pkeys::results(m).unwrap()) && p.contains("WARN"),
         "nothing logged"
     );
 }

@@ -16,8 +16,10 @@ use bridge::zenoh::Wait;
 use bridge::{DecodeLimits, ZenohArgs, ZenohNode};
 use common::*;
 use pipeline::collect::Collector;
-use planner::service::{Plan, PlanRequest, MAX_PLAN_BYTES, PLAN_KEY};
-use radar_sim::service::{ApertureDetections, ApertureImage, MissionContext, MissionMetrics};
+use pipeline::protocol::keys::{self as pkeys, PLAN as PLAN_KEY};
+use pipeline::protocol::{ApertureDetections, ApertureImage, MissionMetrics};
+use pipeline::protocol::{Plan, PlanRequest, MAX_PLAN_BYTES};
+use pipeline::services::process::MissionContext;
 
 const H: f64 = 20.0;
 
@@ -151,20 +153,20 @@ impl Client {
 fn collect_and_check(c: &Client, plan: &Plan, out: &Path, started: Vec<Service>) {
     let det = c
         .node
-        .subscriber::<ApertureDetections>("cellsar/*/detections", SubscribeOptions::default())
+        .subscriber::<ApertureDetections>(pkeys::ALL_DETECTIONS, SubscribeOptions::default())
         .unwrap();
     let img = c
         .node
-        .subscriber::<ApertureImage>("cellsar/*/image/*", SubscribeOptions::default())
+        .subscriber::<ApertureImage>(pkeys::ALL_IMAGES, SubscribeOptions::default())
         .unwrap();
     let met = c
         .node
-        .subscriber::<MissionMetrics>("cellsar/*/metrics", SubscribeOptions::default())
+        .subscriber::<MissionMetrics>(pkeys::ALL_METRICS, SubscribeOptions::default())
         .unwrap();
     let ctx = MissionContext::new(
         &Arc::new(plan.clone()),
         &radar_sim::config::SceneFile::from_path(&scene()).unwrap(),
-        radar_sim::service::DEFAULT_MAX_FRAME_BYTES,
+        pipeline::services::radar::DEFAULT_MAX_FRAME_BYTES,
     )
     .unwrap();
     let mut col = Collector::new(plan.mission_id, ctx.apertures.len(), out).unwrap();
@@ -188,13 +190,13 @@ fn collect_and_check(c: &Client, plan: &Plan, out: &Path, started: Vec<Service>)
         // results published before this client subscribed: ask for them again
         if last_ask.elapsed() > Duration::from_secs(3) {
             last_ask = Instant::now();
-            let req = radar_sim::service::ResultRequest {
+            let req = pipeline::protocol::ResultRequest {
                 mission_id: plan.mission_id,
                 apertures: col.missing(),
                 metrics: !col.has_metrics(),
             };
-            let _ = c.node.query_one::<_, radar_sim::service::ResultAck>(
-                &format!("cellsar/{}/results", plan.mission_id),
+            let _ = c.node.query_one::<_, pipeline::protocol::ResultAck>(
+                &pkeys::results(plan.mission_id).unwrap(),
                 &req,
                 &QueryOptions::default(),
             );

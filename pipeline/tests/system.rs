@@ -106,7 +106,12 @@ fn listen_endpoint_without_scouting_forms_the_mesh() {
     let mut l = Launch::start(dir.path(), H, &["-l", &ep, "--no-multicast-scouting"]);
     let net = l.event("network", Duration::from_secs(60));
     let children: Vec<String> = serde_json::from_value(net["children"].clone()).unwrap();
-    assert!(children.windows(2).any(|w| w[0] == "--connect" && w[1] == ep), "{children:?}");
+    assert!(
+        children
+            .windows(2)
+            .any(|w| w[0] == "--connect" && w[1] == ep),
+        "{children:?}"
+    );
     let st = l.finish(Duration::from_secs(240));
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
     assert_same_as_reference(&l.out, &reference);
@@ -118,7 +123,17 @@ fn listen_endpoints_children_cannot_reach_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     for (flags, named) in [
         (vec!["-l", "tcp/127.0.0.1:0"], "port 0"),
-        (vec!["-m", "client", "-e", "tcp/127.0.0.1:9", "-l", "tcp/127.0.0.1:7447"], "-m client"),
+        (
+            vec![
+                "-m",
+                "client",
+                "-e",
+                "tcp/127.0.0.1:9",
+                "-l",
+                "tcp/127.0.0.1:7447",
+            ],
+            "-m client",
+        ),
     ] {
         let o = Command::new(exe())
             .args(run_args(dir.path(), "out", &flags))
@@ -126,7 +141,10 @@ fn listen_endpoints_children_cannot_reach_are_refused() {
             .unwrap();
         let e = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{flags:?}: {e}");
-        assert!(e.contains("--listen") && e.contains(named), "{flags:?}: {e}");
+        assert!(
+            e.contains("--listen") && e.contains(named),
+            "{flags:?}: {e}"
+        );
     }
 }
 

@@ -9,7 +9,11 @@
 //! - exact-geometry evaluation of any trajectory: [`evaluate()`];
 //! - trajectories and their files: [`trajectory`];
 //! - the convex machinery: [`socp`] (Clarabel), [`schemes`] (the subproblems), [`init`]
-//!   (pre-check and start), [`driver`] (the iteration loop: [`plan`]).
+//!   (pre-check and start), [`driver`] (the iteration loop: [`plan`]);
+//! - a plan as data: [`summary`] (`summary.json`, `trajectory.csv`).
+//!
+//! A pure library: no networking, no command line, no plotting (those live in the `pipeline`
+//! crate, which also holds the `cellsar-planner` binary).
 
 pub mod dmin;
 pub mod driver;
@@ -20,11 +24,9 @@ pub mod landmarks;
 pub mod mission;
 pub mod params;
 pub mod power;
-pub mod report;
 pub mod schemes;
-#[cfg(feature = "service")]
-pub mod service;
 pub mod socp;
+pub mod summary;
 pub mod trajectory;
 
 pub use driver::{
@@ -36,6 +38,7 @@ pub use landmarks::{LandmarkWindow, LandmarksSpec, Preset, Schedule};
 pub use mission::{Mission, MissionError, MissionFile};
 pub use params::{ParamError, Params, ParamsOverride};
 pub use power::PowerModel;
+pub use summary::Summary;
 pub use trajectory::{Trajectory, TrajectoryError};
 
 pub use cellsar_error::{error_chain, init_logging};

@@ -30,8 +30,6 @@ pub mod resolution;
 pub mod run;
 pub mod scene;
 pub mod scoring;
-#[cfg(feature = "service")]
-pub mod service;
 pub mod synth;
 pub mod tally;
 pub mod track;

@@ -39,11 +39,11 @@ enum Command {
     #[command(after_help = EXIT_CODES)]
     Run(Box<RunArgs>),
     /// The plan service (as `cellsar-planner serve`).
-    Planner(planner::service::ServeArgs),
+    Planner(pipeline::services::plan::ServeArgs),
     /// The echo simulator service (as `cellsar-radar-sim echo`).
-    Echo(radar_sim::service::EchoArgs),
+    Echo(pipeline::services::echo::EchoArgs),
     /// The processor service (as `cellsar-radar-sim process-service`).
-    Process(radar_sim::service::ProcessArgs),
+    Process(pipeline::services::process::ProcessArgs),
     /// The iceoryx2 <-> Zenoh bridge (as `cellsar-bridge`: the same code and flags).
     Bridge(BridgeArgs),
     /// A plain Zenoh router (what `zenohd` does without plugins).
@@ -77,7 +77,7 @@ fn main() -> ExitCode {
         Command::Run(_) => cellsar_error::COMMAND_LOG_FILTER,
         _ => cellsar_error::SERVICE_LOG_FILTER,
     });
-    let stop = match planner::service::stop_on_signals() {
+    let stop = match pipeline::services::plan::stop_on_signals() {
         Ok(s) => s,
         Err(e) => return Failure::runtime(e).report(),
     };
@@ -103,10 +103,10 @@ fn main() -> ExitCode {
             .zenoh
             .to_config()
             .map_err(Failure::bad_input)
-            .and_then(|_| planner::service::serve(&a, &stop).map_err(Failure::from))
+            .and_then(|_| pipeline::services::plan::serve(&a, &stop).map_err(Failure::from))
             .map(|r| tracing::info!(?r, "plan service stopped")),
         Command::Echo(a) => check_radar_service(&a.scene, &a.zenoh, &a.iox)
-            .and_then(|()| radar_sim::service::run_echo(&a, &stop).map_err(Failure::from))
+            .and_then(|()| pipeline::services::echo::run_echo(&a, &stop).map_err(Failure::from))
             .map(|r| tracing::info!(?r, "echo stopped")),
         Command::Process(a) => if a.window == 0 {
             Err(Failure::bad_input(anyhow::anyhow!(
@@ -115,7 +115,7 @@ fn main() -> ExitCode {
         } else {
             check_radar_service(&a.scene, &a.zenoh, &a.iox)
         }
-        .and_then(|()| radar_sim::service::run_processor(&a, &stop).map_err(Failure::from))
+        .and_then(|()| pipeline::services::process::run_processor(&a, &stop).map_err(Failure::from))
         .map(|r| tracing::info!(?r, "processor stopped")),
         Command::Bridge(a) => bridge::service::run(&a, &stop).map(|_| ()),
         Command::Router(a) => roles::run_router(&a, &stop),
@@ -142,7 +142,7 @@ mod tests {
     #[test]
     fn max_frame_bytes_defaults_agree() {
         let want = bridge::frame::SERVICE_MAX_FRAME_BYTES;
-        assert_eq!(radar_sim::service::DEFAULT_MAX_FRAME_BYTES, want);
+        assert_eq!(pipeline::services::radar::DEFAULT_MAX_FRAME_BYTES, want);
         let got = [
             match parse(&["run", "m.toml", "--scene", "s.toml", "--out", "o"]) {
                 Command::Run(a) => a.max_frame_bytes,

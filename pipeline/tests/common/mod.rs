@@ -48,8 +48,8 @@ pub fn reference(horizon_s: f64) -> PathBuf {
     let m = radar_sim::run::shorten(&m, horizon_s).unwrap();
     let scene = radar_sim::config::SceneFile::from_path(&scene()).unwrap();
     let result = planner::plan(&m, &planner::PlanOptions::default()).unwrap();
-    planner::report::write_plan_dir(&out.join("plan"), &m, &result).unwrap();
-    let (m2, traj) = planner::report::read_plan_dir(&out.join("plan")).unwrap();
+    pipeline::report::write_plan_dir(&out.join("plan"), &m, &result).unwrap();
+    let (m2, traj) = pipeline::report::read_plan_dir(&out.join("plan")).unwrap();
     radar_sim::run::simulate(&m2, &traj, &scene, &out.join("recording"), &mut |_, _| {}).unwrap();
     let metrics = radar_sim::run::process(
         &out.join("recording"),

@@ -15,8 +15,9 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use pipeline::args::IqLimitArgs;
 use radar_sim::config::SceneFile;
-use radar_sim::limits::{IqLimitArgs, IqLimits, DEFAULT_MAX_APERTURE_GIB};
+use radar_sim::limits::{IqLimits, DEFAULT_MAX_APERTURE_GIB};
 use radar_sim::pipeline::RadarSetup;
 use radar_sim::run;
 
@@ -102,17 +103,15 @@ enum Cmd {
     },
     /// Service: synthesise the apertures processors ask for along each plan heard on Zenoh and
     /// publish them as IQ frames on iceoryx2 (`cellsar/<mission>/echo`); stops on SIGINT/SIGTERM.
-    #[cfg(feature = "service")]
     Echo {
         #[command(flatten)]
-        args: radar_sim::service::EchoArgs,
+        args: pipeline::services::echo::EchoArgs,
     },
     /// Service: pull each planned mission's apertures from the echo (iceoryx2, or Zenoh via
     /// cellsar-bridge), process them and publish detections, images and metrics on Zenoh.
-    #[cfg(feature = "service")]
     ProcessService {
         #[command(flatten)]
-        args: radar_sim::service::ProcessArgs,
+        args: pipeline::services::process::ProcessArgs,
     },
 }
 
@@ -132,7 +131,7 @@ fn bad(e: impl Into<anyhow::Error>) -> Failure {
 type Result<T, E = Failure> = std::result::Result<T, E>;
 
 fn simulate(plan: &Path, scene: &Path, out: &Path, limits: &IqLimits) -> Result<()> {
-    let (mission, traj) = planner::report::read_plan_dir(plan)
+    let (mission, traj) = pipeline::report::read_plan_dir(plan)
         .with_context(|| format!("reading plan directory {}", plan.display()))
         .map_err(bad)?;
     let scene = SceneFile::from_path(scene)?;
@@ -213,11 +212,11 @@ fn closed_loop(
         result.evaluation.is_feasible_for(plan_options.resolution)
     );
     let plan_dir = out.join("plan");
-    planner::report::write_plan_dir(&plan_dir, &m, &result)
+    pipeline::report::write_plan_dir(&plan_dir, &m, &result)
         .with_context(|| format!("writing {}", plan_dir.display()))?;
     let rec = out.join("recording");
     // the plan just written: a failure to read it back is a runtime failure
-    let (m2, traj) = planner::report::read_plan_dir(&plan_dir)
+    let (m2, traj) = pipeline::report::read_plan_dir(&plan_dir)
         .with_context(|| format!("reading back {}", plan_dir.display()))?;
     let b = bar(1, "simulate");
     let sim = run::simulate_limited(&m2, &traj, &scene_file, &rec, limits, &mut |d, n| {
@@ -294,7 +293,6 @@ fn main() -> ExitCode {
 /// one-shot commands.
 fn default_log_filter(cmd: &Cmd) -> &'static str {
     match cmd {
-        #[cfg(feature = "service")]
         Cmd::Echo { .. } | Cmd::ProcessService { .. } => cellsar_error::SERVICE_LOG_FILTER,
         _ => cellsar_error::COMMAND_LOG_FILTER,
     }
@@ -303,7 +301,6 @@ fn default_log_filter(cmd: &Cmd) -> &'static str {
 fn run_cli() -> Result<()> {
     let cli = Cli::parse();
     planner::init_logging(default_log_filter(&cli.cmd));
-    #[cfg(feature = "service")]
     bridge::iox::init_iceoryx_logging();
     match cli.cmd {
         Cmd::Simulate {
@@ -351,17 +348,15 @@ fn run_cli() -> Result<()> {
             out,
             bandwidths_mhz,
         } => resolution(&out, &bandwidths_mhz),
-        #[cfg(feature = "service")]
         Cmd::Echo { args } => {
-            let stop = planner::service::stop_on_signals().map_err(anyhow::Error::new)?;
-            let report = radar_sim::service::run_echo(&args, &stop)?;
+            let stop = pipeline::services::plan::stop_on_signals().map_err(anyhow::Error::new)?;
+            let report = pipeline::services::echo::run_echo(&args, &stop)?;
             tracing::info!(?report, "echo stopped");
             Ok(())
         }
-        #[cfg(feature = "service")]
         Cmd::ProcessService { args } => {
-            let stop = planner::service::stop_on_signals().map_err(anyhow::Error::new)?;
-            let report = radar_sim::service::run_processor(&args, &stop)?;
+            let stop = pipeline::services::plan::stop_on_signals().map_err(anyhow::Error::new)?;
+            let report = pipeline::services::process::run_processor(&args, &stop)?;
             tracing::info!(?report, "processor stopped");
             Ok(())
         }
@@ -386,7 +381,6 @@ mod tests {
                 .cmd,
             )
         };
-        #[cfg(feature = "service")]
         {
             assert_eq!(
                 level(&["echo", "--scene", "s.toml"]),

@@ -10,8 +10,8 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_cellsar-radar-sim"))
 }
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
+fn root() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../radar-sim")
 }
 
 #[test]

@@ -2,9 +2,12 @@
 //! per pulse and the frame size, so the echo and the processor agree on every sequence number
 //! without exchanging anything, and a re-sent frame keeps its number.
 
-use crate::track::Aperture;
+use radar_sim::track::Aperture;
 
-use super::{ServiceError, ServiceResult};
+/// Frames that cannot be laid out; the message names the flag or aperture.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct LayoutError(pub String);
 
 /// Where one frame sits in the mission.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -46,16 +49,16 @@ impl FrameLayout {
         apertures: &[Aperture],
         samples_per_pulse: usize,
         max_frame_bytes: usize,
-    ) -> ServiceResult<Self> {
+    ) -> Result<Self, LayoutError> {
         let pulse_bytes = samples_per_pulse.saturating_mul(8);
         if samples_per_pulse == 0 || max_frame_bytes < pulse_bytes {
-            return Err(ServiceError::Flag(format!(
+            return Err(LayoutError(format!(
                 "--max-frame-bytes {max_frame_bytes} is smaller than one pulse ({pulse_bytes} bytes)"
             )));
         }
         let ppl = apertures.first().map_or(1, |a| a.pulses_per_look).max(1);
         if let Some(a) = apertures.iter().find(|a| a.pulses_per_look != ppl) {
-            return Err(ServiceError::Flag(format!(
+            return Err(LayoutError(format!(
                 "aperture {} has {} pulses per look, aperture 0 has {ppl}: a mission's looks must be equal",
                 a.index, a.pulses_per_look
             )));

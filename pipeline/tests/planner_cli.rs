@@ -77,7 +77,7 @@ fn plan_writes_the_plan_directory() {
     assert_eq!(summary["scheme"], "exact");
     assert_eq!(summary["feasible"], true);
     // the plan directory reads back, and its trajectory re-plans as --init
-    let (m, tr) = planner::report::read_plan_dir(&out).unwrap();
+    let (m, tr) = pipeline::report::read_plan_dir(&out).unwrap();
     assert_eq!(tr.slots(), m.slots());
     let out2 = tmp("plan-init");
     let o = bin()

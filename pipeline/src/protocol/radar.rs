@@ -3,7 +3,7 @@
 use bridge::{Message, MissionId};
 use serde::{Deserialize, Serialize};
 
-use crate::run::{DetectionRow, Metrics};
+use radar_sim::run::{DetectionRow, Metrics};
 
 /// f64 fields that may be NaN or infinite: JSON has no such numbers, so they are written as
 /// `null` and read back as NaN; binary forms keep the value.
@@ -275,20 +275,4 @@ impl Message for ResultAck {
     const KIND: u16 = 0x0308;
     const NAME: &'static str = "radar.result_ack";
     const SCHEMA_VERSION: u16 = 1;
-}
-
-/// A per-aperture outcome as the processor stores it in `--state-dir`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct StoredOutcome {
-    /// The outcome.
-    pub outcome: super::ApertureOutcome,
-}
-
-impl Message for StoredOutcome {
-    const KIND: u16 = 0x0309;
-    const NAME: &'static str = "radar.stored_outcome";
-    /// 2: the outcome nests its tally and no longer repeats the aperture index (a version-1
-    /// file in a state directory is ignored, and that aperture processed again). 3: the tally
-    /// carries the physics review's metrics (an older file is ignored the same way).
-    const SCHEMA_VERSION: u16 = 3;
 }

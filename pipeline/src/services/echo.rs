@@ -7,28 +7,29 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use super::plan::{PlanCache, StatusBoard};
+use crate::protocol::keys::{self as pkeys, ALL_PLANS};
+use crate::protocol::{Plan, MAX_PLAN_BYTES};
 use bridge::envelope::DecodeLimits;
 use bridge::iox::FramePublisherOptions;
 use bridge::net::{IncomingQuery, PublishOptions, SubscribeOptions, TypedPublisher};
 use bridge::zenoh::qos::CongestionControl;
 use bridge::{
-    keys, FrameMeta, FrameNode, FramePublisher, FrameServiceSpec, IoxArgs, MissionId, Refusal,
+    FrameMeta, FrameNode, FramePublisher, FrameServiceSpec, IoxArgs, MissionId, Refusal,
     RefusalKind, ZenohArgs, ZenohNode,
 };
-use planner::service::{Plan, PlanCache, StatusBoard, ALL_PLANS, MAX_PLAN_BYTES};
 use serde::{Deserialize, Serialize};
 
-use crate::config::SceneFile;
-use crate::limits::{IqLimitArgs, IqLimits};
-use crate::synth::{Components, Synthesizer};
-use crate::track::PulseMeta;
+use crate::args::IqLimitArgs;
 use bridge::flags::Seconds;
+use radar_sim::config::SceneFile;
+use radar_sim::limits::IqLimits;
+use radar_sim::synth::{Components, Synthesizer};
+use radar_sim::track::PulseMeta;
 
 use super::process::MissionContext;
-use super::{
-    ApertureRequest, FrameInfo, FrameSlot, RequestAck, ServiceError, ServiceResult,
-    DEFAULT_MAX_FRAME_BYTES,
-};
+use super::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
+use crate::protocol::{ApertureRequest, FrameInfo, FrameSlot, RequestAck};
 
 /// Flags of `cellsar-radar-sim echo`.
 #[derive(clap::Args, Debug, Clone)]
@@ -171,7 +172,7 @@ impl<'a> Echo<'a> {
             },
         )?;
         let requests = self.node.queryable::<ApertureRequest>(
-            "cellsar/*/echo/request",
+            pkeys::ALL_ECHO_REQUESTS,
             SubscribeOptions {
                 capacity: 256,
                 ..SubscribeOptions::default()
@@ -281,7 +282,7 @@ impl<'a> Echo<'a> {
         let objects = ctx.setup.objects(&ctx.mission)?;
         let synth = ctx.setup.synthesizer(objects)?;
         let info = self.node.publisher::<FrameInfo>(
-            &keys::mission(ctx.mission_id, "frames")?,
+            &pkeys::frames(ctx.mission_id)?,
             PublishOptions {
                 mission_id: ctx.mission_id,
                 congestion_control: CongestionControl::Drop,
@@ -290,10 +291,7 @@ impl<'a> Echo<'a> {
         )?;
         self.cache.insert(plan)?;
         // the publisher exists from the plan on, so processors are connected before they ask
-        let spec = FrameServiceSpec::new(
-            &keys::mission(ctx.mission_id, "echo")?,
-            self.args.max_frame_bytes,
-        );
+        let spec = FrameServiceSpec::new(&pkeys::echo(ctx.mission_id)?, self.args.max_frame_bytes);
         let publisher = self
             .frames
             .publisher(&spec, FramePublisherOptions::default())?;
@@ -309,7 +307,7 @@ impl<'a> Echo<'a> {
         let r = q.request.clone();
         if !self.missions.contains_key(&r.mission_id) {
             // a processor may know a plan that this echo (just restarted) has not seen yet
-            if let Ok(key) = keys::mission(r.mission_id, "plan") {
+            if let Ok(key) = pkeys::plan(r.mission_id) {
                 if let Ok(found) = PlanCache::lookup(self.node, &key, Duration::from_millis(1500)) {
                     for p in found {
                         self.add_plan(p);
@@ -444,10 +442,8 @@ impl<'a> Echo<'a> {
             })?;
         let iq = m.synth.synthesize_frame(chunk, Components::ALL)?;
         if m.publisher.is_none() {
-            let spec = FrameServiceSpec::new(
-                &keys::mission(ctx.mission_id, "echo")?,
-                self.args.max_frame_bytes,
-            );
+            let spec =
+                FrameServiceSpec::new(&pkeys::echo(ctx.mission_id)?, self.args.max_frame_bytes);
             m.publisher = Some(
                 self.frames
                     .publisher(&spec, FramePublisherOptions::default())?,

@@ -12,15 +12,16 @@ use rayon::prelude::*;
 use serde_json::Value;
 
 use super::plot::{line_plot, trajectory_plot, Series, TrackStyle};
-use super::{circle_slots, create_dir, write_file, ReportError, Summary};
-use crate::dmin::{expected_dmin_m, expected_dmin_monte_carlo_m, CdfForm};
-use crate::evaluate::ResolutionMode;
-use crate::geometry::range_resolution_paper_m;
-use crate::landmarks::{LandmarksSpec, Preset};
-use crate::mission::MissionFile;
-use crate::params::ParamsOverride;
-use crate::power::PowerModel;
-use crate::{plan, Mission, Params, PlanOptions, PlanResult, Scheme};
+use super::{circle_slots, create_dir, write_file, ReportError};
+use planner::dmin::{expected_dmin_m, expected_dmin_monte_carlo_m, CdfForm};
+use planner::evaluate::ResolutionMode;
+use planner::geometry::range_resolution_paper_m;
+use planner::landmarks::{LandmarksSpec, Preset};
+use planner::mission::MissionFile;
+use planner::params::ParamsOverride;
+use planner::power::PowerModel;
+use planner::Summary;
+use planner::{plan, Mission, Params, PlanOptions, PlanResult, Scheme};
 
 /// A figure or table of the paper's Section IV.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -735,7 +736,7 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
             if let Some(r) = get(&format!("{group}/{}", s.name())) {
                 write_file(
                     &dir.join(format!("{group}-{}.csv", s.name())),
-                    &super::trajectory_csv(r),
+                    &planner::summary::trajectory_csv(r),
                 )?;
             }
         }
@@ -984,7 +985,7 @@ pub fn reproduce(out: &Path, quick: bool, figs: &FigureSet) -> Result<PathBuf, R
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::{plan_row, resolution_of_key, FAR_START_M};
-    use crate::evaluate::ResolutionMode;
+    use planner::evaluate::ResolutionMode;
 
     /// Each row of plans.json names its plan (group and scheme) and its resolution, and a
     /// failed plan keeps its error instead of being left out.
@@ -999,12 +1000,12 @@ mod tests {
         assert_eq!(row["resolution"], "general");
         assert_eq!(row["scheme"], "exact");
         assert_eq!(row["error"], e.as_str());
-        let m = crate::Mission::from_file_struct(&crate::MissionFile::from_toml_str(
+        let m = planner::Mission::from_file_struct(&planner::MissionFile::from_toml_str(
             "name = \"short\"\n[params]\nhorizon_s = 20\n[landmarks]\npreset = \"default\"\nspacing_m = 30\n",
         ).unwrap())
         .unwrap();
-        let r = crate::plan(&m, &crate::PlanOptions::default()).unwrap();
-        let s = super::Summary::new(&m, &r);
+        let r = planner::plan(&m, &planner::PlanOptions::default()).unwrap();
+        let s = planner::Summary::new(&m, &r);
         let row = plan_row("default-30/exact", ResolutionMode::Paper, Ok(&s));
         assert_eq!(row["plan"], "default-30/exact");
         assert_eq!(row["resolution"], "paper");
@@ -1018,13 +1019,13 @@ mod tests {
     fn far_start_is_the_mission_files() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../missions/default-30m-far-start.toml");
-        let m = crate::Mission::from_path(&path).unwrap();
+        let m = planner::Mission::from_path(&path).unwrap();
         assert_eq!(m.params().start_m, FAR_START_M);
         let default = super::mission_of(
-            crate::Preset::Default,
+            planner::Preset::Default,
             30.0,
             0,
-            crate::params::ParamsOverride::default(),
+            planner::params::ParamsOverride::default(),
         )
         .unwrap();
         assert_eq!(m.schedule(), default.schedule());

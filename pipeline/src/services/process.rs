@@ -10,29 +10,32 @@ use std::sync::mpsc::{self, Receiver, Sender, SyncSender, TrySendError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use super::plan::{write_atomic, PlanCache, StatusBoard};
+use crate::protocol::keys::{self as pkeys, ALL_PLANS};
+use crate::protocol::{Plan, MAX_PLAN_BYTES};
 use bridge::envelope::{self, DecodeLimits, Meta};
 use bridge::flags::Seconds;
 use bridge::net::{
     FrameSubscribeOptions, PublishOptions, QueryOptions, SubscribeOptions, TypedPublisher,
 };
 use bridge::{
-    keys, Complex32, FrameNode, FrameServiceSpec, IoxArgs, MissionId, ZenohArgs, ZenohNode,
+    Complex32, FrameNode, FrameServiceSpec, IoxArgs, Message, MissionId, ZenohArgs, ZenohNode,
 };
-use planner::service::{Plan, PlanCache, StatusBoard, ALL_PLANS, MAX_PLAN_BYTES};
 use serde::{Deserialize, Serialize};
 
-use crate::config::SceneFile;
-use crate::limits::{IqBudget, IqLimitArgs, IqLimits};
-use crate::pipeline::{Processor, RadarSetup};
-use crate::run::{MeasuredResolution, Metrics};
-use crate::scene::SceneObject;
-use crate::tally::{self, ApertureTally};
-use crate::track::{Aperture, PlannedTrack, PulseMeta};
+use crate::args::IqLimitArgs;
+use radar_sim::config::SceneFile;
+use radar_sim::limits::{IqBudget, IqLimits};
+use radar_sim::pipeline::{Processor, RadarSetup};
+use radar_sim::run::{MeasuredResolution, Metrics};
+use radar_sim::scene::SceneObject;
+use radar_sim::tally::{self, ApertureTally};
+use radar_sim::track::{Aperture, PlannedTrack, PulseMeta};
 
-use super::{
+use super::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
+use crate::protocol::{
     ApertureDetections, ApertureImage, ApertureRequest, Detection, FrameLayout, MissionMetrics,
-    RequestAck, ResultAck, ResultRequest, ServiceError, ServiceResult, StoredOutcome,
-    DEFAULT_MAX_FRAME_BYTES,
+    RequestAck, ResultAck, ResultRequest,
 };
 
 /// What every radar service derives from a plan and a scene.
@@ -62,7 +65,7 @@ impl MissionContext {
     }
 
     /// Resolves a plan against a scene; a mission whose IQ or largest aperture exceeds
-    /// `limits` is refused ([`crate::limits::IqBudget`]); errors name the mission.
+    /// `limits` is refused ([`radar_sim::limits::IqBudget`]); errors name the mission.
     pub fn with_limits(
         plan: &Arc<Plan>,
         scene: &SceneFile,
@@ -187,6 +190,22 @@ impl ApertureOutcome {
     pub fn aperture(&self) -> usize {
         self.tally.summary.aperture
     }
+}
+
+/// A per-aperture outcome as the processor stores it in `--state-dir`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct StoredOutcome {
+    /// The outcome.
+    pub outcome: ApertureOutcome,
+}
+
+impl Message for StoredOutcome {
+    const KIND: u16 = 0x0309;
+    const NAME: &'static str = "radar.stored_outcome";
+    /// 2: the outcome nests its tally and no longer repeats the aperture index (a version-1
+    /// file in a state directory is ignored, and that aperture processed again). 3: the tally
+    /// carries the physics review's metrics (an older file is ignored the same way).
+    const SCHEMA_VERSION: u16 = 3;
 }
 
 /// The pulse as `cellsar-radar-sim simulate` writes it to `pulses.csv` and `process` reads it
@@ -519,7 +538,7 @@ fn serve(
 
     let zenoh_frames = match args.frames {
         FrameSource::Zenoh => Some(node.frame_subscriber(
-            "cellsar/*/echo",
+            pkeys::ALL_ECHO,
             FrameSubscribeOptions {
                 capacity: 16,
                 max_payload_bytes: args.max_frame_bytes,
@@ -610,7 +629,7 @@ fn requester(
     done: Sender<RequestDone>,
 ) {
     while let Ok(j) = jobs.recv() {
-        let result = keys::mission(j.mission, "echo/request")
+        let result = pkeys::echo_request(j.mission)
             .map_err(|e| e.to_string())
             .and_then(|key| {
                 let req = ApertureRequest {
@@ -724,7 +743,7 @@ fn receive_iox(
             if subs.iter().any(|(m, _, _)| *m == id) {
                 continue;
             }
-            let spec = FrameServiceSpec::new(&keys::mission(id, "echo")?, args.max_frame_bytes);
+            let spec = FrameServiceSpec::new(&pkeys::echo(id)?, args.max_frame_bytes);
             subs.push((id, frames.subscriber(&spec)?, 0));
             tracing::info!(mission = %id, service = %spec.name, "subscribed to frames");
             let _ = watching.send(id);
@@ -823,7 +842,7 @@ impl Proc<'_> {
             },
         )?;
         let result_requests = self.node.queryable::<ResultRequest>(
-            "cellsar/*/results",
+            pkeys::ALL_RESULTS,
             SubscribeOptions {
                 capacity: 64,
                 ..SubscribeOptions::default()
@@ -1348,7 +1367,7 @@ impl Proc<'_> {
             time_unix_ns: 0,
         };
         if !self.detections.contains_key(&id) {
-            let made = keys::mission(id, "detections")
+            let made = pkeys::detections(id)
                 .map_err(ServiceError::from)
                 .and_then(|key| {
                     Ok(self.node.publisher::<ApertureDetections>(
@@ -1372,7 +1391,7 @@ impl Proc<'_> {
             }
         }
         if !self.images.contains_key(&(id, k)) {
-            let made = keys::mission(id, &format!("image/{k}"))
+            let made = pkeys::image(id, k)
                 .map_err(ServiceError::from)
                 .and_then(|key| {
                     Ok(self.node.publisher::<ApertureImage>(
@@ -1402,7 +1421,7 @@ impl Proc<'_> {
         let id = run.ctx.base.mission_id;
         let Some(m) = &run.metrics else { return };
         if !self.metrics_pubs.contains_key(&id) {
-            let made = keys::mission(id, "metrics")
+            let made = pkeys::metrics(id)
                 .map_err(ServiceError::from)
                 .and_then(|key| {
                     Ok(self.node.publisher::<MissionMetrics>(
@@ -1527,7 +1546,7 @@ fn store(dir: &Path, o: &ApertureOutcome) -> ServiceResult<()> {
             source,
         },
     )?;
-    planner::service::write_atomic(&outcome_path(dir, o.aperture()), &bytes)?;
+    write_atomic(&outcome_path(dir, o.aperture()), &bytes)?;
     Ok(())
 }
 
@@ -1540,7 +1559,7 @@ fn store_metrics(dir: &Path, m: &MissionMetrics) -> ServiceResult<()> {
         what: "metrics".into(),
         source,
     })?;
-    planner::service::write_atomic(&dir.join("metrics.bin"), &bytes)?;
+    write_atomic(&dir.join("metrics.bin"), &bytes)?;
     Ok(())
 }
 

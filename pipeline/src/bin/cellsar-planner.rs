@@ -12,10 +12,10 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use pipeline::report::{self, reproduce};
 use planner::dmin::{expected_dmin_m, expected_dmin_monte_carlo_m, CdfForm};
 use planner::evaluate::ResolutionMode;
-use planner::report::{self, reproduce, Summary};
-use planner::socp::{Backend, SocpSettings};
+use planner::Summary;
 use planner::{
     evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanOptions, Scheme,
     Trajectory,
@@ -67,11 +67,6 @@ enum Command {
         /// 2-D resolution cell ≤ d_min, away from blind geometry) or paper (δ_r, δ_a ≤ d_min).
         #[arg(long, default_value = "paper", value_parser = ResolutionMode::parse)]
         resolution: ResolutionMode,
-        /// Interior-point method of the exact scheme's cone programs: clarabel (default), or
-        /// banded (the planner's own banded normal-equations method, Clarabel where it gives no
-        /// answer; experimental, see BENCHMARKS.md).
-        #[arg(long, default_value = "clarabel", value_parser = parse_backend)]
-        socp_backend: Backend,
         /// Wall-time limit of the whole run, s: the iterations stop at the first check after it
         /// and the last accepted (feasible) iterate is written, with termination `time_limit`;
         /// a run still repairing its start then fails (exit 1).
@@ -104,10 +99,9 @@ enum Command {
     },
     /// Serve plan requests over Zenoh (`cellsar/plan`), publish each plan on
     /// `cellsar/<mission>/plan`; stops on SIGINT/SIGTERM.
-    #[cfg(feature = "service")]
     Serve {
         #[command(flatten)]
-        args: planner::service::ServeArgs,
+        args: pipeline::services::plan::ServeArgs,
     },
     /// Expected least object distance `E[d_min]` in a disk: correct formula, as printed, Monte Carlo.
     Dmin {
@@ -154,10 +148,6 @@ fn parse_named<T: Copy>(
             names.join(", ")
         )
     })
-}
-
-fn parse_backend(s: &str) -> Result<Backend, String> {
-    parse_named(s, &Backend::ALL, Backend::name, "cone-program backend")
 }
 
 fn parse_scheme(s: &str) -> Result<Scheme, String> {
@@ -220,7 +210,6 @@ fn run(cli: Cli) -> Result<(), Failure> {
             no_coarse,
             plain_sca,
             resolution,
-            socp_backend,
             time_limit_s,
             no_init_fallback,
         } => {
@@ -246,10 +235,6 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     1.0
                 } else {
                     PlanOptions::default().min_kappa_scale
-                },
-                exact_socp: SocpSettings {
-                    backend: socp_backend,
-                    ..SocpSettings::exact_geometry()
                 },
                 time_limit_s,
                 replace_unrepairable_init: !no_init_fallback,
@@ -331,10 +316,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
             out!("wrote {}", report.display());
             Ok(())
         }
-        #[cfg(feature = "service")]
         Command::Serve { args } => {
-            let stop = planner::service::stop_on_signals().map_err(Failure::runtime)?;
-            let report = planner::service::serve(&args, &stop).map_err(Failure::from)?;
+            let stop = pipeline::services::plan::stop_on_signals().map_err(Failure::runtime)?;
+            let report = pipeline::services::plan::serve(&args, &stop).map_err(Failure::from)?;
             tracing::info!(?report, "plan service stopped");
             Ok(())
         }
@@ -377,7 +361,6 @@ fn run(cli: Cli) -> Result<(), Failure> {
 /// commands.
 fn default_log_filter(command: &Command) -> &'static str {
     match command {
-        #[cfg(feature = "service")]
         Command::Serve { .. } => cellsar_error::SERVICE_LOG_FILTER,
         _ => cellsar_error::COMMAND_LOG_FILTER,
     }
@@ -410,7 +393,6 @@ mod tests {
                 .command,
             )
         };
-        #[cfg(feature = "service")]
         assert_eq!(level(&["serve"]), cellsar_error::SERVICE_LOG_FILTER);
         assert_eq!(
             level(&["plan", "m.toml", "--out", "o"]),

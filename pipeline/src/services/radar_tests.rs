@@ -4,14 +4,16 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use planner::service::{plan_request, PlanRequest};
+use super::echo::*;
+use super::plan::plan_request;
+use super::process::*;
+use crate::protocol::*;
 use planner::NoObserver;
 
 use super::process::{fold_metrics, ProcContext};
-use super::*;
-use crate::config::SceneFile;
-use crate::io::NpyReader;
-use crate::run;
+use radar_sim::config::SceneFile;
+use radar_sim::io::NpyReader;
+use radar_sim::run;
 
 /// A small, fast scene (1024-point FFT, 50 MHz, 40 m grid at 0.5 m).
 pub(crate) const SMALL_SCENE: &str = r#"
@@ -39,9 +41,9 @@ fn small_scene() -> SceneFile {
     SceneFile::from_toml_str(SMALL_SCENE, "small scene").unwrap()
 }
 
-fn plan(horizon_s: f64) -> Arc<planner::service::Plan> {
+fn plan(horizon_s: f64) -> Arc<crate::protocol::Plan> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let m = planner::Mission::from_path(&root.join("missions/default.toml")).unwrap();
+    let m = planner::Mission::from_path(&root.join("../radar-sim/missions/default.toml")).unwrap();
     let m = run::shorten(&m, horizon_s).unwrap();
     let req = PlanRequest {
         mission: m.to_file_struct(),

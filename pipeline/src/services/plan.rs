@@ -29,22 +29,18 @@ use bridge::zenoh::key_expr::KeyExpr;
 use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::query::{Query, QueryTarget};
 use bridge::zenoh::Wait;
-use bridge::{keys, Message, MissionId, Refusal, RefusalKind, ZenohArgs, ZenohNode};
+use bridge::{MissionId, Refusal, RefusalKind, ZenohArgs, ZenohNode};
 use serde::{Deserialize, Serialize};
 
-use crate::driver::{
-    plan_with_observer, IterationRecord, Observer, PlanError, PlanOptions, PlanResult,
-};
-use crate::evaluate::ResolutionMode;
-use crate::report::Summary;
-use crate::{Mission, MissionFile, Scheme};
+use planner::driver::{plan_with_observer, IterationRecord, Observer, PlanError, PlanOptions};
+use planner::Mission;
 
-/// Key of the plan queryable.
-pub const PLAN_KEY: &str = "cellsar/plan";
-/// Selector of every mission's plan (plan lookups by late joiners).
-pub const ALL_PLANS: &str = "cellsar/*/plan";
-/// Largest plan message accepted (a plan of a long mission with its iteration records).
-pub const MAX_PLAN_BYTES: usize = 64 << 20;
+use crate::protocol::keys::{self as pkeys, ALL_PLANS, PLAN as PLAN_KEY};
+use crate::protocol::{
+    mission_id, BadRequest, Plan, PlanLookup, PlanRequest, PlanSummary, ServiceStatus,
+    MAX_PLAN_BYTES,
+};
+use planner::Summary;
 
 /// Errors of the planner service; each names what failed.
 #[derive(Debug, thiserror::Error)]
@@ -99,6 +95,12 @@ pub enum ServiceError {
     /// A worker thread failed.
     #[error("{0}")]
     Internal(String),
+}
+
+impl From<BadRequest> for ServiceError {
+    fn from(e: BadRequest) -> Self {
+        ServiceError::BadRequest(e.0)
+    }
 }
 
 impl ServiceError {
@@ -156,217 +158,6 @@ pub fn stop_on_signals() -> Result<Arc<AtomicBool>, ServiceError> {
     Ok(stop)
 }
 
-/// Options of a plan request; every field optional (defaults: [`PlanOptions::default`]).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PlanRequestOptions {
-    /// `exact` (default), `paper`, `baseline` or `baseline-exact`.
-    #[serde(default)]
-    pub scheme: Option<Scheme>,
-    /// Largest number of SCA/BCD iterations (≥ 1).
-    #[serde(default)]
-    pub max_iterations: Option<usize>,
-    /// Relative objective change that stops the iterations (finite, > 0).
-    #[serde(default)]
-    pub tolerance: Option<f64>,
-    /// `paper` (default) or `general`.
-    #[serde(default)]
-    pub resolution: Option<ResolutionMode>,
-}
-
-impl PlanRequestOptions {
-    /// The planner options, checked; errors name the field (`options.tolerance`, ...).
-    pub fn to_plan_options(&self) -> Result<PlanOptions, ServiceError> {
-        let mut o = PlanOptions::default();
-        if let Some(s) = self.scheme {
-            o.scheme = s;
-        }
-        if let Some(n) = self.max_iterations {
-            if n == 0 {
-                return Err(ServiceError::BadRequest(
-                    "options.max_iterations: must be at least 1".into(),
-                ));
-            }
-            o.max_iterations = n;
-        }
-        if let Some(t) = self.tolerance {
-            if !(t.is_finite() && t > 0.0) {
-                return Err(ServiceError::BadRequest(format!(
-                    "options.tolerance: {t} must be a finite number > 0"
-                )));
-            }
-            o.tolerance = t;
-        }
-        if let Some(r) = self.resolution {
-            o.resolution = r;
-        }
-        Ok(o)
-    }
-}
-
-/// A request to plan a mission (`cellsar/plan`). As JSON:
-/// `{"mission": {"name": ..., "params": {...}, "landmarks": {...}}, "options": {...}}`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PlanRequest {
-    /// The mission, as in a mission file.
-    pub mission: MissionFile,
-    /// Planner options.
-    #[serde(default)]
-    pub options: PlanRequestOptions,
-}
-
-impl Message for PlanRequest {
-    const KIND: u16 = 0x0101;
-    const NAME: &'static str = "planner.plan_request";
-    const SCHEMA_VERSION: u16 = 1;
-}
-
-/// Fields whose types need a self-describing format (the planner's adjacently tagged enums, NaN
-/// values): CBOR bytes inside bincode; the value itself in JSON.
-mod self_describing {
-    use serde::de::{DeserializeOwned, Error as _, Visitor};
-    use serde::ser::Error as _;
-    use serde::{Deserializer, Serialize, Serializer};
-
-    pub fn serialize<T: Serialize, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
-        if s.is_human_readable() {
-            v.serialize(s)
-        } else {
-            let mut buf = Vec::new();
-            ciborium::into_writer(v, &mut buf).map_err(S::Error::custom)?;
-            s.serialize_bytes(&buf)
-        }
-    }
-
-    struct Bytes;
-
-    impl<'de> Visitor<'de> for Bytes {
-        type Value = Vec<u8>;
-        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            f.write_str("CBOR bytes")
-        }
-        fn visit_bytes<E: serde::de::Error>(self, v: &[u8]) -> Result<Vec<u8>, E> {
-            Ok(v.to_vec())
-        }
-        fn visit_byte_buf<E: serde::de::Error>(self, v: Vec<u8>) -> Result<Vec<u8>, E> {
-            Ok(v)
-        }
-    }
-
-    pub fn deserialize<'de, T: DeserializeOwned, D: Deserializer<'de>>(
-        d: D,
-    ) -> Result<T, D::Error> {
-        if d.is_human_readable() {
-            T::deserialize(d)
-        } else {
-            let buf = d.deserialize_byte_buf(Bytes)?;
-            ciborium::from_reader(buf.as_slice()).map_err(D::Error::custom)
-        }
-    }
-}
-
-/// A plan: the resolved mission, the planner's full result and its summary. In the binary form
-/// `result` and `summary` travel as CBOR (their enums and NaN values need a self-describing
-/// format); in JSON they are plain values (NaN as `null`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Plan {
-    /// The mission id ([`mission_id`] of `mission`).
-    pub mission_id: MissionId,
-    /// The resolved mission (explicit landmark windows): `Mission::from_file_struct` gives it back.
-    pub mission: MissionFile,
-    /// The options it was planned with.
-    pub options: PlanRequestOptions,
-    /// The planner's result (trajectory, exact evaluation, histories).
-    #[serde(with = "self_describing")]
-    pub result: PlanResult,
-    /// The summary (as in `summary.json`).
-    #[serde(with = "self_describing")]
-    pub summary: Summary,
-    /// Instance of the planner that made it.
-    pub planner: String,
-}
-
-impl Message for Plan {
-    const KIND: u16 = 0x0102;
-    const NAME: &'static str = "planner.plan";
-    const SCHEMA_VERSION: u16 = 1;
-}
-
-impl Plan {
-    /// The validated mission.
-    pub fn mission(&self) -> Result<Mission, crate::MissionError> {
-        Mission::from_file_struct(&self.mission)
-    }
-
-    /// The key the plan is published on: `cellsar/<mission>/plan`.
-    pub fn key(&self) -> Result<String, ServiceError> {
-        Ok(keys::mission(self.mission_id, "plan")?)
-    }
-}
-
-/// A request for known plans (sent to `cellsar/<mission>/plan` or [`ALL_PLANS`]).
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct PlanLookup {}
-
-impl Message for PlanLookup {
-    const KIND: u16 = 0x0103;
-    const NAME: &'static str = "planner.plan_lookup";
-    const SCHEMA_VERSION: u16 = 1;
-}
-
-/// The summary of a published plan (`cellsar/<mission>/plan/summary`, JSON).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PlanSummary {
-    /// Mission id.
-    pub mission_id: MissionId,
-    /// Mission name.
-    pub mission: String,
-    /// Number of landmark windows.
-    pub windows: usize,
-    /// The summary.
-    #[serde(with = "self_describing")]
-    pub summary: Summary,
-}
-
-impl Message for PlanSummary {
-    const KIND: u16 = 0x0104;
-    const NAME: &'static str = "planner.plan_summary";
-    const SCHEMA_VERSION: u16 = 1;
-}
-
-/// Progress and counters of one service for one mission (`cellsar/<mission>/status/<role>`,
-/// JSON). Shared by every cellsar service.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct ServiceStatus {
-    /// Role (planner, echo, processor, ...).
-    pub role: String,
-    /// Instance name.
-    pub instance: String,
-    /// Mission id.
-    pub mission_id: MissionId,
-    /// State (`planning`, `planned`, `running`, `done`, `failed`, `stopping`).
-    pub state: String,
-    /// Units done (apertures, frames, iterations).
-    pub done: u64,
-    /// Units in total (0 if unknown).
-    pub total: u64,
-    /// The items done (e.g. aperture indices), when the role has them.
-    pub done_items: Vec<u64>,
-    /// Named counters (frames sent, dropped, duplicates, malformed, ...).
-    pub counters: BTreeMap<String, u64>,
-    /// A line for people.
-    pub message: String,
-    /// Seconds since the process started.
-    pub uptime_s: f64,
-}
-
-impl Message for ServiceStatus {
-    const KIND: u16 = 0x0110;
-    const NAME: &'static str = "cellsar.service_status";
-    const SCHEMA_VERSION: u16 = 1;
-}
-
 /// Publishes [`ServiceStatus`] per mission (JSON, congestion control `Drop`: a frozen reader
 /// never stalls a service).
 pub struct StatusBoard {
@@ -407,7 +198,7 @@ impl StatusBoard {
         let p = match pubs.entry(status.mission_id) {
             std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
             std::collections::hash_map::Entry::Vacant(v) => {
-                let made = keys::mission(status.mission_id, &format!("status/{}", self.role))
+                let made = pkeys::status(status.mission_id, &self.role)
                     .map_err(bridge::NetError::from)
                     .and_then(|key| {
                         node.publisher::<ServiceStatus>(
@@ -432,14 +223,6 @@ impl StatusBoard {
             tracing::debug!(error = %e, "status not published");
         }
     }
-}
-
-/// The mission id of a (resolved) mission file: FNV-1a of its JSON form, so equal missions get
-/// equal ids in every process and a changed mission gets a new one.
-pub fn mission_id(file: &MissionFile) -> MissionId {
-    let text =
-        serde_json::to_string(file).unwrap_or_else(|_| file.name.clone().unwrap_or_default());
-    MissionId::from_name(&text)
 }
 
 /// Plans held by a process, answered to `cellsar/*/plan` lookups (so a process that joins late
@@ -868,7 +651,7 @@ fn publish_plan(
     p.put_with(plan, meta)?;
     if let std::collections::hash_map::Entry::Vacant(v) = summary_pubs.entry(id) {
         v.insert(node.publisher::<PlanSummary>(
-            &keys::mission(id, "plan/summary")?,
+            &pkeys::plan_summary(id)?,
             PublishOptions {
                 mission_id: id,
                 ..PublishOptions::json()
@@ -947,7 +730,9 @@ fn plan_in_thread(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::NoObserver;
+    use crate::protocol::*;
+    use bridge::Message;
+    use planner::{MissionFile, NoObserver};
 
     /// A Zenoh client configuration (JSON5 in `dir`) whose router at an unused loopback port
     /// never comes, waiting for it as `pipeline/deploy/client.json5` does.
@@ -1083,7 +868,10 @@ mod tests {
         };
         match plan_request_within(&req, "t", Some(1e-9), &mut NoObserver) {
             Ok(plan) => {
-                assert_eq!(plan.result.termination, crate::TerminationReason::TimeLimit);
+                assert_eq!(
+                    plan.result.termination,
+                    planner::TerminationReason::TimeLimit
+                );
                 assert_eq!(plan.result.iterations, 0);
             }
             Err(e) => {

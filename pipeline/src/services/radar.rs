@@ -3,25 +3,14 @@
 //! `cellsar-radar-sim process-service` (BS side: pulls apertures, cancels, images, detects,
 //! publishes detections and images on Zenoh).
 //!
-//! ```text
-//! cellsar/<m>/echo                 iceoryx2 frame service (IQ, zero copy); the same key on Zenoh
-//!                                  when cellsar-bridge carries it to another host
-//! cellsar/<m>/echo/request         queryable of echo: ApertureRequest -> RequestAck
-//! cellsar/<m>/frames               FrameInfo per frame sent (bincode, droppable)
-//! cellsar/<m>/detections           ApertureDetections per aperture (JSON)
-//! cellsar/<m>/image/<n>            ApertureImage of aperture n (bincode: f32 multilook)
-//! cellsar/<m>/metrics              MissionMetrics when every aperture is done (bincode)
-//! cellsar/<m>/results              queryable of the processor: ResultRequest -> ResultAck
-//!                                  (re-publishes what a consumer missed)
-//! cellsar/<m>/status/<role>        planner::service::ServiceStatus (JSON)
-//! ```
+//! The keys they use are listed in [`crate::protocol::keys`].
 //!
 //! # Delivery: pull, at least once, de-duplicated
 //! The processor drives: it asks the echo for at most `--window` apertures at a time
 //! (`ApertureRequest`, a Zenoh query; the reply says which frame sequence numbers will come),
 //! and asks again for an aperture whose frames stop arriving for `--resend-after-s` (frames
 //! lost to a full buffer, a frozen or restarted process, a dead bridge or router). Frame
-//! sequence numbers are a pure function of the mission ([`FrameLayout`]): a re-sent frame has
+//! sequence numbers are a pure function of the mission ([`crate::protocol::FrameLayout`]): a re-sent frame has
 //! its original number, so the processor keeps the first copy of each and drops the rest. The
 //! echo keeps no state beyond its queue. The processor stores each finished aperture in
 //! `--state-dir` before publishing it, so after a restart it resumes with the next one and
@@ -29,17 +18,7 @@
 //! never cross looks, so a single look can be asked for again (the resolution measurement at
 //! the end of a mission does that).
 //!
-//! Message kinds of this crate: `0x0300..=0x03ff` (the IQ frame is the bridge's `0x0200`).
-
-mod echo;
-mod layout;
-mod messages;
-mod process;
-
-pub use echo::{run_echo, EchoArgs, EchoReport};
-pub use layout::{FrameLayout, FrameSlot};
-pub use messages::*;
-pub use process::{run_processor, ApertureOutcome, MissionContext, ProcessArgs, ProcessReport};
+//! Their messages are in [`crate::protocol::radar`]; this module holds their common error.
 
 use std::path::PathBuf;
 
@@ -54,10 +33,10 @@ pub const DEFAULT_MAX_FRAME_BYTES: usize = bridge::frame::SERVICE_MAX_FRAME_BYTE
 pub enum ServiceError {
     /// The radar library failed.
     #[error(transparent)]
-    Radar(#[from] crate::RadarError),
+    Radar(#[from] radar_sim::RadarError),
     /// The planner service layer failed.
     #[error(transparent)]
-    Planner(#[from] planner::service::ServiceError),
+    Planner(#[from] super::plan::ServiceError),
     /// Zenoh failed.
     #[error(transparent)]
     Net(#[from] bridge::NetError),
@@ -95,6 +74,9 @@ pub enum ServiceError {
         /// The codec error.
         source: bridge::CodecError,
     },
+    /// The frames of a mission cannot be laid out (the message names the flag).
+    #[error(transparent)]
+    Layout(#[from] crate::protocol::layout::LayoutError),
     /// A flag is invalid (the message names it).
     #[error("{0}")]
     Flag(String),
@@ -105,12 +87,12 @@ pub enum ServiceError {
 
 impl From<ServiceError> for cellsar_error::exit::Failure {
     /// Bad input (exit 2): the flags, the Zenoh configuration, a radar input that is bad
-    /// ([`crate::RadarError::is_bad_input`]) and the planner layer's bad input; the rest is a
+    /// ([`radar_sim::RadarError::is_bad_input`]) and the planner layer's bad input; the rest is a
     /// failure at run time (exit 1).
     fn from(e: ServiceError) -> Self {
         let bad = match &e {
             ServiceError::Radar(r) => r.is_bad_input(),
-            ServiceError::Config(_) | ServiceError::Flag(_) => true,
+            ServiceError::Config(_) | ServiceError::Flag(_) | ServiceError::Layout(_) => true,
             ServiceError::Planner(p) => p.is_bad_input(),
             _ => false,
         };
@@ -120,6 +102,3 @@ impl From<ServiceError> for cellsar_error::exit::Failure {
 
 /// Result of the services.
 pub type ServiceResult<T> = std::result::Result<T, ServiceError>;
-
-#[cfg(test)]
-mod tests;

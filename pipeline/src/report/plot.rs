@@ -6,9 +6,9 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::ReportError;
-use crate::geometry::sensing_centre_m;
-use crate::Mission;
-use crate::Trajectory;
+use planner::geometry::sensing_centre_m;
+use planner::Mission;
+use planner::Trajectory;
 
 /// Colours used for successive series (Tableau 10 and two more: twelve that are told apart;
 /// none is the base station's [`BS_COLOUR`]).

@@ -1,0 +1,26 @@
+//! The pipeline's protocol: every message the processes exchange and every key expression,
+//! each defined once. Built on the transport's envelope ([`bridge::Message`]: kind, schema
+//! version, bincode or JSON body); the message kinds are
+//! `0x0100..=0x01ff` for the planner ([`plan`], [`status`]) and `0x0300..=0x03ff` for the radar
+//! ([`radar`]); the IQ frame is the transport's `0x0200`.
+//!
+//! - [`keys`]: the key space;
+//! - [`plan`]: plan requests, plans, lookups, summaries, the mission id;
+//! - [`status`]: the status every service publishes;
+//! - [`radar`]: aperture requests, frame info, detections, images, metrics, result requests;
+//! - [`layout`]: the frame sequence numbers of a mission (a pure function of the mission, so a
+//!   re-sent frame keeps its number).
+
+pub mod keys;
+pub mod layout;
+pub mod plan;
+pub mod radar;
+pub mod status;
+
+pub use layout::{FrameLayout, FrameSlot};
+pub use plan::{
+    mission_id, BadRequest, Plan, PlanLookup, PlanRequest, PlanRequestOptions, PlanSummary,
+    MAX_PLAN_BYTES,
+};
+pub use radar::*;
+pub use status::ServiceStatus;

@@ -1,0 +1,207 @@
+//! The planner's messages (kinds `0x0100..=0x01ff`): plan requests and their options, plans,
+//! plan lookups and plan summaries, and the mission id every process derives from a mission.
+
+use bridge::keys::KeyError;
+use bridge::{Message, MissionId};
+use planner::evaluate::ResolutionMode;
+use planner::summary::Summary;
+use planner::{Mission, MissionFile, PlanOptions, PlanResult, Scheme};
+use serde::{Deserialize, Serialize};
+
+use super::keys;
+
+/// Largest plan message accepted (a plan of a long mission with its iteration records).
+pub const MAX_PLAN_BYTES: usize = 64 << 20;
+
+/// A plan request whose options are invalid; the message names the field
+/// (`options.tolerance`, ...).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct BadRequest(pub String);
+
+/// Options of a plan request; every field optional (defaults: [`PlanOptions::default`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanRequestOptions {
+    /// `exact` (default), `paper`, `baseline` or `baseline-exact`.
+    #[serde(default)]
+    pub scheme: Option<Scheme>,
+    /// Largest number of SCA/BCD iterations (≥ 1).
+    #[serde(default)]
+    pub max_iterations: Option<usize>,
+    /// Relative objective change that stops the iterations (finite, > 0).
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+    /// `paper` (default) or `general`.
+    #[serde(default)]
+    pub resolution: Option<ResolutionMode>,
+}
+
+impl PlanRequestOptions {
+    /// The planner options, checked; errors name the field (`options.tolerance`, ...).
+    pub fn to_plan_options(&self) -> Result<PlanOptions, BadRequest> {
+        let mut o = PlanOptions::default();
+        if let Some(s) = self.scheme {
+            o.scheme = s;
+        }
+        if let Some(n) = self.max_iterations {
+            if n == 0 {
+                return Err(BadRequest(
+                    "options.max_iterations: must be at least 1".into(),
+                ));
+            }
+            o.max_iterations = n;
+        }
+        if let Some(t) = self.tolerance {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(BadRequest(format!(
+                    "options.tolerance: {t} must be a finite number > 0"
+                )));
+            }
+            o.tolerance = t;
+        }
+        if let Some(r) = self.resolution {
+            o.resolution = r;
+        }
+        Ok(o)
+    }
+}
+
+/// A request to plan a mission (`cellsar/plan`). As JSON:
+/// `{"mission": {"name": ..., "params": {...}, "landmarks": {...}}, "options": {...}}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanRequest {
+    /// The mission, as in a mission file.
+    pub mission: MissionFile,
+    /// Planner options.
+    #[serde(default)]
+    pub options: PlanRequestOptions,
+}
+
+impl Message for PlanRequest {
+    const KIND: u16 = 0x0101;
+    const NAME: &'static str = "planner.plan_request";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+/// Fields whose types need a self-describing format (the planner's adjacently tagged enums, NaN
+/// values): CBOR bytes inside bincode; the value itself in JSON.
+mod self_describing {
+    use serde::de::{DeserializeOwned, Error as _, Visitor};
+    use serde::ser::Error as _;
+    use serde::{Deserializer, Serialize, Serializer};
+
+    pub fn serialize<T: Serialize, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
+        if s.is_human_readable() {
+            v.serialize(s)
+        } else {
+            let mut buf = Vec::new();
+            ciborium::into_writer(v, &mut buf).map_err(S::Error::custom)?;
+            s.serialize_bytes(&buf)
+        }
+    }
+
+    struct Bytes;
+
+    impl<'de> Visitor<'de> for Bytes {
+        type Value = Vec<u8>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("CBOR bytes")
+        }
+        fn visit_bytes<E: serde::de::Error>(self, v: &[u8]) -> Result<Vec<u8>, E> {
+            Ok(v.to_vec())
+        }
+        fn visit_byte_buf<E: serde::de::Error>(self, v: Vec<u8>) -> Result<Vec<u8>, E> {
+            Ok(v)
+        }
+    }
+
+    pub fn deserialize<'de, T: DeserializeOwned, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<T, D::Error> {
+        if d.is_human_readable() {
+            T::deserialize(d)
+        } else {
+            let buf = d.deserialize_byte_buf(Bytes)?;
+            ciborium::from_reader(buf.as_slice()).map_err(D::Error::custom)
+        }
+    }
+}
+
+/// A plan: the resolved mission, the planner's full result and its summary. In the binary form
+/// `result` and `summary` travel as CBOR (their enums and NaN values need a self-describing
+/// format); in JSON they are plain values (NaN as `null`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// The mission id ([`mission_id`] of `mission`).
+    pub mission_id: MissionId,
+    /// The resolved mission (explicit landmark windows): `Mission::from_file_struct` gives it back.
+    pub mission: MissionFile,
+    /// The options it was planned with.
+    pub options: PlanRequestOptions,
+    /// The planner's result (trajectory, exact evaluation, histories).
+    #[serde(with = "self_describing")]
+    pub result: PlanResult,
+    /// The summary (as in `summary.json`).
+    #[serde(with = "self_describing")]
+    pub summary: Summary,
+    /// Instance of the planner that made it.
+    pub planner: String,
+}
+
+impl Message for Plan {
+    const KIND: u16 = 0x0102;
+    const NAME: &'static str = "planner.plan";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+impl Plan {
+    /// The validated mission.
+    pub fn mission(&self) -> Result<Mission, planner::MissionError> {
+        Mission::from_file_struct(&self.mission)
+    }
+
+    /// The key the plan is published on: `cellsar/<mission>/plan`.
+    pub fn key(&self) -> Result<String, KeyError> {
+        keys::plan(self.mission_id)
+    }
+}
+
+/// A request for known plans (sent to `cellsar/<mission>/plan` or [`keys::ALL_PLANS`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PlanLookup {}
+
+impl Message for PlanLookup {
+    const KIND: u16 = 0x0103;
+    const NAME: &'static str = "planner.plan_lookup";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+/// The summary of a published plan (`cellsar/<mission>/plan/summary`, JSON).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanSummary {
+    /// Mission id.
+    pub mission_id: MissionId,
+    /// Mission name.
+    pub mission: String,
+    /// Number of landmark windows.
+    pub windows: usize,
+    /// The summary.
+    #[serde(with = "self_describing")]
+    pub summary: Summary,
+}
+
+impl Message for PlanSummary {
+    const KIND: u16 = 0x0104;
+    const NAME: &'static str = "planner.plan_summary";
+    const SCHEMA_VERSION: u16 = 1;
+}
+
+/// The mission id of a (resolved) mission file: FNV-1a of its JSON form, so equal missions get
+/// equal ids in every process and a changed mission gets a new one.
+pub fn mission_id(file: &MissionFile) -> MissionId {
+    let text =
+        serde_json::to_string(file).unwrap_or_else(|_| file.name.clone().unwrap_or_default());
+    MissionId::from_name(&text)
+}

@@ -1,0 +1,203 @@
+//! Output files of a plan: `mission.toml`, `trajectory.csv`, `summary.json`, `trajectory.svg`,
+//! `energy.svg`, `convergence.svg`; and reading a plan directory back.
+
+pub mod plot;
+pub mod reproduce;
+
+use std::path::{Path, PathBuf};
+
+use planner::driver::{PlanResult, Scheme};
+use planner::summary::{trajectory_csv, Summary};
+use planner::{Mission, MissionError, Trajectory, TrajectoryError};
+use plot::{line_plot, trajectory_plot, Series, TrackStyle};
+
+/// Writing or reading report files failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// File system error, with the path.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: String,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A plot could not be drawn.
+    #[error("plot {path}: {message}")]
+    Plot {
+        /// The output file.
+        path: String,
+        /// The plotting library's message.
+        message: String,
+    },
+    /// Serialisation failed.
+    #[error("{path}: {message}")]
+    Encode {
+        /// The output file.
+        path: String,
+        /// The encoder's message.
+        message: String,
+    },
+    /// The mission file of a plan directory is invalid.
+    #[error(transparent)]
+    Mission(#[from] MissionError),
+    /// The trajectory file of a plan directory is invalid.
+    #[error(transparent)]
+    Trajectory(#[from] TrajectoryError),
+}
+
+/// Writes `text` to `path`, naming the path on error.
+pub fn write_file(path: &Path, text: &str) -> Result<(), ReportError> {
+    std::fs::write(path, text).map_err(|source| ReportError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+/// Creates a directory (and parents).
+pub fn create_dir(dir: &Path) -> Result<(), ReportError> {
+    std::fs::create_dir_all(dir).map_err(|source| ReportError::Io {
+        path: dir.display().to_string(),
+        source,
+    })
+}
+
+/// Slots whose sensing circles are drawn: a few spread over the mission.
+pub fn circle_slots(slots: usize, count: usize) -> Vec<usize> {
+    if slots == 0 || count == 0 {
+        return Vec::new();
+    }
+    (0..count)
+        .map(|k| 1 + (k * (slots - 1)) / count.max(1))
+        .collect()
+}
+
+/// Writes a plan directory: `mission.toml`, `trajectory.csv`, `summary.json`, `trajectory.svg`,
+/// `energy.svg`, `convergence.svg`. Returns the files written.
+pub fn write_plan_dir(
+    dir: &Path,
+    mission: &Mission,
+    result: &PlanResult,
+) -> Result<Vec<PathBuf>, ReportError> {
+    create_dir(dir)?;
+    let mut written = Vec::new();
+    let path = dir.join("mission.toml");
+    let toml = mission
+        .to_file_struct()
+        .to_toml_string()
+        .map_err(|message| ReportError::Encode {
+            path: path.display().to_string(),
+            message,
+        })?;
+    write_file(&path, &toml)?;
+    written.push(path);
+
+    let path = dir.join("trajectory.csv");
+    write_file(&path, &trajectory_csv(result))?;
+    written.push(path);
+
+    let path = dir.join("summary.json");
+    let encode_error = |e: serde_json::Error| ReportError::Encode {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    };
+    let mut value = serde_json::to_value(Summary::new(mission, result)).map_err(encode_error)?;
+    // Only in the file (the summary is also a wire message, whose layout stays fixed): why a
+    // given `--init` path was replaced by the built-in start.
+    if let (Some(reason), Some(map)) = (&result.init_replaced, value.as_object_mut()) {
+        map.insert(
+            "init_replaced".to_string(),
+            serde_json::Value::String(reason.clone()),
+        );
+    }
+    let json = serde_json::to_string_pretty(&value).map_err(encode_error)?;
+    write_file(&path, &json)?;
+    written.push(path);
+
+    let path = dir.join("trajectory.svg");
+    let circles = circle_slots(mission.slots(), 6);
+    trajectory_plot(
+        &path,
+        &format!("{} — scheme {}", mission.name(), result.scheme),
+        mission,
+        &[TrackStyle {
+            name: result.scheme.name(),
+            traj: &result.trajectory,
+            circle_slots: &circles,
+            dashed: false,
+        }],
+    )?;
+    written.push(path);
+
+    let path = dir.join("energy.svg");
+    let ev = &result.evaluation;
+    line_plot(
+        &path,
+        &format!(
+            "energy per slot — {} (total {:.0} J)",
+            result.scheme, ev.energy_j
+        ),
+        "t (s)",
+        "energy per slot (J)",
+        &[Series::line(
+            result.scheme.name(),
+            ev.slots.iter().map(|s| (s.t_s, s.slot_energy_j)).collect(),
+        )],
+    )?;
+    written.push(path);
+
+    let path = dir.join("convergence.svg");
+    let mut series = vec![Series {
+        name: "optimiser objective".into(),
+        points: result
+            .objective_history
+            .iter()
+            .enumerate()
+            .map(|(i, v)| ((i + 1) as f64, *v))
+            .collect(),
+        markers: true,
+        dashed: false,
+        colour: None,
+    }];
+    if matches!(result.scheme, Scheme::Exact | Scheme::Paper) {
+        series.push(Series {
+            name: "true energy".into(),
+            points: result
+                .true_energy_history
+                .iter()
+                .enumerate()
+                .map(|(i, v)| ((i + 1) as f64, *v))
+                .collect(),
+            markers: true,
+            dashed: true,
+            colour: None,
+        });
+    }
+    line_plot(
+        &path,
+        &format!("convergence — {}", result.scheme),
+        "iteration",
+        if matches!(result.scheme, Scheme::Exact | Scheme::Paper) {
+            "J"
+        } else {
+            "m"
+        },
+        &series,
+    )?;
+    written.push(path);
+    Ok(written)
+}
+
+/// Reads a plan directory written by [`write_plan_dir`]: the mission and the trajectory.
+pub fn read_plan_dir(dir: &Path) -> Result<(Mission, Trajectory), ReportError> {
+    let mission = Mission::from_path(&dir.join("mission.toml"))?;
+    let p = mission.params();
+    let traj = Trajectory::from_csv_path(
+        &dir.join("trajectory.csv"),
+        p.slot_s,
+        mission.slots(),
+        p.start_m,
+    )?;
+    Ok((mission, traj))
+}

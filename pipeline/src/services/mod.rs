@@ -1,0 +1,18 @@
+//! The long-running processes of the pipeline, as library code that the binaries call:
+//!
+//! - [`plan`]: the plan service (`cellsar-planner serve`, `cellsar planner`), the status board
+//!   and the plan cache every service keeps;
+//! - [`echo`]: the UAV side (`cellsar-radar-sim echo`, `cellsar echo`): synthesises the IQ of
+//!   the apertures a processor asks for and publishes it as frames on iceoryx2;
+//! - [`process`]: the BS side (`cellsar-radar-sim process-service`, `cellsar process`): pulls
+//!   apertures, cancels, images, detects, publishes detections, images and metrics;
+//! - [`radar`]: what the two radar services share (their error, the frame size).
+//!
+//! Their messages and keys are in [`crate::protocol`].
+
+pub mod echo;
+pub mod plan;
+pub mod process;
+pub mod radar;
+#[cfg(test)]
+mod radar_tests;
