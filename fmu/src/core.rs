@@ -844,7 +844,7 @@ impl PlannerCore {
             return Ok(StepReport::default());
         };
         let planned = w.pos_m();
-        if planner::geometry::v2::dist(input, planned) <= 1e-6 {
+        if planner::geometry::distance(&input.into(), &planned.into()) <= 1e-6 {
             return Ok(StepReport::default());
         }
         // slots up to `from` are flown or committed (the UAV is on its way to q_from)
@@ -1297,7 +1297,7 @@ mod tests {
                 proptest::prop_assert!(mid.energy_j + 1e-9 >= last_energy);
                 proptest::prop_assert!(mid.energy_j <= at_end.energy_j + 1e-9);
                 proptest::prop_assert_eq!(mid.power_w, s.power_w);
-                let off = planner::geometry::v2::dist(mid.centre_m, mid.pos_m);
+                let off = planner::geometry::distance(&mid.centre_m.into(), &mid.pos_m.into());
                 proptest::prop_assert!((off - run.mission.params().centre_offset_m()).abs() < 1e-9);
                 last_energy = at_end.energy_j;
             }

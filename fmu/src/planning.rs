@@ -427,7 +427,7 @@ pub fn replan(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use planner::geometry::v2;
+    use planner::geometry::{Point2, RIGHT_TURN};
 
     /// A 20 s mission of two landmark windows, for the tests of this crate.
     pub(crate) const SHORT: &str = r#"name = "short"
@@ -456,9 +456,9 @@ points = [
         let hop = (p.max_speed_mps * p.slot_s).hypot(p.centre_offset_m());
         let d = hop + p.sensing_radius_m + 1.5 * p.max_speed_mps * p.slot_s;
         let g = current.q(from + 1);
-        let u = v2::scale(v2::sub(g, q), 1.0 / v2::dist(g, q));
-        let rot = [u[1], -u[0]]; // to the right of the track, where the centre is
-        let moved = v2::add(q, v2::scale(rot, d));
+        let u = (Point2::from(g) - Point2::from(q)).normalize();
+        // to the right of the track, where the centre is
+        let moved = (Point2::from(q) + RIGHT_TURN * u * d).into();
         let re = replan(
             &mission,
             &current,

@@ -5,6 +5,8 @@
 //! Run with `cargo bench -p planner --bench plan` (7–10 minutes on 2 busy cores). Groups:
 //! - `plan_default`: `planner::plan` with the default options (exact scheme, coarse start,
 //!   over-relaxation, tolerance 1e-4) on the paper's default mission at 30 m and 200 m spacing;
+//! - `default_mission_plan`: the same on `missions/default-30m.toml` as read from the file, no
+//!   side runs (the figure to compare before and after a change of the planner's internals);
 //! - `sca_iteration`: one exact SCA iteration (`ExactSubproblem::build` + `SocpSolver::solve`) at
 //!   a feasible start, with the solver's pattern reused (`reuse: true`, values updated in place)
 //!   or rebuilt every time (`reuse: false`), and the assembly alone (`build_only`);
@@ -25,7 +27,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, SamplingMode};
 use planner::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
-use planner::socp::{Backend, SocpSettings, SocpSolver};
+use planner::socp::{SocpSettings, SocpSolver};
 use planner::{
     plan, plan_with_observer, IterationRecord, Mission, Observer, PlanOptions, Preset, Trajectory,
 };
@@ -173,6 +175,23 @@ fn plan_default(c: &mut Criterion) {
     g.finish();
 }
 
+/// `planner::plan` with the default options on `missions/default-30m.toml` (the file the README's
+/// main job plans): the figure to compare before and after a change of the planner's internals.
+fn default_mission_plan(c: &mut Criterion) {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/default-30m.toml");
+    let m = must(Mission::from_path(&path), "missions/default-30m.toml");
+    let mut g = c.benchmark_group("default_mission_plan");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(1))
+        .measurement_time(Duration::from_secs(10))
+        .sampling_mode(SamplingMode::Flat);
+    g.bench_function("default-30m", |b| {
+        b.iter(|| must(plan(black_box(&m), &PlanOptions::default()), "default plan"))
+    });
+    g.finish();
+}
+
 fn sca_reuse(c: &mut Criterion) {
     let mut g = c.benchmark_group("sca_iteration");
     g.sample_size(10)
@@ -253,13 +272,6 @@ fn settings_variants() -> Vec<(&'static str, SocpSettings)> {
                 tol_gap_rel: 1e-6,
                 refine_max_iter: 2,
                 ..d
-            },
-        ),
-        (
-            "banded IPM (planner::socp::banded; Clarabel if it fails)",
-            SocpSettings {
-                backend: Backend::Banded,
-                ..SocpSettings::exact_geometry()
             },
         ),
     ]
@@ -493,6 +505,7 @@ fn summary() {
 fn main() {
     let mut c = Criterion::default().configure_from_args();
     plan_default(&mut c);
+    default_mission_plan(&mut c);
     sca_reuse(&mut c);
     sca_settings(&mut c);
     scaling(&mut c);

@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use serde::{Deserialize, Serialize};
 
 use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
-use crate::geometry::v2;
+use crate::geometry::{distance, Point2, Vector2};
 use crate::init::{guidance_start, precheck, Infeasibility};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::schemes::paper::{PaperObjective, PaperState};
@@ -140,16 +140,6 @@ impl PlanOptions {
         match self.scheme {
             Scheme::Exact => self.exact_socp,
             Scheme::BaselineExact | Scheme::Paper | Scheme::Baseline => self.socp,
-        }
-    }
-
-    /// The cone-program settings of phase I (repair): the scheme's, always on Clarabel. The
-    /// banded method has no homogeneous embedding and its phase I programs diverge (see
-    /// [`crate::socp::banded`]): trying it first would only add a failed solve per program.
-    pub fn repair_socp(&self) -> SocpSettings {
-        SocpSettings {
-            backend: crate::socp::Backend::Clarabel,
-            ..self.scheme_socp()
         }
     }
 }
@@ -377,7 +367,7 @@ pub fn plan_with_observer(
             if tr.pos_m.iter().flatten().any(|v| !v.is_finite()) {
                 return Err(PlanError::InvalidInit("non-finite position".into()));
             }
-            if v2::dist(tr.start_m, p.start_m) > 1e-6 {
+            if distance(&Point2::from(tr.start_m), &Point2::from(p.start_m)) > 1e-6 {
                 return Err(PlanError::InvalidInit(format!(
                     "it starts at ({}, {}) m (its t = 0 row), but the mission starts at \
                      start_m = ({}, {}) m",
@@ -412,7 +402,7 @@ pub fn plan_with_observer(
         Scheme::Paper | Scheme::Baseline => ResolutionMode::Paper,
     };
     let mut solver = SocpSolver::new(options.scheme_socp());
-    let mut repair_solver = SocpSolver::new(options.repair_socp());
+    let mut repair_solver = SocpSolver::new(options.scheme_socp());
     // Every scheme needs a start that is feasible on the exact geometry, except the paper's
     // schemes started from a given path: that path is used as it is (its first (p5) is the
     // reproduction check).
@@ -667,7 +657,7 @@ fn coarse_start_from(
     let mut best: Option<(f64, Trajectory)> = None;
     let mut stalled: Option<Trajectory> = None;
     for start in starts {
-        let mut solver = SocpSolver::new(options.repair_socp());
+        let mut solver = SocpSolver::new(options.scheme_socp());
         let feasible = make_feasible(
             &coarse,
             start,
@@ -760,11 +750,12 @@ fn total_violation(
             let mut sens = s.centre_error_m.unwrap_or(0.0) - p.sensing_radius_m;
             if let (true, Some(g)) = (whole_slot, s.landmark_m) {
                 // the centre at the start of the slot (straight flight, same heading)
-                let start = v2::sub(s.centre_m, v2::scale(s.velocity_mps, p.slot_s));
-                sens = sens.max(v2::dist(start, g) - p.sensing_radius_m);
+                let start = Point2::from(s.centre_m) - Vector2::from(s.velocity_mps) * p.slot_s;
+                sens = sens.max(distance(&start, &Point2::from(g)) - p.sensing_radius_m);
             }
             let speed = v_min - s.speed_mps;
-            let range = keepout.map_or(0.0, |k| k - v2::dist(s.centre_m, p.bs_m));
+            let bs = Point2::from(p.bs_m);
+            let range = keepout.map_or(0.0, |k| k - distance(&Point2::from(s.centre_m), &bs));
             let width = match mode {
                 ResolutionMode::General => s.worst_width_m - p.d_min_m,
                 ResolutionMode::Paper => 0.0,

@@ -5,8 +5,9 @@
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{
-    azimuth_resolution_paper_m, bistatic_angle_rad, range_resolution_general_m,
-    range_resolution_paper_m, sensing_centre_m, v2, ResolutionCell,
+    azimuth_resolution_paper_m, bistatic_angle_rad, distance, heading_unit,
+    range_resolution_general_m, range_resolution_paper_m, sensing_centre_m, Length, Point2,
+    ResolutionCell, Vector2,
 };
 use crate::power::PowerModel;
 use crate::{Mission, Trajectory};
@@ -58,7 +59,8 @@ impl ResolutionMode {
 /// below this (the cell's cross-track extent is then more than 1/sin 5° ≈ 11 times its range width).
 pub const BLIND_PSI_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
-/// One slot of an evaluated trajectory.
+/// One slot of an evaluated trajectory. Points and vectors are `[f64; 2]` so that
+/// `summary.json` and the wire messages keep their format.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SlotEval {
     /// Slot index t (1-based).
@@ -190,7 +192,7 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
     for t in 1..=traj.slots() {
         let pos = traj.q(t);
         let vel = traj.velocity_mps(t);
-        let speed = v2::norm(vel);
+        let speed = Vector2::from(vel).length();
         let heading = headings[t - 1];
         let centre = sensing_centre_m(pos, heading, offset);
         let landmark = mission.target_m(t);
@@ -206,12 +208,12 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         let cell_vel = if speed > 0.0 {
             vel
         } else {
-            [heading.cos() * 1e-12, heading.sin() * 1e-12]
+            (heading_unit(heading) * 1e-12).into()
         };
         let cell = ResolutionCell::new(p, pos, cell_vel, sensed);
         let range_paper = range_resolution_paper_m(p, centre);
         let az_paper = azimuth_resolution_paper_m(p, speed);
-        let centre_error = landmark.map(|g| v2::dist(g, centre));
+        let centre_error = landmark.map(|g| distance(&Point2::from(g), &Point2::from(centre)));
         let in_view = centre_error.is_none_or(|e| e <= p.sensing_radius_m);
         if let Some(e) = centre_error {
             viol.sensing_m = viol.sensing_m.max(e - p.sensing_radius_m);

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::evaluate::ResolutionMode;
-use crate::geometry::{v2, ResolutionCell};
+use crate::geometry::{distance, heading_unit, Point2, ResolutionCell, Vector2, RIGHT_TURN};
 use crate::power::PowerModel;
 use crate::{Mission, Trajectory};
 
@@ -43,7 +43,7 @@ pub fn earliest_in_view_slot(
     let offset = p.centre_offset_m();
     let v_step = (p.max_speed_mps + tol) * p.slot_s;
     let r = p.sensing_radius_m + tol;
-    let d = v2::dist(p.start_m, g_m);
+    let d = distance(&Point2::from(p.start_m), &Point2::from(g_m));
     let last_hop = v_step.hypot(offset);
     let slack = 1e-9 * (1.0 + d + offset);
     (first.max(1)..=last).find(|&t| {
@@ -65,7 +65,7 @@ pub fn reachable_between(p: &crate::Params, g1_m: [f64; 2], g2_m: [f64; 2], slot
     let offset = p.centre_offset_m();
     let v_step = (p.max_speed_mps + tol) * p.slot_s;
     let r = p.sensing_radius_m + tol;
-    let d = v2::dist(g1_m, g2_m);
+    let d = distance(&Point2::from(g1_m), &Point2::from(g2_m));
     let reach = 2.0 * r + offset + v_step.hypot(offset) + v_step * slots.saturating_sub(1) as f64;
     d <= reach + 1e-9 * (1.0 + d + offset)
 }
@@ -112,7 +112,7 @@ pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
         }
         Some(k) => {
             for &(t, g) in &landmark_slots {
-                if v2::dist(g, p.bs_m) + r < k {
+                if distance(&Point2::from(g), &Point2::from(p.bs_m)) + r < k {
                     return Err(fail(
                         t,
                         format!(
@@ -140,7 +140,7 @@ pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
                  between {near:.1} and {far:.1} m from it",
                 g0[0],
                 g0[1],
-                v2::dist(p.start_m, g0),
+                distance(&Point2::from(p.start_m), &Point2::from(g0)),
                 t0 as f64 * p.slot_s,
                 p.max_speed_mps
             ),
@@ -164,7 +164,7 @@ pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
                     g2[1],
                     g1[0],
                     g1[1],
-                    v2::dist(g1, g2),
+                    distance(&Point2::from(g1), &Point2::from(g2)),
                     (t2 - t1) as f64 * p.slot_s,
                     p.max_speed_mps
                 ),
@@ -177,7 +177,7 @@ pub fn precheck(mission: &Mission) -> Result<(), Infeasibility> {
 /// The reference point of slot t: it glides along the polyline of landmark positions, reaching
 /// each landmark in the middle of its window and the midpoint between two landmarks at their
 /// switch; in slots without a landmark it is the next landmark (or the last one).
-fn reference_m(mission: &Mission, t: usize) -> Option<([f64; 2], Option<[f64; 2]>)> {
+fn reference_m(mission: &Mission, t: usize) -> Option<(Point2<f64>, Option<Point2<f64>>)> {
     let sched = mission.schedule();
     let n = mission.slots();
     let idx = |t: usize| {
@@ -189,7 +189,7 @@ fn reference_m(mission: &Mission, t: usize) -> Option<([f64; 2], Option<[f64; 2]
     };
     match idx(t) {
         Some(k) => {
-            let g = sched.landmarks[k].pos_m();
+            let g = Point2::from(sched.landmarks[k].pos_m());
             // window extent in slots
             let mut a = t;
             while a > 1 && idx(a - 1) == Some(k) {
@@ -203,29 +203,20 @@ fn reference_m(mission: &Mission, t: usize) -> Option<([f64; 2], Option<[f64; 2]
             let f = (t - a) as f64 / len + 0.5 / len; // fraction of the window at slot centre
             let prev = (a > 1).then(|| idx(a - 1)).flatten();
             let next = (z < n).then(|| idx(z + 1)).flatten();
+            // towards the neighbouring landmark by `share` of the way
+            let towards =
+                |j: usize, share: f64| g + (Point2::from(sched.landmarks[j].pos_m()) - g) * share;
             let r = if f < 0.5 {
-                match prev {
-                    Some(j) => v2::add(
-                        g,
-                        v2::scale(v2::sub(sched.landmarks[j].pos_m(), g), 0.5 - f),
-                    ),
-                    None => g,
-                }
+                prev.map_or(g, |j| towards(j, 0.5 - f))
             } else {
-                match next {
-                    Some(j) => v2::add(
-                        g,
-                        v2::scale(v2::sub(sched.landmarks[j].pos_m(), g), f - 0.5),
-                    ),
-                    None => g,
-                }
+                next.map_or(g, |j| towards(j, f - 0.5))
             };
             Some((r, Some(g)))
         }
         None => {
             let upcoming = (t + 1..=n).find_map(|s| mission.target_m(s));
             let past = (1..t).rev().find_map(|s| mission.target_m(s));
-            upcoming.or(past).map(|g| (g, None))
+            upcoming.or(past).map(|g| (Point2::from(g), None))
         }
     }
 }
@@ -247,19 +238,16 @@ pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajecto
         .map(|i| v_lo + (v_hi - v_lo).max(0.0) * i as f64 / 10.0)
         .collect();
     speeds.push(v_star);
-    let headings: Vec<[f64; 2]> = (0..360)
-        .map(|i| {
-            let a = i as f64 * std::f64::consts::TAU / 360.0;
-            [a.cos(), a.sin()]
-        })
+    let headings: Vec<Vector2<f64>> = (0..360)
+        .map(|i| heading_unit(i as f64 * std::f64::consts::TAU / 360.0))
         .collect();
-    let mut q = p.start_m;
+    let mut q = Point2::from(p.start_m);
     let mut pos = Vec::with_capacity(mission.slots());
     for t in 1..=mission.slots() {
         let Some((reference, landmark)) = reference_m(mission, t) else {
             // no landmark at all: cruise east at the least-power speed
-            q = [q[0] + delta * v_star, q[1]];
-            pos.push(q);
+            q += Vector2::x() * (delta * v_star);
+            pos.push(q.into());
             continue;
         };
         // While sensing, the radius to the reference only has to stay in a comfortable band
@@ -275,19 +263,19 @@ pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajecto
         for &v in &speeds {
             let power_pen = power_weight * (model.power_w(v) - p_star);
             for &e in &headings {
-                let qn = v2::add(q, v2::scale(e, delta * v));
-                let radial = ((v2::dist(qn, reference) - offset).abs() - band).max(0.0);
+                let qn = q + e * (delta * v);
+                let radial = ((distance(&qn, &reference) - offset).abs() - band).max(0.0);
                 let mut cost = radial * radial + power_pen;
                 if let Some(g) = landmark {
-                    let c = v2::add(qn, v2::scale(v2::right(e), offset));
-                    let err2 = v2::dot(v2::sub(c, g), v2::sub(c, g));
+                    let c = qn + RIGHT_TURN * e * offset;
+                    let err2 = (c - g).norm_squared();
                     let over = (err2.sqrt() - 0.6 * radius).max(0.0);
                     // the least error any heading could give from the new position: being at
                     // the right distance from the landmark matters more than this step's error
-                    let reach = ((v2::dist(qn, g) - offset).abs() - 0.5 * radius).max(0.0);
+                    let reach = ((distance(&qn, &g) - offset).abs() - 0.5 * radius).max(0.0);
                     cost += 1e3 * over * over + 1e4 * reach * reach + 1e-2 * err2;
                     if resolution == ResolutionMode::General {
-                        let cell = ResolutionCell::new(p, qn, v2::scale(e, v), g);
+                        let cell = ResolutionCell::new(p, qn.into(), (e * v).into(), g.into());
                         let excess = (cell.worst_width_m.min(1e4) - 0.9 * p.d_min_m).max(0.0);
                         cost += 1e3 * excess * excess;
                     }
@@ -298,7 +286,7 @@ pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajecto
             }
         }
         q = best.1;
-        pos.push(q);
+        pos.push(q.into());
     }
     Trajectory {
         slot_s: delta,
@@ -442,7 +430,9 @@ mod tests {
             let traj = flown(&p, &steps);
             let t = 1 + ((pick * steps.len() as f64) as usize).min(steps.len() - 1);
             let (g, centre) = in_view(&p, &traj, t, angle, radius);
-            proptest::prop_assert!(v2::dist(g, centre) <= p.sensing_radius_m + 1e-9);
+            proptest::prop_assert!(
+                distance(&Point2::from(g), &Point2::from(centre)) <= p.sensing_radius_m + 1e-9
+            );
             let earliest = earliest_in_view_slot(&p, g, 1, t);
             proptest::prop_assert!(earliest.is_some_and(|e| e <= t), "slot {t}: {earliest:?}");
         }

@@ -48,7 +48,8 @@ pub struct Params {
     pub slot_s: f64,
     /// Mission horizon T, s (a whole number of slots).
     pub horizon_s: f64,
-    /// Start position q_0 (x, y), m.
+    /// Start position q_0 (x, y), m. Positions here are `[f64; 2]` (the mission files' format);
+    /// the geometry converts them to nalgebra points.
     pub start_m: [f64; 2],
     /// Base-station ground position q_b (x, y), m.
     pub bs_m: [f64; 2],

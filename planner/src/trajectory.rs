@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::geometry::{heading_rad, v2};
+use crate::geometry::{heading_rad, Length, Point2, Vector2};
 
 /// A trajectory that cannot be read or does not fit its mission.
 #[derive(Debug, thiserror::Error)]
@@ -31,7 +31,8 @@ pub enum TrajectoryError {
     },
 }
 
-/// A planned or given trajectory.
+/// A planned or given trajectory. Points are `[f64; 2]` so that files and messages keep their
+/// format; the methods below do the vector maths in nalgebra ([`crate::geometry`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Trajectory {
     /// Slot length δ, s.
@@ -68,17 +69,17 @@ impl Trajectory {
 
     /// Displacement q_t − q_{t−1} of slot t (1-based), m.
     pub fn step_m(&self, t: usize) -> [f64; 2] {
-        v2::sub(self.q(t), self.q(t.saturating_sub(1)))
+        (Point2::from(self.q(t)) - Point2::from(self.q(t.saturating_sub(1)))).into()
     }
 
     /// True velocity of slot t, (q_t − q_{t−1}) / δ, m/s.
     pub fn velocity_mps(&self, t: usize) -> [f64; 2] {
-        v2::scale(self.step_m(t), 1.0 / self.slot_s)
+        (Vector2::from(self.step_m(t)) * (1.0 / self.slot_s)).into()
     }
 
     /// True speed of slot t, m/s.
     pub fn speed_mps(&self, t: usize) -> f64 {
-        v2::norm(self.velocity_mps(t))
+        Vector2::from(self.velocity_mps(t)).length()
     }
 
     /// True headings of slots 1..=T_w, rad. A slot without motion keeps the previous heading
@@ -112,9 +113,9 @@ impl Trajectory {
         }
         let t = x.floor() as usize; // slot t+1 runs from q_t to q_{t+1}
         let f = x - t as f64;
-        let a = self.q(t);
-        let b = self.q(t + 1);
-        [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
+        let a = Point2::from(self.q(t));
+        let b = Point2::from(self.q(t + 1));
+        (a + (b - a) * f).into()
     }
 
     /// Velocity at time `time_s`: that of the slot containing it (m/s).
@@ -129,7 +130,9 @@ impl Trajectory {
 
     /// Total path length Σ ‖q_t − q_{t−1}‖, m.
     pub fn length_m(&self) -> f64 {
-        (1..=self.slots()).map(|t| v2::norm(self.step_m(t))).sum()
+        (1..=self.slots())
+            .map(|t| Vector2::from(self.step_m(t)).length())
+            .sum()
     }
 
     /// Reads a CSV file with at least the columns `t_s,x_m,y_m`, one row per slot, optionally with

@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use planner::evaluate::ResolutionMode;
-use planner::geometry::{heading_unit, v2, ResolutionCell};
+use planner::geometry::{heading_unit, Point2, ResolutionCell, RIGHT_TURN};
 use planner::{plan, Mission, Params, PlanError, PlanOptions, Preset};
 
 /// Headings (whole degrees) at which a UAV flying at `speed_mps` with the landmark at the
@@ -15,8 +15,9 @@ fn allowed_arcs_deg(p: &Params, landmark: [f64; 2], speed_mps: f64) -> Vec<(u32,
         let h = f64::from(deg).to_radians();
         let u = heading_unit(h);
         // the sensing centre is `centre_offset_m` to the right of the UAV
-        let uav = v2::sub(landmark, v2::scale(v2::right(u), p.centre_offset_m()));
-        ResolutionCell::new(p, uav, v2::scale(u, speed_mps), landmark).worst_width_m <= p.d_min_m
+        let uav = Point2::from(landmark) - RIGHT_TURN * u * p.centre_offset_m();
+        ResolutionCell::new(p, uav.into(), (u * speed_mps).into(), landmark).worst_width_m
+            <= p.d_min_m
     };
     let mut arcs = Vec::new();
     let mut start = None;
@@ -70,9 +71,9 @@ fn first_landmark_is_seen_from_the_default_start_only_near_the_blind_arc() {
         .filter(|&deg| {
             let h = f64::from(deg).to_radians();
             let u = heading_unit(h);
-            let q = v2::add(p.start_m, v2::scale(u, step));
-            let c = v2::add(q, v2::scale(v2::right(u), p.centre_offset_m()));
-            v2::norm(c) <= p.sensing_radius_m
+            let q = Point2::from(p.start_m) + u * step;
+            let c = q + RIGHT_TURN * u * p.centre_offset_m();
+            c.coords.norm() <= p.sensing_radius_m
         })
         .collect();
     let (lo, hi) = (*seen.first().unwrap(), *seen.last().unwrap());

@@ -128,51 +128,6 @@ fn exact_is_feasible_and_monotone_on_a_short_mission() {
     assert!(r.objective >= r.evaluation.energy_j - 1e-3 * r.evaluation.energy_j);
 }
 
-/// The opt-in banded interior-point backend (`planner::socp::Backend::Banded`, Clarabel where
-/// it gives no answer) plans the short mission feasibly and to the same energy as Clarabel
-/// alone, and solves its SCA subproblem itself to Clarabel's optimum.
-#[test]
-fn banded_backend_plans_like_clarabel() {
-    use planner::socp::{Backend, SocpSettings};
-    let m = short_mission();
-    let reference = plan(&m, &PlanOptions::default()).unwrap();
-    let options = PlanOptions {
-        exact_socp: SocpSettings {
-            backend: Backend::Banded,
-            ..SocpSettings::exact_geometry()
-        },
-        ..PlanOptions::default()
-    };
-    let r = plan(&m, &options).unwrap();
-    let c = check(&m, &r.trajectory);
-    assert!(c.max_sensing_excess_m <= 1e-4, "{}", c.max_sensing_excess_m);
-    assert!(c.max_speed_mps <= 50.0 + 1e-6);
-    let (e, e_ref) = (r.evaluation.energy_j, reference.evaluation.energy_j);
-    assert!(
-        (e - e_ref).abs() <= 1e-4 * e_ref,
-        "banded {e} J vs Clarabel {e_ref} J"
-    );
-    // the banded method itself (not its fallback) solves the mission's SCA subproblem
-    use planner::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
-    use planner::socp::banded::{solve, BandedSettings};
-    use planner::socp::SocpSolver;
-    let sub = ExactSubproblem::build(
-        &m,
-        &reference.trajectory,
-        ExactObjective::Energy,
-        &ExactTuning::default(),
-    );
-    let own = solve(&sub.builder, &BandedSettings::default()).unwrap();
-    let clarabel = SocpSolver::new(SocpSettings::exact_geometry())
-        .solve(&sub.builder)
-        .unwrap();
-    let (a, b) = (
-        sub.physical_objective(sub.builder.objective(&own.x)),
-        sub.physical_objective(clarabel.objective),
-    );
-    assert!((a - b).abs() <= 1e-5 * b, "banded {a} J vs Clarabel {b} J");
-}
-
 #[test]
 fn exact_reaches_the_floor_on_the_default_mission_30m() {
     let m = Mission::preset(Preset::Default, 30.0).unwrap();

@@ -27,7 +27,7 @@ use crate::scoring::{score, Score, TruthInImage};
 use crate::synth::{Components, Synthesizer};
 use crate::track::{plan_apertures, plan_pulses, Aperture, PulseMeta, Track};
 use crate::waveform::{Numerology, C_MPS};
-use planner::geometry::{self as pg, v2};
+use planner::geometry::{self as pg, Length, Vector2};
 
 /// Everything fixed by a mission's parameters and a scene file.
 #[derive(Debug, Clone)]
@@ -279,11 +279,13 @@ pub fn cfar_geometry(
 ) -> (usize, usize, f64) {
     let cr = pc.range_weighting.coherence_factor();
     let ca = pc.azimuth_weighting.coherence_factor();
-    let (gn, dn) = (v2::norm(g), v2::norm(d));
+    let (gn, dn) = (Vector2::from(g).length(), Vector2::from(d).length());
     let dr = C_MPS / (bandwidth_hz * gn.max(1e-9));
     let da = 1.0 / (look_s * dn.max(1e-12));
     let s = if gn > 0.0 && dn > 0.0 {
-        (v2::cross(g, d) / (gn * dn)).abs().max(0.05)
+        (Vector2::from(g).perp(&Vector2::from(d)) / (gn * dn))
+            .abs()
+            .max(0.05)
     } else {
         0.05
     };
@@ -680,13 +682,11 @@ impl Processor {
             (first.pos_m[1] + last.pos_m[1]) / 2.0,
         ];
         let dt = last.t_s - first.t_s;
-        let vel = v2::scale(
-            [
-                last.pos_m[0] - first.pos_m[0],
-                last.pos_m[1] - first.pos_m[1],
-            ],
-            1.0 / dt,
-        );
+        let vel: [f64; 2] = (Vector2::new(
+            last.pos_m[0] - first.pos_m[0],
+            last.pos_m[1] - first.pos_m[1],
+        ) * (1.0 / dt))
+            .into();
         let g = pg::bistatic_range_gradient(params, uc, target_m);
         let d = pg::doppler_gradient(params, uc, vel, target_m);
         let (vr, va) = cut_directions(g, d).ok_or_else(|| {
@@ -697,8 +697,8 @@ impl Processor {
         let fr = pc.range_weighting.mainlobe_factor();
         let fa = pc.azimuth_weighting.mainlobe_factor();
         let b = self.setup.num.bandwidth_hz();
-        let range_general = fr * C_MPS / (b * v2::norm(g));
-        let az_general = fa / (t_look * v2::norm(d));
+        let range_general = fr * C_MPS / (b * Vector2::from(g).length());
+        let az_general = fa / (t_look * Vector2::from(d).length());
         let measure = |dir: [f64; 2], proj: f64| -> Result<f64> {
             // width along the cut ≈ predicted ground width / |cos| of the mapping
             let expect = proj.max(1e-3);
@@ -715,10 +715,10 @@ impl Processor {
                 reason: "the response does not fall by 3 dB within the cut".into(),
             })
         };
-        let gn = v2::norm(g);
-        let dn = v2::norm(d);
-        let cr = v2::dot(g, vr).abs() / gn; // ground width along g = W_cut · cr
-        let ca = v2::dot(d, va).abs() / dn;
+        let gn = Vector2::from(g).length();
+        let dn = Vector2::from(d).length();
+        let cr = Vector2::from(g).dot(&Vector2::from(vr)).abs() / gn; // ground width along g = W_cut · cr
+        let ca = Vector2::from(d).dot(&Vector2::from(va)).abs() / dn;
         let w_r = measure(vr, range_general / cr.max(1e-6))?;
         let w_a = measure(va, az_general / ca.max(1e-6))?;
         let cell = pg::ResolutionCell::new(params, uc, vel, target_m);
@@ -728,7 +728,7 @@ impl Processor {
             range_paper_m: pg::range_resolution_paper_m(params, target_m),
             azimuth_measured_m: w_a * ca,
             azimuth_general_m: az_general,
-            azimuth_paper_m: pg::azimuth_resolution_paper_m(params, v2::norm(vel)),
+            azimuth_paper_m: pg::azimuth_resolution_paper_m(params, Vector2::from(vel).length()),
             mainlobe_factor: fr,
             azimuth_mainlobe_factor: fa,
             bistatic_angle_deg: pg::bistatic_angle_rad(params, uc, target_m).to_degrees(),
@@ -789,13 +789,11 @@ impl Processor {
             (first.pos_m[0] + last.pos_m[0]) / 2.0,
             (first.pos_m[1] + last.pos_m[1]) / 2.0,
         ];
-        let vel = v2::scale(
-            [
-                last.pos_m[0] - first.pos_m[0],
-                last.pos_m[1] - first.pos_m[1],
-            ],
-            1.0 / (last.t_s - first.t_s),
-        );
+        let vel: [f64; 2] = (Vector2::new(
+            last.pos_m[0] - first.pos_m[0],
+            last.pos_m[1] - first.pos_m[1],
+        ) * (1.0 / (last.t_s - first.t_s)))
+            .into();
         let mut params = self.setup.params.clone();
         params.integration_time_s = ps.len() as f64 / self.setup.scene.radar.prf_hz;
         params.bandwidth_hz = self.setup.num.bandwidth_hz();
@@ -805,8 +803,8 @@ impl Processor {
         let (vr, va) = cut_directions(g, d).ok_or_else(|| {
             RadarError::Mismatch("degenerate geometry: zero range or Doppler gradient".into())
         })?;
-        let gh = v2::scale(g, 1.0 / v2::norm(g));
-        let dh = v2::scale(d, 1.0 / v2::norm(d));
+        let gh: [f64; 2] = (Vector2::from(g) * (1.0 / Vector2::from(g).length())).into();
+        let dh: [f64; 2] = (Vector2::from(d) * (1.0 / Vector2::from(d).length())).into();
         let pc = &self.setup.scene.processing;
         let fr = pc.range_weighting.mainlobe_factor();
         let fa = pc.azimuth_weighting.mainlobe_factor();
@@ -855,7 +853,7 @@ impl Processor {
             longest_chord_deg: dir.to_degrees(),
             chord_along_g_m: region.chord_m(gh),
             paper_range_m: pg::range_resolution_paper_m(&params, target_m),
-            paper_azimuth_m: pg::azimuth_resolution_paper_m(&params, v2::norm(vel)),
+            paper_azimuth_m: pg::azimuth_resolution_paper_m(&params, Vector2::from(vel).length()),
             planner_worst_width_m: cell.worst_width_m,
             mainlobe_factors: [fr, fa],
             region,
@@ -930,15 +928,15 @@ impl Processor {
             .map(|c| {
                 let (a, z) = (&c[0], &c[c.len() - 1]);
                 let m = &c[c.len() / 2];
-                let v = v2::scale(
-                    [z.pos_m[0] - a.pos_m[0], z.pos_m[1] - a.pos_m[1]],
-                    1.0 / (z.t_s - a.t_s).max(1e-9),
-                );
+                let v: [f64; 2] = (Vector2::new(z.pos_m[0] - a.pos_m[0], z.pos_m[1] - a.pos_m[1])
+                    * (1.0 / (z.t_s - a.t_s).max(1e-9)))
+                .into();
                 let u = [m.pos_m[0], m.pos_m[1]];
                 let t = c.len() as f64 / self.setup.scene.radar.prf_hz;
                 (
-                    v2::scale(pg::bistatic_range_gradient(params, u, point_m), b / C_MPS),
-                    v2::scale(pg::doppler_gradient(params, u, v, point_m), t),
+                    (Vector2::from(pg::bistatic_range_gradient(params, u, point_m)) * (b / C_MPS))
+                        .into(),
+                    (Vector2::from(pg::doppler_gradient(params, u, v, point_m)) * t).into(),
                 )
             })
             .collect()
@@ -965,11 +963,10 @@ impl Processor {
         // predicted cell at the image centre, mid-aperture
         let mid = &pulses[pulses.len() / 2];
         let (a, b) = (&pulses[0], &pulses[pulses.len() - 1]);
-        let vel = v2::scale(
-            [b.pos_m[0] - a.pos_m[0], b.pos_m[1] - a.pos_m[1]],
-            1.0 / (b.t_s - a.t_s).max(1e-9),
-        );
-        let vel = if v2::norm(vel) > 1e-9 {
+        let vel: [f64; 2] = (Vector2::new(b.pos_m[0] - a.pos_m[0], b.pos_m[1] - a.pos_m[1])
+            * (1.0 / (b.t_s - a.t_s).max(1e-9)))
+        .into();
+        let vel = if Vector2::from(vel).length() > 1e-9 {
             vel
         } else {
             [mid.heading[0] * 1e-9, mid.heading[1] * 1e-9]
@@ -1005,7 +1002,10 @@ impl Processor {
         let map = ca_cfar(multilook, grid.nx, grid.ny, &cfar);
         let per_look = self.look_gradients(ap, pulses, ap.centre_m);
         let per_look = if per_look.is_empty() {
-            vec![(v2::scale(g, b / C_MPS), v2::scale(d, self.setup.look_s))]
+            vec![(
+                (Vector2::from(g) * (b / C_MPS)).into(),
+                (Vector2::from(d) * self.setup.look_s).into(),
+            )]
         } else {
             per_look
         };

@@ -15,7 +15,7 @@
 use std::path::Path;
 
 use planner::evaluate::ResolutionMode;
-use planner::geometry::{self as pg, v2};
+use planner::geometry::{self as pg, Length, Vector2, RIGHT_TURN};
 use radar_sim::config::{CancellerKind, SceneFile};
 use radar_sim::pipeline::{Processor, RadarSetup};
 use radar_sim::scene::SceneObject;
@@ -58,7 +58,8 @@ fn cell_facts(m: &planner::Mission, traj: &planner::Trajectory) -> (f64, f64, [f
         .fold(0.0, f64::max);
     let mid = slots[slots.len() / 2];
     let g = pg::bistatic_range_gradient(p, traj.q(mid), lm);
-    let e = v2::scale([-g[1], g[0]], 1.0 / v2::norm(g));
+    let g = Vector2::from(g);
+    let e = (RIGHT_TURN.inverse() * g * (1.0 / g.length())).into();
     (worst, cell(mid).worst_width_m, e)
 }
 

@@ -15,7 +15,7 @@
 //! energy is no larger than the previous one (a majorisation–minimisation sequence).
 
 use crate::evaluate::ResolutionMode;
-use crate::geometry::{v2, CellLinear};
+use crate::geometry::{heading_unit, CellLinear, Length, Matrix2, Point2, Vector2, RIGHT_TURN};
 use crate::params::SPEED_OF_LIGHT_MPS;
 use crate::power::PowerModel;
 use crate::socp::{Lin, ProblemBuilder};
@@ -118,13 +118,13 @@ struct SlotVars {
 #[derive(Debug, Clone, Copy)]
 struct SlotLin {
     /// Previous step u_t = q_t − q_{t−1}, m.
-    step_m: [f64; 2],
+    step_m: Vector2<f64>,
     /// Unit heading of u_t (or the carried-over heading in hover).
-    dir: [f64; 2],
+    dir: Vector2<f64>,
     /// Induced factor ι(‖u_t‖/δ).
     aux: f64,
     /// Previous true centre.
-    centre_m: [f64; 2],
+    centre_m: Point2<f64>,
 }
 
 /// The exact-geometry SCA subproblem for one iteration.
@@ -190,14 +190,15 @@ impl ExactSubproblem {
         let headings = prev.headings_rad();
         let lin: Vec<SlotLin> = (1..=n)
             .map(|t| {
-                let step = prev.step_m(t);
-                let h = headings[t - 1];
-                let dir = v2::unit(step).unwrap_or([h.cos(), h.sin()]);
+                let step = Vector2::from(prev.step_m(t));
+                let dir = step
+                    .direction()
+                    .unwrap_or_else(|| heading_unit(headings[t - 1]));
                 SlotLin {
                     step_m: step,
                     dir,
-                    aux: model.induced_factor(v2::norm(step) / delta),
-                    centre_m: v2::add(prev.q(t), v2::scale(v2::right(dir), offset)),
+                    aux: model.induced_factor(step.length() / delta),
+                    centre_m: Point2::from(prev.q(t)) + RIGHT_TURN * dir * offset,
                 }
             })
             .collect();
@@ -246,9 +247,9 @@ impl ExactSubproblem {
                 let k = 1.0 / (delta * delta * v0 * v0);
                 let u = l.step_m;
                 let lexpr = Lin::var(a, 2.0 * l.aux)
-                    .plus_const(-l.aux * l.aux - k * v2::dot(u, u))
-                    .plus_lin(&vx.clone().scaled(2.0 * k * u[0]))
-                    .plus_lin(&vy.clone().scaled(2.0 * k * u[1]));
+                    .plus_const(-l.aux * l.aux - k * u.norm_squared())
+                    .plus_lin(&vx.clone().scaled(2.0 * k * u.x))
+                    .plus_lin(&vy.clone().scaled(2.0 * k * u.y));
                 // s a ≥ 1 ; s² ≤ L
                 b.rotated_soc(
                     Lin::var(s, 1.0),
@@ -272,9 +273,9 @@ impl ExactSubproblem {
             // segment [u_t, v_t] at least s_t long (the centre-error bound needs it) and carries
             // the azimuth requirement ‖v‖ ≥ δ V_min conservatively. In elastic mode the azimuth
             // part may be violated (slack σ_t); the bound's part stays hard.
-            let u_norm = v2::norm(l.step_m);
+            let u_norm = l.step_m.length();
             let h = l.dir;
-            let along = vx.clone().scaled(h[0]).plus_lin(&vy.clone().scaled(h[1]));
+            let along = vx.clone().scaled(h.x).plus_lin(&vy.clone().scaled(h.y));
             let keep = (tuning.speed_keep_fraction * u_norm).min(KEEP_CAP_OF_LIMIT * delta * v_max);
             let s_min = match sv.sigma {
                 None => (delta * v_min).max(keep),
@@ -287,25 +288,22 @@ impl ExactSubproblem {
 
             // linearised centre: c̃ = q_t + D J ĥ + (D/‖u‖) J P v, P = I − ĥĥᵀ
             let scale = if u_norm > 0.0 { offset / u_norm } else { 0.0 };
-            let pm = [
-                [1.0 - h[0] * h[0], -h[0] * h[1]],
-                [-h[0] * h[1], 1.0 - h[1] * h[1]],
-            ];
+            let pm = Matrix2::identity() - h * h.transpose();
             // J P v = ((P v)_y, −(P v)_x)
             let pvx = vx
                 .clone()
-                .scaled(pm[0][0])
-                .plus_lin(&vy.clone().scaled(pm[0][1]));
+                .scaled(pm[(0, 0)])
+                .plus_lin(&vy.clone().scaled(pm[(0, 1)]));
             let pvy = vx
                 .clone()
-                .scaled(pm[1][0])
-                .plus_lin(&vy.clone().scaled(pm[1][1]));
-            let jh = v2::right(h);
+                .scaled(pm[(1, 0)])
+                .plus_lin(&vy.clone().scaled(pm[(1, 1)]));
+            let jh = RIGHT_TURN * h;
             let cx = Lin::var(sv.x, 1.0)
-                .plus_const(offset * jh[0])
+                .plus_const(offset * jh.x)
                 .plus_lin(&pvy.clone().scaled(scale));
             let cy = Lin::var(sv.y, 1.0)
-                .plus_const(offset * jh[1])
+                .plus_const(offset * jh.y)
                 .plus_lin(&pvx.clone().scaled(-scale));
             let mut head = Lin::var(e, -1.0).plus_const(radius);
             if let Some(sig) = sv.sigma {
@@ -327,8 +325,8 @@ impl ExactSubproblem {
             );
             // κ‖v − u‖² ≤ e
             let kappa = tuning.kappa_scale * offset * CENTRE_CURVATURE_BOUND / (s_min * s_min);
-            let dvx = vx.clone().plus_const(-l.step_m[0]);
-            let dvy = vy.clone().plus_const(-l.step_m[1]);
+            let dvx = vx.clone().plus_const(-l.step_m.x);
+            let dvy = vy.clone().plus_const(-l.step_m.y);
             b.rotated_soc(
                 Lin::var(e, 1.0 / kappa),
                 Lin::constant_only(1.0),
@@ -340,11 +338,12 @@ impl ExactSubproblem {
             // range requirement (only when it is not vacuous): the true centre stays outside
             // the keep-out disc around the BS; linearised along the previous centre's direction.
             if let Some(rk) = keepout {
-                let nrm = v2::unit(v2::sub(l.centre_m, p.bs_m)).unwrap_or([1.0, 0.0]);
+                let bs = Point2::from(p.bs_m);
+                let nrm = (l.centre_m - bs).direction().unwrap_or_else(Vector2::x);
                 let mut expr = cx
-                    .scaled(nrm[0])
-                    .plus_lin(&cy.scaled(nrm[1]))
-                    .plus_const(-v2::dot(nrm, p.bs_m) - rk - SENSING_MARGIN_M)
+                    .scaled(nrm.x)
+                    .plus_lin(&cy.scaled(nrm.y))
+                    .plus_const(-nrm.dot(&bs.coords) - rk - SENSING_MARGIN_M)
                     .plus(e, -1.0);
                 if let Some(sig) = sv.sigma {
                     expr = expr.plus(sig, 1.0);
@@ -356,9 +355,9 @@ impl ExactSubproblem {
                     &mut b,
                     mission,
                     ResolutionSlot {
-                        q0: prev.q(t),
+                        q0: Point2::from(prev.q(t)),
                         step0: l.step_m,
-                        landmark: g,
+                        landmark: Point2::from(g),
                         x: sv.x,
                         y: sv.y,
                         shift: m,
@@ -422,11 +421,11 @@ impl ExactSubproblem {
 #[derive(Debug, Clone, Copy)]
 struct ResolutionSlot {
     /// Previous position q_t^(ℓ).
-    q0: [f64; 2],
+    q0: Point2<f64>,
     /// Previous step u_t.
-    step0: [f64; 2],
+    step0: Vector2<f64>,
     /// The landmark.
-    landmark: [f64; 2],
+    landmark: Point2<f64>,
     x: usize,
     y: usize,
     /// m_t ≥ ‖q_t − q0‖.
@@ -441,20 +440,21 @@ const CELL_MARGIN_FACTOR: f64 = 3.0;
 /// V_m, |f(q, v) − f(q0, v)| ≤ L ‖q − q0‖ for f = s k(q)·v − ‖g(q)‖/(T_d d_min) (iso-range) and
 /// f = s k(q)·v − c/(B d_min) ‖A(q) v‖ (cross-track), estimated by finite differences and
 /// multiplied by `CELL_MARGIN_FACTOR`; the property test in this module checks the bound.
-pub fn cell_margins(p: &crate::Params, q0: [f64; 2], landmark: [f64; 2]) -> (f64, f64) {
+pub fn cell_margins(p: &crate::Params, q0: Point2<f64>, landmark: Point2<f64>) -> (f64, f64) {
     let cl = CellLinear::new(p, q0, landmark);
-    let iso_rhs = |c: &CellLinear| v2::norm(c.grad) / (p.integration_time_s * p.d_min_m);
+    let iso_rhs = |c: &CellLinear| c.grad.length() / (p.integration_time_s * p.d_min_m);
     let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
     let h = 1.0;
     let mut l_iso: f64 = 0.0;
     let mut l_cross: f64 = 0.0;
-    for dir in [[h, 0.0], [0.0, h], [-h, 0.0], [0.0, -h]] {
-        let c2 = CellLinear::new(p, v2::add(q0, dir), landmark);
-        let dk = v2::norm(v2::sub(c2.cross, cl.cross)) / h;
+    for dir in [Vector2::x(), Vector2::y(), -Vector2::x(), -Vector2::y()] {
+        let c2 = CellLinear::new(p, q0 + dir * h, landmark);
+        let dk = (c2.cross - cl.cross).length() / h;
         let dg = (iso_rhs(&c2) - iso_rhs(&cl)).abs() / h;
-        let da = (0..2)
-            .flat_map(|i| (0..2).map(move |j| (i, j)))
-            .map(|(i, j)| (c2.doppler_map[i][j] - cl.doppler_map[i][j]).powi(2))
+        // Frobenius norm of the change of A (summed in the order of the entries: A is symmetric)
+        let da = (c2.doppler_map - cl.doppler_map)
+            .iter()
+            .map(|x| x * x)
             .sum::<f64>()
             .sqrt()
             / h;
@@ -481,27 +481,27 @@ fn resolution_cell_constraints(
     let p = mission.params();
     let delta = p.slot_s;
     let cl = CellLinear::new(p, rs.q0, rs.landmark);
-    let side = if v2::dot(cl.cross, rs.step0) >= 0.0 {
+    let side = if cl.cross.dot(&rs.step0) >= 0.0 {
         1.0
     } else {
         -1.0
     };
-    let iso_rhs = |c: &CellLinear| v2::norm(c.grad) / (p.integration_time_s * p.d_min_m);
+    let iso_rhs = |c: &CellLinear| c.grad.length() / (p.integration_time_s * p.d_min_m);
     let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
     let (l_iso, l_cross) = cell_margins(mission.params(), rs.q0, rs.landmark);
     // m ≥ ‖q_t − q0‖
     b.soc(
         Lin::var(rs.shift, 1.0),
         &[
-            Lin::var(rs.x, 1.0).plus_const(-rs.q0[0]),
-            Lin::var(rs.y, 1.0).plus_const(-rs.q0[1]),
+            Lin::var(rs.x, 1.0).plus_const(-rs.q0.x),
+            Lin::var(rs.y, 1.0).plus_const(-rs.q0.y),
         ],
     );
     // s k·v/δ, with v the step (m per slot)
     let kv = vx
         .clone()
-        .scaled(side * cl.cross[0] / delta)
-        .plus_lin(&vy.clone().scaled(side * cl.cross[1] / delta));
+        .scaled(side * cl.cross.x / delta)
+        .plus_lin(&vy.clone().scaled(side * cl.cross.y / delta));
     let rhs = iso_rhs(&cl);
     let mut iso = kv.clone().plus_const(-rhs).plus(rs.shift, -l_iso);
     let mut head = kv.plus(rs.shift, -l_cross);
@@ -514,8 +514,8 @@ fn resolution_cell_constraints(
     let a = cl.doppler_map;
     let av = |i: usize| {
         vx.clone()
-            .scaled(k_cross * a[i][0] / delta)
-            .plus_lin(&vy.clone().scaled(k_cross * a[i][1] / delta))
+            .scaled(k_cross * a[(i, 0)] / delta)
+            .plus_lin(&vy.clone().scaled(k_cross * a[(i, 1)] / delta))
     };
     b.soc(head, &[av(0), av(1)]);
 }
@@ -540,11 +540,8 @@ fn step_exprs(vars: &[SlotVars], t: usize, start_m: [f64; 2]) -> (Lin, Lin) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::distance;
     use proptest::prelude::*;
-
-    fn unit(v: [f64; 2]) -> [f64; 2] {
-        v2::scale(v, 1.0 / v2::norm(v))
-    }
 
     proptest! {
         /// The cell constraints linearised at q0 with the position margin imply the exact ones at
@@ -557,23 +554,24 @@ mod tests {
             vx in -50.0f64..50.0, vy in -50.0f64..50.0,
         ) {
             let p = crate::Params::default();
-            let q0 = [qx, qy];
-            let lm = [lx, ly];
-            prop_assume!(v2::dist(q0, lm) > 500.0);
-            let v = [vx, vy];
-            prop_assume!(v2::norm(v) <= p.max_speed_mps);
-            let q1 = v2::add(q0, [dqx, dqy]);
+            let q0 = Point2::new(qx, qy);
+            let lm = Point2::new(lx, ly);
+            prop_assume!(distance(&q0, &lm) > 500.0);
+            let v = Vector2::new(vx, vy);
+            prop_assume!(v.norm() <= p.max_speed_mps);
+            let dq = Vector2::new(dqx, dqy);
+            let q1 = q0 + dq;
             let (l_iso, l_cross) = cell_margins(&p, q0, lm);
             let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
-            let f_iso = |q: [f64; 2]| {
+            let f_iso = |q: Point2<f64>| {
                 let c = CellLinear::new(&p, q, lm);
-                v2::dot(c.cross, v) - v2::norm(c.grad) / (p.integration_time_s * p.d_min_m)
+                c.cross.dot(&v) - c.grad.norm() / (p.integration_time_s * p.d_min_m)
             };
-            let f_cross = |q: [f64; 2]| {
+            let f_cross = |q: Point2<f64>| {
                 let c = CellLinear::new(&p, q, lm);
-                v2::dot(c.cross, v) - k_cross * v2::norm(c.doppler_gradient(v))
+                c.cross.dot(&v) - k_cross * c.doppler_gradient(v).norm()
             };
-            let dq = v2::norm([dqx, dqy]);
+            let dq = dq.norm();
             prop_assert!(f_iso(q1) >= f_iso(q0) - l_iso * dq - 1e-12);
             prop_assert!(f_cross(q1) >= f_cross(q0) - l_cross * dq - 1e-12);
         }
@@ -587,19 +585,18 @@ mod tests {
             dx in -20.0f64..20.0, dy in -20.0f64..20.0,
             frac in 0.05f64..1.0,
         ) {
-            let u = [ux, uy];
-            let un = v2::norm(u);
+            let u = Vector2::new(ux, uy);
+            let un = u.norm();
             prop_assume!(un > 0.5);
-            let v = [ux + dx, uy + dy];
-            let h = unit(u);
+            let d = Vector2::new(dx, dy);
+            let v = u + d;
+            let h = u.normalize();
             let s = frac * un;
-            prop_assume!(v2::dot(h, v) >= s);
-            let p = [[1.0 - h[0] * h[0], -h[0] * h[1]], [-h[0] * h[1], 1.0 - h[1] * h[1]]];
-            let d = v2::sub(v, u);
-            let lin = [h[0] + (p[0][0] * d[0] + p[0][1] * d[1]) / un,
-                       h[1] + (p[1][0] * d[0] + p[1][1] * d[1]) / un];
-            let err = v2::dist(unit(v), lin);
-            let bound = CENTRE_CURVATURE_BOUND * v2::dot(d, d) / (s * s);
+            prop_assume!(h.dot(&v) >= s);
+            let p = Matrix2::identity() - h * h.transpose();
+            let lin = h + p * d / un;
+            let err = (v.normalize() - lin).norm();
+            let bound = CENTRE_CURVATURE_BOUND * d.norm_squared() / (s * s);
             prop_assert!(err <= bound * (1.0 + 1e-9) + 1e-12, "err {} > bound {}", err, bound);
         }
 
@@ -613,14 +610,14 @@ mod tests {
             let delta = 0.5;
             let v0 = 5.4;
             let k = 1.0 / (delta * delta * v0 * v0);
-            let u = [ux, uy];
-            let a0 = model.induced_factor(v2::norm(u) / delta);
-            let v = [vx, vy];
-            let lhs_true = a * a + k * v2::dot(v, v);
-            let lin = 2.0 * a0 * a - a0 * a0 + k * (2.0 * v2::dot(u, v) - v2::dot(u, u));
+            let u = Vector2::new(ux, uy);
+            let a0 = model.induced_factor(u.norm() / delta);
+            let v = Vector2::new(vx, vy);
+            let lhs_true = a * a + k * v.norm_squared();
+            let lin = 2.0 * a0 * a - a0 * a0 + k * (2.0 * u.dot(&v) - u.norm_squared());
             prop_assert!(lin <= lhs_true + 1e-9);
-            let at_u = 2.0 * a0 * a0 - a0 * a0 + k * v2::dot(u, u);
-            prop_assert!((at_u - (a0 * a0 + k * v2::dot(u, u))).abs() < 1e-9);
+            let at_u = 2.0 * a0 * a0 - a0 * a0 + k * u.norm_squared();
+            prop_assert!((at_u - (a0 * a0 + k * u.norm_squared())).abs() < 1e-9);
         }
     }
 }

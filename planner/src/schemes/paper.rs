@@ -11,7 +11,7 @@
 //! one cone program, and any slot whose returned (w, u) fails our own check keeps its previous
 //! value, which (p5) guarantees to be feasible.
 
-use crate::geometry::v2;
+use crate::geometry::{Length, Vector2};
 use crate::power::PowerModel;
 use crate::schemes::exact::SPEED_UNIT_MPS as VU;
 use crate::socp::{Lin, ProblemBuilder, SocpSolver, SolveError};
@@ -264,7 +264,7 @@ impl PaperState {
             let lin_ok = rows
                 .iter()
                 .all(|row| row.eval(x) >= -tol * (1.0 + row.constant().abs()));
-            let tail = v2::norm([soc[1].eval(x), soc[2].eval(x)]);
+            let tail = Vector2::new(soc[1].eval(x), soc[2].eval(x)).length();
             if lin_ok && tail <= r + tol * (1.0 + r) {
                 self.w[t - 1] = x[2 * k];
                 self.u[t - 1] = x[2 * k + 1];

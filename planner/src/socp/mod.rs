@@ -7,7 +7,6 @@
 //! new values and call Clarabel's in-place `update_*` (presolve off), so the KKT ordering and
 //! symbolic factorisation are reused across SCA iterations.
 
-pub mod banded;
 mod lin;
 mod pattern;
 
@@ -257,10 +256,6 @@ pub enum SolveError {
     /// Clarabel proved the subproblem unbounded.
     #[error("subproblem is unbounded (solver status {0:?})")]
     Unbounded(SolverStatus),
-    /// The banded method gave no answer. [`SocpSolver::solve`] then always asks Clarabel, so
-    /// its callers see Clarabel's outcome; this variant only carries the reason to the log.
-    #[error("banded interior-point method: {0}")]
-    Banded(String),
     /// Clarabel stopped without a solution of the required accuracy.
     #[error("solver stopped with status {status:?} (cone violation {violation:.3e})")]
     Inaccurate {
@@ -286,8 +281,7 @@ pub struct Solution {
     pub x: Vec<f64>,
     /// Objective value ½xᵀPx + qᵀx at `x`.
     pub objective: f64,
-    /// Clarabel's status (`Solved`, or `AlmostSolved` that passed our residual check); an
-    /// answer of the banded method ([`Backend::Banded`]) reports `Solved`.
+    /// Clarabel's status (`Solved`, or `AlmostSolved` that passed our residual check).
     pub status: SolverStatus,
     /// Interior-point iterations.
     pub iterations: u32,
@@ -326,36 +320,6 @@ pub struct SocpSettings {
     /// Fig. 11's random realisations 3 and 19, whose first `baseline` program Clarabel stopped
     /// `AlmostSolved` at a relative cone violation of 1.5e-4 and 2.9e-4: the plan failed.)
     pub fallbacks: bool,
-    /// Which interior-point method solves first ([`Backend`]).
-    pub backend: Backend,
-}
-
-/// The interior-point method a [`SocpSolver`] tries first.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Backend {
-    /// Clarabel (sparse LDLᵀ of the full KKT system) for every program.
-    #[default]
-    Clarabel,
-    /// The banded method of [`banded`] (normal equations factored as a band matrix) for
-    /// programs without equality cones whose normal equations are banded; Clarabel (with the
-    /// retries and fallbacks of these settings) for the others and for any program the banded
-    /// method does not solve to the tolerances (it has no infeasibility certificates).
-    /// Experimental: default plans 1.2× faster at 200 m, no faster at 30 m, energies within
-    /// 0.02 J of Clarabel's (BENCHMARKS.md).
-    Banded,
-}
-
-impl Backend {
-    /// All backends.
-    pub const ALL: [Backend; 2] = [Backend::Clarabel, Backend::Banded];
-
-    /// The name used on the command line (`--socp-backend`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Backend::Clarabel => "clarabel",
-            Backend::Banded => "banded",
-        }
-    }
 }
 
 impl SocpSettings {
@@ -386,7 +350,6 @@ impl Default for SocpSettings {
             refine_reltol: 1e-13,
             retry_refine_max_iter: 0,
             fallbacks: true,
-            backend: Backend::Clarabel,
         }
     }
 }
@@ -399,9 +362,6 @@ pub struct SocpSolver {
     pub builds: usize,
     /// Number of solves repeated with refinement after a failure, for diagnostics.
     pub retries: usize,
-    /// Number of programs the banded method did not solve and Clarabel did (or tried), for
-    /// diagnostics.
-    pub banded_fallbacks: usize,
 }
 
 struct Built {
@@ -419,7 +379,6 @@ impl std::fmt::Debug for SocpSolver {
             .field("built", &self.state.is_some())
             .field("builds", &self.builds)
             .field("retries", &self.retries)
-            .field("banded_fallbacks", &self.banded_fallbacks)
             .finish()
     }
 }
@@ -432,7 +391,6 @@ impl SocpSolver {
             state: None,
             builds: 0,
             retries: 0,
-            banded_fallbacks: 0,
         }
     }
 
@@ -451,8 +409,7 @@ impl SocpSolver {
             .map_err(|e| SolveError::Setup(e.to_string()))
     }
 
-    /// Solves `prob`; reuses the previous pattern when the structure is unchanged. With
-    /// [`Backend::Banded`] the banded method tries first and Clarabel solves what it does not.
+    /// Solves `prob`; reuses the previous pattern when the structure is unchanged.
     /// A failed Clarabel solve is repeated once with more iterative refinement when the settings
     /// ask for it ([`SocpSettings::retry_refine_max_iter`]), and an inaccurate one with the
     /// [`SocpSettings::fallbacks`]; the last attempt's error is what the caller sees. A variable
@@ -461,22 +418,8 @@ impl SocpSolver {
     pub fn solve(&mut self, prob: &ProblemBuilder) -> Result<Solution, SolveError> {
         let start = Instant::now();
         prob.validate()?;
-        let mut banded_failed = false;
-        if self.settings.backend == Backend::Banded {
-            match self.solve_banded(prob) {
-                Ok(sol) => return Ok(sol),
-                Err(e) => {
-                    tracing::debug!(error = %e, "banded interior-point method gave no answer; Clarabel solves");
-                    self.banded_fallbacks += 1;
-                    banded_failed = true;
-                }
-            }
-        }
         let mut result = self.solve_once(prob);
         if result.is_ok() {
-            if let (true, Ok(sol)) = (banded_failed, result.as_mut()) {
-                sol.seconds = start.elapsed().as_secs_f64();
-            }
             return result;
         }
         for (settings, after_certificate) in self.retry_ladder() {
@@ -515,7 +458,6 @@ impl SocpSolver {
     fn retry_ladder(&self) -> Vec<(SocpSettings, bool)> {
         let base = SocpSettings {
             reuse: false,
-            backend: Backend::Clarabel,
             retry_refine_max_iter: 0,
             fallbacks: false,
             ..self.settings
@@ -555,44 +497,6 @@ impl SocpSolver {
             }
         }
         ladder
-    }
-
-    /// One solve with the banded method; its answer passes the same residual check as
-    /// Clarabel's `Solved` (relative cone violation ≤ 1e-6).
-    fn solve_banded(&self, prob: &ProblemBuilder) -> Result<Solution, SolveError> {
-        let start = Instant::now();
-        let settings = banded::BandedSettings {
-            max_iter: self.settings.max_iter.min(100),
-            tol_feas: self.settings.tol_feas,
-            tol_gap_abs: self.settings.tol_gap_rel,
-            tol_gap_rel: self.settings.tol_gap_rel,
-            ..banded::BandedSettings::default()
-        };
-        let sol = banded::solve(prob, &settings).map_err(|e| SolveError::Banded(e.to_string()))?;
-        let violation = prob.max_cone_violation(&sol.x);
-        let relative = prob.max_relative_cone_violation(&sol.x);
-        let seconds = start.elapsed().as_secs_f64();
-        tracing::trace!(
-            variables = prob.n,
-            iterations = sol.iterations,
-            bandwidth = sol.bandwidth,
-            seconds,
-            relative_violation = relative,
-            "cone program solved (banded)"
-        );
-        if relative > 1e-6 || sol.x.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::Banded(format!(
-                "answer fails the residual check (relative cone violation {relative:.2e})"
-            )));
-        }
-        Ok(Solution {
-            objective: prob.objective(&sol.x),
-            x: sol.x,
-            status: SolverStatus::Solved,
-            iterations: sol.iterations,
-            seconds,
-            violation,
-        })
     }
 
     fn solve_once(&mut self, prob: &ProblemBuilder) -> Result<Solution, SolveError> {
@@ -720,7 +624,7 @@ mod tests {
     use super::*;
 
     /// min x + y s.t. ‖(x, y)‖ ≤ 1: optimum x = y = −1/√2, objective −√2.
-    pub(crate) fn unit_disc_problem() -> ProblemBuilder {
+    fn unit_disc_problem() -> ProblemBuilder {
         let mut b = ProblemBuilder::new(2);
         b.add_linear_cost(0, 1.0);
         b.add_linear_cost(1, 1.0);
@@ -860,10 +764,6 @@ mod tests {
         let mut row = ProblemBuilder::new(2);
         row.nonneg(Lin::var(0, 1.0));
         row.soc(Lin::var(1, 1.0), &[Lin::var(7, 1.0)]);
-        let banded = SocpSettings {
-            backend: Backend::Banded,
-            ..SocpSettings::exact_geometry()
-        };
         for (b, settings, needles) in [
             (&square, SocpSettings::default(), &["(5, 5)"][..]),
             (&linear, SocpSettings::default(), &["entry 4"][..]),
@@ -872,7 +772,6 @@ mod tests {
                 SocpSettings::exact_geometry(),
                 &["row 2", "variable 7"][..],
             ),
-            (&row, banded, &["row 2", "variable 7"][..]),
         ] {
             let e = SocpSolver::new(settings).solve(b).unwrap_err();
             assert!(
@@ -892,7 +791,7 @@ mod tests {
     }
 
     /// min t s.t. x² ≤ t·1, x = 3 → t = 9 (an equality cone and a rotated cone).
-    pub(crate) fn rotated_cone_problem() -> ProblemBuilder {
+    fn rotated_cone_problem() -> ProblemBuilder {
         let mut b = ProblemBuilder::new(2);
         b.add_linear_cost(1, 1.0);
         b.zero(Lin::var(0, 1.0).plus_const(-3.0));
