@@ -4,20 +4,21 @@
 //!
 //! Run: `cargo run --release -p radar-sim --example bench [-- --quick] [-- --threads N]`.
 //!
-//! Every figure is the median over repetitions, with its CPU time (all threads, from /proc) and
-//! the load average at the start of the step, because the machine is shared. The NumPy outputs
-//! are checked against the Rust outputs (signal-to-error ratio) so that both do the same work.
+//! Every figure is the median over repetitions, with its CPU time (all threads: the process
+//! CPU-time clock, [`radar_sim::cputime`]) and the load average at the start of the step,
+//! because the machine is shared. The NumPy outputs are checked against the Rust outputs
+//! (signal-to-error ratio) so that both do the same work.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
 use std::time::Instant;
 
-use radar_sim::backproject::{backproject, backproject_reference, ser_db, BpPulse};
+use radar_sim::backproject::{backproject, backproject_reference, ser_db, BpPulse, Grid};
 use radar_sim::config::SceneFile;
 use radar_sim::cputime::{load_average, process_cpu_s};
 use radar_sim::io::{write_json, NpyType, NpyWriter};
-use radar_sim::pipeline::{Processor, RadarSetup};
+use radar_sim::pipeline::{Compressed, Processor, RadarSetup};
 use radar_sim::scene::SceneObject;
 use radar_sim::synth::{Components, Synthesizer};
 use radar_sim::track::{dist3, plan_apertures, plan_pulses, LinearTrack, PulseMeta};
@@ -158,25 +159,23 @@ fn write_synth_inputs(
     );
 }
 
-fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let quick = args.iter().any(|a| a == "--quick");
-    let threads = args
-        .iter()
-        .position(|a| a == "--threads")
-        .and_then(|i| args.get(i + 1))
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(0);
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build_global()
-        .unwrap();
-    let reps = if quick { 3 } else { 7 };
-    let params = planner::Params::default();
-    let scene = SceneFile::default();
-    let setup = RadarSetup::new(&params, &scene).unwrap();
-    let proc = Processor::new(setup.clone()).unwrap();
-    let num = setup.num.clone();
+/// What every step shares: the radar, the processor, the scene's objects, the repetitions,
+/// the directory of NumPy's inputs and the figures so far.
+struct Bench {
+    setup: RadarSetup,
+    proc: Processor,
+    synth: Synthesizer,
+    /// Pulses per look.
+    npl: usize,
+    reps: usize,
+    quick: bool,
+    dir: tempfile::TempDir,
+    results: serde_json::Map<String, serde_json::Value>,
+}
+
+/// Prints the machine and the numerology.
+fn print_header(setup: &RadarSetup, reps: usize) {
+    let num = &setup.num;
     let threads = rayon::current_num_threads();
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
@@ -202,12 +201,11 @@ fn main() {
         num.cp_range_m(),
         reps
     );
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let mut results = serde_json::Map::new();
+}
 
-    // --- scene: 50 objects around the origin (the default mission's first landmark) + it
-    let objects: Vec<SceneObject> = (0..51)
+/// The scene: 50 objects around the origin (the default mission's first landmark) + it.
+fn bench_objects() -> Vec<SceneObject> {
+    (0..51)
         .map(|i| SceneObject {
             id: i,
             x_m: if i == 0 { 0.0 } else { -60.0 + 2.4 * i as f64 },
@@ -220,15 +218,62 @@ fn main() {
             phase_rad: i as f64,
             landmark: None,
         })
-        .collect();
-    let synth = setup.synthesizer(objects).unwrap();
-    let npl = (setup.look_s * scene.radar.prf_hz).round() as usize;
+        .collect()
+}
 
-    // --- synthesis: in-CP geometry (UAV west of the landmark heading north, as on the default
-    // mission) and a geometry whose echoes lie beyond the CP (UAV east, heading south)
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let quick = args.iter().any(|a| a == "--quick");
+    let threads = args
+        .iter()
+        .position(|a| a == "--threads")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global()
+        .unwrap();
+    let reps = if quick { 3 } else { 7 };
+    let params = planner::Params::default();
+    let scene = SceneFile::default();
+    let setup = RadarSetup::new(&params, &scene).unwrap();
+    print_header(&setup, reps);
+    let mut b = Bench {
+        proc: Processor::new(setup.clone()).unwrap(),
+        synth: setup.synthesizer(bench_objects()).unwrap(),
+        npl: (setup.look_s * scene.radar.prf_hz).round() as usize,
+        setup,
+        reps,
+        quick,
+        dir: tempfile::tempdir().unwrap(),
+        results: serde_json::Map::new(),
+    };
+    let synth_cases = bench_synthesis(&mut b);
+    // cancellation, range compression and backprojection on the in-CP look
+    let (_, pulses, iq) = &synth_cases[0];
+    let ap = plan_apertures(&[([0.0, 0.0], Some(0), 0.0, b.setup.look_s)], 1.0, 100.0)
+        .unwrap()
+        .remove(0);
+    let grid = b.setup.grid(&ap);
+    let comp = bench_compress(&mut b, &grid, pulses, iq);
+    let img = bench_backprojection(&mut b, &grid, iq, &comp);
+    write_numpy_config(&b, &grid, &comp);
+    if let Some(v) = run_numpy(b.dir.path()) {
+        compare_with_numpy(&b, &v, &grid, &img);
+    }
+    println!("load average at the end: {}", load_average());
+}
+
+/// Echo synthesis on an in-CP geometry (UAV west of the landmark heading north, as on the
+/// default mission) and on one whose echoes lie beyond the CP (UAV east, heading south):
+/// (tag, pulses, IQ) of each.
+fn bench_synthesis(b: &mut Bench) -> Vec<(&'static str, Vec<PulseMeta>, Vec<Complex32>)> {
+    let (setup, synth, reps, d) = (&b.setup, &b.synth, b.reps, b.dir.path());
+    let num = &setup.num;
     let mut synth_cases = Vec::new();
     for (tag, heading) in [("incp", 90.0), ("split", 270.0)] {
-        let pulses = look_pulses(&setup, heading, 1);
+        let pulses = look_pulses(setup, heading, 1);
         let mid = &pulses[pulses.len() / 2];
         let excess: Vec<f64> = synth
             .objects()
@@ -254,7 +299,7 @@ fn main() {
             c,
             samples / c
         );
-        write_synth_inputs(d, tag, &setup, &synth, &pulses);
+        write_synth_inputs(d, tag, setup, synth, &pulses);
         let clean = synth
             .synthesize_frame(
                 &pulses,
@@ -269,21 +314,27 @@ fn main() {
             &[pulses.len(), synth.samples_per_pulse()],
             &clean,
         );
-        results.insert(
+        b.results.insert(
             format!("synth_{tag}"),
             json!({"wall_s": w, "cpu_s": c, "best_s": best, "samples": samples, "load": load, "beyond_cp": beyond}),
         );
         synth_cases.push((tag, pulses, iq));
     }
 
-    // --- cancellation + range compression on the in-CP look (ECA-B, 1 pulse per batch)
-    let (_, pulses, iq) = &synth_cases[0];
-    let ap = plan_apertures(&[([0.0, 0.0], Some(0), 0.0, setup.look_s)], 1.0, 100.0)
-        .unwrap()
-        .remove(0);
-    let grid = setup.grid(&ap);
+    synth_cases
+}
+
+/// Cancellation + range compression (ECA-B, 1 pulse per batch) of one look.
+fn bench_compress(
+    b: &mut Bench,
+    grid: &Grid,
+    pulses: &[PulseMeta],
+    iq: &[Complex32],
+) -> Compressed {
+    let (setup, proc, reps, npl, d) = (&b.setup, &b.proc, b.reps, b.npl, b.dir.path());
+    let (num, scene) = (&setup.num, &setup.scene);
     let (w, c, load, comp, best) = timed(reps, || {
-        proc.compress(&grid, pulses, iq, npl, Some([0.0, 0.0]), false)
+        proc.compress(grid, pulses, iq, npl, Some([0.0, 0.0]), false)
             .unwrap()
     });
     println!(
@@ -294,7 +345,7 @@ fn main() {
         1e6 * w / pulses.len() as f64,
         1e6 * c / pulses.len() as f64
     );
-    results.insert(
+    b.results.insert(
         "compress".into(),
         json!({"wall_s": w, "cpu_s": c, "best_s": best, "pulses": pulses.len(), "load": load}),
     );
@@ -314,7 +365,7 @@ fn main() {
         })
         .collect();
     write_f8(&d.join("cancel_delays.npy"), &[pulses.len(), 2], &delays);
-    results.insert(
+    b.results.insert(
         "compress_metrics".into(),
         json!({
             "input_power": comp.cancel.input_power, "output_power": comp.cancel.output_power,
@@ -328,33 +379,45 @@ fn main() {
         &comp.profiles,
     );
 
-    // --- backprojection: the look's profiles onto the 251 × 251 grid (and 10 looks' worth)
+    comp
+}
+
+/// Backprojection of the look's profiles onto the 251 × 251 grid (and of 10 looks' worth);
+/// returns the one-look image.
+fn bench_backprojection(
+    b: &mut Bench,
+    grid: &Grid,
+    iq: &[Complex32],
+    comp: &Compressed,
+) -> Vec<Complex32> {
+    let (setup, proc, reps, npl, quick, d) =
+        (&b.setup, &b.proc, b.reps, b.npl, b.quick, b.dir.path());
     let geom = setup.geometry();
     let bp_sets: Vec<(usize, usize)> = if quick {
         vec![(npl, reps)]
     } else {
         vec![(npl, reps), (10 * npl, 3)]
     };
-    let ten = look_pulses(&setup, 90.0, 10);
+    let ten = look_pulses(setup, 90.0, 10);
     let comp10 = if quick {
         None
     } else {
         // profiles of 10 looks: the same IQ repeated is enough for timing
         let iq10: Vec<Complex32> = (0..10).flat_map(|_| iq.iter().copied()).collect();
         Some(
-            proc.compress(&grid, &ten, &iq10, npl, Some([0.0, 0.0]), false)
+            proc.compress(grid, &ten, &iq10, npl, Some([0.0, 0.0]), false)
                 .unwrap(),
         )
     };
     let mut img = Vec::new();
     for (np, r) in bp_sets {
         let cc = if np == npl {
-            &comp
+            comp
         } else {
             comp10.as_ref().unwrap()
         };
         let (w, c, load, im, best) = timed(r, || {
-            backproject(&geom, &grid, &cc.pulses, &cc.profiles, cc.m, 32).unwrap()
+            backproject(&geom, grid, &cc.pulses, &cc.profiles, cc.m, 32).unwrap()
         });
         let work = (grid.pixels() * cc.pulses.len()) as f64;
         println!(
@@ -366,7 +429,7 @@ fn main() {
             c,
             work / c
         );
-        results.insert(
+        b.results.insert(
             format!("bp_{np}"),
             json!({"wall_s": w, "cpu_s": c, "best_s": best, "work": work, "load": load}),
         );
@@ -384,7 +447,7 @@ fn main() {
     let sub: Vec<_> = idx.iter().map(|&i| img[i]).collect();
     let ser = ser_db(&sub, &reference);
     println!("  image SER against the f64 reference: {ser:.1} dB");
-    results.insert("bp_ser_db".into(), json!(ser));
+    b.results.insert("bp_ser_db".into(), json!(ser));
     write_c8(
         &d.join("bp_profiles.npy"),
         &[comp.pulses.len(), comp.m],
@@ -406,7 +469,14 @@ fn main() {
         .collect();
     write_f8(&d.join("bp_pulses.npy"), &[comp.pulses.len(), 6], &flat);
 
-    // --- NumPy, same inputs, same sizes
+    img
+}
+
+/// Writes what NumPy needs besides the arrays: sizes, geometry, link budget, antenna.
+fn write_numpy_config(b: &Bench, grid: &Grid, comp: &Compressed) {
+    let (setup, d) = (&b.setup, b.dir.path());
+    let (num, scene, geom) = (&setup.num, &setup.scene, setup.geometry());
+    let reps = b.reps;
     let ant = &setup.antenna;
     let radar = &scene.radar;
     write_json(
@@ -418,7 +488,7 @@ fn main() {
             "wavelength_m": geom.wavelength_m,
             "fft_size": num.fft_size, "cp_samples": num.cp_samples, "subcarriers": num.subcarriers,
             "eirp_w": radar.tx_power_w * 10f64.powf((radar.tx_gain_dbi - radar.system_loss_db) / 10.0),
-            "noise_w": synth.noise_power_w(),
+            "noise_w": b.synth.noise_power_w(),
             "antenna": {"length_m": ant.length_m, "height_m": ant.height_m, "look_rad": ant.look_rad,
                         "peak_gain": ant.peak_gain, "floor": ant.floor, "back": ant.back},
             "taps_before": scene.processing.taps_before, "taps_after": scene.processing.taps_after,
@@ -426,25 +496,35 @@ fn main() {
         }),
     )
     .unwrap();
+}
+
+/// Runs `bench/numpy_bench.py` on the inputs in `d`; its figures, or None (said why).
+fn run_numpy(d: &Path) -> Option<serde_json::Value> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("bench/numpy_bench.py");
     let out = std::process::Command::new("python3")
         .arg(&script)
         .arg(d)
         .output();
-    let v: serde_json::Value = match out {
-        Ok(o) if o.status.success() => serde_json::from_slice(&o.stdout).unwrap(),
+    match out {
+        Ok(o) if o.status.success() => Some(serde_json::from_slice(&o.stdout).unwrap()),
         Ok(o) => {
             println!(
                 "NumPy benchmark failed: {}",
                 String::from_utf8_lossy(&o.stderr)
             );
-            return;
+            None
         }
         Err(e) => {
             println!("NumPy benchmark not run (python3: {e})");
-            return;
+            None
         }
-    };
+    }
+}
+
+/// Prints NumPy's figures against Rust's: the ratios and the agreement of the outputs.
+fn compare_with_numpy(b: &Bench, v: &serde_json::Value, grid: &Grid, img: &[Complex32]) {
+    let (results, reps, npl, d) = (&b.results, b.reps, b.npl, b.dir.path());
+    let geom = b.setup.geometry();
     println!("NumPy {} (same run, same inputs and sizes):", v["numpy"]);
     let f = |k: &str, f: &str| v[k][f].as_f64().unwrap_or(f64::NAN);
     let r = |k: &str, f: &str| results[k][f].as_f64().unwrap_or(f64::NAN);
@@ -502,8 +582,7 @@ fn main() {
         {
             let mut rd = radar_sim::io::NpyReader::open(&d.join("numpy_image.npy")).unwrap();
             let npimg = rd.read_c8(0, grid.pixels()).unwrap();
-            ser_c32(&img, &npimg)
+            ser_c32(img, &npimg)
         }
     );
-    println!("load average at the end: {}", load_average());
 }

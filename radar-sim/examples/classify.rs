@@ -28,6 +28,18 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
     serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
 }
 
+/// Whether the image (`ny × nx`) has a local maximum (of its 3 × 3 neighbourhood) within `r`
+/// pixels of `(cx, cy)`.
+fn has_local_max(img: &[f32], nx: usize, ny: usize, (cx, cy): (i64, i64), r: i64) -> bool {
+    let at_px = |x: i64, y: i64| img[y as usize * nx + x as usize];
+    ((cy - r).max(1)..=(cy + r).min(ny as i64 - 2)).any(|y| {
+        ((cx - r).max(1)..=(cx + r).min(nx as i64 - 2)).any(|x| {
+            let v = at_px(x, y);
+            (-1..=1).all(|dy| (-1..=1).all(|dx| at_px(x + dx, y + dy) <= v))
+        })
+    })
+}
+
 fn main() -> Result<()> {
     let dir = std::env::args()
         .nth(1)
@@ -79,15 +91,7 @@ fn main() -> Result<()> {
             }
             let (cx, cy) = pixel(o.pos_m());
             let r = (2.0 / grid.spacing_m).round() as i64;
-            let mut local_max = false;
-            for y in (cy - r).max(1)..=(cy + r).min(grid.ny as i64 - 2) {
-                for x in (cx - r).max(1)..=(cx + r).min(grid.nx as i64 - 2) {
-                    let v = at_px(x, y);
-                    if (-1..=1).all(|dy| (-1..=1).all(|dx| at_px(x + dx, y + dy) <= v)) {
-                        local_max = true;
-                    }
-                }
-            }
+            let local_max = has_local_max(&img, grid.nx, grid.ny, (cx, cy), r);
             let p = rel(o.pos_m());
             println!(
                 "aperture {:2} MISS object {} at ({:.1}, {:.1}): {:.1} dB, {}; {cell}",

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::{CancellerKind, SceneFile};
 use crate::error::Result;
-use crate::io::write_json;
+use crate::io::{write_bytes, write_json};
 use crate::pipeline::{Processor, RadarSetup};
 use crate::resolution::CellReport;
 use crate::scene::SceneObject;
@@ -176,7 +176,7 @@ measured/predicted − 1.\n\n\
             );
             let svg = cell.svg(&format!("B = {:.0} MHz, {}", b / 1e6, case.label));
             let path = out.join(format!("psf_{:.0}MHz_{k}.svg", b / 1e6));
-            std::fs::write(&path, svg).map_err(|e| crate::RadarError::io(&path, e))?;
+            write_bytes(&path, svg.as_bytes())?;
             rows.push(ReportRow {
                 case: case.clone(),
                 cell,
@@ -188,7 +188,7 @@ measured/predicted − 1.\n\n\
 blind (small ψ) the cell is long along the iso-range and iso-Doppler lines, and the gradients \
 change over its length, so the linear prediction is only approximate there.\n";
     let path = out.join("RESOLUTION.md");
-    std::fs::write(&path, md).map_err(|e| crate::RadarError::io(&path, e))?;
+    write_bytes(&path, md.as_bytes())?;
     write_json(&out.join("resolution.json"), &rows)?;
     Ok(rows)
 }

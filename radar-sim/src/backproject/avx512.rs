@@ -15,7 +15,7 @@ use std::arch::x86_64::*;
 
 use rustfft::num_complex::Complex32;
 
-use super::{PulseTerms, TileSetup, COS_COEFFS, SIN_COEFFS};
+use super::kernel::{PulseTerms, TileSetup, COS_COEFFS, SIN_COEFFS};
 
 /// Columns per tile of this kernel (two 16-lane vectors).
 pub(super) const WIDTH: usize = 32;

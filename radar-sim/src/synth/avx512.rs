@@ -2,9 +2,9 @@
 
 use std::arch::x86_64::*;
 
-use super::{SumKernel, LANES};
+use super::path_sums::{SumKernel, LANES};
 
-/// [`super::path_sums_kernel`] with explicit AVX-512F intrinsics: per block of eight
+/// [`super::path_sums::path_sums_kernel`] with explicit AVX-512F intrinsics: per block of eight
 /// subcarriers, two interleaved accumulator pairs per term (short dependency chains), each
 /// path's phasors loaded, used and advanced in registers.
 ///

@@ -1,0 +1,162 @@
+//! From exceedances to detections: connected components, peaks with non-maximum suppression
+//! and sidelobe editing against the predicted response.
+
+use serde::{Deserialize, Serialize};
+
+use super::{CfarMap, ResponseModel, SIDELOBE_MARGIN};
+use crate::backproject::Grid;
+
+/// One detection.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Detection {
+    /// Aperture index.
+    pub aperture: usize,
+    /// Ground x, m.
+    pub x_m: f64,
+    /// Ground y, m.
+    pub y_m: f64,
+    /// Peak image value over the local noise estimate, dB.
+    pub snr_db: f64,
+    /// Pixels in the cluster.
+    pub pixels: usize,
+}
+
+/// 8-connected components of the `hits` of an `nx × ny` image: per pixel its component's index
+/// (`usize::MAX` for no hit), and each component's size.
+pub fn components(hits: &[bool], nx: usize, ny: usize) -> (Vec<usize>, Vec<usize>) {
+    let mut label = vec![usize::MAX; nx * ny];
+    let mut sizes: Vec<usize> = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..(nx * ny).min(hits.len()) {
+        if !hits[start] || label[start] != usize::MAX {
+            continue;
+        }
+        let id = sizes.len();
+        label[start] = id;
+        stack.push(start);
+        let mut size = 0usize;
+        while let Some(i) = stack.pop() {
+            size += 1;
+            let (x, y) = ((i % nx) as i64, (i / nx) as i64);
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let (xx, yy) = (x + dx, y + dy);
+                    if xx < 0 || yy < 0 || xx >= nx as i64 || yy >= ny as i64 {
+                        continue;
+                    }
+                    let j = yy as usize * nx + xx as usize;
+                    if hits[j] && label[j] == usize::MAX {
+                        label[j] = id;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        sizes.push(size);
+    }
+    (label, sizes)
+}
+
+/// Turns exceedances into detections. Every exceeding pixel that is a local maximum of the
+/// image (above its 8 neighbours) is a peak; peaks are taken strongest first, and a peak is
+/// suppressed when
+/// - a stronger peak already taken lies within `merge_radius_m` (Euclidean; non-maximum
+///   suppression between peaks, not pixels, so that a distinct peak next to a strong
+///   neighbour's flank is kept), or
+/// - with a `model` of the point response, it is no higher than [`SIDELOBE_MARGIN`] times the
+///   response that the stronger peaks taken can put there (the coherent sum of their
+///   amplitudes times the response's envelope, [`ResponseModel::envelope`]) plus the local
+///   noise: a sidelobe of a stronger return, not an object (sidelobe editing).
+///
+/// Each peak kept is one detection at its sub-pixel position; `pixels` is the size of its
+/// 8-connected exceedance region. A peak on the image border is no detection (the response
+/// still rises towards the outside, so it belongs to an object beyond the grid, imaged in its
+/// own aperture), but it suppresses as any other.
+pub fn cluster(
+    img: &[f32],
+    map: &CfarMap,
+    grid: &Grid,
+    merge_radius_m: f64,
+    aperture: usize,
+    model: Option<&ResponseModel>,
+) -> Vec<Detection> {
+    let (nx, ny) = (grid.nx, grid.ny);
+    let (label, sizes) = components(&map.hits, nx, ny);
+    // peaks: exceeding local maxima (equal values: the lower index is the maximum)
+    let mut peaks: Vec<usize> = (0..nx * ny)
+        .filter(|&i| {
+            if !map.hits[i] {
+                return false;
+            }
+            let (x, y) = ((i % nx) as i64, (i / nx) as i64);
+            let v = img[i];
+            for dy in -1..=1i64 {
+                for dx in -1..=1i64 {
+                    let (xx, yy) = (x + dx, y + dy);
+                    if (dx == 0 && dy == 0)
+                        || xx < 0
+                        || yy < 0
+                        || xx >= nx as i64
+                        || yy >= ny as i64
+                    {
+                        continue;
+                    }
+                    let j = yy as usize * nx + xx as usize;
+                    if img[j] > v || (img[j] == v && j < i) {
+                        return false;
+                    }
+                }
+            }
+            true
+        })
+        .collect();
+    peaks.sort_by(|a, b| img[*b].total_cmp(&img[*a]).then(a.cmp(b)));
+    let r = merge_radius_m.max(grid.spacing_m);
+    let mut taken: Vec<([f64; 2], f64)> = Vec::new();
+    let mut out = Vec::new();
+    for i in peaks {
+        let (xu, yu) = (i % nx, i / nx);
+        let pos = [grid.x(xu), grid.y(yu)];
+        let v = img[i] as f64;
+        let near = taken
+            .iter()
+            .any(|(q, _)| (q[0] - pos[0]).hypot(q[1] - pos[1]) <= r);
+        if near {
+            continue;
+        }
+        if let Some(m) = model {
+            let amp: f64 = taken
+                .iter()
+                .map(|(q, qv)| (qv * m.envelope([pos[0] - q[0], pos[1] - q[1]])).sqrt())
+                .sum();
+            if v <= SIDELOBE_MARGIN * (amp * amp + map.noise[i].max(0.0) as f64) {
+                continue;
+            }
+        }
+        taken.push((pos, v));
+        if xu == 0 || yu == 0 || xu + 1 == nx || yu + 1 == ny {
+            continue;
+        }
+        let refine = |a: f32, b: f32, c: f32| -> f64 {
+            let (a, b, c) = (a as f64, b as f64, c as f64);
+            let den = a - 2.0 * b + c;
+            if den < 0.0 {
+                (0.5 * (a - c) / den).clamp(-0.5, 0.5)
+            } else {
+                0.0
+            }
+        };
+        let fx = refine(img[i - 1], img[i], img[i + 1]);
+        let fy = refine(img[i - nx], img[i], img[i + nx]);
+        let noise = map.noise[i].max(f32::MIN_POSITIVE) as f64;
+        out.push(Detection {
+            aperture,
+            x_m: pos[0] + fx * grid.spacing_m,
+            y_m: pos[1] + fy * grid.spacing_m,
+            snr_db: 10.0 * (v / noise).log10(),
+            pixels: sizes[label[i]],
+        });
+    }
+    out.sort_by(|a, b| b.snr_db.total_cmp(&a.snr_db));
+    out
+}

@@ -1,0 +1,111 @@
+//! Tests of [`super`].
+
+use super::*;
+
+#[test]
+fn defaults_validate_and_round_trip() {
+    let s = SceneFile::default();
+    s.validate().unwrap();
+    let text = toml::to_string(&s).unwrap();
+    let back = SceneFile::from_toml_str(&text, "x.toml").unwrap();
+    assert_eq!(back, s);
+    assert!((s.radar.sample_rate_hz() - 245.76e6).abs() < 1.0);
+    // kT0F fs with F = 5 dB at 245.76 MHz: −85.0 dBm.
+    let dbm = 10.0 * (s.radar.noise_power_w() * 1e3).log10();
+    assert!((dbm - (-85.04)).abs() < 0.05, "{dbm}");
+}
+
+#[test]
+fn errors_name_the_field() {
+    let e = SceneFile::from_toml_str("[radar]\nprf_hz = -1\n", "s.toml").unwrap_err();
+    assert!(e.to_string().contains("radar.prf_hz"), "{e}");
+    let e = SceneFile::from_toml_str("[radar]\nprfhz = 1\n", "s.toml").unwrap_err();
+    assert!(
+        e.to_string().contains("s.toml") && e.to_string().contains("prfhz"),
+        "{e}"
+    );
+    let e = SceneFile::from_toml_str("[objects]\ncount = 3\nintensity_per_km2 = 2\n", "s.toml")
+        .unwrap_err();
+    assert!(e.to_string().contains("objects.count"), "{e}");
+    let e = SceneFile::from_toml_str("[radar]\ncp_samples = 5000\n", "s.toml").unwrap_err();
+    assert!(e.to_string().contains("radar.cp_samples"), "{e}");
+}
+
+fn err(text: &str) -> String {
+    SceneFile::from_toml_str(text, "s.toml")
+        .unwrap_err()
+        .to_string()
+}
+
+#[test]
+fn prf_is_bounded_by_the_symbol_rate() {
+    let r = RadarConfig::default();
+    assert!((r.symbol_rate_hz() - 48_000.0).abs() < 1e-6);
+    assert!((r.max_prf_hz() - 48_000.0).abs() < 1e-6);
+    // at the limit: one pulse per symbol
+    SceneFile::from_toml_str("[radar]\nprf_hz = 48000\n", "s.toml").unwrap();
+    for prf in ["1e5", "1e7", "48000.5"] {
+        let e = err(&format!("[radar]\nprf_hz = {prf}\n"));
+        assert!(
+            e.contains("radar.prf_hz") && e.contains("48000 Hz") && e.contains("symbols_per_pulse"),
+            "{e}"
+        );
+    }
+    // 4 symbols per pulse: at most 12 kHz
+    let e = err("[radar]\nprf_hz = 20000\nsymbols_per_pulse = 4\n");
+    assert!(e.contains("radar.prf_hz") && e.contains("12000 Hz"), "{e}");
+}
+
+#[test]
+fn sizes_that_would_exhaust_memory_are_refused_by_field() {
+    // samples per pulse
+    let e =
+        err("[radar]\nfft_size = 1048576\nsymbols_per_pulse = 2\ncp_samples = 0\nprf_hz = 10\n");
+    assert!(
+        e.contains("radar.symbols_per_pulse") && e.contains("2097152"),
+        "{e}"
+    );
+    // the band must fit the sample rate
+    let e = err("[radar]\nbandwidth_hz = 300e6\n");
+    assert!(
+        e.contains("radar.bandwidth_hz") && e.contains("245760000"),
+        "{e}"
+    );
+    SceneFile::from_toml_str("[radar]\nbandwidth_hz = 150e6\n", "s.toml").unwrap();
+    // grid
+    let e = err("[processing]\ngrid_half_m = 1000\npixel_m = 0.4\n");
+    assert!(
+        e.contains("processing.grid_half_m") && e.contains("5001"),
+        "{e}"
+    );
+    SceneFile::from_toml_str(
+        "[processing]\ngrid_half_m = 819.2\npixel_m = 0.4\n",
+        "s.toml",
+    )
+    .unwrap();
+    // CFAR bands
+    let e = err("[processing]\ncfar_train_px = 1000000\n");
+    assert!(e.contains("processing.cfar_train_px"), "{e}");
+    let e = err("[processing]\ncfar_guard_px = 1000000\n");
+    assert!(e.contains("processing.cfar_guard_px"), "{e}");
+    // upsampled range profile
+    let e = err("[radar]\nfft_size = 262144\ncp_samples = 0\n[processing]\nupsample = 32\n");
+    assert!(
+        e.contains("processing.upsample") && e.contains("8388608"),
+        "{e}"
+    );
+    // objects: the Poisson mean is checked by validate, not only when generating
+    let e = err("[objects]\nintensity_per_km2 = 1e9\nradius_m = 400\n");
+    assert!(e.contains("objects.intensity_per_km2"), "{e}");
+    let e = err("[objects]\ncount = 2000000\n");
+    assert!(e.contains("objects.count"), "{e}");
+}
+
+#[test]
+fn weighting_factors() {
+    assert!((Weighting::None.mainlobe_factor() - 0.886).abs() < 1e-3);
+    assert!((Weighting::None.coherence_factor() - 1.0).abs() < 1e-12);
+    assert!((Weighting::Hann.coherence_factor() - 35.0 / 18.0).abs() < 1e-3);
+    let w = Weighting::Hann.weights(8);
+    assert!((w[0] - w[7]).abs() < 1e-12 && w[3] > 0.9);
+}

@@ -1,0 +1,143 @@
+//! `simulate`: a planned trajectory and a scene → a recording directory (`iq/aperture_NNN.npy`,
+//! `pulses.csv`, `truth.csv`, `meta.json`).
+
+use std::path::Path;
+
+use super::recording::{write_pulses, write_truth};
+use super::{iq_path, mkdir, ApertureTruth, Progress, RecordingMeta, FORMAT, FRAME_LAYOUT};
+use crate::config::SceneFile;
+use crate::error::{RadarError, Result};
+use crate::io::{write_json, NpyType, NpyWriter};
+use crate::limits::{IqBudget, IqLimits};
+use crate::pipeline::RadarSetup;
+use crate::scene::SceneObject;
+use crate::synth::{Components, Synthesizer};
+use crate::track::{Aperture, PlannedTrack, PulseMeta};
+
+/// Frames of `run::simulate` hold at most this many bytes of IQ (and 100 pulses).
+pub const SIMULATE_FRAME_BYTES: usize = 64 << 20;
+
+/// Simulates the recording of `mission` flown along `traj` over the scene into `out`, refusing
+/// a run above the default [`IqLimits`] (see [`simulate_limited`]).
+pub fn simulate(
+    mission: &planner::Mission,
+    traj: &planner::Trajectory,
+    scene: &SceneFile,
+    out: &Path,
+    progress: Progress<'_>,
+) -> Result<RecordingMeta> {
+    simulate_limited(mission, traj, scene, out, &IqLimits::default(), progress)
+}
+
+/// Simulates the recording of `mission` flown along `traj` over the scene into `out`. Before
+/// anything is synthesised or written, the run's IQ and the memory of its largest aperture are
+/// checked against `limits` ([`crate::limits::IqBudget`]).
+pub fn simulate_limited(
+    mission: &planner::Mission,
+    traj: &planner::Trajectory,
+    scene: &SceneFile,
+    out: &Path,
+    limits: &IqLimits,
+    progress: Progress<'_>,
+) -> Result<RecordingMeta> {
+    let setup = RadarSetup::new(mission.params(), scene)?;
+    let aps = setup.apertures(mission)?;
+    IqBudget::new(&setup, &aps).check(&setup, limits)?;
+    let objects = setup.objects(mission)?;
+    let track = PlannedTrack::new(traj.clone(), mission.params().altitude_m);
+    let synth = setup.synthesizer(objects.clone())?;
+    mkdir(&out.join("iq"))?;
+    let spp = synth.samples_per_pulse();
+    let sample_bytes = crate::limits::IQ_SAMPLE_BYTES as usize;
+    let frame_pulses = (SIMULATE_FRAME_BYTES / (spp * sample_bytes).max(1)).clamp(1, 100);
+    let total: u64 = aps.iter().map(|a| a.pulses() as u64).sum();
+    let mut done = 0u64;
+    let mut all_pulses = Vec::new();
+    let mut truths = Vec::new();
+    let mut warnings = Vec::new();
+    for ap in &aps {
+        let pulses = setup.pulses(&track, ap);
+        let (truth, warning) = aperture_truth(&setup, &synth, &objects, ap, &pulses);
+        truths.push(truth);
+        warnings.extend(warning);
+        let mut w = NpyWriter::create(&iq_path(out, ap.index), NpyType::C8, &[pulses.len(), spp])?;
+        crate::pipeline::synthesize_frames(
+            &synth,
+            &pulses,
+            frame_pulses,
+            Components::ALL,
+            &mut |ps, iq| {
+                w.write_c8(iq)?;
+                done += ps.len() as u64;
+                progress(done, total);
+                Ok(())
+            },
+        )?;
+        w.finish()?;
+        all_pulses.extend(pulses);
+    }
+    if !truths.is_empty()
+        && truths
+            .iter()
+            .all(|t| t.landmark_gain_db.is_some_and(|g| g < -10.0))
+    {
+        return Err(RadarError::Mismatch(format!(
+            "no landmark is in the receive beam in any aperture (best {:.1} dB off the peak): the plan does not look at the scene",
+            truths.iter().filter_map(|t| t.landmark_gain_db).fold(f64::NEG_INFINITY, f64::max)
+        )));
+    }
+    write_pulses(&out.join("pulses.csv"), &all_pulses)?;
+    write_truth(&out.join("truth.csv"), &objects)?;
+    let meta = RecordingMeta {
+        format: FORMAT.into(),
+        frame_layout: FRAME_LAYOUT.into(),
+        mission: mission.name().to_string(),
+        params: mission.params().clone(),
+        scene: scene.clone(),
+        numerology: setup.num.clone(),
+        noise_power_w: synth.noise_power_w(),
+        samples_per_pulse: spp,
+        apertures: truths,
+        warnings,
+    };
+    write_json(&out.join("meta.json"), &meta)?;
+    Ok(meta)
+}
+
+/// The truth-side facts of one aperture at its middle pulse, and a warning when its landmark
+/// lies more than 10 dB off the beam peak.
+fn aperture_truth(
+    setup: &RadarSetup,
+    synth: &Synthesizer,
+    objects: &[SceneObject],
+    ap: &Aperture,
+    pulses: &[PulseMeta],
+) -> (ApertureTruth, Option<String>) {
+    let mid = &pulses[pulses.len() / 2];
+    let landmark_gain_db = ap.landmark.map(|_| {
+        let g = setup.antenna.gain_towards(
+            mid.pos_m,
+            mid.heading,
+            [ap.centre_m[0], ap.centre_m[1], 0.0],
+        );
+        10.0 * (g / setup.antenna.peak_gain).log10()
+    });
+    let warning = landmark_gain_db.filter(|&g| g < -10.0).map(|g| {
+        format!(
+            "aperture {} (t = {:.1}..{:.1} s): landmark {:?} is {:.1} dB off the beam peak at mid-aperture",
+            ap.index, ap.t_start_s, ap.t_end_s, ap.landmark, g
+        )
+    });
+    let pd = synth.direct_power_w(mid.pos_m, mid.heading);
+    let pe: f64 = objects
+        .iter()
+        .map(|o| synth.echo_power_w(o, mid.pos_m, mid.heading))
+        .sum();
+    let truth = ApertureTruth {
+        aperture: ap.clone(),
+        landmark_gain_db,
+        direct_to_echo_db: 10.0 * (pd / pe.max(1e-300)).log10(),
+        direct_to_noise_db: 10.0 * (pd / synth.noise_power_w()).log10(),
+    };
+    (truth, warning)
+}

@@ -1,0 +1,179 @@
+//! Tests of [`super`].
+
+use super::*;
+use crate::config::RadarConfig;
+
+fn small_radar(motion: MotionModel) -> RadarConfig {
+    RadarConfig {
+        fft_size: 64,
+        cp_samples: 16,
+        subcarrier_spacing_hz: 1e6,
+        bandwidth_hz: Some(40e6),
+        motion,
+        ..RadarConfig::default()
+    }
+}
+
+fn synth(motion: MotionModel) -> Synthesizer {
+    let r = small_radar(motion);
+    let num = Numerology::new(&r, 40e6, 0.1).unwrap();
+    let ant = Antenna::new(&r, 0.1, std::f64::consts::FRAC_PI_4);
+    Synthesizer::new(num, &r, ant, [1000.0, -1000.0, 50.0], vec![]).unwrap()
+}
+
+/// Brute force: evaluate the rectangular-windowed continuous OFDM signal at each sample.
+fn brute(s: &Synthesizer, m: i64, paths: &[Path]) -> Vec<Complex64> {
+    let num = s.numerology();
+    let n = num.fft_size;
+    let (ncp, ns) = (num.cp_samples as f64, num.symbol_samples() as f64);
+    let fs = num.sample_rate_hz();
+    (0..n)
+        .map(|k| {
+            let mut acc = Complex64::new(0.0, 0.0);
+            for p in paths {
+                let x = k as f64 - p.delay_samples;
+                let j = ((x + ncp) / ns).floor();
+                let sym = m + j as i64;
+                if sym < 0 {
+                    continue;
+                }
+                let xl = x - j * ns;
+                let data = num.symbol_data(sym as u64);
+                let mut u = Complex64::new(0.0, 0.0);
+                for (i, d) in data.iter().enumerate() {
+                    let kk = num.subcarrier_index(i) as f64;
+                    u += Complex64::new(d.re as f64, d.im as f64)
+                        * Complex64::from_polar(1.0, std::f64::consts::TAU * kk * xl / n as f64);
+                }
+                u /= (num.subcarriers as f64).sqrt();
+                let dop = Complex64::from_polar(
+                    1.0,
+                    std::f64::consts::TAU * p.doppler_hz * (k as f64 - n as f64 / 2.0) / fs,
+                );
+                acc += p.amp * u * dop;
+            }
+            acc
+        })
+        .collect()
+}
+
+#[test]
+fn exact_for_in_cp_and_split_paths() {
+    for motion in [MotionModel::StopAndHop, MotionModel::IntraPulse] {
+        let s = synth(motion);
+        let dop = if motion == MotionModel::IntraPulse {
+            1.0
+        } else {
+            0.0
+        };
+        let paths = vec![
+            Path {
+                amp: Complex64::new(1.0, 0.5),
+                delay_samples: 0.37,
+                doppler_hz: 3e3 * dop,
+            },
+            Path {
+                amp: Complex64::new(-0.2, 0.1),
+                delay_samples: 7.9,
+                doppler_hz: -8e3 * dop,
+            },
+            Path {
+                amp: Complex64::new(0.3, 0.0),
+                delay_samples: 16.0,
+                doppler_hz: 0.0,
+            },
+            // beyond the CP: split between symbols m−1 and m
+            Path {
+                amp: Complex64::new(0.1, -0.4),
+                delay_samples: 23.6,
+                doppler_hz: 5e3 * dop,
+            },
+            // more than a symbol late: symbols m−2 and m−1
+            Path {
+                amp: Complex64::new(0.05, 0.05),
+                delay_samples: 101.2,
+                doppler_hz: 0.0,
+            },
+            // early: symbols m and m+1
+            Path {
+                amp: Complex64::new(0.2, 0.2),
+                delay_samples: -3.3,
+                doppler_hz: 0.0,
+            },
+        ];
+        let mut data = |m: i64| (m >= 0).then(|| Arc::new(s.numerology().symbol_data(m as u64)));
+        let mut out = vec![Complex64::new(0.0, 0.0); 64];
+        s.synthesize_window(5, &paths, &mut data, &mut out);
+        let want = brute(&s, 5, &paths);
+        let err: f64 = out.iter().zip(&want).map(|(a, b)| (a - b).norm_sqr()).sum();
+        let pow: f64 = want.iter().map(|a| a.norm_sqr()).sum();
+        assert!(
+            err / pow < 1e-20,
+            "{motion:?}: relative error {}",
+            err / pow
+        );
+    }
+}
+
+#[test]
+fn noise_has_kt0f_fs_variance() {
+    let r = RadarConfig::default();
+    let num = Numerology::new(&r, 150e6, 0.1).unwrap();
+    let ant = Antenna::new(&r, 0.1, std::f64::consts::FRAC_PI_4);
+    let s = Synthesizer::new(num, &r, ant, [1000.0, -1000.0, 50.0], vec![]).unwrap();
+    let pulse = PulseMeta {
+        index: 3,
+        aperture: 0,
+        look: 0,
+        t_s: 1.0,
+        symbol: 100,
+        pos_m: [0.0, 0.0, 1000.0],
+        vel_mps: [0.0, 20.0, 0.0],
+        heading: [0.0, 1.0],
+        window_delay_samples: 2000,
+    };
+    let comps = Components {
+        direct: false,
+        echoes: false,
+        noise: true,
+    };
+    let mut out = vec![Complex32::new(0.0, 0.0); 4096];
+    s.synthesize_pulse(&pulse, comps, &mut out).unwrap();
+    let p: f64 = out.iter().map(|x| x.norm_sqr() as f64).sum::<f64>() / 4096.0;
+    assert!(
+        (p / s.noise_power_w() - 1.0).abs() < 0.08,
+        "{}",
+        p / s.noise_power_w()
+    );
+}
+
+#[test]
+fn radar_equation_amplitudes() {
+    let r = RadarConfig::default();
+    let num = Numerology::new(&r, 150e6, 0.1).unwrap();
+    let ant = Antenna::new(&r, 0.1, std::f64::consts::FRAC_PI_4);
+    let obj = SceneObject {
+        id: 0,
+        x_m: 1000.0,
+        y_m: 0.0,
+        rcs_m2: 10.0,
+        phase_rad: 0.0,
+        landmark: None,
+    };
+    let s = Synthesizer::new(num, &r, ant, [1000.0, -1000.0, 50.0], vec![obj]).unwrap();
+    let pos = [0.0, 0.0, 1000.0];
+    let heading = [0.0, 1.0];
+    // P_r = P_t G_t G_r σ λ² / ((4π)³ R_t² R_r² L)
+    let rt = (1000f64.powi(2) + 50f64.powi(2)).sqrt();
+    let rr = 2f64.sqrt() * 1000.0;
+    let g_r = ant.peak_gain;
+    let want = 40.0 * 10f64.powf(1.2) * g_r * 10.0 * 0.01
+        / ((4.0 * std::f64::consts::PI).powi(3) * rt * rt * rr * rr);
+    let got = s.echo_power_w(&obj, pos, heading);
+    assert!((got / want - 1.0).abs() < 1e-6, "{got} vs {want}");
+    let paths = s.paths(pos, [0.0, 20.0, 0.0], heading, 0, Components::ALL);
+    assert_eq!(paths.len(), 2);
+    assert!((paths[1].amp.norm_sqr() / want - 1.0).abs() < 1e-6);
+    let fs = 245.76e6;
+    assert!((paths[1].delay_samples - (rt + rr) * fs / C_MPS).abs() < 1e-6);
+}
