@@ -11,16 +11,14 @@
 //! - [`iox`]: zero-copy frame services over iceoryx2 (explicit sizing, event wake-ups,
 //!   stale-resource cleanup, isolated roots for tests).
 //! - [`forward`]: the iceoryx2 <-> Zenoh forwarder behind the `cellsar-bridge` binary.
-//! - [`service`]: the bridge as a process (flags, checked set-up, run loop), shared by
-//!   `cellsar-bridge` and `cellsar bridge`.
 //! - [`refusal`]: the typed error reply of a queryable ([`Refusal`]: bad request, infeasible,
 //!   internal, busy), decoded by queries into [`NetError::Refused`].
 //! - [`counters`], [`seq`]: what every endpoint counts; sequence gaps and duplicates.
 //! - [`flags`]: numeric flags (seconds, rates) shared by the binaries, checked once when parsed
 //!   ([`flags::Seconds`]).
 //!
-//! This crate knows no domain type: the planner and radar crates define their messages and
-//! implement [`Message`] for them.
+//! This crate knows no domain type: the pipeline's protocol (`pipeline::protocol`) defines the
+//! messages and implements [`Message`] for them.
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
@@ -34,7 +32,6 @@ pub mod keys;
 pub mod net;
 pub mod refusal;
 pub mod seq;
-pub mod service;
 pub mod stats;
 pub mod zconfig;
 

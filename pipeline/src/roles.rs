@@ -1,5 +1,5 @@
 //! The roles the `cellsar` binary runs as a child that live in this crate: a plain Zenoh
-//! router. (`cellsar bridge` is [`bridge::service`], the same code and flags as
+//! router. (`cellsar bridge` is [`crate::services::bridge`], the same code and flags as
 //! `cellsar-bridge`.)
 
 use std::sync::atomic::{AtomicBool, Ordering};

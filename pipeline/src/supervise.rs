@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
+use nix::sys::signal::Signal;
+
 use crate::events::Events;
 
 /// Environment variable with the launcher's pid, set for every child.
@@ -244,7 +246,7 @@ impl Supervised {
     /// Sends SIGTERM (if running).
     pub fn terminate(&self) {
         if let Some(pid) = self.pid() {
-            signal(pid, "TERM");
+            signal(pid, Signal::SIGTERM);
         }
     }
 
@@ -271,7 +273,7 @@ impl Drop for Supervised {
     fn drop(&mut self) {
         if let Some(c) = self.child.as_mut() {
             if let Ok(None) = c.try_wait() {
-                signal(c.id(), "CONT");
+                signal(c.id(), Signal::SIGCONT);
                 let _ = c.kill();
             }
             let _ = c.wait();
@@ -315,11 +317,9 @@ fn describe(s: ExitStatus) -> String {
     }
 }
 
-/// Sends `kill -<sig> <pid>` (no error if the process is gone).
-pub fn signal(pid: u32, sig: &str) {
-    let _ = Command::new("kill")
-        .args([format!("-{sig}"), pid.to_string()])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status();
+/// Sends `sig` to process `pid` (no error if the process is gone).
+pub fn signal(pid: u32, sig: Signal) {
+    if let Ok(pid) = i32::try_from(pid) {
+        let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(pid), sig);
+    }
 }

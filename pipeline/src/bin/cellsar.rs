@@ -9,11 +9,11 @@
 use std::process::ExitCode;
 
 use anyhow::Context;
-use bridge::service::BridgeArgs;
 use clap::{Parser, Subcommand};
 use pipeline::exit::{self, Failure};
 use pipeline::launch::{self, Outcome, RunArgs};
 use pipeline::roles::{self, RouterArgs};
+use pipeline::services::bridge::BridgeArgs;
 
 const EXIT_CODES: &str = "Exit codes: 0 done; 1 failure at run time; 2 bad input (an option, the \
 mission or the scene file; nothing started); 3 the mission cannot be flown; 4 `run --strict`: a \
@@ -117,7 +117,7 @@ fn main() -> ExitCode {
         }
         .and_then(|()| pipeline::services::process::run_processor(&a, &stop).map_err(Failure::from))
         .map(|r| tracing::info!(?r, "processor stopped")),
-        Command::Bridge(a) => bridge::service::run(&a, &stop).map(|_| ()),
+        Command::Bridge(a) => pipeline::services::bridge::run(&a, &stop).map(|_| ()),
         Command::Router(a) => roles::run_router(&a, &stop),
     };
     match r {
@@ -202,7 +202,7 @@ mod tests {
     }
 
     /// `cellsar bridge` is `cellsar-bridge`: the same flags and set-up
-    /// (`bridge::service::BridgeArgs`), not a subset of its own.
+    /// (`pipeline::services::bridge::BridgeArgs`), not a subset of its own.
     #[test]
     fn bridge_role_takes_every_cellsar_bridge_flag() {
         let Command::Bridge(a) = parse(&[

@@ -6,10 +6,12 @@
 //!   the apertures a processor asks for and publishes it as frames on iceoryx2;
 //! - [`process`]: the BS side (`cellsar-radar-sim process-service`, `cellsar process`): pulls
 //!   apertures, cancels, images, detects, publishes detections, images and metrics;
-//! - [`radar`]: what the two radar services share (their error, the frame size).
+//! - [`radar`]: what the two radar services share (their error, the frame size);
+//! - [`bridge`]: the iceoryx2 <-> Zenoh bridge as a process (`cellsar-bridge`, `cellsar bridge`).
 //!
 //! Their messages and keys are in [`crate::protocol`].
 
+pub mod bridge;
 pub mod echo;
 pub mod plan;
 pub mod process;

@@ -43,7 +43,7 @@ fn small_scene() -> SceneFile {
 
 fn plan(horizon_s: f64) -> Arc<crate::protocol::Plan> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let m = planner::Mission::from_path(&root.join("../radar-sim/missions/default.toml")).unwrap();
+    let m = planner::Mission::from_path(&root.join("../missions/default-30m.toml")).unwrap();
     let m = run::shorten(&m, horizon_s).unwrap();
     let req = PlanRequest {
         mission: m.to_file_struct(),

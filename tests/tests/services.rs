@@ -4,8 +4,6 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -14,7 +12,7 @@ use bridge::net::{QueryOptions, SubscribeOptions, WireFormat};
 use bridge::zenoh::bytes::Encoding;
 use bridge::zenoh::Wait;
 use bridge::{DecodeLimits, ZenohArgs, ZenohNode};
-use common::*;
+use harness::pipeline::*;
 use pipeline::collect::Collector;
 use pipeline::protocol::keys::{self as pkeys, PLAN as PLAN_KEY};
 use pipeline::protocol::{ApertureDetections, ApertureImage, MissionMetrics};

@@ -26,7 +26,7 @@ from fmpy.fmi2 import (  # noqa: E402
 )
 from fmpy.fmi3 import FMU3Slave  # noqa: E402
 
-REPO = pathlib.Path(__file__).resolve().parents[2]
+REPO = pathlib.Path(__file__).resolve().parents[3]
 FMU_DIR = pathlib.Path(os.environ.get("CELLSAR_FMU_DIR", REPO / "target" / "fmu"))
 VERSIONS = ["fmi2", "fmi3"]
 DEBUG_INJECT_PANIC_VR = 0x7FFF0001

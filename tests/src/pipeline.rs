@@ -1,6 +1,6 @@
-//! Helpers of the pipeline's system tests: the `cellsar` binary with its event stream, the
-//! in-process closed-loop reference, output comparison, bounded waits, reaped children.
-#![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
+//! The pipeline's processes: the `cellsar` launcher with its event stream, services started
+//! directly, the in-process closed-loop reference, output comparison; bounded waits, reaped
+//! children.
 
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader};
@@ -12,25 +12,21 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-pub fn exe() -> &'static str {
-    env!("CARGO_BIN_EXE_cellsar")
-}
+pub use crate::{free_port, root, running, signal, Signal};
 
-pub fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
+/// The `cellsar` binary.
+pub fn exe() -> PathBuf {
+    crate::bin("cellsar")
 }
 
 /// The shortened paper mission of radar-sim (30 landmarks, 10 s each; cut with --horizon-s).
 pub fn mission() -> PathBuf {
-    root().join("radar-sim/missions/default.toml")
+    root().join("missions/default-30m.toml")
 }
 
 /// The small test scene.
 pub fn scene() -> PathBuf {
-    root().join("pipeline/tests/data/small-scene.toml")
+    root().join("tests/data/small-scene.toml")
 }
 
 /// `cellsar-radar-sim closed-loop` on the same inputs, in this process (same library calls),
@@ -157,7 +153,7 @@ pub fn cellsar_bounded(
             break s;
         }
         if Instant::now() >= deadline {
-            signal(pid, "TERM");
+            signal(pid, Signal::SIGTERM);
             std::thread::sleep(Duration::from_secs(2));
             let _ = child.kill();
             let _ = child.wait();
@@ -356,7 +352,7 @@ impl Launch {
 impl Drop for Launch {
     fn drop(&mut self) {
         if let Ok(None) = self.child.try_wait() {
-            signal(self.child.id(), "TERM");
+            signal(self.child.id(), Signal::SIGTERM);
             let deadline = Instant::now() + Duration::from_secs(20);
             while Instant::now() < deadline {
                 if let Ok(Some(_)) = self.child.try_wait() {
@@ -368,20 +364,6 @@ impl Drop for Launch {
         }
         let _ = self.child.wait();
     }
-}
-
-pub fn signal(pid: u32, sig: &str) {
-    let _ = Command::new("kill")
-        .args([format!("-{sig}"), pid.to_string()])
-        .stderr(Stdio::null())
-        .status();
-}
-
-/// Whether a process with this pid exists (and is not a zombie).
-pub fn running(pid: u32) -> bool {
-    std::fs::read_to_string(format!("/proc/{pid}/stat"))
-        .map(|s| !s.contains(") Z "))
-        .unwrap_or(false)
 }
 
 /// A service started directly (not by the launcher), killed and reaped on drop.
@@ -423,7 +405,7 @@ impl Service {
     }
 
     pub fn stop(&mut self, timeout: Duration) -> ExitStatus {
-        signal(self.child.id(), "TERM");
+        signal(self.child.id(), Signal::SIGTERM);
         let deadline = Instant::now() + timeout;
         loop {
             if let Some(s) = self.child.try_wait().unwrap() {
@@ -442,20 +424,11 @@ impl Service {
 impl Drop for Service {
     fn drop(&mut self) {
         if let Ok(None) = self.child.try_wait() {
-            signal(self.child.id(), "CONT");
+            signal(self.child.id(), Signal::SIGCONT);
             let _ = self.child.kill();
         }
         let _ = self.child.wait();
     }
-}
-
-/// A free TCP port on loopback.
-pub fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
 }
 
 /// The value of `key=<n>` in the last line of `log` that contains `marker`.

@@ -4,13 +4,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
 use std::ffi::OsString;
 use std::process::Command;
 use std::time::Duration;
 
-use common::*;
+use harness::pipeline::*;
 
 const H: f64 = 30.0;
 
@@ -157,7 +155,7 @@ fn sigint_stops_every_child() {
         .iter()
         .map(|r| l.pid(r))
         .collect();
-    signal(l.child.id(), "INT");
+    signal(l.child.id(), Signal::SIGINT);
     let st = l.finish(Duration::from_secs(60));
     assert_eq!(st.code(), Some(130), "{}", l.stderr_tail());
     // the event log says so, once, before the children are stopped
@@ -201,7 +199,7 @@ fn sigint_while_the_zenoh_session_opens_is_an_interrupted_run() {
     let mut l = Launch::start(dir.path(), H, &["-l", &ep, "--no-multicast-scouting"]);
     l.event("network", Duration::from_secs(60));
     std::thread::sleep(Duration::from_millis(500));
-    signal(l.child.id(), "INT");
+    signal(l.child.id(), Signal::SIGINT);
     let st = l.finish(Duration::from_secs(60));
     assert_eq!(st.code(), Some(130), "{}", l.stderr_tail());
     assert!(
@@ -429,7 +427,7 @@ fn sigint_while_waiting_for_the_planner_exits_130() {
                     std::thread::sleep(Duration::from_millis(50));
                 }
                 std::thread::sleep(Duration::from_millis(500));
-                signal(pid, "INT");
+                signal(pid, Signal::SIGINT);
             });
         },
     );
@@ -489,7 +487,7 @@ fn client_without_router(dir: &std::path::Path) -> std::path::PathBuf {
 fn interrupt_after(pid: u32, wait: Duration) {
     std::thread::spawn(move || {
         std::thread::sleep(wait);
-        signal(pid, "INT");
+        signal(pid, Signal::SIGINT);
     });
 }
 

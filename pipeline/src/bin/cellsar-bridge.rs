@@ -17,9 +17,9 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use bridge::iox::init_iceoryx_logging;
-use bridge::service::{self, BridgeArgs};
 use cellsar_error::exit::Failure;
 use clap::Parser;
+use pipeline::services::bridge::{self as service, BridgeArgs};
 
 /// Forwards iceoryx2 frame services to Zenoh keys and back, without loops.
 ///

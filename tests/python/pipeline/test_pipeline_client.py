@@ -39,7 +39,7 @@ import zenoh
 
 REPO = pathlib.Path(__file__).resolve().parents[3]
 CELLSAR = os.environ.get("CELLSAR_BIN", str(REPO / "target" / "debug" / "cellsar"))
-SCENE = str(REPO / "pipeline" / "tests" / "data" / "small-scene.toml")
+SCENE = str(REPO / "tests" / "data" / "small-scene.toml")
 TIMEOUT_S = 120.0
 
 MISSION = {

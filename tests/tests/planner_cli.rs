@@ -1,15 +1,15 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 //! The `cellsar-planner` binary end to end: files written, exit codes, messages.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cellsar-planner"))
+    Command::new(harness::bin("cellsar-planner"))
 }
 
 fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    harness::root()
 }
 
 fn tmp(name: &str) -> PathBuf {

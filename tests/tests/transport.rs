@@ -4,8 +4,6 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
 use std::time::{Duration, Instant};
 
 use bridge::envelope::{self, Meta};
@@ -20,7 +18,7 @@ use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::sample::Locality;
 use bridge::zenoh::Wait;
 use bridge::{Complex32, Message, MissionId, Refusal, RefusalKind, ZenohNode};
-use common::*;
+use harness::transport::*;
 use serde::{Deserialize, Serialize};
 
 #[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
@@ -1006,9 +1004,9 @@ fn iox_stale_resources_of_killed_process_are_cleaned() {
         s_("--wait-subscribers"),
         s_("0"),
     ]);
-    let mut child = Proc::spawn("iox-pub", bench_exe(), &args, dir.path(), "warn");
+    let mut child = Proc::spawn("iox-pub", &bench_exe(), &args, dir.path(), "warn");
     child.ready();
-    child.signal("KILL");
+    child.signal(Signal::SIGKILL);
     child.wait(T);
     let (node, report) = FrameNode::new(&iso.env(), "after-kill").unwrap();
     assert!(report.cleaned >= 1, "no dead node cleaned: {report:?}");
@@ -1058,7 +1056,7 @@ fn frozen_subscriber_does_not_stall_publisher() {
         s("30"),
         s("--verify"),
     ]);
-    let mut sub = Proc::spawn("iox-sub", bench_exe(), &sub_args, dir.path(), "warn");
+    let mut sub = Proc::spawn("iox-sub", &bench_exe(), &sub_args, dir.path(), "warn");
     sub.ready();
     let mut pub_args = vec![s("iox-pub")];
     pub_args.extend(svc);
@@ -1070,12 +1068,12 @@ fn frozen_subscriber_does_not_stall_publisher() {
         s("--rate-hz"),
         rate.to_string(),
     ]);
-    let mut publ = Proc::spawn("iox-pub", bench_exe(), &pub_args, dir.path(), "warn");
+    let mut publ = Proc::spawn("iox-pub", &bench_exe(), &pub_args, dir.path(), "warn");
     publ.ready();
     std::thread::sleep(Duration::from_millis(300));
-    sub.signal("STOP");
+    sub.signal(Signal::SIGSTOP);
     let tx = publ.report(Duration::from_secs(30));
-    sub.signal("CONT");
+    sub.signal(Signal::SIGCONT);
     let rx = sub.report(Duration::from_secs(30));
     let nominal = n as f64 / rate;
     let elapsed = tx["elapsed_s"].as_f64().unwrap();
@@ -1189,7 +1187,7 @@ fn bridges_forward_both_ways_without_loops() {
     // bridge b re-publishes in Zenoh's callback, bridge a from its queue thread: both modes
     let mut bb = Proc::spawn(
         "bridge-b",
-        bridge_exe(),
+        &bridge_exe(),
         &[
             bridge_args("b", service, &hb, &listen),
             vec![s("--inbound-queue"), s("0")],
@@ -1200,13 +1198,13 @@ fn bridges_forward_both_ways_without_loops() {
     );
     let mut ba = Proc::spawn(
         "bridge-a",
-        bridge_exe(),
+        &bridge_exe(),
         &bridge_args("a", service, &ha, &connect),
         dir.path(),
         "info",
     );
     let probe = ZenohNode::open(
-        common::z_connect(&format!("tcp/127.0.0.1:{port}"))
+        z_connect(&format!("tcp/127.0.0.1:{port}"))
             .to_config()
             .unwrap(),
         "test",
@@ -1233,14 +1231,14 @@ fn bridges_forward_both_ways_without_loops() {
     ];
     let mut sub_a = Proc::spawn(
         "sub-a",
-        bench_exe(),
+        &bench_exe(),
         &iox_tool("iox-sub", service, &ha, &rx_args),
         dir.path(),
         "warn",
     );
     let mut sub_b = Proc::spawn(
         "sub-b",
-        bench_exe(),
+        &bench_exe(),
         &iox_tool("iox-sub", service, &hb, &rx_args),
         dir.path(),
         "warn",
@@ -1262,14 +1260,14 @@ fn bridges_forward_both_ways_without_loops() {
     };
     let mut pa = Proc::spawn(
         "pub-a",
-        bench_exe(),
+        &bench_exe(),
         &iox_tool("iox-pub", service, &ha, &tx(na)),
         dir.path(),
         "warn",
     );
     let mut pb = Proc::spawn(
         "pub-b",
-        bench_exe(),
+        &bench_exe(),
         &iox_tool("iox-pub", service, &hb, &tx(nb)),
         dir.path(),
         "warn",
@@ -1306,10 +1304,10 @@ fn bridges_forward_both_ways_without_loops() {
     // liveliness reports the bridge's loss on SIGTERM, exit code 0, final counters logged
     let watch = probe.watch_liveliness("cellsar/alive/bridge/*").unwrap();
     assert!(watch.wait_for("cellsar/alive/bridge/a", true, T));
-    ba.signal("TERM");
+    ba.signal(Signal::SIGTERM);
     assert!(ba.wait(T).success(), "{}", ba.stderr_tail());
     assert!(watch.wait_for("cellsar/alive/bridge/a", false, T));
-    bb.signal("INT");
+    bb.signal(Signal::SIGINT);
     assert!(bb.wait(T).success(), "{}", bb.stderr_tail());
     for b in [&ba, &bb] {
         let log = b.stderr();
@@ -1334,7 +1332,7 @@ fn bridge_survives_10k_malformed_payloads() {
     let key = "cellsar/test/flood";
     let mut bb = Proc::spawn(
         "bridge",
-        bridge_exe(),
+        &bridge_exe(),
         &bridge_args(
             "f",
             &format!("cellsar/test/flood={key}@in"),
@@ -1351,16 +1349,11 @@ fn bridge_survives_10k_malformed_payloads() {
         "info,bridge=debug",
     );
     let ep = format!("tcp/127.0.0.1:{port}");
-    let probe = ZenohNode::open(
-        common::z_connect(&ep).to_config().unwrap(),
-        "test",
-        "probe-f",
-    )
-    .unwrap();
+    let probe = ZenohNode::open(z_connect(&ep).to_config().unwrap(), "test", "probe-f").unwrap();
     wait_route(&probe, "f", key);
     let mut sub = Proc::spawn(
         "sub",
-        bench_exe(),
+        &bench_exe(),
         &iox_tool(
             "iox-sub",
             "cellsar/test/flood",
@@ -1389,7 +1382,7 @@ fn bridge_survives_10k_malformed_payloads() {
         s("--wait-matching"),
     ];
     flood_args.extend(zargs.iter().cloned());
-    let mut flood = Proc::spawn("z-flood", bench_exe(), &flood_args, dir.path(), "warn");
+    let mut flood = Proc::spawn("z-flood", &bench_exe(), &flood_args, dir.path(), "warn");
     flood.ready();
     let fr = flood.report(Duration::from_secs(60));
     assert_eq!(fr["sent"], 10_000);
@@ -1413,13 +1406,13 @@ fn bridge_survives_10k_malformed_payloads() {
         s("--wait-matching"),
     ];
     zp.extend(zargs.iter().cloned());
-    let mut good = Proc::spawn("z-pub", bench_exe(), &zp, dir.path(), "warn");
+    let mut good = Proc::spawn("z-pub", &bench_exe(), &zp, dir.path(), "warn");
     good.ready();
     good.report(Duration::from_secs(30));
     let rx = sub.report(Duration::from_secs(30));
     assert_eq!(rx["frames"], 1, "{rx}");
     assert_eq!(rx["checksum_errors"], 0);
-    bb.signal("TERM");
+    bb.signal(Signal::SIGTERM);
     assert!(bb.wait(T).success());
     // every rejected payload is in the log: at WARN (rate-limited) or DEBUG
     let log = bb.stderr();
@@ -1445,7 +1438,7 @@ fn bridge_waiting_for_its_router_stops_on_signals() {
         bridge::zconfig::waiting_client_json5(&format!("tcp/127.0.0.1:{port}")),
     )
     .unwrap();
-    for sig in ["INT", "TERM"] {
+    for sig in [Signal::SIGINT, Signal::SIGTERM] {
         let mut a = vec![
             s("--service"),
             s("cellsar/0123456789abcdef/echo@out"),
@@ -1454,8 +1447,13 @@ fn bridge_waiting_for_its_router_stops_on_signals() {
         ];
         a.extend(iso.args());
         // no RUST_LOG: the bridge's default level shows that it waits
-        let mut p =
-            Proc::spawn_with_env(&format!("bridge-{sig}"), bridge_exe(), &a, dir.path(), None);
+        let mut p = Proc::spawn_with_env(
+            &format!("bridge-{sig}"),
+            &bridge_exe(),
+            &a,
+            dir.path(),
+            None,
+        );
         wait_until("the bridge says that it waits", T, || {
             p.stderr().contains("waiting for the Zenoh session")
         });
@@ -1508,7 +1506,7 @@ fn bridge_rejects_bad_configuration() {
     ] {
         let mut a = args.clone();
         a.extend(iso.args());
-        let mut p = Proc::spawn("bridge-bad", bridge_exe(), &a, dir.path(), "warn");
+        let mut p = Proc::spawn("bridge-bad", &bridge_exe(), &a, dir.path(), "warn");
         let st = p.wait(T);
         assert_eq!(st.code(), Some(2), "{args:?}");
         let err = p.stderr();
@@ -1533,7 +1531,7 @@ fn bridge_rejects_bad_configuration() {
     for bad in ["nan", "-1", "0"] {
         let mut a = vec![s("--service"), s("x"), format!("--stats-interval-s={bad}")];
         a.extend(iso.args());
-        let mut p = Proc::spawn("bridge-bad", bridge_exe(), &a, dir.path(), "warn");
+        let mut p = Proc::spawn("bridge-bad", &bridge_exe(), &a, dir.path(), "warn");
         let st = p.wait(T);
         assert_eq!(st.code(), Some(2), "{bad}: {}", p.stderr_tail());
         assert!(

@@ -1,6 +1,5 @@
-//! Helpers of the transport tests: isolated iceoryx2 environments, Zenoh endpoints, child
-//! processes with bounded waits.
-#![allow(dead_code)]
+//! The transport's processes: isolated iceoryx2 environments, Zenoh endpoints, the bridge and
+//! the frame tools as child processes with bounded waits.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -60,11 +59,7 @@ impl Drop for Iso {
     }
 }
 
-/// A TCP port on loopback that was free a moment ago.
-pub fn free_port() -> u16 {
-    let l = std::net::TcpListener::bind("127.0.0.1:0").expect("bind");
-    l.local_addr().expect("addr").port()
-}
+pub use crate::{free_port, signal, wait_until, Signal};
 
 /// A Unix-socket Zenoh endpoint in `dir`.
 pub fn unix_endpoint(dir: &Path, name: &str) -> String {
@@ -81,24 +76,14 @@ pub fn z_connect(connect: &str) -> ZenohArgs {
     ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[connect.to_string()])
 }
 
-/// Waits until `cond` holds (polling every 20 ms) or panics after `timeout`.
-pub fn wait_until(what: &str, timeout: Duration, mut cond: impl FnMut() -> bool) {
-    let deadline = Instant::now() + timeout;
-    while !cond() {
-        assert!(
-            Instant::now() < deadline,
-            "timed out after {timeout:?} waiting for {what}"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+/// The frame tools and transport benchmark (this crate's binary).
+pub fn bench_exe() -> PathBuf {
+    crate::bin("cellsar-bridge-bench")
 }
 
-pub fn bench_exe() -> &'static str {
-    env!("CARGO_BIN_EXE_cellsar-bridge-bench")
-}
-
-pub fn bridge_exe() -> &'static str {
-    env!("CARGO_BIN_EXE_cellsar-bridge")
+/// The `cellsar-bridge` binary.
+pub fn bridge_exe() -> PathBuf {
+    crate::bin("cellsar-bridge")
 }
 
 /// A child process whose stdout lines are collected, killed (and reaped) on drop.
@@ -111,7 +96,7 @@ pub struct Proc {
 
 impl Proc {
     /// Starts `exe args` with stderr written to `<dir>/<name>.err`.
-    pub fn spawn(name: &str, exe: &str, args: &[String], dir: &Path, rust_log: &str) -> Proc {
+    pub fn spawn(name: &str, exe: &Path, args: &[String], dir: &Path, rust_log: &str) -> Proc {
         Proc::spawn_with_env(name, exe, args, dir, Some(rust_log))
     }
 
@@ -119,7 +104,7 @@ impl Proc {
     /// binary's default log level).
     pub fn spawn_with_env(
         name: &str,
-        exe: &str,
+        exe: &Path,
         args: &[String],
         dir: &Path,
         rust_log: Option<&str>,
@@ -182,12 +167,11 @@ impl Proc {
         self.child.id().to_string()
     }
 
-    pub fn signal(&self, sig: &str) {
-        let s = Command::new("kill")
-            .args([&format!("-{sig}"), &self.pid()])
-            .status()
-            .expect("kill");
-        assert!(s.success(), "kill -{sig} {}", self.name);
+    /// Sends `sig` to the process, which must still exist.
+    pub fn signal(&self, sig: Signal) {
+        let pid = nix::unistd::Pid::from_raw(self.child.id() as i32);
+        nix::sys::signal::kill(pid, sig)
+            .unwrap_or_else(|e| panic!("kill -{sig} {}: {e}", self.name));
     }
 
     pub fn wait(&mut self, timeout: Duration) -> ExitStatus {
@@ -223,7 +207,7 @@ impl Proc {
 impl Drop for Proc {
     fn drop(&mut self) {
         if let Ok(None) = self.child.try_wait() {
-            let _ = Command::new("kill").args(["-CONT", &self.pid()]).status();
+            crate::signal(self.child.id(), Signal::SIGCONT);
             let _ = self.child.kill();
         }
         let _ = self.child.wait();

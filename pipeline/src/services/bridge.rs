@@ -13,20 +13,20 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use bridge::zenoh::qos::CongestionControl;
+use bridge::zenoh::query::Query;
+use bridge::zenoh::Wait;
 use cellsar_error::exit::Failure;
-use zenoh::qos::CongestionControl;
-use zenoh::query::Query;
-use zenoh::Wait;
 
-use crate::envelope::{encode_json, Message, Meta};
-use crate::flags::{self, Seconds};
-use crate::forward::{ForwardError, Forwarder, ForwarderConfig, Route};
-use crate::iox::{Backpressure, IoxArgs, IoxEnv, IoxError};
-use crate::keys::{self, KeyError};
-use crate::net::{refuse_query, NetError, PublishOptions, WireFormat, ZenohNode};
-use crate::refusal::{Refusal, RefusalKind};
-use crate::stats::BridgeStats;
-use crate::zconfig::{ConfigError, ZenohArgs};
+use bridge::envelope::{encode_json, Message, Meta};
+use bridge::flags::{self, Seconds};
+use bridge::forward::{ForwardError, Forwarder, ForwarderConfig, Route};
+use bridge::iox::{Backpressure, IoxArgs, IoxEnv, IoxError};
+use bridge::keys::{self, KeyError};
+use bridge::net::{refuse_query, NetError, PublishOptions, WireFormat, ZenohNode};
+use bridge::refusal::{Refusal, RefusalKind};
+use bridge::stats::BridgeStats;
+use bridge::zconfig::{ConfigError, ZenohArgs};
 
 /// Congestion control of the bridge's Zenoh frame publishers.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,7 +77,7 @@ pub struct BridgeArgs {
     pub services: Vec<String>,
     /// Largest frame payload in bytes (sizes every service's samples; the echo and the
     /// processor must be given the same value, and have the same default).
-    #[arg(long, default_value_t = crate::frame::SERVICE_MAX_FRAME_BYTES)]
+    #[arg(long, default_value_t = bridge::frame::SERVICE_MAX_FRAME_BYTES)]
     pub max_frame_bytes: usize,
     /// Subscribers each service admits.
     #[arg(long, default_value_t = 4)]
@@ -146,7 +146,7 @@ pub struct BridgeSetup {
     /// The forwarder's routes and settings.
     pub config: ForwarderConfig,
     /// The Zenoh configuration.
-    pub zconfig: zenoh::Config,
+    pub zconfig: bridge::zenoh::Config,
     /// The iceoryx2 environment.
     pub env: IoxEnv,
     /// Time between counter logs and stats publications.
@@ -369,7 +369,7 @@ mod tests {
         let r = &s.config.routes[0];
         assert_eq!(
             r.service,
-            crate::FrameServiceSpec::new("cellsar/m/echo", crate::frame::SERVICE_MAX_FRAME_BYTES)
+            bridge::FrameServiceSpec::new("cellsar/m/echo", bridge::frame::SERVICE_MAX_FRAME_BYTES)
         );
         assert_eq!(r.key, "cellsar/m/echo");
 

@@ -6,12 +6,10 @@
 use std::path::Path;
 use std::process::Command;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cellsar-radar-sim"))
-}
+use harness::root;
 
-fn root() -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../radar-sim")
+fn bin() -> Command {
+    Command::new(harness::bin("cellsar-radar-sim"))
 }
 
 #[test]
@@ -20,9 +18,9 @@ fn closed_loop_on_shortened_default_mission() {
     let out = dir.path().join("loop");
     let o = bin()
         .arg("closed-loop")
-        .arg(root().join("missions/default.toml"))
+        .arg(root().join("missions/default-30m.toml"))
         .arg("--scene")
-        .arg(root().join("scenes/default.toml"))
+        .arg(root().join("radar-sim/scenes/default.toml"))
         .arg("--out")
         .arg(&out)
         .args(["--horizon-s", "20"])
@@ -174,7 +172,7 @@ fn far_plan(dir: &Path) -> std::path::PathBuf {
 fn short_closed_loop(dir: &Path, scene: &Path) -> Command {
     let mut c = bin();
     c.arg("closed-loop")
-        .arg(root().join("missions/default.toml"))
+        .arg(root().join("missions/default-30m.toml"))
         .arg("--scene")
         .arg(scene)
         .arg("--out")
@@ -185,7 +183,7 @@ fn short_closed_loop(dir: &Path, scene: &Path) -> Command {
 
 /// The default scene with `key = value` set in its table.
 fn scene_with(dir: &Path, name: &str, key: &str, value: &str) -> std::path::PathBuf {
-    let text = std::fs::read_to_string(root().join("scenes/default.toml")).unwrap();
+    let text = std::fs::read_to_string(root().join("radar-sim/scenes/default.toml")).unwrap();
     let mut found = false;
     let out: Vec<String> = text
         .lines()
@@ -212,7 +210,7 @@ fn bad_inputs_get_named_errors() {
     std::fs::write(&scene, "[radar]\nprf_hz = -5\n").unwrap();
     let o = bin()
         .arg("closed-loop")
-        .arg(root().join("missions/default.toml"))
+        .arg(root().join("missions/default-30m.toml"))
         .arg("--scene")
         .arg(&scene)
         .arg("--out")
@@ -228,7 +226,7 @@ fn bad_inputs_get_named_errors() {
         .arg("simulate")
         .args(["--plan", "/nonexistent/plan"])
         .arg("--scene")
-        .arg(root().join("scenes/default.toml"))
+        .arg(root().join("radar-sim/scenes/default.toml"))
         .arg("--out")
         .arg(dir.path().join("y"))
         .output()
@@ -249,7 +247,7 @@ fn bad_inputs_get_named_errors() {
     // a missing scene file
     let o = bin()
         .arg("closed-loop")
-        .arg(root().join("missions/default.toml"))
+        .arg(root().join("missions/default-30m.toml"))
         .args(["--scene", "/nonexistent/scene.toml"])
         .arg("--out")
         .arg(dir.path().join("x"))
@@ -260,9 +258,9 @@ fn bad_inputs_get_named_errors() {
     // a bad option value (clap's usage errors exit 2 too)
     let o = bin()
         .arg("closed-loop")
-        .arg(root().join("missions/default.toml"))
+        .arg(root().join("missions/default-30m.toml"))
         .arg("--scene")
-        .arg(root().join("scenes/default.toml"))
+        .arg(root().join("radar-sim/scenes/default.toml"))
         .arg("--out")
         .arg(dir.path().join("x"))
         .args(["--horizon-s", "1"])
@@ -287,7 +285,7 @@ fn bad_inputs_get_named_errors() {
         .arg("--plan")
         .arg(&plan)
         .arg("--scene")
-        .arg(root().join("scenes/default.toml"))
+        .arg(root().join("radar-sim/scenes/default.toml"))
         .arg("--out")
         .arg(dir.path().join("w"))
         .output()
@@ -368,7 +366,7 @@ fn an_infeasible_mission_exits_3_and_a_failed_write_exits_1() {
         .arg("closed-loop")
         .arg(&mission)
         .arg("--scene")
-        .arg(root().join("scenes/default.toml"))
+        .arg(root().join("radar-sim/scenes/default.toml"))
         .arg("--out")
         .arg(dir.path().join("out"))
         .output()
@@ -384,7 +382,7 @@ fn an_infeasible_mission_exits_3_and_a_failed_write_exits_1() {
         .arg("--plan")
         .arg(far_plan(dir.path()))
         .arg("--scene")
-        .arg(root().join("scenes/default.toml"))
+        .arg(root().join("radar-sim/scenes/default.toml"))
         .arg("--out")
         .arg(blocker.join("rec"))
         .output()
@@ -470,7 +468,7 @@ fn help_documents_the_exit_codes_and_the_required_scene() {
 #[test]
 fn service_seconds_beyond_a_duration_exit_2_naming_the_flag() {
     // 1e300 s passed the old "> 0 and finite" check and panicked converting to a Duration.
-    let scene = root().join("scenes/default.toml");
+    let scene = root().join("radar-sim/scenes/default.toml");
     for (cmd, flag) in [
         ("echo", "--status-interval-s"),
         ("process-service", "--status-interval-s"),
@@ -494,9 +492,9 @@ fn closed_loop_plans_for_the_general_resolution_cell() {
     let dir = tempfile::tempdir().unwrap();
     let o = bin()
         .arg("closed-loop")
-        .arg(root().join("../missions/default-30m-far-start.toml"))
+        .arg(root().join("missions/default-30m-far-start.toml"))
         .arg("--scene")
-        .arg(root().join("scenes/default.toml"))
+        .arg(root().join("radar-sim/scenes/default.toml"))
         .arg("--out")
         .arg(dir.path())
         .args(["--horizon-s", "20", "--resolution", "general"])

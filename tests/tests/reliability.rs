@@ -4,8 +4,6 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
 use std::time::{Duration, Instant};
 
 use bridge::net::QueryOptions;
@@ -14,7 +12,7 @@ use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::query::QueryTarget;
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohArgs, ZenohNode};
-use common::*;
+use harness::pipeline::*;
 use pipeline::protocol::keys as pkeys;
 use pipeline::protocol::{ApertureRequest, RequestAck};
 use serde_json::Value;
@@ -63,7 +61,7 @@ fn kill_mid_mission(role: &str, extra: &[&str]) -> Launch {
         })
         .map(|r| (r.to_string(), l.pid(r)))
         .collect();
-    signal(victim, "KILL");
+    signal(victim, Signal::SIGKILL);
     l.wait_for("the liveliness loss", Duration::from_secs(60), |e| {
         e["event"] == "alive" && e["role"] == role && e["alive"] == false
     });
@@ -149,7 +147,7 @@ fn frozen_processor_does_not_stall_the_echo() {
         e["event"] == "aperture" && e["done"] == 1
     });
     let proc = l.pid("processor");
-    signal(proc, "STOP");
+    signal(proc, Signal::SIGSTOP);
     wait_sees(&node, "echo", &l);
     let before = l.seen.len();
     // make the echo publish 4 apertures (40 frames) into the frozen reader's full buffer
@@ -192,7 +190,7 @@ fn frozen_processor_does_not_stall_the_echo() {
     );
     assert!(running(proc));
     let _ = before;
-    signal(proc, "CONT");
+    signal(proc, Signal::SIGCONT);
     node.close().unwrap();
     expect_exit(&mut l, &reference);
     eprintln!(

@@ -1,0 +1,252 @@
+//! Step 3 of a run: the outputs. Writes what `cellsar-radar-sim closed-loop` writes
+//! (detections, images, metrics, `report.json`) from the collected results, plus
+//! `pipeline.json` (timings, counters, events) and `report.md`, and prints the summary.
+
+use std::path::Path;
+
+use anyhow::{anyhow, Context, Result};
+use serde_json::{json, Value};
+
+use super::imaging::Collected;
+use super::session::Session;
+use super::Outcome;
+use crate::protocol::Plan;
+use crate::services::process::MissionContext;
+
+/// What the run knows once the plan came.
+pub(super) struct Planned<'p> {
+    pub plan: &'p Plan,
+    pub mission: &'p planner::Mission,
+    pub ctx: &'p MissionContext,
+    /// Seconds from the request to the plan.
+    pub plan_s: f64,
+}
+
+impl Session<'_> {
+    /// Writes every output of a complete run; the outcome: complete, or a missed landmark
+    /// under `--strict`.
+    pub fn finish(&self, planned: &Planned<'_>, c: &Collected) -> Result<Outcome> {
+        let (out, resolved, plan) = (self.setup.out, planned.mission, planned.plan);
+        c.col.write()?;
+        let m = c
+            .col
+            .metrics()
+            .cloned()
+            .ok_or_else(|| anyhow!("no metrics"))?;
+        let report = radar_sim::run::loop_report(resolved, &plan.result.evaluation, m);
+        radar_sim::io::write_json(&out.join("report.json"), &report)?;
+        let wall_s = self.setup.wall.elapsed().as_secs_f64();
+        let pipeline = self.pipeline_json(planned, c, wall_s);
+        std::fs::write(
+            out.join("pipeline.json"),
+            serde_json::to_string_pretty(&pipeline)?,
+        )
+        .with_context(|| format!("writing {}", out.join("pipeline.json").display()))?;
+        let widths = window_worst_widths_m(resolved, &plan.result.evaluation);
+        let n = planned.ctx.apertures.len();
+        write_report_md(out, resolved, plan, &report, &widths, &pipeline, n)?;
+        self.print_summary(&report, wall_s);
+        self.setup.events.emit(
+            "done",
+            &[
+                ("wall_s", wall_s.into()),
+                ("all_in_view_detected", report.all_in_view_detected.into()),
+            ],
+        );
+        if !report.all_in_view_detected {
+            self.say(&missed_landmarks(resolved, &widths, &report));
+        }
+        Ok(if report.all_in_view_detected || !self.args().strict {
+            Outcome::Complete
+        } else {
+            Outcome::MissedLandmark
+        })
+    }
+
+    fn pipeline_json(&self, planned: &Planned<'_>, c: &Collected, wall_s: f64) -> Value {
+        let args = self.args();
+        let subs = &self.subs;
+        json!({
+            "mission": planned.mission.name(),
+            "mission_id": planned.plan.mission_id.to_string(),
+            "apertures": planned.ctx.apertures.len(),
+            "frames": planned.ctx.layout.total_frames(),
+            "frame_pulses": planned.ctx.layout.frame_pulses(),
+            "transport": format!("{:?}", args.transport).to_lowercase(),
+            "router": args.router,
+            "wall_s": wall_s,
+            "plan_s": planned.plan_s,
+            "imaging_s": c.imaging_s,
+            "aperture_done_s": c.aperture_done_s,
+            "restarts": self.restarts(),
+            "collector": {"duplicates": c.col.duplicates, "foreign": c.col.foreign, "resend_requests": c.resend_requests,
+                "detections": subs.detections.counters().snapshot(),
+                "images": subs.images.counters().snapshot(),
+                "metrics": subs.metrics.counters().snapshot(),
+                "status": subs.statuses.counters().snapshot()},
+            "services": c.last_status,
+            "events": self.setup.events.all(),
+        })
+    }
+
+    fn print_summary(&self, report: &radar_sim::run::LoopReport, wall_s: f64) {
+        self.say("aperture landmark  in-view  detected  SNR/dB");
+        for r in &report.rows {
+            self.say(&format!(
+                "{:>8} {:>8} {:>8.2} {:>9} {:>7.1}",
+                r.aperture,
+                r.landmark.map(|l| l.to_string()).unwrap_or_default(),
+                r.in_view_fraction,
+                r.detected_label(),
+                r.snr_db.unwrap_or(f64::NAN)
+            ));
+        }
+        self.say(&format!(
+            "every landmark in view detected: {}",
+            if report.all_in_view_detected {
+                "yes"
+            } else {
+                "NO"
+            }
+        ));
+        self.say(&format!(
+            "wall time {wall_s:.1} s; outputs in {}",
+            self.setup.out.display()
+        ));
+    }
+}
+
+/// Median of the plan's worst resolution-cell width (general cell, SPEC.md §4 item 12) over the
+/// slots of each landmark window, m (NaN for a landmark without slots).
+fn window_worst_widths_m(mission: &planner::Mission, eval: &planner::Evaluation) -> Vec<f64> {
+    let n = mission.schedule().landmarks.len();
+    let mut widths: Vec<Vec<f64>> = vec![Vec::new(); n];
+    for (s, lm) in eval.slots.iter().zip(&mission.schedule().slot_landmark) {
+        if let Some(w) = lm.and_then(|l| widths.get_mut(l)) {
+            w.push(s.worst_width_m);
+        }
+    }
+    widths
+        .into_iter()
+        .map(|mut w| {
+            if w.is_empty() {
+                return f64::NAN;
+            }
+            w.sort_by(f64::total_cmp);
+            w[w.len() / 2]
+        })
+        .collect()
+}
+
+/// One line naming the in-view landmarks that were not detected and whether the plan's
+/// resolution cell explains it.
+fn missed_landmarks(
+    mission: &planner::Mission,
+    widths: &[f64],
+    report: &radar_sim::run::LoopReport,
+) -> String {
+    let d_min = mission.params().d_min_m;
+    let mut wide = 0;
+    let missed: Vec<String> = report
+        .rows
+        .iter()
+        .filter(|r| r.missed_in_view())
+        .map(|r| match r.landmark.and_then(|l| widths.get(l)) {
+            Some(w) if *w > d_min => {
+                wide += 1;
+                format!("{} (cell {w:.0} m)", r.aperture)
+            }
+            _ => r.aperture.to_string(),
+        })
+        .collect();
+    let why = if wide > 0 {
+        format!(
+            "; a cell wider than d_min = {d_min} m (near-blind bistatic geometry, which the \
+             paper's resolution criterion allows) can merge neighbouring objects"
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "not detected although in view: aperture(s) {}{why}; see report.md",
+        missed.join(", ")
+    )
+}
+
+fn write_report_md(
+    out: &Path,
+    mission: &planner::Mission,
+    plan: &Plan,
+    report: &radar_sim::run::LoopReport,
+    widths: &[f64],
+    pipeline: &Value,
+    n: usize,
+) -> Result<()> {
+    use std::fmt::Write as _;
+    let m = &report.metrics;
+    let mut s = String::new();
+    let _ = writeln!(s, "# cellsar run: {}\n", mission.name());
+    let _ = writeln!(
+        s,
+        "- plan: {} slots, energy {:.0} J (feasible {}), planned in {:.1} s",
+        mission.slots(),
+        plan.summary.energy_j,
+        plan.summary.feasible,
+        pipeline["plan_s"].as_f64().unwrap_or(f64::NAN)
+    );
+    let _ = writeln!(
+        s,
+        "- imaging: {n} apertures in {:.1} s; wall time {:.1} s",
+        pipeline["imaging_s"].as_f64().unwrap_or(f64::NAN),
+        pipeline["wall_s"].as_f64().unwrap_or(f64::NAN)
+    );
+    let _ = writeln!(s, "- detection: {}", m.detection_summary());
+    let _ = writeln!(s, "- canceller: {}", m.canceller_summary());
+    let _ = writeln!(
+        s,
+        "- every landmark in view detected: {}",
+        if report.all_in_view_detected {
+            "yes"
+        } else {
+            "NO"
+        }
+    );
+    let _ = writeln!(s, "- restarts: {}", pipeline["restarts"]);
+    let d_min = mission.params().d_min_m;
+    let _ = writeln!(
+        s,
+        "\n\"cell\" is the median over the window's slots of the worst width of the plan's \
+         resolution cell (general bistatic cell, SPEC.md §4 item 12); above d_min = {d_min} m \
+         the geometry is near blind: objects d_min apart along the cell's long side fall into \
+         one cell although the paper's δ_r, δ_a ≤ d_min hold (`--resolution general` plans \
+         avoid this where the mission allows it)."
+    );
+    let _ = writeln!(
+        s,
+        "\n| aperture | landmark | in view | detected | SNR/dB | cell/m |\n|---:|---:|---:|:---:|---:|---:|"
+    );
+    for r in &report.rows {
+        let w = r
+            .landmark
+            .and_then(|l| widths.get(l).copied())
+            .unwrap_or(f64::NAN);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2} | {} | {:.1} | {:.1}{} |",
+            r.aperture,
+            r.landmark.map(|l| l.to_string()).unwrap_or_default(),
+            r.in_view_fraction,
+            match r.detected {
+                Some(true) => "yes",
+                Some(false) => "no",
+                None => "not scored",
+            },
+            r.snr_db.unwrap_or(f64::NAN),
+            w,
+            if w > d_min { " (> d_min)" } else { "" }
+        );
+    }
+    let _ = writeln!(s, "\nFiles: plan/, images/aperture_NNN.{{npy,png}}, detections.csv, detections.json, metrics.json, report.json, pipeline.json (timings, counters, events), logs/.");
+    std::fs::write(out.join("report.md"), s)
+        .with_context(|| format!("writing {}", out.join("report.md").display()))
+}

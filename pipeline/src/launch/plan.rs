@@ -1,0 +1,177 @@
+//! Step 1 of a run: the plan. Waits for a planner's liveliness token, asks it for the plan and
+//! waits for the answer, together at most `--plan-timeout-s`; a busy planner or one that does
+//! not answer is asked again (at most `--max-restarts` more times); SIGINT/SIGTERM at any
+//! moment ends the run as interrupted.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, Context, Result};
+use bridge::envelope::DecodeLimits;
+use bridge::net::{QueryOptions, WireFormat};
+use bridge::{NetError, RefusalKind};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::plan_refusal;
+use super::session::Session;
+use crate::protocol::{self, Plan, PlanRequest, PlanRequestOptions, MAX_PLAN_BYTES};
+
+/// The time left for the plan.
+struct PlanClock {
+    timeout: Duration,
+    deadline: Option<Instant>,
+}
+
+impl PlanClock {
+    fn left(&self) -> Duration {
+        self.deadline.map_or(self.timeout, |d| {
+            d.saturating_duration_since(Instant::now())
+        })
+    }
+}
+
+impl Session<'_> {
+    /// The plan of `mission`, or `None` when the run was interrupted.
+    pub fn request_plan(&mut self, mission: &planner::Mission) -> Result<Option<Plan>> {
+        let spinner = ProgressBar::new_spinner();
+        if let Ok(s) = ProgressStyle::with_template("{spinner} {prefix:>9} {msg} [{elapsed}]") {
+            spinner.set_style(s);
+        }
+        spinner.set_prefix("planning");
+        spinner.enable_steady_tick(Duration::from_millis(200));
+        let request = PlanRequest {
+            mission: mission.to_file_struct(),
+            options: PlanRequestOptions {
+                resolution: Some(self.args().resolution),
+                ..PlanRequestOptions::default()
+            },
+        };
+        let timeout = self.args().plan_timeout_s.duration();
+        let clock = PlanClock {
+            timeout,
+            deadline: Instant::now().checked_add(timeout),
+        };
+        let plan = self.ask_until_answered(&request, &clock, &spinner);
+        spinner.finish_and_clear();
+        plan
+    }
+
+    fn no_plan(&self, what: &str) -> anyhow::Error {
+        anyhow!(
+            "no plan within --plan-timeout-s {} s: {what}",
+            self.args().plan_timeout_s
+        )
+    }
+
+    fn ask_until_answered(
+        &mut self,
+        request: &PlanRequest,
+        clock: &PlanClock,
+        spinner: &ProgressBar,
+    ) -> Result<Option<Plan>> {
+        let mut attempt = 0u32;
+        loop {
+            attempt += 1;
+            if !self.wait_for_planner(clock)? {
+                return Ok(None);
+            }
+            let Some(answer) = self.ask_once(request, clock, spinner)? else {
+                return Ok(None);
+            };
+            let retries_left = attempt < 1 + self.args().max_restarts;
+            match answer {
+                Ok(plan) => return Ok(Some(plan)),
+                // a busy planner (its request queue full) is asked again, as one that did not
+                // answer
+                Err(NetError::Refused { refusal, .. })
+                    if refusal.kind == RefusalKind::Busy
+                        && !clock.left().is_zero()
+                        && retries_left =>
+                {
+                    tracing::warn!(message = %refusal.message, attempt, "the planner is busy; asking again");
+                    self.retry_event(attempt, refusal.message.clone());
+                    std::thread::sleep(Duration::from_millis(500));
+                }
+                Err(e @ (NetError::Refused { .. } | NetError::Remote { .. })) => {
+                    return Err(plan_refusal(e))
+                }
+                Err(e) if clock.left().is_zero() => {
+                    return Err(
+                        anyhow::Error::new(e).context(self.no_plan("the planner did not answer"))
+                    )
+                }
+                Err(e) if retries_left => {
+                    tracing::warn!(error = %e, attempt, "no plan; asking again");
+                    self.retry_event(attempt, e.to_string());
+                    std::thread::sleep(Duration::from_millis(200));
+                }
+                Err(e) => return Err(e).context("asking the planner for the plan"),
+            }
+        }
+    }
+
+    fn retry_event(&self, attempt: u32, error: String) {
+        self.setup.events.emit(
+            "plan_retry",
+            &[("attempt", attempt.into()), ("error", error.into())],
+        );
+    }
+
+    /// Waits for a planner's token; `false` when interrupted.
+    fn wait_for_planner(&mut self, clock: &PlanClock) -> Result<bool> {
+        while !self.planner_alive() {
+            if self.stopped() {
+                return Ok(false);
+            }
+            self.check_time("waiting for the planner")?;
+            if clock.left().is_zero() {
+                return Err(self.no_plan(if self.local("planner") {
+                    "the planner did not announce itself (see logs/planner.log)"
+                } else {
+                    "no planner announced itself (cellsar/alive/planner/*): start \
+                     `cellsar-planner serve` with the same Zenoh flags"
+                }));
+            }
+            self.tick()?;
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        Ok(true)
+    }
+
+    /// Sends the request and waits for its answer, showing the planner's status; `None` when
+    /// interrupted.
+    fn ask_once(
+        &mut self,
+        request: &PlanRequest,
+        clock: &PlanClock,
+        spinner: &ProgressBar,
+    ) -> Result<Option<Result<Plan, NetError>>> {
+        let mut query = self.node.start_query::<PlanRequest, Plan>(
+            protocol::keys::PLAN,
+            request,
+            &QueryOptions {
+                timeout: clock.left(),
+                format: WireFormat::Bincode,
+                limits: DecodeLimits {
+                    max_body_bytes: MAX_PLAN_BYTES,
+                    verify_crc: true,
+                },
+                ..QueryOptions::default()
+            },
+        )?;
+        loop {
+            if self.stopped() {
+                return Ok(None);
+            }
+            self.check_time("planning")?;
+            self.tick()?;
+            while let Some(s) = self.subs.statuses.try_recv() {
+                if s.message.role == "planner" {
+                    spinner.set_message(s.message.message.clone());
+                }
+            }
+            if let Some(a) = query.poll(Duration::from_millis(20)) {
+                return Ok(Some(a.map(|r| r.message)));
+            }
+        }
+    }
+}
