@@ -90,7 +90,7 @@ pub const PANIC_IN_GET: i32 = 2;
 pub const DEFAULT_MISSION_FILE: &str = "default_mission.toml";
 
 /// The default mission shipped in the FMU's `resources/`.
-pub const DEFAULT_MISSION_TOML: &str = include_str!("../resources/default_mission.toml");
+pub const DEFAULT_MISSION_TOML: &str = include_str!("../../missions/default-30m.toml");
 
 /// Which model an instance runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -235,7 +235,7 @@ mod tests {
 
     fn mission() -> planner::Mission {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        planner::Mission::from_path(&root.join("missions/default.toml")).unwrap()
+        planner::Mission::from_path(&root.join("../missions/default-30m.toml")).unwrap()
     }
 
     fn scene() -> SceneFile {

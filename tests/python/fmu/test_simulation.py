@@ -14,7 +14,7 @@ from fmpy import simulate_fmu
 
 from conftest import REPO, Fmu, fmu_path, run, status_of
 
-DEFAULT_MISSION = REPO / "fmu" / "resources" / "default_mission.toml"
+DEFAULT_MISSION = REPO / "missions" / "default-30m.toml"
 OFFSET_M = 1000.0  # H tan(eta) with the SPEC defaults
 RS_M = 200.0
 
