@@ -66,17 +66,11 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "target/pbench-compare")
     ap.add_argument("--skip-build", action="store_true")
     ap.add_argument("--max-iterations", type=int, default=200)
-    ap.add_argument(
-        "--socp-backend",
-        default="clarabel",
-        choices=["clarabel", "banded"],
-        help="cone-program backend of the Rust runs (cellsar-planner plan --socp-backend)",
-    )
     args = ap.parse_args()
 
     if not args.skip_build:
-        print("building: cargo build --release -p planner", flush=True)
-        sh(["cargo", "build", "--release", "-p", "planner"], cwd=ROOT)
+        print("building: cargo build --release -p pipeline --bin cellsar-planner", flush=True)
+        sh(["cargo", "build", "--release", "-p", "pipeline", "--bin", "cellsar-planner"], cwd=ROOT)
     binary = ROOT / "target/release/cellsar-planner"
     if not binary.exists():
         raise SystemExit(f"{binary} is missing (build it or drop --skip-build)")
@@ -88,7 +82,6 @@ def main() -> int:
         "load_avg_at_start": os.getloadavg(),
         "python": platform.python_version(),
         "binary": str(binary),
-        "socp_backend": args.socp_backend,
     }
     try:
         import cvxpy, clarabel  # noqa: F401
@@ -106,9 +99,8 @@ def main() -> int:
         d0 = base / "D0"
         print(f"\n== {name}: feasible start", flush=True)
         s0 = rust_plan(binary, mission, d0, "--no-coarse", "--plain-sca", "--max-iterations", "0")
-        backend = ["--socp-backend", args.socp_backend]
         extra = ["--no-coarse", "--plain-sca", "--init", str(d0 / "trajectory.csv"),
-                 "--max-iterations", str(args.max_iterations), *backend]
+                 "--max-iterations", str(args.max_iterations)]
         rust_runs = []
         print(f"   rust plain SCA (run 1/{args.repeat})", flush=True)
         rust_runs.append(rust_plan(binary, mission, base / "D1", *extra))
@@ -130,7 +122,7 @@ def main() -> int:
         full_runs = []
         for k in range(args.repeat):
             print(f"   rust full default pipeline (run {k + 1}/{args.repeat})", flush=True)
-            full_runs.append(rust_plan(binary, mission, base / f"full-{k}", *backend))
+            full_runs.append(rust_plan(binary, mission, base / f"full-{k}"))
 
         rust = sorted(rust_runs, key=lambda s: s["solve_seconds"])[len(rust_runs) // 2]
         full = sorted(full_runs, key=lambda s: s["solve_seconds"])[len(full_runs) // 2]

@@ -24,7 +24,7 @@ true sensing centre, within 1e-4) and its true energy does not increase; the loo
 relative change of the true energy is below the tolerance.
 
 The mission parameters come from the `mission.toml` that `cellsar-planner plan --out DIR` writes
-(explicit landmark windows, [params] overrides of the SPEC defaults); the start and the per-slot
+(explicit landmark windows, [params] overrides of the the default parameters); the start and the per-slot
 landmarks from its `trajectory.csv` (both are cross-checked against each other).
 
 Modes: `dpp` (default) builds one parametrised CVXPY problem (DPP) and only updates parameter
@@ -55,7 +55,7 @@ import cvxpy as cp
 # is recorded per iteration instead.
 warnings.filterwarnings("ignore", message="Solution may be inaccurate")
 
-# SPEC defaults (planner::Params::default()).
+# the default parameters (planner::Params::default()).
 DEFAULTS = {
     "bandwidth_hz": 150e6,
     "wavelength_m": 0.1,

@@ -398,7 +398,7 @@ pub struct Run {
 /// The planner model's state.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct PlannerCore {
-    /// Parameter values as set through FMI (SPEC defaults at start); after initialisation the
+    /// Parameter values as set through FMI (the default parameters at start); after initialisation the
     /// values in effect.
     params: Params,
     /// Names of the parameters set through FMI to a value other than their start value: they
@@ -460,7 +460,7 @@ pub struct Sample {
 }
 
 /// The slot (1-based) whose values hold at mission time `tau_s`: slot t covers ((t−1)δ, tδ]
-/// (SPEC), so this is ⌈τ/δ⌉; at τ ≤ 0 it is slot 1, past the horizon the last slot. The outputs
+/// (the slot rule), so this is ⌈τ/δ⌉; at τ ≤ 0 it is slot 1, past the horizon the last slot. The outputs
 /// and the landmark inputs both use it ([`current_window`]).
 pub fn slot_at(tau_s: f64, slot_s: f64, slots: usize) -> usize {
     let x = (tau_s / slot_s - 1e-9).ceil();
@@ -704,7 +704,7 @@ impl PlannerCore {
                 let d = Params::default();
                 for name in &self.params_set {
                     // array elements (`start_m[1]`) replace only that element of the file's
-                    // array (or of the SPEC default when the file has none)
+                    // array (or of the default when the file has none)
                     let array = [
                         ("start_m", self.params.start_m, d.start_m),
                         ("bs_m", self.params.bs_m, d.bs_m),
@@ -985,7 +985,7 @@ impl PlannerCore {
 }
 
 /// The landmark window (0-based, as `points[i]` of the mission file) current at mission time
-/// `tau_s`: the one sensed in slot ⌈τ/δ⌉ ([`slot_at`]). SPEC rule: slot t covers ((t−1)δ, tδ]
+/// `tau_s`: the one sensed in slot ⌈τ/δ⌉ ([`slot_at`]). the slot rule: slot t covers ((t−1)δ, tδ]
 /// and senses the landmark whose window holds tδ (from_s < tδ ≤ to_s). The outputs
 /// `landmark_x_m`/`landmark_y_m` report this landmark at τ, the inputs
 /// `landmark_x_in_m`/`landmark_y_in_m` of a doStep from τ move it, and `LandmarkMover`, which

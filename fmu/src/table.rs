@@ -465,11 +465,11 @@ pub const PLANNER_VARS: &[Var] = &[
     output("landmark_x_m", pv::LANDMARK_X, VarType::Real, Some("m"), "Landmark of the current slot, x (NaN: none)"),
     output("landmark_y_m", pv::LANDMARK_Y, VarType::Real, Some("m"), "Landmark of the current slot, y (NaN: none)"),
     output("in_view", pv::IN_VIEW, VarType::Boolean, None, "The slot's landmark lies within r_s of the sensing centre at the slot end (true without a landmark)"),
-    output("range_resolution_m", pv::RANGE_RES, VarType::Real, Some("m"), "General bistatic range resolution at the sensed point (SPEC 4.11)"),
+    output("range_resolution_m", pv::RANGE_RES, VarType::Real, Some("m"), "General bistatic range resolution at the sensed point (erratum 11 (docs/paper-notes.md))"),
     output("azimuth_resolution_m", pv::AZIMUTH_RES, VarType::Real, Some("m"), "General azimuth (Doppler) resolution at the sensed point"),
     output("range_resolution_paper_m", pv::RANGE_RES_PAPER, VarType::Real, Some("m"), "The paper's range resolution c/(B (sin eta + sin theta)) at the sensing centre"),
     output("azimuth_resolution_paper_m", pv::AZIMUTH_RES_PAPER, VarType::Real, Some("m"), "The paper's azimuth resolution at the true speed"),
-    output("worst_cell_width_m", pv::WORST_WIDTH, VarType::Real, Some("m"), "Worst width of the resolution cell at the sensed point (SPEC 4.12)"),
+    output("worst_cell_width_m", pv::WORST_WIDTH, VarType::Real, Some("m"), "Worst width of the resolution cell at the sensed point (erratum 12 (docs/paper-notes.md))"),
     output("replan_count", pv::REPLAN_COUNT, VarType::Integer, None, "Receding-horizon re-plans so far"),
     output("slots_out_of_view", pv::SLOTS_OUT_OF_VIEW, VarType::Integer, None, "Slots of the plan (whole horizon, flown ones included) whose landmark is not within r_s of the sensing centre at the slot end, against the landmarks in effect (moved ones included); 0 for a plan that keeps every landmark in view"),
     Var {

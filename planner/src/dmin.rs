@@ -1,7 +1,7 @@
 //! The expected least distance E\[d_min\] from a designated object to the other N − 1 objects of a
 //! uniform (Poisson, conditioned on N) point set in a disk of radius R (paper Section II-A).
 //!
-//! SPEC.md §4 item 1: the paper's CDF (eq. `cpdf_of_l`) lacks a factor l in its last term. The
+//! erratum 1 (docs/paper-notes.md): the paper's CDF (eq. `cpdf_of_l`) lacks a factor l in its last term. The
 //! correct CDF of the distance between two uniform points in a disk is
 //! F(l) = 1 + (2/π)(l²/R² − 1) acos(l/2R) − (l/(πR))(1 + l²/(2R²)) sqrt(1 − l²/(4R²)).
 //! [`expected_dmin_m`] integrates E = ∫₀^{2R} (1 − F(l))^{N−1} dl for either form

@@ -1,4 +1,4 @@
-//! Exact-geometry evaluation of any trajectory, independent of the optimiser (SPEC.md §4 item 3):
+//! Exact-geometry evaluation of any trajectory, independent of the optimiser (erratum 3 (docs/paper-notes.md)):
 //! true speed, true heading, true sensing centre, true energy, the paper's and the general
 //! resolutions, and the largest violation of every constraint of problem (p2).
 
@@ -19,10 +19,10 @@ pub const FEASIBILITY_TOL: f64 = 1e-4;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ResolutionMode {
-    /// The paper's: δ_r ≤ d_min and δ_a ≤ d_min with its formulas (SPEC.md §4 items 2, 11).
+    /// The paper's: δ_r ≤ d_min and δ_a ≤ d_min with its formulas (errata 2 (docs/paper-notes.md), 11).
     #[default]
     Paper,
-    /// The general 2-D cell: its worst width (SPEC.md §4 item 12) ≤ d_min, which also keeps the
+    /// The general 2-D cell: its worst width (erratum 12 (docs/paper-notes.md)) ≤ d_min, which also keeps the
     /// plan away from blind geometry. Implies the paper's requirement in the default geometry.
     General,
 }
@@ -93,7 +93,7 @@ pub struct SlotEval {
     pub range_resolution_paper_m: f64,
     /// The paper's δ_a at the true speed, m.
     pub azimuth_resolution_paper_m: f64,
-    /// The general bistatic δ_r (SPEC.md §4 item 11) at the sensed point, m.
+    /// The general bistatic δ_r (erratum 11 (docs/paper-notes.md)) at the sensed point, m.
     pub range_resolution_general_m: f64,
     /// Bistatic angle β at the sensed point, rad.
     pub bistatic_angle_rad: f64,
@@ -105,7 +105,7 @@ pub struct SlotEval {
     pub along_track_width_m: f64,
     /// Cross-track width of the resolution cell, m.
     pub cross_track_width_m: f64,
-    /// Worst width of the resolution cell, m (SPEC.md §4 item 12).
+    /// Worst width of the resolution cell, m (erratum 12 (docs/paper-notes.md)).
     pub worst_width_m: f64,
 }
 
@@ -120,7 +120,7 @@ pub struct Violations {
     pub max_speed_mps: f64,
     /// max over landmark slots of (δ_r − d_min)⁺ with the paper's δ_r at the true centre, m.
     pub range_paper_m: f64,
-    /// max over landmark slots of (worst cell width − d_min)⁺ (general cell, SPEC §4 item 12), m.
+    /// max over landmark slots of (worst cell width − d_min)⁺ (general cell, erratum 12 (docs/paper-notes.md)), m.
     pub worst_width_m: f64,
 }
 

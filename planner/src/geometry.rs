@@ -1,6 +1,6 @@
 //! Bistatic SAR geometry on the ground plane z = 0: heading, sensing centre, the paper's range and
-//! azimuth resolutions, their general bistatic forms (SPEC.md §4 item 11) and the 2-D resolution
-//! cell (SPEC.md §4 item 12).
+//! azimuth resolutions, their general bistatic forms (erratum 11 (docs/paper-notes.md)) and the 2-D resolution
+//! cell (erratum 12 (docs/paper-notes.md)).
 //!
 //! Frames: a world frame with x east, y north, z up, metres. The UAV flies at z = H, the BS antenna
 //! is at z = H_b. Headings α are measured from the x axis, counter-clockwise.
@@ -112,7 +112,7 @@ pub fn bistatic_range_gradient(params: &Params, uav_m: [f64; 2], point_m: [f64; 
 }
 
 /// The general bistatic ground-range resolution c / (B ‖sin θ_t ĝ_t + sin θ_r ĝ_r‖), m
-/// (SPEC.md §4 item 11). ∞ when the gradient vanishes.
+/// (erratum 11 (docs/paper-notes.md)). ∞ when the gradient vanishes.
 pub fn range_resolution_general_m(params: &Params, uav_m: [f64; 2], point_m: [f64; 2]) -> f64 {
     let g = Vector2::from(bistatic_range_gradient(params, uav_m, point_m));
     SPEED_OF_LIGHT_MPS / (params.bandwidth_hz * g.length())
@@ -156,7 +156,7 @@ pub fn bistatic_angle_rad(params: &Params, uav_m: [f64; 2], point_m: [f64; 2]) -
     a.perp(&b).abs().atan2(a.dot(&b))
 }
 
-/// The 2-D resolution cell at a ground point (SPEC.md §4 item 12): a parallelogram whose sides
+/// The 2-D resolution cell at a ground point (erratum 12 (docs/paper-notes.md)): a parallelogram whose sides
 /// are the iso-range lines (⊥ range gradient g) and the iso-Doppler lines (⊥ Doppler gradient,
 /// i.e. ⊥ the track at broadside).
 #[derive(Debug, Clone, Copy, PartialEq)]

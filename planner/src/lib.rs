@@ -2,7 +2,7 @@
 //!
 //! Least-energy trajectory planning for a cellular-connected rotary-wing UAV that forms a
 //! bistatic SAR with its serving base station (Hu, Yuan, Ni, Wang, IEEE Trans. Commun.),
-//! with the corrections of `SPEC.md` §4.
+//! with the corrections of `the errata (docs/paper-notes.md).
 //!
 //! Layers, bottom up:
 //! - models: [`params`], [`landmarks`], [`mission`], [`power`], [`geometry`], [`dmin`];

@@ -2,7 +2,7 @@
 //!
 //! ```toml
 //! name = "paper default, 30 m"      # optional
-//! [params]                           # any subset of `Params`, SPEC defaults otherwise
+//! [params]                           # any subset of `Params`, the default parameters otherwise
 //! bandwidth_hz = 150e6
 //! [landmarks]
 //! preset = "default"                 # or: points = [{ x_m = 0, y_m = 0, from_s = 0, to_s = 10 }]
@@ -50,7 +50,7 @@ pub enum MissionError {
 pub struct MissionFile {
     /// Free-form name used in reports.
     pub name: Option<String>,
-    /// Overrides of the SPEC defaults.
+    /// Overrides of the the default parameters.
     #[serde(default)]
     pub params: ParamsOverride,
     /// The landmark schedule.
@@ -143,7 +143,7 @@ impl Mission {
         Self::from_file_struct(&file)
     }
 
-    /// The paper's preset mission with the given spacing (and SPEC defaults otherwise).
+    /// The paper's preset mission with the given spacing (and the default parameters otherwise).
     pub fn preset(preset: Preset, spacing_m: f64) -> Result<Self, MissionError> {
         Self::from_file_struct(&MissionFile {
             name: None,

@@ -1,4 +1,4 @@
-//! Validated mission parameters (SPEC.md §3: the paper's Table II plus what it leaves open).
+//! Validated mission parameters (the paper's Table II plus what it leaves open; docs/user-guide.md lists them).
 //!
 //! [`Params`] holds every physical constant of the model under a name that carries its unit.
 //! [`ParamsOverride`] is the `[params]` table of a mission file: every field optional, unknown
@@ -26,7 +26,7 @@ pub enum ParamError {
 
 /// All parameters of the model, in SI units (names carry the unit).
 ///
-/// Build one with [`Params::default`] (SPEC defaults) and [`Params::apply`], then call
+/// Build one with [`Params::default`] (the default parameters) and [`Params::apply`], then call
 /// [`Params::validate`]; a [`crate::Mission`] only ever holds validated parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Params {
@@ -323,7 +323,7 @@ impl Params {
     }
 
     /// Right-hand side of the squared range constraint, sin θ_t ≥ c/(B d_min) − sin η.
-    /// When this is ≤ 0 the range requirement holds everywhere (SPEC.md §4 item 2).
+    /// When this is ≤ 0 the range requirement holds everywhere (erratum 2 (docs/paper-notes.md)).
     pub fn range_sin_threshold(&self) -> f64 {
         SPEED_OF_LIGHT_MPS / (self.bandwidth_hz * self.d_min_m) - self.observation_angle_rad.sin()
     }
@@ -343,7 +343,7 @@ impl Params {
         }
     }
 
-    /// The sensing radius that SPEC.md §3 derives from the antenna height W_a:
+    /// The sensing radius that the defaults (docs/user-guide.md) derives from the antenna height W_a:
     /// r_s = λ_c H / (2 W_a cos² η).
     pub fn sensing_radius_from_antenna_m(&self, antenna_height_m: f64) -> f64 {
         let c = self.observation_angle_rad.cos();

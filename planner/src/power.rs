@@ -162,7 +162,7 @@ mod tests {
         let (v, p) = model().min_power(100.0);
         assert!((v - 18.1).abs() < 0.1, "V* = {v}");
         assert!((p - 50.3).abs() < 0.1, "P(V*) = {p}");
-        // SPEC.md §4 item 4: the paper's "≈ 35 m/s" is wrong for Table II.
+        // erratum 4 (docs/paper-notes.md): the paper's "≈ 35 m/s" is wrong for Table II.
         assert!(model().power_w(35.0) > p + 10.0);
     }
 

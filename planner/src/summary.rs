@@ -59,7 +59,7 @@ pub struct Summary {
     pub length_m: f64,
     /// Landmark slots with the landmark outside the true sensing disc.
     pub slots_out_of_view: usize,
-    /// Landmark slots whose general resolution cell is wider than d_min (SPEC.md §4 item 12).
+    /// Landmark slots whose general resolution cell is wider than d_min (erratum 12 (docs/paper-notes.md)).
     pub slots_unresolved_general: usize,
     /// Landmark slots in blind geometry (ψ < 5°).
     pub slots_blind: usize,

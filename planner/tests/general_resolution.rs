@@ -1,5 +1,5 @@
 //! Why the paper's default mission cannot be flown with `--resolution general` from its start, and
-//! that it can from another (README, "Resolution"):
+//! that it can from another (docs/user-guide.md, "Resolution: paper or general"):
 //! the allowed heading arcs of the default geometry, and the planner's named refusal.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]

@@ -154,8 +154,8 @@ fn exact_is_feasible_on_the_default_mission_200m() {
     let r = plan(&m, &PlanOptions::default()).unwrap();
     let c = check(&m, &r.trajectory);
     assert_feasible_on_exact_geometry(&c);
-    // The centre must follow a 5.8 km L-shaped route with the UAV outside the corner; README "How
-    // close to the floor" estimates at least 6.6 km of flight (≥ 15.94 kJ) even before timing.
+    // The centre must follow a 5.8 km L-shaped route with the UAV outside the corner; docs/paper-notes.md ("Where the results
+    // differ from the paper") estimates at least 6.6 km of flight (≥ 15.94 kJ) even before timing.
     // The plan flies about 7.4 km for ≈ 18.27 kJ. Guard against regressions.
     assert!(c.energy_j < 18_400.0, "{}", c.energy_j);
     assert!(r.trajectory.length_m() > 6_575.0);

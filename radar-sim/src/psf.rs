@@ -1,5 +1,5 @@
 //! The resolution report: the measured −3 dB region of a point target's response and its
-//! principal widths beside the predicted parallelogram cell (SPEC.md §4 items 11 and 12), for
+//! principal widths beside the predicted parallelogram cell (errata 11 and 12 (docs/paper-notes.md)), for
 //! several bistatic geometries (one within a few degrees of blind) and bandwidths. Each case is
 //! one noise-free look of a single object at the sensing centre of a straight track, imaged
 //! exactly (sinc-interpolated, f64) and traced in 40 directions ([`crate::resolution::PsfRegion`]).
@@ -134,7 +134,7 @@ pub fn write_report(
 Measured: the −3 dB region of one noise-free look (T_d = 1 s, 20 m/s, unweighted) traced in 40 \
 directions through the peak. *range* and *along-track* are the region's extents along the range \
 gradient g and along the Doppler gradient (the track); *cross-track* and *iso-range* are its \
-chords along the iso-Doppler and iso-range lines (SPEC.md §4 item 12). Every width in the \
+chords along the iso-Doppler and iso-range lines (erratum 12 (docs/paper-notes.md)). Every width in the \
 table is a −3 dB width, one definition for every pair: the predictions are the planner's \
 `ResolutionCell` widths × 0.886 (the main-lobe factor of the unweighted response), and the \
 paper's δ_r, δ_a are shown × 0.886 too. The last column is the planner's worst width without \

@@ -118,7 +118,7 @@ pub fn half_power_radius(
 }
 
 /// The −3 dB region of a point response, measured in many directions through its peak (the
-/// region is star-shaped about the peak), and its principal widths (SPEC.md §4 item 12).
+/// region is star-shaped about the peak), and its principal widths (erratum 12 (docs/paper-notes.md)).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PsfRegion {
     /// Peak position, m.
@@ -248,7 +248,7 @@ impl PsfRegion {
     }
 }
 
-/// Measured principal widths of a point response beside the predicted cell (SPEC.md §4 items
+/// Measured principal widths of a point response beside the predicted cell (the errata (docs/paper-notes.md) items
 /// 11 and 12); predictions include the main-lobe factor of the weighting used.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CellReport {
@@ -416,7 +416,7 @@ mod tests {
     }
 
     /// An analytic separable response sinc²(a·x) sinc²(b·x) (a, b: oblique gradients): the
-    /// measured region has the closed-form principal widths of SPEC §4 item 12.
+    /// measured region has the closed-form principal widths of erratum 12 (docs/paper-notes.md).
     #[test]
     fn region_of_a_separable_response_has_the_closed_form_widths() {
         use crate::antenna::sinc;

@@ -1,5 +1,5 @@
 //! Acceptance: measured −3 dB range and Doppler widths of a point target are within 15% of the
-//! general predictions (SPEC.md §4 item 11, × 0.886) for B = 50, 100, 150 MHz at several
+//! general predictions (erratum 11 (docs/paper-notes.md), × 0.886) for B = 50, 100, 150 MHz at several
 //! positions along the track (different bistatic angles).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]

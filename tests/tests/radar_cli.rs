@@ -487,8 +487,8 @@ fn service_seconds_beyond_a_duration_exit_2_naming_the_flag() {
 
 #[test]
 fn closed_loop_plans_for_the_general_resolution_cell() {
-    // The default mission started where a general-resolution plan exists (top-level README,
-    // "Resolution"), first two windows: every landmark slot resolved under the general cell.
+    // The default mission started where a general-resolution plan exists (docs/user-guide.md,
+    // "Resolution: paper or general"), first two windows: every landmark slot resolved under the general cell.
     let dir = tempfile::tempdir().unwrap();
     let o = bin()
         .arg("closed-loop")

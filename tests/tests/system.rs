@@ -437,7 +437,7 @@ fn sigint_while_waiting_for_the_planner_exits_130() {
 }
 
 /// `--resolution` reaches the planner: under the general cell the default mission cannot be
-/// planned from its start (top-level README, "Resolution": the planner stops at slot 23), so
+/// planned from its start (docs/user-guide.md, "Resolution: paper or general": the planner stops at slot 23), so
 /// the run exits 3 naming the resolution; with the default `paper` the same mission is planned
 /// (every other test here).
 #[test]

@@ -87,7 +87,7 @@ enum Cmd {
         limits: IqLimitArgs,
         /// The resolution requirement of the plan: `paper` (the paper's δ_r, δ_a ≤ d_min) or
         /// `general` (the worst width of the true bistatic cell ≤ d_min in every landmark slot;
-        /// see the top-level README, "Resolution").
+        /// see the top-level docs/user-guide.md, "Resolution: paper or general").
         #[arg(long, default_value = "paper", value_parser = planner::evaluate::ResolutionMode::parse)]
         resolution: planner::evaluate::ResolutionMode,
     },

@@ -82,7 +82,7 @@ pub struct RunArgs {
     pub horizon_s: Option<Seconds>,
     /// The plan's resolution requirement: `paper` (the paper's δ_r, δ_a ≤ d_min) or `general`
     /// (the worst width of the true bistatic cell ≤ d_min in every landmark slot; top-level
-    /// README, "Resolution"). Sent with the plan request; `cellsar-radar-sim closed-loop
+    /// docs/user-guide.md, "Resolution: paper or general"). Sent with the plan request; `cellsar-radar-sim closed-loop
     /// --resolution` gives the same results.
     #[arg(long, default_value = "paper", value_parser = planner::evaluate::ResolutionMode::parse)]
     pub resolution: planner::evaluate::ResolutionMode,

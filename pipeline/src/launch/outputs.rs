@@ -116,7 +116,7 @@ impl Session<'_> {
     }
 }
 
-/// Median of the plan's worst resolution-cell width (general cell, SPEC.md §4 item 12) over the
+/// Median of the plan's worst resolution-cell width (general cell, erratum 12 (docs/paper-notes.md)) over the
 /// slots of each landmark window, m (NaN for a landmark without slots).
 fn window_worst_widths_m(mission: &planner::Mission, eval: &planner::Evaluation) -> Vec<f64> {
     let n = mission.schedule().landmarks.len();
@@ -216,7 +216,7 @@ fn write_report_md(
     let _ = writeln!(
         s,
         "\n\"cell\" is the median over the window's slots of the worst width of the plan's \
-         resolution cell (general bistatic cell, SPEC.md §4 item 12); above d_min = {d_min} m \
+         resolution cell (general bistatic cell, erratum 12 (docs/paper-notes.md)); above d_min = {d_min} m \
          the geometry is near blind: objects d_min apart along the cell's long side fall into \
          one cell although the paper's δ_r, δ_a ≤ d_min hold (`--resolution general` plans \
          avoid this where the mission allows it)."

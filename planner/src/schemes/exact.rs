@@ -464,7 +464,7 @@ pub fn cell_margins(p: &crate::Params, q0: Point2<f64>, landmark: Point2<f64>) -
     (l_iso * CELL_MARGIN_FACTOR, l_cross * CELL_MARGIN_FACTOR)
 }
 
-/// The worst width of the resolution cell ≤ d_min (SPEC.md §4 item 12), convexified.
+/// The worst width of the resolution cell ≤ d_min (erratum 12 (docs/paper-notes.md)), convexified.
 ///
 /// At a fixed UAV position both width conditions are convex in the velocity v (CellLinear):
 /// s k·v ≥ ‖g‖/(T_d d_min) (linear) and s k·v ≥ c/(B d_min) ‖A v‖ (a second-order cone), with

@@ -2,7 +2,7 @@
 //! (scheme `baseline`): block coordinate descent between problem (p5) over (q, V, q_aux) with the
 //! heading slacks (w, u) fixed, and the feasibility problem (p6) over (w, u).
 //!
-//! Corrections applied (SPEC.md §4): the range constraint is used only when c/(B d_min) − sin η > 0
+//! Corrections applied (the errata (docs/paper-notes.md)): the range constraint is used only when c/(B d_min) − sin η > 0
 //! (item 2); eq. (explicit3) is used in its correct form (item 8); energies are reported in joules,
 //! Σ P̃_t δ (item 10); the baseline minimises Σ‖q_t − q_{t−1}‖ (item 6); the sensing radius is
 //! r_s (item 5). The relaxations of item 3 are kept on purpose: this scheme exists to reproduce
@@ -231,7 +231,7 @@ impl PaperState {
                 Lin::var(uv, -1.0).plus_const(1.0),
             ];
             if let Some(rk) = keepout {
-                // (explicit3) corrected (SPEC.md §4 item 8)
+                // (explicit3) corrected (erratum 8 (docs/paper-notes.md))
                 let (w0, u0) = (self.w[t - 1], self.u[t - 1]);
                 let ax = q[0] + w0 * d - p.bs_m[0];
                 let ay = q[1] - u0 * d - p.bs_m[1];

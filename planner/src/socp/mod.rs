@@ -327,7 +327,7 @@ impl SocpSettings {
     /// (it is about half of the interior-point time on these well-scaled, banded programs and
     /// changes the planned energies by less than 1 J), and a failed solve repeated with
     /// Clarabel's default refinement (10 steps). The comparison schemes keep the defaults: the
-    /// paper's later iterates depend on the solver's path (SPEC.md §4 item 10), and the
+    /// paper's later iterates depend on the solver's path (erratum 10 (docs/paper-notes.md)), and the
     /// least-distance SCA lands on slightly longer local optima without refinement.
     pub fn exact_geometry() -> Self {
         Self {

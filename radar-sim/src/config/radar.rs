@@ -79,7 +79,7 @@ pub struct RadarConfig {
     pub noise_temperature_k: f64,
     /// Receive antenna length along track L_a, m. Default 0.5.
     pub antenna_length_m: f64,
-    /// Receive antenna height W_a, m. Default 0.5 (gives the SPEC's r_s = 200 m).
+    /// Receive antenna height W_a, m. Default 0.5 (gives the the default r_s = 200 m).
     pub antenna_height_m: f64,
     /// Least gain in front of the antenna relative to the peak, dB. Default −30.
     pub sidelobe_floor_db: f64,

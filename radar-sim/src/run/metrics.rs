@@ -60,7 +60,7 @@ pub struct ApertureSummary {
     /// Canceller: residual over thermal noise (echoes included), dB.
     pub residual_to_noise_db: f64,
     /// Worst width of the unweighted resolution cell (1/B, 1/T: the planner's definition) at
-    /// the landmark (SPEC §4 item 12), m.
+    /// the landmark (erratum 12 (docs/paper-notes.md)), m.
     pub worst_width_m: f64,
     /// The same with the weightings' main-lobe factors: the worst −3 dB width of the image's
     /// response there, m.

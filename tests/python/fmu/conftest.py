@@ -13,7 +13,7 @@ import tempfile
 
 import pytest
 
-fmpy = pytest.importorskip("fmpy") if os.environ.get("CELLSAR_SKIP_FMPY") == "1" else __import__("fmpy")
+import fmpy  # noqa: E402  (provisioned by the test harness)
 
 from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402

@@ -50,7 +50,7 @@ def test_model_description_basics(version):
         assert {"start_m[1]", "start_m[2]", "bs_m[1]", "bs_m[2]"} <= names
     else:
         assert {"start_m", "bs_m", "time"} <= names
-    # SPEC defaults as start values
+    # the default parameters as start values
     start = {v.name: v.start for v in md.modelVariables}
     assert float(start["bandwidth_hz"]) == 150e6
     assert float(start["altitude_m"]) == 1000.0

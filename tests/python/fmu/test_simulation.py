@@ -15,7 +15,7 @@ from fmpy import simulate_fmu
 from conftest import REPO, Fmu, fmu_path, run, status_of
 
 DEFAULT_MISSION = REPO / "missions" / "default-30m.toml"
-OFFSET_M = 1000.0  # H tan(eta) with the SPEC defaults
+OFFSET_M = 1000.0  # H tan(eta) with the the default parameters
 RS_M = 200.0
 
 
@@ -166,7 +166,7 @@ def drive(version, mission, stop, move=None, name="drive"):
 def test_moved_landmark_is_kept_in_view_from_the_next_window_on(version, short_mission):
     moved = (40.0, 20.0)
     # the input holds the moved landmark from t = 5 s on: the rest of window 0 and window 1.
-    # The input refers to the landmark the outputs show (SPEC: slot ceil(t/0.5)), so window 1's
+    # The input refers to the landmark the outputs show (the slot rule: slot ceil(t/0.5)), so window 1's
     # landmark moves at the doStep from 10.5 s, when its first slot (10, 10.5] is flown.
     rows, replans = drive(version, short_mission, 20.0,
                           move=lambda t: moved if t >= 5.0 else None)
@@ -244,7 +244,7 @@ def test_outputs_fed_back_to_the_inputs_change_nothing(version, short_mission):
 
 
 def test_parameters_override_the_mission_file(version, tmp_path):
-    """[params] of the file over SPEC defaults; FMI parameters (other than their start values)
+    """[params] of the file over the default parameters; FMI parameters (other than their start values)
     over the file; after initialisation the parameters read back the values in effect."""
     mission = tmp_path / "m.toml"
     mission.write_text(
@@ -321,7 +321,7 @@ def test_persistent_far_input_warns_at_every_window(version, short_mission):
 
 def test_mover_and_planner_agree_at_a_window_boundary(version, short_mission):
     """LandmarkMover latches the landmark the planner reports at its move time; at a window
-    boundary (t = 10 s) that is window 0's (SPEC: slot 20 covers (9.5, 10] s), and the planner
+    boundary (t = 10 s) that is window 0's (the slot rule: slot 20 covers (9.5, 10] s), and the planner
     applies the mover's output to that same window (it moved window 1's landmark before). Window
     0 has no slot left, so nothing is re-planned and the step warns; window 1 is untouched."""
     p = Fmu(version, name="planner")
@@ -360,7 +360,7 @@ def test_mover_default_move_is_mid_window(version):
 
 def test_parameter_array_elements_override_the_file_one_by_one(version, tmp_path):
     """Setting one element of start_m (FMI 2: start_m[2]; FMI 3: the array with x at its start
-    value) keeps the mission file's other element (it was reset to the SPEC default)."""
+    value) keeps the mission file's other element (it was reset to the default)."""
     mission = tmp_path / "m.toml"
     mission.write_text(
         "[params]\nhorizon_s = 20\nstart_m = [-1100.0, -450.0]\nbs_m = [10.0, 20.0]\n"

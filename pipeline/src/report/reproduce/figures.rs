@@ -205,7 +205,7 @@ fn fig4a(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
     let at = |form| expected_dmin_m(5000.0, 1000, form).unwrap_or(f64::NAN);
     let _ = writeln!(
         f.report,
-        "## Fig. 4(a) — E[d_min]\n\nAt R = 5000 m, N = 1000: the formula as printed gives {:.1} m (the paper's \"≈ 20 m\"); the correct CDF gives {:.1} m, confirmed by Monte Carlo (`fig4a/dmin.csv`). d_min = 20 m is kept as the requirement (SPEC.md §4 item 1).\n",
+        "## Fig. 4(a) — E[d_min]\n\nAt R = 5000 m, N = 1000: the formula as printed gives {:.1} m (the paper's \"≈ 20 m\"); the correct CDF gives {:.1} m, confirmed by Monte Carlo (`fig4a/dmin.csv`). d_min = 20 m is kept as the requirement (erratum 1 (docs/paper-notes.md)).\n",
         at(CdfForm::AsPrinted),
         at(CdfForm::Correct)
     );
@@ -277,7 +277,7 @@ fn fig4b(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
     )?;
     let _ = writeln!(
         f.report,
-        "## Fig. 4(b) — convergence\n\n`paper`'s own objective (p41) and the true energy of its iterates differ: the relaxations of SPEC.md §4 item 3 let the objective fall below what the trajectory really costs. `exact` iterates are feasible and their true energy decreases monotonically (`fig4b/convergence.csv`).\n"
+        "## Fig. 4(b) — convergence\n\n`paper`'s own objective (p41) and the true energy of its iterates differ: the relaxations of erratum 3 (docs/paper-notes.md) let the objective fall below what the trajectory really costs. `exact` iterates are feasible and their true energy decreases monotonically (`fig4b/convergence.csv`).\n"
     );
     f.produced.push("fig4b/convergence.svg".into());
     Ok(())
@@ -565,7 +565,7 @@ fn fig12(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
     }
     let _ = writeln!(
         f.report,
-        "\nWith the paper's resolution model the bandwidth only enters through the range constraint, which is vacuous at 50–150 MHz with the defaults (SPEC.md §4 item 2: its right side c/(B d_min) − sin η is negative), so every scheme flies the same track at every bandwidth and Fig. 12's trajectories repeat Fig. 7's (the paper finds \"similar patterns\" to its Fig. 6). The bandwidth does matter for the true (general) bistatic cell: see \"The general resolution cell\" above and README \"Resolution\" (`--resolution general`).\n"
+        "\nWith the paper's resolution model the bandwidth only enters through the range constraint, which is vacuous at 50–150 MHz with the defaults (erratum 2 (docs/paper-notes.md): its right side c/(B d_min) − sin η is negative), so every scheme flies the same track at every bandwidth and Fig. 12's trajectories repeat Fig. 7's (the paper finds \"similar patterns\" to its Fig. 6). The bandwidth does matter for the true (general) bistatic cell: see \"The general resolution cell\" above and docs/user-guide.md, \"Resolution: paper or general\" (`--resolution general`).\n"
     );
     Ok(())
 }
@@ -584,7 +584,7 @@ fn table3(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
         rows.push(vec![b / 1e6, v, paper]);
         let _ = writeln!(f.report, "| {} | {v:.2} | {paper} |", b / 1e6);
     }
-    let _ = writeln!(f.report, "\nThese use the paper's formula, valid only when the BS→point and UAV→point ground directions coincide (SPEC.md §4 item 11). The general value along each plan is in the `range_resolution_general_m` column of every trajectory CSV.\n");
+    let _ = writeln!(f.report, "\nThese use the paper's formula, valid only when the BS→point and UAV→point ground directions coincide (erratum 11 (docs/paper-notes.md)). The general value along each plan is in the `range_resolution_general_m` column of every trajectory CSV.\n");
     csv_write(
         &d.join("table3.csv"),
         "bandwidth_mhz,range_resolution_m,paper_m",

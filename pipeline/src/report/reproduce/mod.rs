@@ -172,7 +172,7 @@ pub(crate) fn csv_write(path: &Path, header: &str, rows: &[Vec<f64>]) -> Result<
 
 /// The start of `missions/default-30m-far-start.toml`: the default mission's start moved to the
 /// far end of the heading arc that keeps the general bistatic resolution cell within d_min
-/// (README, "Resolution"), m.
+/// (docs/user-guide.md, "Resolution: paper or general"), m.
 pub const FAR_START_M: [f64; 2] = [342.0, 940.0];
 
 pub(crate) const SCHEMES: [Scheme; 4] = [
@@ -216,7 +216,7 @@ fn plan_row(key: &str, resolution: ResolutionMode, outcome: Result<&Summary, &St
 }
 
 /// The plans every selected figure needs; each group also gets an `exact` plan under the
-/// general resolution cell (its energy cost, SPEC.md §4 item 12).
+/// general resolution cell (its energy cost, erratum 12 (docs/paper-notes.md)).
 fn plan_jobs(figs: &FigureSet, realisations: u64) -> Result<Vec<Job>, ReportError> {
     let mut jobs: Vec<Job> = Vec::new();
     let mut add = |key: String, mission: &Mission, schemes: &[Scheme]| {
@@ -228,7 +228,7 @@ fn plan_jobs(figs: &FigureSet, realisations: u64) -> Result<Vec<Job>, ReportErro
                 resolution: ResolutionMode::Paper,
             });
         }
-        // the energy cost of the general 2-D resolution cell (SPEC.md §4 item 12)
+        // the energy cost of the general 2-D resolution cell (erratum 12 (docs/paper-notes.md))
         jobs.push(Job {
             key: format!("{key}/exact-general"),
             mission: mission.clone(),
@@ -416,7 +416,7 @@ fn headline(report: &mut String, results: &Results, model: &PowerModel) {
     }
     let _ = writeln!(
         report,
-        "\n### The general resolution cell (SPEC.md §4 items 11–12)\n"
+        "\n### The general resolution cell (errata 11–12 (docs/paper-notes.md))\n"
     );
     let mut groups: Vec<&str> = results
         .keys()
@@ -452,7 +452,7 @@ fn headline(report: &mut String, results: &Results, model: &PowerModel) {
     let (v_me, _) = model.min_energy_per_metre(50.0);
     let _ = writeln!(
     report,
-    "- Power model (Table II): least power {p_star:.2} W at {v_star:.2} m/s (the paper's text says ≈ 35 m/s, SPEC.md §4 item 4), least energy per metre at {v_me:.2} m/s, hover {:.1} W; floor T·P(V*) = {:.0} J for T = 300 s.\n",
+    "- Power model (Table II): least power {p_star:.2} W at {v_star:.2} m/s (the paper's text says ≈ 35 m/s, erratum 4 (docs/paper-notes.md)), least energy per metre at {v_me:.2} m/s, hover {:.1} W; floor T·P(V*) = {:.0} J for T = 300 s.\n",
     model.hover_w(),
     300.0 * p_star
 );
