@@ -42,9 +42,17 @@ pub fn reference(horizon_s: f64) -> PathBuf {
     let out = dir.path().join("closed-loop");
     let m = planner::Mission::from_path(&mission()).unwrap();
     let m = radar_sim::run::shorten(&m, horizon_s).unwrap();
-    let scene = radar_sim::config::SceneFile::from_path(&scene()).unwrap();
-    let result = planner::plan(&m, &planner::PlanOptions::default()).unwrap();
-    pipeline::report::write_plan_dir(&out.join("plan"), &m, &result).unwrap();
+    closed_loop(&m, &scene(), &out);
+    c.insert(horizon_s.to_bits(), (dir, out.clone()));
+    out
+}
+
+/// `cellsar-radar-sim closed-loop` of `mission` with `scene` into `out`, in this process (the
+/// same library calls): `out/{plan,recording,processed}/`, `out/report.json`.
+pub fn closed_loop(mission: &planner::Mission, scene: &Path, out: &Path) {
+    let scene = radar_sim::config::SceneFile::from_path(scene).unwrap();
+    let result = planner::plan(mission, &planner::PlanOptions::default()).unwrap();
+    pipeline::report::write_plan_dir(&out.join("plan"), mission, &result).unwrap();
     let (m2, traj) = pipeline::report::read_plan_dir(&out.join("plan")).unwrap();
     radar_sim::run::simulate(&m2, &traj, &scene, &out.join("recording"), &mut |_, _| {}).unwrap();
     let metrics = radar_sim::run::process(
@@ -55,8 +63,6 @@ pub fn reference(horizon_s: f64) -> PathBuf {
     .unwrap();
     let report = radar_sim::run::loop_report(&m2, &result.evaluation, metrics);
     radar_sim::io::write_json(&out.join("report.json"), &report).unwrap();
-    c.insert(horizon_s.to_bits(), (dir, out.clone()));
-    out
 }
 
 /// Asserts that the launcher's outputs in `out` are those of the closed loop in `reference`:
