@@ -20,7 +20,7 @@ pub fn stop_on_signals() -> Result<Arc<AtomicBool>, ServiceError> {
     let stop = Arc::new(AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         signal_hook::flag::register(signal, stop.clone())
-            .map_err(|source| ServiceError::Signal { signal, source })?;
+            .map_err(|error| ServiceError::Signal { signal, error })?;
     }
     Ok(stop)
 }

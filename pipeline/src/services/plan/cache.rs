@@ -97,9 +97,9 @@ impl PlanCache {
                     ..Meta::default()
                 },
             )
-            .map_err(|source| ServiceError::Codec {
+            .map_err(|error| ServiceError::Codec {
                 what: format!("plan {}", plan.mission_id),
-                source,
+                error,
             })?;
             let path = d.join(format!("{}.plan", plan.mission_id));
             write_atomic(&path, &bytes)?;
@@ -213,9 +213,9 @@ fn load_plan(path: &Path) -> Result<Plan, ServiceError> {
         },
     )
     .map(|e| e.message)
-    .map_err(|source| ServiceError::Codec {
+    .map_err(|error| ServiceError::Codec {
         what: path.display().to_string(),
-        source,
+        error,
     })
 }
 

@@ -8,8 +8,10 @@ use planner::driver::PlanError;
 
 use crate::protocol::BadRequest;
 
-/// Errors of the planner service; each names what failed.
+/// Errors of the planner service; each names what failed. A variant whose message includes
+/// its cause does not also return it from `source()` (each cause is printed once).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ServiceError {
     /// Zenoh failed.
     #[error(transparent)]
@@ -21,30 +23,28 @@ pub enum ServiceError {
     #[error(transparent)]
     Key(#[from] bridge::keys::KeyError),
     /// A file of the state directory could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file or directory.
         path: String,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
+        /// The I/O error (in the message).
+        error: std::io::Error,
     },
     /// A message could not be encoded.
-    #[error("{what}: {source}")]
+    #[error("{what}: {error}")]
     Codec {
         /// What was being encoded.
         what: String,
-        /// The codec error.
-        source: bridge::CodecError,
+        /// The codec error (in the message).
+        error: bridge::CodecError,
     },
     /// The signal handlers could not be installed.
-    #[error("installing the handler of signal {signal}: {source}")]
+    #[error("installing the handler of signal {signal}: {error}")]
     Signal {
         /// Signal number.
         signal: i32,
-        /// The OS error.
-        #[source]
-        source: std::io::Error,
+        /// The OS error (in the message).
+        error: std::io::Error,
     },
     /// A request was invalid (the message names the field).
     #[error("{0}")]
@@ -106,10 +106,50 @@ impl From<ServiceError> for cellsar_error::exit::Failure {
 
 impl ServiceError {
     /// An [`ServiceError::Io`] naming `path`.
-    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
+    pub(crate) fn io(path: &Path, error: std::io::Error) -> Self {
         ServiceError::Io {
             path: path.display().to_string(),
-            source,
+            error,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::error::Error as _;
+
+    /// A cause in the message is not returned again from `source()`, so the printed chain
+    /// names it once; a transparent variant forwards both to its inner error.
+    #[test]
+    fn each_cause_is_printed_once() {
+        let io = || std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let e = ServiceError::io(Path::new("/state/a.plan"), io());
+        assert_eq!(e.to_string(), "/state/a.plan: no such file");
+        assert!(e.source().is_none());
+        assert_eq!(cellsar_error::error_chain(&e), e.to_string());
+        let e = ServiceError::Signal {
+            signal: 2,
+            error: io(),
+        };
+        assert!(e.source().is_none() && e.to_string().ends_with(": no such file"));
+        let e = crate::services::radar::ServiceError::Io {
+            path: "/state/metrics.bin".into(),
+            error: io(),
+        };
+        assert!(e.source().is_none());
+        assert_eq!(
+            cellsar_error::error_chain(&e),
+            "/state/metrics.bin: no such file"
+        );
+        let e = crate::services::radar::ServiceError::from(ServiceError::io(
+            Path::new("/state/a.plan"),
+            io(),
+        ));
+        assert!(e.source().is_none());
+        assert_eq!(
+            cellsar_error::error_chain(&e),
+            "/state/a.plan: no such file"
+        );
     }
 }

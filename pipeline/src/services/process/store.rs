@@ -18,14 +18,14 @@ fn outcome_path(dir: &Path, k: usize) -> PathBuf {
 
 /// Stores an aperture's outcome in `dir` (created if missing).
 pub(super) fn store(dir: &Path, o: &ApertureOutcome) -> ServiceResult<()> {
-    std::fs::create_dir_all(dir).map_err(|source| ServiceError::Io {
+    std::fs::create_dir_all(dir).map_err(|error| ServiceError::Io {
         path: dir.to_path_buf(),
-        source,
+        error,
     })?;
     let bytes = envelope::encode(&StoredOutcome { outcome: o.clone() }, Meta::default()).map_err(
-        |source| ServiceError::Codec {
+        |error| ServiceError::Codec {
             what: format!("aperture {}", o.aperture()),
-            source,
+            error,
         },
     )?;
     write_atomic(&outcome_path(dir, o.aperture()), &bytes)?;
@@ -34,13 +34,13 @@ pub(super) fn store(dir: &Path, o: &ApertureOutcome) -> ServiceResult<()> {
 
 /// Stores the mission's metrics in `dir` (created if missing).
 pub(super) fn store_metrics(dir: &Path, m: &MissionMetrics) -> ServiceResult<()> {
-    std::fs::create_dir_all(dir).map_err(|source| ServiceError::Io {
+    std::fs::create_dir_all(dir).map_err(|error| ServiceError::Io {
         path: dir.to_path_buf(),
-        source,
+        error,
     })?;
-    let bytes = envelope::encode(m, Meta::default()).map_err(|source| ServiceError::Codec {
+    let bytes = envelope::encode(m, Meta::default()).map_err(|error| ServiceError::Codec {
         what: "metrics".into(),
-        source,
+        error,
     })?;
     write_atomic(&dir.join("metrics.bin"), &bytes)?;
     Ok(())
@@ -65,9 +65,9 @@ pub(super) fn restore(dir: &Path, apertures: usize) -> ServiceResult<Restored> {
         if !p.exists() {
             continue;
         }
-        let bytes = std::fs::read(&p).map_err(|source| ServiceError::Io {
+        let bytes = std::fs::read(&p).map_err(|error| ServiceError::Io {
             path: p.clone(),
-            source,
+            error,
         })?;
         match envelope::decode::<StoredOutcome>(&bytes, &limits) {
             Ok(e) if e.message.outcome.aperture() == k => {
@@ -83,9 +83,9 @@ pub(super) fn restore(dir: &Path, apertures: usize) -> ServiceResult<Restored> {
     }
     let mp = dir.join("metrics.bin");
     let metrics = if out.len() == apertures && mp.exists() {
-        let bytes = std::fs::read(&mp).map_err(|source| ServiceError::Io {
+        let bytes = std::fs::read(&mp).map_err(|error| ServiceError::Io {
             path: mp.clone(),
-            source,
+            error,
         })?;
         envelope::decode::<MissionMetrics>(&bytes, &limits)
             .map(|e| e.message)
