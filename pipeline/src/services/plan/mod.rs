@@ -16,6 +16,11 @@
 //! Message kinds of this crate: `0x0100..=0x01ff`. The mission id of a plan is derived from the
 //! resolved mission ([`mission_id`]), so every process agrees on it without coordination and a
 //! changed mission never shares an id with an old one.
+//!
+//! - this file: the service ([`serve`]) and planning one request ([`plan_request`]);
+//! - `cache.rs`: the plan cache every process keeps ([`PlanCache`]);
+//! - `status.rs`: the status board every service publishes on ([`StatusBoard`]);
+//! - `error.rs`: [`ServiceError`].
 
 mod cache;
 mod error;
