@@ -118,6 +118,7 @@ pub struct BridgeArgs {
 /// Errors of the bridge process: [`BridgeArgs::setup`] fails with bad input, a
 /// [`BridgeSetup::run`] at run time. Each names what failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BridgeError {
     /// A route or the forwarder failed (an invalid route, a forwarding thread).
     #[error(transparent)]

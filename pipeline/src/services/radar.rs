@@ -28,8 +28,10 @@ use std::path::PathBuf;
 /// the services and the bridge must agree on it.
 pub const DEFAULT_MAX_FRAME_BYTES: usize = bridge::frame::SERVICE_MAX_FRAME_BYTES;
 
-/// Errors of the radar services; each names what failed.
+/// Errors of the radar services; each names what failed. A variant whose message includes its
+/// cause does not also return it from `source()` (each cause is printed once).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ServiceError {
     /// The radar library failed.
     #[error(transparent)]
@@ -58,21 +60,20 @@ pub enum ServiceError {
         reason: String,
     },
     /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The error.
-        #[source]
-        source: std::io::Error,
+        /// The error (in the message).
+        error: std::io::Error,
     },
     /// A stored or received message could not be encoded or decoded.
-    #[error("{what}: {source}")]
+    #[error("{what}: {error}")]
     Codec {
         /// What.
         what: String,
-        /// The codec error.
-        source: bridge::CodecError,
+        /// The codec error (in the message).
+        error: bridge::CodecError,
     },
     /// The frames of a mission cannot be laid out (the message names the flag).
     #[error(transparent)]

@@ -16,419 +16,38 @@
 //! Message kinds of this crate: `0x0100..=0x01ff`. The mission id of a plan is derived from the
 //! resolved mission ([`mission_id`]), so every process agrees on it without coordination and a
 //! changed mission never shares an id with an old one.
+//!
+//! - this file: the service ([`serve`]) and planning one request ([`plan_request`]);
+//! - `cache.rs`: the plan cache every process keeps ([`PlanCache`]);
+//! - `status.rs`: the status board every service publishes on ([`StatusBoard`]);
+//! - `error.rs`: [`ServiceError`].
 
-use std::collections::{BTreeMap, HashMap};
-use std::path::{Path, PathBuf};
+mod cache;
+mod error;
+mod status;
+
+use std::collections::HashMap;
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use bridge::envelope::{self, DecodeLimits, Meta};
-use bridge::net::{PublishOptions, QueryOptions, SubscribeOptions, WireFormat};
-use bridge::zenoh::key_expr::KeyExpr;
-use bridge::zenoh::qos::CongestionControl;
-use bridge::zenoh::query::{Query, QueryTarget};
-use bridge::zenoh::Wait;
-use bridge::{MissionId, Refusal, RefusalKind, ZenohArgs, ZenohNode};
+use bridge::envelope::Meta;
+use bridge::net::{PublishOptions, SubscribeOptions};
+use bridge::{MissionId, ZenohArgs, ZenohNode};
 use serde::{Deserialize, Serialize};
 
-use planner::driver::{plan_with_observer, IterationRecord, Observer, PlanError, PlanOptions};
+use planner::driver::{plan_with_observer, IterationRecord, Observer, PlanOptions};
 use planner::Mission;
-
-use crate::protocol::keys::{self as pkeys, ALL_PLANS, PLAN as PLAN_KEY};
-use crate::protocol::{
-    mission_id, BadRequest, Plan, PlanLookup, PlanRequest, PlanSummary, ServiceStatus,
-    MAX_PLAN_BYTES,
-};
 use planner::Summary;
 
-/// Errors of the planner service; each names what failed.
-#[derive(Debug, thiserror::Error)]
-pub enum ServiceError {
-    /// Zenoh failed.
-    #[error(transparent)]
-    Net(#[from] bridge::NetError),
-    /// The Zenoh flags or configuration file are invalid.
-    #[error(transparent)]
-    Config(#[from] bridge::zconfig::ConfigError),
-    /// A key could not be built.
-    #[error(transparent)]
-    Key(#[from] bridge::keys::KeyError),
-    /// A file of the state directory could not be read or written.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file or directory.
-        path: String,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
-    },
-    /// A message could not be encoded.
-    #[error("{what}: {source}")]
-    Codec {
-        /// What was being encoded.
-        what: String,
-        /// The codec error.
-        source: bridge::CodecError,
-    },
-    /// The signal handlers could not be installed.
-    #[error("installing the handler of signal {signal}: {source}")]
-    Signal {
-        /// Signal number.
-        signal: i32,
-        /// The OS error.
-        #[source]
-        source: std::io::Error,
-    },
-    /// A request was invalid (the message names the field).
-    #[error("{0}")]
-    BadRequest(String),
-    /// Planning a valid mission failed: it cannot be flown, the start trajectory does not
-    /// fit, or the solver failed ([`PlanError`] says which).
-    #[error("planning {mission:?}: {error}")]
-    Plan {
-        /// The mission's name.
-        mission: String,
-        /// The planner's error.
-        error: PlanError,
-    },
-    /// A worker thread failed.
-    #[error("{0}")]
-    Internal(String),
-}
+use crate::protocol::keys::{self as pkeys, PLAN as PLAN_KEY};
+use crate::protocol::{mission_id, Plan, PlanRequest, PlanSummary};
 
-impl From<BadRequest> for ServiceError {
-    fn from(e: BadRequest) -> Self {
-        ServiceError::BadRequest(e.0)
-    }
-}
-
-impl ServiceError {
-    /// Whether the service could not start because of its flags or configuration (the
-    /// binaries' exit code 2), rather than failing at run time.
-    pub fn is_bad_input(&self) -> bool {
-        matches!(self, ServiceError::Config(_))
-    }
-
-    /// The typed refusal a plan request is answered with: a request that names a bad field
-    /// (or a start trajectory that does not fit) is `bad_request`, a mission that cannot be
-    /// flown `infeasible`, the rest (a solver or worker failure) `internal`; the message is
-    /// this error's.
-    pub fn refusal(&self) -> Refusal {
-        let kind = match self {
-            ServiceError::BadRequest(_)
-            | ServiceError::Plan {
-                error: PlanError::InvalidInit(_) | PlanError::InvalidOption { .. },
-                ..
-            } => RefusalKind::BadRequest,
-            ServiceError::Plan {
-                error: PlanError::Infeasible(_),
-                ..
-            } => RefusalKind::Infeasible,
-            _ => RefusalKind::Internal,
-        };
-        Refusal::new(kind, self.to_string())
-    }
-}
-
-impl From<ServiceError> for cellsar_error::exit::Failure {
-    /// Bad flags or configuration exit 2 ([`ServiceError::is_bad_input`]), the rest 1.
-    fn from(e: ServiceError) -> Self {
-        Self::bad_input_or_runtime(e.is_bad_input(), e)
-    }
-}
-
-fn io_err(path: &Path, source: std::io::Error) -> ServiceError {
-    ServiceError::Io {
-        path: path.display().to_string(),
-        source,
-    }
-}
-
-/// Installs SIGINT and SIGTERM handlers that set the returned flag (services poll it and stop
-/// cleanly: liveliness token withdrawn, final counters logged, exit 0). The services open
-/// their Zenoh session with [`ZenohNode::open_until`], so the flag also stops a service that
-/// still waits for its router.
-pub fn stop_on_signals() -> Result<Arc<AtomicBool>, ServiceError> {
-    let stop = Arc::new(AtomicBool::new(false));
-    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register(signal, stop.clone())
-            .map_err(|source| ServiceError::Signal { signal, source })?;
-    }
-    Ok(stop)
-}
-
-/// Publishes [`ServiceStatus`] per mission (JSON, congestion control `Drop`: a frozen reader
-/// never stalls a service).
-pub struct StatusBoard {
-    role: String,
-    instance: String,
-    started: Instant,
-    pubs: Mutex<HashMap<MissionId, bridge::net::TypedPublisher<ServiceStatus>>>,
-}
-
-impl StatusBoard {
-    /// A board for `role`/`instance`.
-    pub fn new(role: &str, instance: &str) -> Self {
-        StatusBoard {
-            role: role.to_string(),
-            instance: instance.to_string(),
-            started: Instant::now(),
-            pubs: Mutex::new(HashMap::new()),
-        }
-    }
-
-    /// A status with role, instance, mission and uptime filled in.
-    pub fn status(&self, mission_id: MissionId, state: &str) -> ServiceStatus {
-        ServiceStatus {
-            role: self.role.clone(),
-            instance: self.instance.clone(),
-            mission_id,
-            state: state.to_string(),
-            uptime_s: self.started.elapsed().as_secs_f64(),
-            ..Default::default()
-        }
-    }
-
-    /// Publishes `status` on `cellsar/<mission>/status/<role>`; failures are logged, not fatal.
-    pub fn publish(&self, node: &ZenohNode, status: &ServiceStatus) {
-        let Ok(mut pubs) = self.pubs.lock() else {
-            return;
-        };
-        let p = match pubs.entry(status.mission_id) {
-            std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
-            std::collections::hash_map::Entry::Vacant(v) => {
-                let made = pkeys::status(status.mission_id, &self.role)
-                    .map_err(bridge::NetError::from)
-                    .and_then(|key| {
-                        node.publisher::<ServiceStatus>(
-                            &key,
-                            PublishOptions {
-                                mission_id: status.mission_id,
-                                congestion_control: CongestionControl::Drop,
-                                ..PublishOptions::json()
-                            },
-                        )
-                    });
-                match made {
-                    Ok(p) => v.insert(p),
-                    Err(e) => {
-                        tracing::warn!(error = %e, "status publisher");
-                        return;
-                    }
-                }
-            }
-        };
-        if let Err(e) = p.put(status) {
-            tracing::debug!(error = %e, "status not published");
-        }
-    }
-}
-
-/// Plans held by a process, answered to `cellsar/*/plan` lookups (so a process that joins late
-/// or restarts gets the plans without re-planning; a lookup that is no [`PlanLookup`] gets a
-/// typed `bad_request` refusal), optionally persisted in a directory.
-pub struct PlanCache {
-    plans: Arc<Mutex<BTreeMap<MissionId, Arc<Plan>>>>,
-    dir: Option<PathBuf>,
-    malformed: Arc<std::sync::atomic::AtomicU64>,
-    _queryable: bridge::zenoh::query::Queryable<()>,
-}
-
-impl PlanCache {
-    /// Declares the lookup queryable on `cellsar/*/plan`; with `dir`, loads the plans stored
-    /// there (unreadable files are logged and skipped) and stores new ones.
-    pub fn new(node: &ZenohNode, dir: Option<&Path>) -> Result<Self, ServiceError> {
-        let plans: Arc<Mutex<BTreeMap<MissionId, Arc<Plan>>>> = Arc::default();
-        if let Some(d) = dir {
-            std::fs::create_dir_all(d).map_err(|e| io_err(d, e))?;
-            let mut loaded = BTreeMap::new();
-            for entry in std::fs::read_dir(d).map_err(|e| io_err(d, e))?.flatten() {
-                let path = entry.path();
-                if path.extension().and_then(|e| e.to_str()) != Some("plan") {
-                    continue;
-                }
-                match load_plan(&path) {
-                    Ok(p) => {
-                        loaded.insert(p.mission_id, Arc::new(p));
-                    }
-                    Err(e) => {
-                        tracing::warn!(file = %path.display(), error = %e, "stored plan skipped")
-                    }
-                }
-            }
-            if !loaded.is_empty() {
-                tracing::info!(plans = loaded.len(), dir = %d.display(), "plans restored");
-            }
-            if let Ok(mut p) = plans.lock() {
-                *p = loaded;
-            }
-        }
-        let p = plans.clone();
-        let malformed = Arc::new(std::sync::atomic::AtomicU64::new(0));
-        let m = malformed.clone();
-        let log = Arc::new(bridge::counters::BadPayloadLog::default());
-        let queryable = node
-            .session()
-            .declare_queryable(ALL_PLANS)
-            .callback(move |query: Query| answer_lookup(&p, &query, &m, &log))
-            .wait()
-            .map_err(|e| bridge::NetError::Zenoh {
-                op: "declare queryable",
-                key: ALL_PLANS.into(),
-                reason: e.to_string(),
-            })?;
-        Ok(PlanCache {
-            plans,
-            dir: dir.map(Path::to_path_buf),
-            malformed,
-            _queryable: queryable,
-        })
-    }
-
-    /// Lookups whose payload was not a [`PlanLookup`] (answered with an error, counted, logged).
-    pub fn malformed(&self) -> u64 {
-        self.malformed.load(Ordering::Relaxed)
-    }
-
-    /// Adds (or replaces) a plan; stores it when the cache has a directory.
-    pub fn insert(&self, plan: Arc<Plan>) -> Result<(), ServiceError> {
-        if let Some(d) = &self.dir {
-            let bytes = envelope::encode(
-                plan.as_ref(),
-                Meta {
-                    mission_id: plan.mission_id,
-                    ..Meta::default()
-                },
-            )
-            .map_err(|source| ServiceError::Codec {
-                what: format!("plan {}", plan.mission_id),
-                source,
-            })?;
-            let path = d.join(format!("{}.plan", plan.mission_id));
-            write_atomic(&path, &bytes)?;
-        }
-        if let Ok(mut p) = self.plans.lock() {
-            p.insert(plan.mission_id, plan);
-        }
-        Ok(())
-    }
-
-    /// The plan of `id`, if held.
-    pub fn get(&self, id: MissionId) -> Option<Arc<Plan>> {
-        self.plans.lock().ok().and_then(|p| p.get(&id).cloned())
-    }
-
-    /// Every plan held.
-    pub fn all(&self) -> Vec<Arc<Plan>> {
-        self.plans
-            .lock()
-            .map(|p| p.values().cloned().collect())
-            .unwrap_or_default()
-    }
-
-    /// Asks every process for the plans matching `selector` (e.g. [`ALL_PLANS`] or
-    /// `cellsar/<mission>/plan`); replies that do not decode are logged and skipped.
-    pub fn lookup(
-        node: &ZenohNode,
-        selector: &str,
-        timeout: Duration,
-    ) -> Result<Vec<Plan>, ServiceError> {
-        let opts = QueryOptions {
-            timeout,
-            target: QueryTarget::All,
-            limits: DecodeLimits {
-                max_body_bytes: MAX_PLAN_BYTES,
-                verify_crc: true,
-            },
-            ..QueryOptions::default()
-        };
-        let mut out: BTreeMap<MissionId, Plan> = BTreeMap::new();
-        for r in node.query::<PlanLookup, Plan>(selector, &PlanLookup {}, &opts)? {
-            match r {
-                Ok(p) => {
-                    out.insert(p.message.mission_id, p.message);
-                }
-                Err(e) => tracing::warn!(error = %e, "plan lookup reply skipped"),
-            }
-        }
-        Ok(out.into_values().collect())
-    }
-}
-
-fn answer_lookup(
-    plans: &Mutex<BTreeMap<MissionId, Arc<Plan>>>,
-    query: &Query,
-    malformed: &std::sync::atomic::AtomicU64,
-    log: &bridge::counters::BadPayloadLog,
-) {
-    let format = query.encoding().map(WireFormat::of).unwrap_or_default();
-    if let Some(payload) = query.payload() {
-        let bytes = payload.to_bytes();
-        if let Err(e) = format.decode::<PlanLookup>(&bytes, &DecodeLimits::default()) {
-            malformed.fetch_add(1, Ordering::Relaxed);
-            let key = query.key_expr().as_str();
-            log.log(key, bytes.len(), &e);
-            let refusal = Refusal::new(RefusalKind::BadRequest, format!("bad plan lookup: {e}"));
-            if let Err(e) = bridge::net::refuse_query(query, key, format, &refusal) {
-                tracing::debug!(error = %e, "plan lookup refusal failed");
-            }
-            return;
-        }
-    }
-    let held: Vec<Arc<Plan>> = plans
-        .lock()
-        .map(|p| p.values().cloned().collect())
-        .unwrap_or_default();
-    for plan in held {
-        let Ok(key) = plan.key() else { continue };
-        let Ok(ke) = KeyExpr::try_from(key.clone()) else {
-            continue;
-        };
-        if !query.key_expr().intersects(&ke) {
-            continue;
-        }
-        let meta = Meta {
-            mission_id: plan.mission_id,
-            ..Meta::default()
-        };
-        match format.encode(plan.as_ref(), meta) {
-            Ok(bytes) => {
-                if let Err(e) = query
-                    .reply(ke, bytes)
-                    .encoding(format.encoding::<Plan>())
-                    .wait()
-                {
-                    tracing::debug!(error = %e, "plan lookup reply failed");
-                }
-            }
-            Err(e) => tracing::warn!(error = %e, "plan lookup: encoding failed"),
-        }
-    }
-}
-
-fn load_plan(path: &Path) -> Result<Plan, ServiceError> {
-    let bytes = std::fs::read(path).map_err(|e| io_err(path, e))?;
-    envelope::decode::<Plan>(
-        &bytes,
-        &DecodeLimits {
-            max_body_bytes: MAX_PLAN_BYTES,
-            verify_crc: true,
-        },
-    )
-    .map(|e| e.message)
-    .map_err(|source| ServiceError::Codec {
-        what: path.display().to_string(),
-        source,
-    })
-}
-
-/// Writes `bytes` to `path` through a temporary file and a rename (never a torn file).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ServiceError> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).map_err(|e| io_err(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
-}
+pub use super::os::{stop_on_signals, write_atomic};
+pub use cache::PlanCache;
+pub use error::ServiceError;
+pub use status::StatusBoard;
 
 /// Flags of `cellsar-planner serve`.
 #[derive(clap::Args, Debug, Clone)]
@@ -712,7 +331,7 @@ fn plan_in_thread(
         }
         while let Ok(line) = progress_rx.try_recv() {
             status.message = line;
-            status.uptime_s = board.started.elapsed().as_secs_f64();
+            status.uptime_s = board.uptime_s();
             board.publish(node, &status);
         }
         match done_rx.recv_timeout(Duration::from_millis(50)) {
@@ -731,8 +350,12 @@ fn plan_in_thread(
 mod tests {
     use super::*;
     use crate::protocol::*;
-    use bridge::Message;
+    use bridge::envelope::{self, DecodeLimits};
+    use bridge::net::WireFormat;
+    use bridge::RefusalKind;
+    use planner::driver::PlanError;
     use planner::{MissionFile, NoObserver};
+    use std::path::Path;
 
     /// A Zenoh client configuration (JSON5 in `dir`) whose router at an unused loopback port
     /// never comes, waiting for it as `pipeline/deploy/client.json5` does.
@@ -785,69 +408,6 @@ mod tests {
         let d = std::env::temp_dir().join(format!("cellsar-{tag}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         d
-    }
-
-    /// A plan lookup whose payload is not a `PlanLookup` is refused with a typed
-    /// `bad_request` (in the lookup's format), counted as malformed.
-    #[test]
-    fn bad_plan_lookups_get_a_typed_refusal() {
-        let port = std::net::TcpListener::bind("127.0.0.1:0")
-            .and_then(|l| l.local_addr())
-            .unwrap()
-            .port();
-        let ep = format!("tcp/127.0.0.1:{port}");
-        let a = ZenohNode::open(
-            ZenohArgs::isolated(std::slice::from_ref(&ep), &[])
-                .to_config()
-                .unwrap(),
-            "test",
-            "cache",
-        )
-        .unwrap();
-        let b = ZenohNode::open(
-            ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[ep])
-                .to_config()
-                .unwrap(),
-            "test",
-            "asker",
-        )
-        .unwrap();
-        let cache = PlanCache::new(&a, None).unwrap();
-        let deadline = Instant::now() + Duration::from_secs(10);
-        for format in [WireFormat::Bincode, WireFormat::Json] {
-            let opts = QueryOptions {
-                format,
-                timeout: Duration::from_secs(2),
-                ..QueryOptions::default()
-            };
-            let e = loop {
-                match b.query_one::<ServiceStatus, Plan>(
-                    "cellsar/0000000000000001/plan",
-                    &ServiceStatus::default(),
-                    &opts,
-                ) {
-                    Err(bridge::NetError::NoReply { .. }) if Instant::now() < deadline => {
-                        std::thread::sleep(Duration::from_millis(50));
-                    }
-                    r => break r.unwrap_err(),
-                }
-            };
-            match e {
-                bridge::NetError::Refused { refusal, .. } => {
-                    assert_eq!(refusal.kind, RefusalKind::BadRequest, "{format:?}");
-                    assert!(
-                        refusal.message.starts_with("bad plan lookup: ")
-                            && refusal.message.contains(PlanLookup::NAME),
-                        "{refusal:?}"
-                    );
-                }
-                e => panic!("{format:?}: {e:?}"),
-            }
-        }
-        assert_eq!(cache.malformed(), 2);
-        drop(cache);
-        a.close().unwrap();
-        b.close().unwrap();
     }
 
     fn short_mission() -> MissionFile {

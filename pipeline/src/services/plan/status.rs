@@ -1,0 +1,84 @@
+//! The status board: each service's [`ServiceStatus`] per mission.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+use std::time::Instant;
+
+use bridge::net::PublishOptions;
+use bridge::zenoh::qos::CongestionControl;
+use bridge::{MissionId, ZenohNode};
+
+use crate::protocol::keys as pkeys;
+use crate::protocol::ServiceStatus;
+
+/// Publishes [`ServiceStatus`] per mission (JSON, congestion control `Drop`: a frozen reader
+/// never stalls a service).
+pub struct StatusBoard {
+    role: String,
+    instance: String,
+    started: Instant,
+    pubs: Mutex<HashMap<MissionId, bridge::net::TypedPublisher<ServiceStatus>>>,
+}
+
+impl StatusBoard {
+    /// A board for `role`/`instance`.
+    pub fn new(role: &str, instance: &str) -> Self {
+        StatusBoard {
+            role: role.to_string(),
+            instance: instance.to_string(),
+            started: Instant::now(),
+            pubs: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// A status with role, instance, mission and uptime filled in.
+    pub fn status(&self, mission_id: MissionId, state: &str) -> ServiceStatus {
+        ServiceStatus {
+            role: self.role.clone(),
+            instance: self.instance.clone(),
+            mission_id,
+            state: state.to_string(),
+            uptime_s: self.uptime_s(),
+            ..Default::default()
+        }
+    }
+
+    /// Seconds since the board was made (the service's uptime).
+    pub(super) fn uptime_s(&self) -> f64 {
+        self.started.elapsed().as_secs_f64()
+    }
+
+    /// Publishes `status` on `cellsar/<mission>/status/<role>`; failures are logged, not fatal.
+    pub fn publish(&self, node: &ZenohNode, status: &ServiceStatus) {
+        let Ok(mut pubs) = self.pubs.lock() else {
+            return;
+        };
+        let p = match pubs.entry(status.mission_id) {
+            std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
+            std::collections::hash_map::Entry::Vacant(v) => {
+                let made = pkeys::status(status.mission_id, &self.role)
+                    .map_err(bridge::NetError::from)
+                    .and_then(|key| {
+                        node.publisher::<ServiceStatus>(
+                            &key,
+                            PublishOptions {
+                                mission_id: status.mission_id,
+                                congestion_control: CongestionControl::Drop,
+                                ..PublishOptions::json()
+                            },
+                        )
+                    });
+                match made {
+                    Ok(p) => v.insert(p),
+                    Err(e) => {
+                        tracing::warn!(error = %e, "status publisher");
+                        return;
+                    }
+                }
+            }
+        };
+        if let Err(e) = p.put(status) {
+            tracing::debug!(error = %e, "status not published");
+        }
+    }
+}

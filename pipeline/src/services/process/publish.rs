@@ -1,0 +1,238 @@
+//! What the processor publishes: each aperture's detections and image, each mission's metrics
+//! (again on request), the status of every mission and, at the end, its counters.
+
+use std::collections::HashMap;
+
+use bridge::envelope::Meta;
+use bridge::net::{PublishOptions, TypedPublisher};
+use bridge::MissionId;
+
+use super::context::detections_message;
+use super::proc::Proc;
+use crate::protocol::keys as pkeys;
+use crate::protocol::{
+    ApertureDetections, ApertureImage, MissionMetrics, ResultAck, ResultRequest,
+};
+use crate::services::radar::ServiceError;
+
+/// The processor's result publishers, made on first use.
+#[derive(Default)]
+pub(super) struct Publishers {
+    /// Detections, per mission.
+    pub(super) detections: HashMap<MissionId, TypedPublisher<ApertureDetections>>,
+    /// Images, per mission and aperture.
+    pub(super) images: HashMap<(MissionId, usize), TypedPublisher<ApertureImage>>,
+    /// Metrics, per mission.
+    pub(super) metrics: HashMap<MissionId, TypedPublisher<MissionMetrics>>,
+}
+
+impl Proc<'_> {
+    /// Publishes aperture `k` of mission `i`: its detections and its image.
+    pub(super) fn publish_outcome(&mut self, i: usize, k: usize) {
+        let run = &self.runs[i];
+        let id = run.ctx.base.mission_id;
+        let Some(o) = run.outcomes.get(&k) else {
+            return;
+        };
+        let n = run.ctx.base.apertures.len();
+        let msg = detections_message(id, o, n, &self.args.instance);
+        let meta = Meta {
+            mission_id: id,
+            seq: k as u64,
+            time_unix_ns: 0,
+        };
+        if !self.publishers.detections.contains_key(&id) {
+            let made = pkeys::detections(id)
+                .map_err(ServiceError::from)
+                .and_then(|key| {
+                    Ok(self.node.publisher::<ApertureDetections>(
+                        &key,
+                        PublishOptions {
+                            mission_id: id,
+                            ..PublishOptions::json()
+                        },
+                    )?)
+                });
+            match made {
+                Ok(p) => {
+                    self.publishers.detections.insert(id, p);
+                }
+                Err(e) => tracing::warn!(error = %e, "detections publisher"),
+            }
+        }
+        if let Some(p) = self.publishers.detections.get(&id) {
+            if let Err(e) = p.put_with(&msg, meta) {
+                tracing::warn!(error = %e, "detections not published");
+            }
+        }
+        if !self.publishers.images.contains_key(&(id, k)) {
+            let made = pkeys::image(id, k)
+                .map_err(ServiceError::from)
+                .and_then(|key| {
+                    Ok(self.node.publisher::<ApertureImage>(
+                        &key,
+                        PublishOptions {
+                            mission_id: id,
+                            ..PublishOptions::default()
+                        },
+                    )?)
+                });
+            match made {
+                Ok(p) => {
+                    self.publishers.images.insert((id, k), p);
+                }
+                Err(e) => tracing::warn!(error = %e, "image publisher"),
+            }
+        }
+        if let Some(p) = self.publishers.images.get(&(id, k)) {
+            if let Err(e) = p.put_with(&o.image, meta) {
+                tracing::warn!(error = %e, "image not published");
+            }
+        }
+    }
+
+    /// Publishes the metrics of mission `i`, once done.
+    pub(super) fn publish_metrics(&mut self, i: usize) {
+        let run = &self.runs[i];
+        let id = run.ctx.base.mission_id;
+        let Some(m) = &run.metrics else { return };
+        if !self.publishers.metrics.contains_key(&id) {
+            let made = pkeys::metrics(id)
+                .map_err(ServiceError::from)
+                .and_then(|key| {
+                    Ok(self.node.publisher::<MissionMetrics>(
+                        &key,
+                        PublishOptions {
+                            mission_id: id,
+                            ..PublishOptions::default()
+                        },
+                    )?)
+                });
+            match made {
+                Ok(p) => {
+                    self.publishers.metrics.insert(id, p);
+                }
+                Err(e) => tracing::warn!(error = %e, "metrics publisher"),
+            }
+        }
+        if let Some(p) = self.publishers.metrics.get(&id) {
+            if let Err(e) = p.put_with(
+                m,
+                Meta {
+                    mission_id: id,
+                    ..Meta::default()
+                },
+            ) {
+                tracing::warn!(error = %e, "metrics not published");
+            }
+        }
+    }
+
+    /// Publishes again the results a [`ResultRequest`] asks for; the answer says which were
+    /// and which are not held.
+    pub(super) fn republish(&mut self, req: &ResultRequest) -> ResultAck {
+        let mut ack = ResultAck {
+            republished: Vec::new(),
+            missing: Vec::new(),
+            metrics: false,
+        };
+        let Some(i) = self.run_index(req.mission_id) else {
+            ack.missing = req.apertures.clone();
+            return ack;
+        };
+        for &k in &req.apertures {
+            if self.runs[i].outcomes.contains_key(&(k as usize)) {
+                self.publish_outcome(i, k as usize);
+                self.report.republished += 1;
+                ack.republished.push(k);
+            } else {
+                ack.missing.push(k);
+            }
+        }
+        if req.metrics && self.runs[i].metrics.is_some() {
+            self.publish_metrics(i);
+            ack.metrics = true;
+        }
+        ack
+    }
+
+    /// Publishes the status of every mission.
+    pub(super) fn publish_status(&self) {
+        for run in &self.runs {
+            let id = run.ctx.base.mission_id;
+            let state = if run.metrics.is_some() {
+                "done"
+            } else if run.failed.is_some() {
+                "failed"
+            } else {
+                "running"
+            };
+            let mut s = self.board.status(id, state);
+            s.total = run.ctx.base.apertures.len() as u64;
+            s.done = run.outcomes.len() as u64;
+            s.done_items = run.outcomes.keys().map(|k| *k as u64).collect();
+            let r = &self.report;
+            for (k, v) in [
+                ("apertures", r.apertures),
+                ("restored", r.restored),
+                ("frames", r.frames),
+                ("used", r.used),
+                ("duplicates", r.duplicates),
+                ("unsolicited", r.unsolicited),
+                ("bad", r.bad),
+                ("dropped", r.dropped),
+                ("transport_lost", r.transport_lost),
+                ("requests", r.requests),
+                ("resends", r.resends),
+                ("request_errors", r.request_errors),
+                ("republished", r.republished),
+                ("metrics", u64::from(run.metrics.is_some())),
+                ("malformed", self.malformed + r.transport_lost),
+            ] {
+                s.counters.insert(k.to_string(), v);
+            }
+            if let Some(f) = &run.failed {
+                s.message = format!("failed: {f}");
+                self.board.publish(self.node, &s);
+                continue;
+            }
+            s.message = format!(
+                "{}/{} apertures, assembling {:?}, {} frames ({} duplicates, {} lost in transport)",
+                s.done,
+                s.total,
+                run.assembling.keys().collect::<Vec<_>>(),
+                r.frames,
+                r.duplicates,
+                r.transport_lost
+            );
+            self.board.publish(self.node, &s);
+        }
+    }
+
+    /// Logs the final counters (with the malformed plans and result requests counted by their
+    /// subscribers) as the processor stops.
+    pub(super) fn log_final_counters(&self, plans_malformed: u64, result_requests_malformed: u64) {
+        let r = &self.report;
+        tracing::info!(
+            final_counters = true,
+            apertures = r.apertures,
+            restored = r.restored,
+            missions = r.missions,
+            frames = r.frames,
+            used = r.used,
+            duplicates = r.duplicates,
+            unsolicited = r.unsolicited,
+            bad = r.bad,
+            dropped = r.dropped,
+            transport_lost = r.transport_lost,
+            requests = r.requests,
+            resends = r.resends,
+            request_errors = r.request_errors,
+            republished = r.republished,
+            plans_malformed,
+            result_requests_malformed,
+            lookups_malformed = self.cache.malformed(),
+            "processor stopping"
+        );
+    }
+}
