@@ -1,0 +1,118 @@
+//! Liveliness: watching tokens ([`ZenohNode::watch_liveliness`], [`LivelinessWatcher`]) and
+//! listing them ([`ZenohNode::alive_now`]).
+
+use std::collections::BTreeSet;
+use std::sync::mpsc::{self, Receiver};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use zenoh::sample::{Sample, SampleKind};
+use zenoh::Wait;
+
+use super::error::zerr;
+use super::{NetError, ZenohNode};
+
+impl ZenohNode {
+    /// Watches liveliness tokens matching `selector` (e.g. [`crate::keys::ALIVE_ALL`]), including
+    /// the ones that exist already.
+    pub fn watch_liveliness(&self, selector: &str) -> Result<LivelinessWatcher, NetError> {
+        let alive = Arc::new(Mutex::new(BTreeSet::new()));
+        let (tx, rx) = mpsc::channel();
+        let a = alive.clone();
+        let subscriber = self
+            .session()
+            .liveliness()
+            .declare_subscriber(selector.to_string())
+            .history(true)
+            .callback(move |sample: Sample| {
+                let key = sample.key_expr().as_str().to_string();
+                let is_alive = sample.kind() == SampleKind::Put;
+                if let Ok(mut set) = a.lock() {
+                    if is_alive {
+                        set.insert(key.clone());
+                    } else {
+                        set.remove(&key);
+                    }
+                }
+                let _ = tx.send(AliveEvent {
+                    key,
+                    alive: is_alive,
+                });
+            })
+            .wait()
+            .map_err(|e| zerr("declare liveliness subscriber", selector, e))?;
+        Ok(LivelinessWatcher {
+            _subscriber: subscriber,
+            alive,
+            events: rx,
+        })
+    }
+
+    /// The liveliness tokens matching `selector` right now (a liveliness query).
+    pub fn alive_now(&self, selector: &str, timeout: Duration) -> Result<Vec<String>, NetError> {
+        let replies = self
+            .session()
+            .liveliness()
+            .get(selector.to_string())
+            .timeout(timeout)
+            .wait()
+            .map_err(|e| zerr("liveliness get", selector, e))?;
+        let mut out = BTreeSet::new();
+        while let Ok(reply) = replies.recv() {
+            if let Ok(sample) = reply.result() {
+                out.insert(sample.key_expr().as_str().to_string());
+            }
+        }
+        Ok(out.into_iter().collect())
+    }
+}
+
+/// A liveliness change.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AliveEvent {
+    /// The token's key, e.g. `cellsar/alive/planner/p1`.
+    pub key: String,
+    /// `true` when it appeared, `false` when it went away.
+    pub alive: bool,
+}
+
+/// Tracks liveliness tokens matching a selector.
+pub struct LivelinessWatcher {
+    _subscriber: zenoh::pubsub::Subscriber<()>,
+    alive: Arc<Mutex<BTreeSet<String>>>,
+    events: Receiver<AliveEvent>,
+}
+
+impl LivelinessWatcher {
+    /// The keys alive now.
+    pub fn alive(&self) -> BTreeSet<String> {
+        self.alive.lock().map(|s| s.clone()).unwrap_or_default()
+    }
+
+    /// Whether `key` is alive now.
+    pub fn is_alive(&self, key: &str) -> bool {
+        self.alive.lock().map(|s| s.contains(key)).unwrap_or(false)
+    }
+
+    /// Waits up to `timeout` for the next change.
+    pub fn next_event(&self, timeout: Duration) -> Option<AliveEvent> {
+        self.events.recv_timeout(timeout).ok()
+    }
+
+    /// Waits until `key`'s state is `alive` (or `timeout`); returns whether it got there.
+    pub fn wait_for(&self, key: &str, alive: bool, timeout: Duration) -> bool {
+        let deadline = std::time::Instant::now() + timeout;
+        loop {
+            if self.is_alive(key) == alive {
+                return true;
+            }
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            if left.is_zero() {
+                return false;
+            }
+            let _ = self
+                .events
+                .recv_timeout(left.min(Duration::from_millis(50)));
+        }
+    }
+}
