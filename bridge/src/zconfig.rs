@@ -18,6 +18,8 @@ use std::path::PathBuf;
 
 use zenoh::Config;
 
+use crate::zenoh_error::ZenohError;
+
 /// The Zenoh session mode.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Mode {
@@ -72,16 +74,46 @@ pub struct ZenohArgs {
     pub no_multicast_scouting: bool,
 }
 
-/// A flag or file that does not make a valid Zenoh configuration: one line naming the flag
-/// and its value (e.g. `--connect garbage`) or the file, then Zenoh's reason without its
-/// source locations ([`clean_zenoh_message`]).
+/// A flag or file that does not make a valid Zenoh configuration. The message names the flag
+/// and its value (`--connect garbage`), the file, or the setting; Zenoh's reason is the
+/// [`source`](std::error::Error::source) ([`ZenohError`]: one line, without Zenoh's source
+/// locations), so that printing the chain (`cellsar_error::error_chain`) shows each once.
 #[derive(Debug, thiserror::Error)]
-#[error("invalid Zenoh configuration: {what}: {reason}")]
-pub struct ConfigError {
-    /// The flag and value, key or file concerned.
-    pub what: String,
-    /// Zenoh's message, on one line.
-    pub reason: String,
+#[non_exhaustive]
+pub enum ConfigError {
+    /// A flag's value that Zenoh refuses (an endpoint of `--connect` or `--listen`).
+    #[error("invalid Zenoh configuration: {flag} {value}")]
+    Flag {
+        /// The flag.
+        flag: &'static str,
+        /// Its value.
+        value: String,
+        /// Why Zenoh refuses it.
+        #[source]
+        source: ZenohError,
+    },
+    /// The configuration file (`--config`) cannot be read or is no valid Zenoh configuration.
+    #[error("invalid Zenoh configuration: --config {}", path.display())]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// Why Zenoh refuses it.
+        #[source]
+        source: ZenohError,
+    },
+    /// A setting that the flags make (on top of a `--config` file) and that Zenoh refuses.
+    #[error("invalid Zenoh configuration: {what} ({key} = {value})")]
+    Setting {
+        /// The flag (or default) that makes the setting.
+        what: &'static str,
+        /// The configuration key.
+        key: &'static str,
+        /// The value (JSON5).
+        value: String,
+        /// Why Zenoh refuses it.
+        #[source]
+        source: ZenohError,
+    },
 }
 
 impl ZenohArgs {
@@ -125,9 +157,9 @@ impl ZenohArgs {
     /// Builds the Zenoh configuration.
     pub fn to_config(&self) -> Result<Config, ConfigError> {
         let mut config = match &self.config {
-            Some(path) => Config::from_file(path).map_err(|e| ConfigError {
-                what: format!("--config {}", path.display()),
-                reason: clean_zenoh_message(&e.to_string()),
+            Some(path) => Config::from_file(path).map_err(|e| ConfigError::File {
+                path: path.clone(),
+                source: e.into(),
             })?,
             None => Config::default(),
         };
@@ -246,137 +278,33 @@ fn json_list(v: &[String]) -> String {
     .to_string()
 }
 
-fn insert(config: &mut Config, key: &str, value: &str, what: &str) -> Result<(), ConfigError> {
-    config.insert_json5(key, value).map_err(|e| ConfigError {
-        what: format!("{what} ({key} = {value})"),
-        reason: clean_zenoh_message(&e.to_string()),
-    })
+fn insert(
+    config: &mut Config,
+    key: &'static str,
+    value: &str,
+    what: &'static str,
+) -> Result<(), ConfigError> {
+    config
+        .insert_json5(key, value)
+        .map_err(|e| ConfigError::Setting {
+            what,
+            key,
+            value: value.to_string(),
+            source: e.into(),
+        })
 }
 
 /// Checks each endpoint of `flag` on its own, so that the error names the bad one.
-fn check_endpoints(flag: &str, endpoints: &[String]) -> Result<(), ConfigError> {
+fn check_endpoints(flag: &'static str, endpoints: &[String]) -> Result<(), ConfigError> {
     for e in endpoints {
         e.parse::<zenoh::config::EndPoint>()
-            .map_err(|err| ConfigError {
-                what: format!("{flag} {e}"),
-                reason: clean_zenoh_message(&err.to_string()),
+            .map_err(|err| ConfigError::Flag {
+                flag,
+                value: e.clone(),
+                source: ZenohError::new(err),
             })?;
     }
     Ok(())
-}
-
-/// Zenoh's error text made fit for one line of a message to a user: the source locations
-/// Zenoh appends (` at /…/src/lib.rs:183.`) removed, the text of a Debug-printed JSON5 error
-/// (`Message { msg: "…", location: … }`) unwrapped, and a multi-line parser report
-/// (` --> 1:24 | … = expected …`) joined into one line.
-pub fn clean_zenoh_message(raw: &str) -> String {
-    let s = unwrap_debug_message(raw);
-    let s = strip_source_locations(&s);
-    let s = if s.contains('\n') {
-        join_parser_report(&s)
-    } else {
-        s
-    };
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-/// `… Message { msg: "text", location: Some(Location { line: 1, column: 2 }) } …` →
-/// `… text (line 1, column 2) …`.
-fn unwrap_debug_message(raw: &str) -> String {
-    const OPEN: &str = "Message { msg: \"";
-    let Some(i) = raw.find(OPEN) else {
-        return raw.to_string();
-    };
-    let mut msg = String::new();
-    let mut chars = raw[i + OPEN.len()..].char_indices();
-    let mut end = None;
-    while let Some((j, c)) = chars.next() {
-        match c {
-            '\\' => match chars.next() {
-                Some((_, 'n' | 't')) => msg.push(' '),
-                Some((_, o)) => msg.push(o),
-                None => {}
-            },
-            '"' => {
-                end = Some(i + OPEN.len() + j + 1);
-                break;
-            }
-            c => msg.push(c),
-        }
-    }
-    let Some(end) = end else {
-        return raw.to_string();
-    };
-    let mut rest = &raw[end..];
-    if let Some(r) = rest.strip_prefix(", location: None }") {
-        rest = r;
-    } else if let Some(r) = rest.strip_prefix(", location: Some(Location { line: ") {
-        let (line, r) = split_digits(r);
-        if let Some(r) = r.strip_prefix(", column: ") {
-            let (column, r) = split_digits(r);
-            if let (false, false, Some(r)) =
-                (line.is_empty(), column.is_empty(), r.strip_prefix(" }) }"))
-            {
-                msg.push_str(&format!(" (line {line}, column {column})"));
-                rest = r;
-            }
-        }
-    }
-    format!("{}{msg}{rest}", &raw[..i])
-}
-
-fn split_digits(s: &str) -> (&str, &str) {
-    let n = s.bytes().take_while(u8::is_ascii_digit).count();
-    s.split_at(n)
-}
-
-/// Removes every ` at <path>.rs:<line>` (and its full stop).
-fn strip_source_locations(raw: &str) -> String {
-    let mut s = raw.to_string();
-    let mut from = 0;
-    while let Some(k) = s[from..].find(".rs:").map(|k| k + from) {
-        let (digits, _) = split_digits(&s[k + 4..]);
-        let mut end = k + 4 + digits.len();
-        let start = s[..k]
-            .rfind(" at ")
-            .filter(|&a| !s[a + 4..k].contains(char::is_whitespace));
-        match (start, digits.is_empty()) {
-            (Some(a), false) => {
-                if s[end..].starts_with('.') {
-                    end += 1;
-                }
-                s.replace_range(a..end, "");
-                from = a;
-            }
-            _ => from = k + 4,
-        }
-    }
-    s
-}
-
-/// A pest-style report (` --> 1:24`, `  |`, `1 | source`, `  = expected …`) on one line.
-fn join_parser_report(s: &str) -> String {
-    let mut parts = Vec::new();
-    for line in s.lines().map(str::trim) {
-        if line.is_empty() || line.starts_with('|') {
-            continue;
-        }
-        let (digits, after) = split_digits(line);
-        if !digits.is_empty() && after.trim_start().starts_with('|') {
-            continue; // the source line echoed
-        }
-        if let Some(pos) = line.strip_prefix("-->") {
-            match pos.trim().split_once(':') {
-                Some((l, c)) => parts.push(format!("line {l}, column {c}")),
-                None => parts.push(format!("at {}", pos.trim())),
-            }
-        } else if let Some(r) = line.strip_prefix("= ") {
-            parts.push(r.to_string());
-        } else {
-            parts.push(line.to_string());
-        }
-    }
-    parts.join(": ")
 }
 
 #[cfg(test)]
@@ -461,13 +389,17 @@ mod tests {
             .contains("tcp/127.0.0.1:0"));
     }
 
+    /// What a person sees of a bad flag or file (the error and its cause, printed as the
+    /// binaries print it): one line naming the flag or file, without Zenoh's Debug output
+    /// or source paths.
     #[test]
     fn zenoh_messages_lose_debug_output_and_source_paths() {
+        use cellsar_error::error_chain;
         let a = ZenohArgs {
             connect: vec!["tcp/127.0.0.1:7447".into(), "garbage".into()],
             ..Default::default()
         };
-        let e = a.to_config().unwrap_err().to_string();
+        let e = error_chain(&a.to_config().unwrap_err());
         assert!(
             e.starts_with("invalid Zenoh configuration: --connect garbage: "),
             "{e}"
@@ -475,24 +407,6 @@ mod tests {
         for noise in [".rs:", "Message {", "registry", "\n", "Json5Err"] {
             assert!(!e.contains(noise), "{noise:?} in {e}");
         }
-        assert_eq!(
-            clean_zenoh_message(
-                "JSON error: Message { msg: \"Endpoints must be of the form <protocol>/<address>: garbage at /root/.cargo/registry/src/x/zenoh-protocol-1.10.2/src/core/endpoint.rs:615.\", location: Some(Location { line: 1, column: 37 }) } at /root/.cargo/registry/src/x/zenoh-config-1.10.2/src/lib.rs:1484."
-            ),
-            "JSON error: Endpoints must be of the form <protocol>/<address>: garbage (line 1, column 37)"
-        );
-        assert_eq!(
-            clean_zenoh_message(
-                "Can not create a new TCP listener bound to tcp/8.8.8.8:1: [8.8.8.8:1: Cannot assign requested address (os error 99) at /r/zenoh-link-commons-1.10.2/src/tcp.rs:61.] at /r/zenoh-link-tcp-1.10.2/src/unicast.rs:338."
-            ),
-            "Can not create a new TCP listener bound to tcp/8.8.8.8:1: [8.8.8.8:1: Cannot assign requested address (os error 99)]"
-        );
-        assert_eq!(
-            clean_zenoh_message(
-                " --> 1:24\n  |\n1 | { mode: 'peer', bogus: 1 \n  |                        ^---\n  |\n  = expected boolean, null, or string at /r/zenoh-config-1.10.2/src/lib.rs:1486."
-            ),
-            "line 1, column 24: expected boolean, null, or string"
-        );
         // a file with a bad endpoint and a file that does not parse: one clean line each
         let dir = tempfile::tempdir().unwrap();
         for (name, text) in [
@@ -509,7 +423,7 @@ mod tests {
                 config: Some(p),
                 ..Default::default()
             };
-            let e = a.to_config().unwrap_err().to_string();
+            let e = error_chain(&a.to_config().unwrap_err());
             assert!(e.contains(name), "{e}");
             for noise in [".rs:", "Message {", "\n"] {
                 assert!(!e.contains(noise), "{noise:?} in {e}");

@@ -4,6 +4,7 @@ use super::{BodyFormat, HEADER_LEN, HEADER_VERSION};
 
 /// Errors of the envelope codec. Each names what was wrong.
 #[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum CodecError {
     /// The payload is shorter than a header.
     #[error("payload of {len} bytes is shorter than the {HEADER_LEN}-byte envelope header")]

@@ -5,6 +5,7 @@ use crate::net::NetError;
 
 /// Errors of the forwarder.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ForwardError {
     /// A route specification is invalid.
     #[error("invalid route {route:?}: {reason}")]

@@ -216,13 +216,7 @@ fn remote_subscriber(
         })
         .allowed_origin(Locality::Remote)
         .wait()
-        .map_err(|e| {
-            ForwardError::from(NetError::Zenoh {
-                op: "declare subscriber",
-                key: key.to_owned(),
-                reason: e.to_string(),
-            })
-        })
+        .map_err(|e| ForwardError::from(NetError::zenoh("declare subscriber", key, e)))
 }
 
 /// One inbound route delivered in the Zenoh callback (`inbound_queue == 0`). The publisher is

@@ -4,6 +4,7 @@ use crate::envelope::CodecError;
 
 /// Errors of the iceoryx2 layer; each names the service and the step that failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum IoxError {
     /// An iceoryx2 call failed.
     #[error("iceoryx2: {step} for {service:?} failed: {reason}")]
@@ -26,12 +27,12 @@ pub enum IoxError {
         reason: String,
     },
     /// A frame is inconsistent.
-    #[error("frame on {service:?}: {source}")]
+    #[error("frame on {service:?}: {error}")]
     Frame {
         /// Service name.
         service: String,
-        /// What was wrong.
-        source: CodecError,
+        /// What was wrong (printed in this message, not returned as `source()`).
+        error: CodecError,
     },
 }
 

@@ -146,7 +146,7 @@ impl FramePublisher {
     ) -> Result<SendReport, IoxError> {
         let len = meta.payload_len().map_err(|source| IoxError::Frame {
             service: self.spec.name.clone(),
-            source,
+            error: source,
         })?;
         self.check_len(len)?;
         let sample = self
@@ -180,7 +180,7 @@ impl FramePublisher {
             .validate(len, self.spec.max_payload_bytes)
             .map_err(|source| IoxError::Frame {
                 service: self.spec.name.clone(),
-                source,
+                error: source,
             })?;
         let mut sample = self
             .publisher
@@ -193,7 +193,7 @@ impl FramePublisher {
             let Some(d) = dst.get_mut(written..end) else {
                 return Err(IoxError::Frame {
                     service: self.spec.name.clone(),
-                    source: CodecError::LengthMismatch {
+                    error: CodecError::LengthMismatch {
                         declared: len as u64,
                         actual: end as u64,
                     },
@@ -214,7 +214,7 @@ impl FramePublisher {
         if written != len {
             return Err(IoxError::Frame {
                 service: self.spec.name.clone(),
-                source: CodecError::LengthMismatch {
+                error: CodecError::LengthMismatch {
                     declared: len as u64,
                     actual: written as u64,
                 },
@@ -231,7 +231,7 @@ impl FramePublisher {
         if len > self.spec.max_payload_bytes {
             return Err(IoxError::Frame {
                 service: self.spec.name.clone(),
-                source: CodecError::TooLarge {
+                error: CodecError::TooLarge {
                     what: "frame payload",
                     len: len as u64,
                     limit: self.spec.max_payload_bytes as u64,
@@ -250,13 +250,13 @@ impl FramePublisher {
         self.check_len(len)?;
         let header = meta.header(checksum).map_err(|source| IoxError::Frame {
             service: self.spec.name.clone(),
-            source,
+            error: source,
         })?;
         header
             .validate(len, self.spec.max_payload_bytes)
             .map_err(|source| IoxError::Frame {
                 service: self.spec.name.clone(),
-                source,
+                error: source,
             })?;
         Ok(header)
     }

@@ -8,7 +8,6 @@ use zenoh::qos::{CongestionControl, Priority};
 use zenoh::sample::Locality;
 use zenoh::Wait;
 
-use super::error::zerr;
 use super::{NetError, ZenohNode};
 use crate::counters::Counters;
 use crate::frame::{self, FrameHeader, WIRE_PREFIX_LEN};
@@ -29,7 +28,7 @@ impl ZenohNode {
             .priority(Priority::DataLow)
             .allowed_destination(allowed_destination)
             .wait()
-            .map_err(|e| zerr("declare publisher", key, e))?;
+            .map_err(|e| NetError::zenoh("declare publisher", key, e))?;
         Ok(ZenohFramePublisher {
             publisher,
             key: key.to_string(),
@@ -97,10 +96,7 @@ impl ZenohFramePublisher {
     pub fn put(&self, header: &FrameHeader, payload: &[u8]) -> Result<(), NetError> {
         header
             .validate(payload.len(), frame::MAX_FRAME_HARD_LIMIT)
-            .map_err(|source| NetError::Codec {
-                key: self.key.to_string(),
-                source,
-            })?;
+            .map_err(|e| NetError::codec(&self.key, e))?;
         let mut buf = self.pool.take(WIRE_PREFIX_LEN + payload.len());
         buf.extend_from_slice(&header.to_wire_prefix());
         buf.extend_from_slice(payload);
@@ -116,7 +112,7 @@ impl ZenohFramePublisher {
             }
             Err(e) => {
                 self.counters.on_send_error();
-                Err(zerr("put", &self.key, e))
+                Err(NetError::zenoh("put", &self.key, e))
             }
         }
     }
@@ -131,10 +127,7 @@ impl ZenohFramePublisher {
         let payload_len = owner.as_ref().len();
         header
             .validate(payload_len, frame::MAX_FRAME_HARD_LIMIT)
-            .map_err(|source| NetError::Codec {
-                key: self.key.to_string(),
-                source,
-            })?;
+            .map_err(|e| NetError::codec(&self.key, e))?;
         let mut writer = ZBytes::writer();
         writer.append(ZBytes::from(header.to_wire_prefix().to_vec()));
         writer.append(ZBytes::from(bytes::Bytes::from_owner(owner)));
@@ -146,7 +139,7 @@ impl ZenohFramePublisher {
             }
             Err(e) => {
                 self.counters.on_send_error();
-                Err(zerr("put", &self.key, e))
+                Err(NetError::zenoh("put", &self.key, e))
             }
         }
     }
@@ -172,7 +165,7 @@ impl ZenohFramePublisher {
             }
             Err(e) => {
                 self.counters.on_send_error();
-                Err(zerr("put", &self.key, e))
+                Err(NetError::zenoh("put", &self.key, e))
             }
         }
     }

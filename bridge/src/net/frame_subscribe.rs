@@ -10,7 +10,6 @@ use zenoh::bytes::ZBytes;
 use zenoh::sample::{Sample, SampleKind};
 use zenoh::Wait;
 
-use super::error::zerr;
 use super::{FrameSubscribeOptions, NetError, OnFull, ZenohNode};
 use crate::counters::{BadPayloadLog, Counters};
 use crate::envelope::CodecError;
@@ -60,7 +59,7 @@ impl ZenohNode {
             })
             .allowed_origin(opts.allowed_origin)
             .wait()
-            .map_err(|e| zerr("declare subscriber", key, e))?;
+            .map_err(|e| NetError::zenoh("declare subscriber", key, e))?;
         Ok(ZenohFrameSubscriber {
             _subscriber: subscriber,
             rx,

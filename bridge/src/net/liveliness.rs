@@ -9,7 +9,6 @@ use std::time::Duration;
 use zenoh::sample::{Sample, SampleKind};
 use zenoh::Wait;
 
-use super::error::zerr;
 use super::{NetError, ZenohNode};
 
 impl ZenohNode {
@@ -40,7 +39,7 @@ impl ZenohNode {
                 });
             })
             .wait()
-            .map_err(|e| zerr("declare liveliness subscriber", selector, e))?;
+            .map_err(|e| NetError::zenoh("declare liveliness subscriber", selector, e))?;
         Ok(LivelinessWatcher {
             _subscriber: subscriber,
             alive,
@@ -56,7 +55,7 @@ impl ZenohNode {
             .get(selector.to_string())
             .timeout(timeout)
             .wait()
-            .map_err(|e| zerr("liveliness get", selector, e))?;
+            .map_err(|e| NetError::zenoh("liveliness get", selector, e))?;
         let mut out = BTreeSet::new();
         while let Ok(reply) = replies.recv() {
             if let Ok(sample) = reply.result() {

@@ -8,7 +8,6 @@ use std::time::{Duration, Instant};
 use zenoh::liveliness::LivelinessToken;
 use zenoh::{Config, Session, Wait};
 
-use super::error::zerr;
 use super::NetError;
 use crate::keys;
 use crate::zconfig;
@@ -49,19 +48,15 @@ impl ZenohNode {
     pub fn open(config: Config, role: &str, instance: &str) -> Result<Self, NetError> {
         let alive = keys::alive(role, instance)?;
         let described = zconfig::describe(&config);
-        let session = zenoh::open(config)
-            .wait()
-            // a configuration error comes back as Debug text with source paths: clean it
-            // here, where users see it (not on the per-frame put path)
-            .map_err(|e| NetError::Open {
-                session: described,
-                reason: zconfig::clean_zenoh_message(&e.to_string()),
-            })?;
+        let session = zenoh::open(config).wait().map_err(|e| NetError::Open {
+            session: described,
+            error: e.into(),
+        })?;
         let token = session
             .liveliness()
             .declare_token(alive.clone())
             .wait()
-            .map_err(|e| zerr("declare liveliness token", &alive, e))?;
+            .map_err(|e| NetError::zenoh("declare liveliness token", &alive, e))?;
         tracing::info!(%alive, zid = %session.zid(), "zenoh session open");
         Ok(ZenohNode {
             session,
@@ -92,7 +87,7 @@ impl ZenohNode {
             .spawn(move || {
                 let _ = tx.send(ZenohNode::open(config, &r, &i));
             })
-            .map_err(|e| NetError::Open {
+            .map_err(|e| NetError::OpenThread {
                 session: session.clone(),
                 reason: format!("starting the thread that opens it: {e}"),
             })?;
@@ -121,7 +116,7 @@ impl ZenohNode {
                     }
                 }
                 Err(RecvTimeoutError::Disconnected) => {
-                    return Err(NetError::Open {
+                    return Err(NetError::OpenThread {
                         session,
                         reason: "the thread that opened it ended without an answer".into(),
                     })
@@ -151,7 +146,7 @@ impl ZenohNode {
             .liveliness()
             .declare_token(key.to_string())
             .wait()
-            .map_err(|e| zerr("declare liveliness token", key, e))
+            .map_err(|e| NetError::zenoh("declare liveliness token", key, e))
     }
 
     /// Closes the session (undeclaring everything, liveliness token included).
@@ -160,6 +155,6 @@ impl ZenohNode {
         self.session
             .close()
             .wait()
-            .map_err(|e| zerr("close session", &alive, e))
+            .map_err(|e| NetError::zenoh("close session", &alive, e))
     }
 }

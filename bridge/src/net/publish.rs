@@ -8,7 +8,6 @@ use std::time::Duration;
 use zenoh::bytes::ZBytes;
 use zenoh::Wait;
 
-use super::error::zerr;
 use super::{NetError, PublishOptions, WireFormat, ZenohNode};
 use crate::counters::Counters;
 use crate::envelope::{Message, Meta, MissionId};
@@ -28,7 +27,7 @@ impl ZenohNode {
             .priority(opts.priority)
             .allowed_destination(opts.allowed_destination)
             .wait()
-            .map_err(|e| zerr("declare publisher", key, e))?;
+            .map_err(|e| NetError::zenoh("declare publisher", key, e))?;
         Ok(TypedPublisher {
             publisher,
             key: key.to_string(),
@@ -73,10 +72,7 @@ impl<M: Message> TypedPublisher<M> {
         let bytes = self
             .format
             .encode(msg, meta)
-            .map_err(|source| NetError::Codec {
-                key: self.key.to_string(),
-                source,
-            })?;
+            .map_err(|e| NetError::codec(&self.key, e))?;
         let len = bytes.len();
         match self.publisher.put(ZBytes::from(bytes)).wait() {
             Ok(()) => {
@@ -85,7 +81,7 @@ impl<M: Message> TypedPublisher<M> {
             }
             Err(e) => {
                 self.counters.on_send_error();
-                Err(zerr("put", &self.key, e))
+                Err(NetError::zenoh("put", &self.key, e))
             }
         }
     }

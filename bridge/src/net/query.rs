@@ -9,7 +9,6 @@ use zenoh::handlers::FifoChannelHandler;
 use zenoh::query::{ConsolidationMode, Reply};
 use zenoh::Wait;
 
-use super::error::zerr;
 use super::{NetError, QueryOptions, Received, WireFormat, ZenohNode};
 use crate::envelope::{DecodeLimits, Message};
 use crate::refusal::Refusal;
@@ -31,10 +30,7 @@ fn decode_reply<Rep: Message>(
                     format,
                     message: env.message,
                 })
-                .map_err(|source| NetError::Codec {
-                    key: key.to_string(),
-                    source,
-                })
+                .map_err(|e| NetError::codec(key, e))
         }
         Err(err) => Err(decode_error_reply(
             key,
@@ -150,10 +146,7 @@ impl ZenohNode {
         let payload = opts
             .format
             .encode(request, opts.meta)
-            .map_err(|source| NetError::Codec {
-                key: key.to_string(),
-                source,
-            })?;
+            .map_err(|e| NetError::codec(key, e))?;
         self.session()
             .get(key.to_string())
             .payload(payload)
@@ -162,7 +155,7 @@ impl ZenohNode {
             .consolidation(consolidation)
             .timeout(opts.timeout)
             .wait()
-            .map_err(|e| zerr("get", key, e))
+            .map_err(|e| NetError::zenoh("get", key, e))
     }
 
     /// Sends a typed query and returns at once: [`PendingQuery::poll`] then waits for its

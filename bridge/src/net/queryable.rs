@@ -8,7 +8,6 @@ use std::time::Duration;
 use zenoh::query::Query;
 use zenoh::Wait;
 
-use super::error::zerr;
 use super::{NetError, OnFull, SubscribeOptions, WireFormat, ZenohNode};
 use crate::counters::{BadPayloadLog, Counters};
 use crate::envelope::{Header, Message, Meta};
@@ -97,7 +96,7 @@ impl ZenohNode {
                 }
             })
             .wait()
-            .map_err(|e| zerr("declare queryable", key, e))?;
+            .map_err(|e| NetError::zenoh("declare queryable", key, e))?;
         Ok(TypedQueryable {
             _queryable: queryable,
             rx,
@@ -116,18 +115,14 @@ pub fn refuse_query(
     format: WireFormat,
     refusal: &Refusal,
 ) -> Result<(), NetError> {
-    let (bytes, encoding) =
-        refusal
-            .encode(format, Meta::default())
-            .map_err(|source| NetError::Codec {
-                key: key.to_string(),
-                source,
-            })?;
+    let (bytes, encoding) = refusal
+        .encode(format, Meta::default())
+        .map_err(|e| NetError::codec(key, e))?;
     query
         .reply_err(bytes)
         .encoding(encoding)
         .wait()
-        .map_err(|e| zerr("reply_err", key, e))
+        .map_err(|e| NetError::zenoh("reply_err", key, e))
 }
 
 /// A decoded request waiting for its reply. The query is finalised (the querier stops waiting
@@ -154,15 +149,12 @@ impl<Req> IncomingQuery<Req> {
         let bytes = self
             .format
             .encode(reply, meta)
-            .map_err(|source| NetError::Codec {
-                key: self.key.to_string(),
-                source,
-            })?;
+            .map_err(|e| NetError::codec(&self.key, e))?;
         self.query
             .reply(self.query.key_expr().clone(), bytes)
             .encoding(self.format.encoding::<Rep>())
             .wait()
-            .map_err(|e| zerr("reply", &self.key, e))
+            .map_err(|e| NetError::zenoh("reply", &self.key, e))
     }
 
     /// Refuses the request with a typed [`Refusal`] (in the request's format), which the
@@ -177,7 +169,7 @@ impl<Req> IncomingQuery<Req> {
         self.query
             .reply_err(message.to_string())
             .wait()
-            .map_err(|e| zerr("reply_err", &self.key, e))
+            .map_err(|e| NetError::zenoh("reply_err", &self.key, e))
     }
 }
 

@@ -8,7 +8,6 @@ use std::time::Duration;
 use zenoh::sample::{Sample, SampleKind};
 use zenoh::Wait;
 
-use super::error::zerr;
 use super::{NetError, OnFull, Received, SubscribeOptions, WireFormat, ZenohNode};
 use crate::counters::{BadPayloadLog, Counters};
 use crate::envelope::Message;
@@ -55,7 +54,7 @@ impl ZenohNode {
             })
             .allowed_origin(opts.allowed_origin)
             .wait()
-            .map_err(|e| zerr("declare subscriber", key, e))?;
+            .map_err(|e| NetError::zenoh("declare subscriber", key, e))?;
         Ok(TypedSubscriber {
             _subscriber: subscriber,
             rx,
