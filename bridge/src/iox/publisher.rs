@@ -189,7 +189,7 @@ impl FramePublisher {
         let dst = sample.payload_mut();
         let mut written = 0usize;
         for chunk in chunks {
-            let end = written + chunk.len();
+            let end = written.saturating_add(chunk.len());
             let Some(d) = dst.get_mut(written..end) else {
                 return Err(IoxError::Frame {
                     service: self.spec.name.clone(),
@@ -280,7 +280,7 @@ impl FramePublisher {
                 return Err(ierr("send", &self.spec.name, e));
             }
         };
-        let skipped_full = self.full.load(Ordering::Relaxed) - before;
+        let skipped_full = self.full.load(Ordering::Relaxed).wrapping_sub(before);
         self.counters.on_sent(len);
         if skipped_full > 0 {
             self.counters.on_dropped(skipped_full);

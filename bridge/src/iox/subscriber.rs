@@ -138,7 +138,10 @@ impl FrameSubscriber {
             }
             let observed = self.seq.borrow_mut().observe(origin, f.header().seq);
             match observed {
-                SeqObservation::Gap { missing } => self.missed.set(self.missed.get() + missing),
+                SeqObservation::Gap { missing } => {
+                    // a peer chooses the numbers: the total saturates, never overflows
+                    self.missed.set(self.missed.get().saturating_add(missing))
+                }
                 SeqObservation::Duplicate | SeqObservation::First | SeqObservation::InOrder => {}
             }
             self.counters.on_delivered();
@@ -203,5 +206,54 @@ impl FrameSubscriber {
     /// The spec of the service.
     pub fn spec(&self) -> &FrameServiceSpec {
         &self.spec
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{FrameNode, FramePublisherOptions, FrameServiceSpec, IoxEnv};
+    use crate::frame::FrameMeta;
+    use crate::MissionId;
+    use std::time::Duration;
+
+    /// Sequence numbers chosen by a publisher (a peer) at the extremes: 0, u64::MAX, a wrap
+    /// around to 0, and gaps that would overflow a plain sum: nothing panics, every frame is
+    /// delivered, and the missed count saturates.
+    #[test]
+    fn extreme_sequence_numbers_saturate_the_missed_count() {
+        let dir = tempfile::tempdir().unwrap();
+        let env = IoxEnv::isolated(dir.path(), &format!("bt{}_", std::process::id())).unwrap();
+        let (node, _) = FrameNode::new(&env, "seq-extremes").unwrap();
+        let spec = FrameServiceSpec {
+            subscriber_buffer: 8,
+            ..FrameServiceSpec::new("cellsar/test/seq-extremes", 64)
+        };
+        let sub = node.subscriber(&spec).unwrap();
+        let publisher = node
+            .publisher(&spec, FramePublisherOptions::default())
+            .unwrap();
+        assert!(publisher.wait_for_subscribers(
+            1,
+            Duration::from_secs(5),
+            Duration::from_millis(50)
+        ));
+        // the subscriber connects to the new publisher on its next receive
+        assert!(sub.receive().unwrap().is_none());
+        let mut got = Vec::new();
+        for seq in [0, u64::MAX, 0, 1, u64::MAX - 1, u64::MAX] {
+            let meta = FrameMeta::bytes(9, MissionId(1), seq, 8).unwrap();
+            publisher.send_bytes(&meta, &[7u8; 8]).unwrap();
+            let f = sub
+                .receive_timeout(Duration::from_secs(5))
+                .unwrap()
+                .expect("a frame");
+            got.push(f.header().seq);
+        }
+        assert_eq!(got, [0, u64::MAX, 0, 1, u64::MAX - 1, u64::MAX]);
+        // 0 -> MAX misses MAX - 1; MAX -> 0 is in order (the counter wrapped); 1 -> MAX - 1
+        // misses MAX - 3: the sum saturates
+        assert_eq!(sub.missed(), u64::MAX);
+        assert_eq!(sub.duplicates(), 0);
+        assert_eq!(sub.counters().snapshot().delivered, 6);
     }
 }

@@ -193,7 +193,7 @@ impl ZenohFrame {
         let dst = bytemuck::cast_slice_mut::<u64, u8>(&mut words);
         let mut written = 0usize;
         for c in self.payload_chunks() {
-            let end = written + c.len();
+            let end = written.saturating_add(c.len());
             let Some(d) = dst.get_mut(written..end) else {
                 return Err(CodecError::LengthMismatch {
                     declared: len as u64,
