@@ -8,16 +8,26 @@
 //! -l, --listen <ENDPOINT>           endpoints to listen on (repeatable)
 //! -c, --config <FILE>               a Zenoh configuration file (JSON5)
 //!     --no-multicast-scouting       disable multicast scouting
+//!     --zenoh-max-message-bytes <BYTES>
+//!                                   largest message Zenoh reassembles [default: 64 MiB + 64 KiB]
 //! ```
 //!
 //! Without `--config`, the session is an embedded peer that listens on the loopback interface
 //! only (`tcp/127.0.0.1:0`) and needs no router. With `--config`, the file is the base and the
 //! flags given on the command line override it.
+//!
+//! Every configuration built here bounds what a peer can make this process allocate: Zenoh
+//! reassembles a fragmented message in memory before anyone sees it, up to
+//! `transport/link/rx/max_message_size` (1 GiB by Zenoh's default). It is set to
+//! [`DEFAULT_MAX_MESSAGE_BYTES`], room for the largest message this crate decodes, unless
+//! `--zenoh-max-message-bytes` says otherwise or a `--config` file sets a value of its own.
 
 use std::path::PathBuf;
 
 use zenoh::Config;
 
+use crate::envelope::{HEADER_LEN, MAX_BODY_BYTES};
+use crate::frame::{DEFAULT_MAX_FRAME_BYTES, MAX_FRAME_HARD_LIMIT, WIRE_PREFIX_LEN};
 use crate::zenoh_error::ZenohError;
 
 /// The Zenoh session mode.
@@ -43,6 +53,29 @@ impl Mode {
 
 /// The listen endpoint used when neither `--listen` nor `--config` is given.
 pub const DEFAULT_LISTEN: &str = "tcp/127.0.0.1:0";
+
+/// Zenoh's configuration key of the largest message it reassembles from fragments.
+pub const MAX_MESSAGE_SIZE_KEY: &str = "transport/link/rx/max_message_size";
+
+/// Default of `--zenoh-max-message-bytes` (64 MiB + 64 KiB): room for the largest message
+/// this crate decodes by default, with its headers: a body of [`MAX_BODY_BYTES`] (64 MiB, the
+/// plan message's limit) or a frame of [`DEFAULT_MAX_FRAME_BYTES`] (64 MiB; the services'
+/// frames default to 4 MiB, `frame::SERVICE_MAX_FRAME_BYTES`). A process that takes frames
+/// above 64 MiB (`--max-frame-bytes`) needs a larger value:
+/// [`ZenohArgs::with_room_for`].
+pub const DEFAULT_MAX_MESSAGE_BYTES: usize = (64 << 20) + (64 << 10);
+
+/// Smallest `--zenoh-max-message-bytes` accepted (64 KiB: one Zenoh batch).
+pub const MIN_MAX_MESSAGE_BYTES: usize = 64 << 10;
+
+/// Largest `--zenoh-max-message-bytes` accepted: the largest frame any process takes
+/// ([`MAX_FRAME_HARD_LIMIT`], 1 GiB) with 64 KiB for its headers.
+pub const MAX_MAX_MESSAGE_BYTES: usize = MAX_FRAME_HARD_LIMIT + (64 << 10);
+
+const _: () = assert!(DEFAULT_MAX_MESSAGE_BYTES >= MAX_BODY_BYTES + HEADER_LEN);
+const _: () = assert!(DEFAULT_MAX_MESSAGE_BYTES >= DEFAULT_MAX_FRAME_BYTES + WIRE_PREFIX_LEN);
+const _: () = assert!(MIN_MAX_MESSAGE_BYTES <= DEFAULT_MAX_MESSAGE_BYTES);
+const _: () = assert!(DEFAULT_MAX_MESSAGE_BYTES <= MAX_MAX_MESSAGE_BYTES);
 
 /// Zenoh flags shared by every cellsar binary (flatten with `#[command(flatten)]`).
 #[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
@@ -72,6 +105,15 @@ pub struct ZenohArgs {
     /// Disable the multicast-based scouting mechanism.
     #[arg(id = "zenoh_no_multicast_scouting", long = "no-multicast-scouting")]
     pub no_multicast_scouting: bool,
+    /// Largest message Zenoh reassembles from its fragments, in bytes; larger ones are
+    /// dropped before they are allocated [default: 67174400 (64 MiB + 64 KiB), or the
+    /// --config file's own value]. Raise it with --max-frame-bytes above 64 MiB.
+    #[arg(
+        id = "zenoh_max_message_bytes",
+        long = "zenoh-max-message-bytes",
+        value_name = "BYTES"
+    )]
+    pub max_message_bytes: Option<usize>,
 }
 
 /// A flag or file that does not make a valid Zenoh configuration. The message names the flag
@@ -101,6 +143,16 @@ pub enum ConfigError {
         #[source]
         source: ZenohError,
     },
+    /// A flag's value outside the range this crate accepts.
+    #[error("invalid Zenoh configuration: {flag} {value}: {reason}")]
+    OutOfRange {
+        /// The flag.
+        flag: &'static str,
+        /// Its value.
+        value: String,
+        /// The range.
+        reason: String,
+    },
     /// A setting that the flags make (on top of a `--config` file) and that Zenoh refuses.
     #[error("invalid Zenoh configuration: {what} ({key} = {value})")]
     Setting {
@@ -126,7 +178,20 @@ impl ZenohArgs {
             connect: connect.to_vec(),
             listen: listen.to_vec(),
             no_multicast_scouting: true,
+            max_message_bytes: None,
         }
+    }
+
+    /// The same flags with room for messages of `bytes` bytes: `--zenoh-max-message-bytes`
+    /// raised to `bytes` if it (or its default) is smaller. For a process that takes frames
+    /// of `--max-frame-bytes` N: `with_room_for(N + frame::WIRE_PREFIX_LEN)`.
+    #[must_use]
+    pub fn with_room_for(mut self, bytes: usize) -> Self {
+        let now = self.max_message_bytes.unwrap_or(DEFAULT_MAX_MESSAGE_BYTES);
+        if bytes > now {
+            self.max_message_bytes = Some(bytes);
+        }
+        self
     }
 
     /// The flags as command-line arguments (to pass them on to a child process).
@@ -150,6 +215,10 @@ impl ZenohArgs {
         }
         if self.no_multicast_scouting {
             v.push("--no-multicast-scouting".to_string());
+        }
+        if let Some(n) = self.max_message_bytes {
+            v.push("--zenoh-max-message-bytes".to_string());
+            v.push(n.to_string());
         }
         v
     }
@@ -204,7 +273,37 @@ impl ZenohArgs {
                 "--no-multicast-scouting",
             )?;
         }
+        if let Some(n) = self.max_message_size(&config)? {
+            insert(
+                &mut config,
+                MAX_MESSAGE_SIZE_KEY,
+                &n.to_string(),
+                "--zenoh-max-message-bytes",
+            )?;
+        }
         Ok(config)
+    }
+
+    /// The largest message to set in `config`: the flag's (checked), else the default unless
+    /// a `--config` file set a value of its own (one that differs from Zenoh's default);
+    /// `None` keeps the file's.
+    fn max_message_size(&self, config: &Config) -> Result<Option<usize>, ConfigError> {
+        if let Some(n) = self.max_message_bytes {
+            if !(MIN_MAX_MESSAGE_BYTES..=MAX_MAX_MESSAGE_BYTES).contains(&n) {
+                return Err(ConfigError::OutOfRange {
+                    flag: "--zenoh-max-message-bytes",
+                    value: n.to_string(),
+                    reason: format!(
+                        "must be in {MIN_MAX_MESSAGE_BYTES}..={MAX_MAX_MESSAGE_BYTES} bytes"
+                    ),
+                });
+            }
+            return Ok(Some(n));
+        }
+        let zenoh_default = Config::default().get_json(MAX_MESSAGE_SIZE_KEY).ok();
+        let own =
+            self.config.is_some() && config.get_json(MAX_MESSAGE_SIZE_KEY).ok() != zenoh_default;
+        Ok((!own).then_some(DEFAULT_MAX_MESSAGE_BYTES))
     }
 }
 
@@ -517,6 +616,67 @@ mod tests {
         };
         let e = a.to_config().unwrap_err();
         assert!(e.to_string().contains("/nonexistent/zenoh.json5"), "{e}");
+    }
+
+    /// Zenoh reassembles at most 64 MiB + 64 KiB by default (not its own 1 GiB); the flag
+    /// sets it within bounds, and passes on to a child; a file's own value is kept.
+    #[test]
+    fn the_largest_message_is_bounded() {
+        let size = |a: &ZenohArgs| -> usize {
+            a.to_config()
+                .unwrap()
+                .get_json(MAX_MESSAGE_SIZE_KEY)
+                .unwrap()
+                .parse()
+                .unwrap()
+        };
+        assert_eq!(size(&ZenohArgs::default()), DEFAULT_MAX_MESSAGE_BYTES);
+        assert_eq!(
+            size(&ZenohArgs::isolated(&[], &[])),
+            DEFAULT_MAX_MESSAGE_BYTES
+        );
+        let a = ZenohArgs {
+            max_message_bytes: Some(1 << 20),
+            ..Default::default()
+        };
+        assert_eq!(size(&a), 1 << 20);
+        let back =
+            Cli::try_parse_from(std::iter::once("x".to_string()).chain(a.to_cli_args())).unwrap();
+        assert_eq!(back.zenoh, a);
+        // room for larger frames, never less than the default
+        assert_eq!(
+            size(&ZenohArgs::default().with_room_for(200 << 20)),
+            200 << 20
+        );
+        assert_eq!(
+            size(&ZenohArgs::default().with_room_for(1 << 20)),
+            DEFAULT_MAX_MESSAGE_BYTES
+        );
+        for bad in [0, 1000, MAX_MAX_MESSAGE_BYTES + 1, usize::MAX] {
+            let a = ZenohArgs {
+                max_message_bytes: Some(bad),
+                ..Default::default()
+            };
+            let e = a.to_config().unwrap_err().to_string();
+            assert!(e.contains("--zenoh-max-message-bytes"), "{e}");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let own = dir.path().join("own.json5");
+        std::fs::write(
+            &own,
+            "{ transport: { link: { rx: { max_message_size: 2097152 } } } }",
+        )
+        .unwrap();
+        let plain = dir.path().join("plain.json5");
+        std::fs::write(&plain, "{ mode: 'peer' }").unwrap();
+        let file = |p: &std::path::Path, flag: Option<usize>| ZenohArgs {
+            config: Some(p.to_path_buf()),
+            max_message_bytes: flag,
+            ..Default::default()
+        };
+        assert_eq!(size(&file(&own, None)), 2 << 20);
+        assert_eq!(size(&file(&own, Some(3 << 20))), 3 << 20);
+        assert_eq!(size(&file(&plain, None)), DEFAULT_MAX_MESSAGE_BYTES);
     }
 
     #[test]
