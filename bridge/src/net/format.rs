@@ -1,9 +1,11 @@
 //! How a message travels on Zenoh: the binary or JSON envelope ([`WireFormat`]) with its
 //! Zenoh encoding, and a received message with its key and header ([`Received`]).
 
-use zenoh::bytes::Encoding;
+use zenoh::bytes::{Encoding, ZBytes};
 
-use crate::envelope::{self, CodecError, DecodeLimits, Envelope, Header, Message, Meta};
+use crate::envelope::{
+    self, CodecError, DecodeLimits, Envelope, Header, Message, Meta, HEADER_LEN,
+};
 
 /// How a message body is encoded on Zenoh.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -44,6 +46,41 @@ impl WireFormat {
             WireFormat::Bincode => envelope::encode(msg, meta),
             WireFormat::Json => envelope::encode_json(msg, meta),
         }
+    }
+
+    /// The longest payload in this format that `limits` can accept: the header and the
+    /// largest body of a binary envelope, the whole text of a JSON one.
+    pub fn max_payload_len(self, limits: &DecodeLimits) -> usize {
+        match self {
+            WireFormat::Bincode => HEADER_LEN.saturating_add(limits.effective_max()),
+            WireFormat::Json => limits.effective_max(),
+        }
+    }
+
+    /// Checks the length of a received payload against `limits` before anything reads it:
+    /// Zenoh hands a large message over in fragments, and gathering them into one buffer
+    /// ([`ZBytes::to_bytes`]) copies it.
+    pub fn check_len(self, len: usize, limits: &DecodeLimits) -> Result<(), CodecError> {
+        let limit = self.max_payload_len(limits);
+        if len > limit {
+            return Err(CodecError::TooLarge {
+                what: "payload",
+                len: len as u64,
+                limit: limit as u64,
+            });
+        }
+        Ok(())
+    }
+
+    /// Decodes a Zenoh payload holding an `M`, its length checked first
+    /// ([`WireFormat::check_len`]).
+    pub fn decode_zbytes<M: Message>(
+        self,
+        payload: &ZBytes,
+        limits: &DecodeLimits,
+    ) -> Result<Envelope<M>, CodecError> {
+        self.check_len(payload.len(), limits)?;
+        self.decode(&payload.to_bytes(), limits)
     }
 
     /// Decodes a payload holding an `M`.

@@ -20,10 +20,9 @@ fn decode_reply<Rep: Message>(
 ) -> Result<Received<Rep>, NetError> {
     match reply.result() {
         Ok(sample) => {
-            let bytes = sample.payload().to_bytes();
             let format = WireFormat::of(sample.encoding());
             format
-                .decode::<Rep>(&bytes, limits)
+                .decode_zbytes::<Rep>(sample.payload(), limits)
                 .map(|env| Received {
                     key: sample.key_expr().as_str().to_string(),
                     header: env.header,
@@ -32,12 +31,17 @@ fn decode_reply<Rep: Message>(
                 })
                 .map_err(|e| NetError::codec(key, e))
         }
-        Err(err) => Err(decode_error_reply(
-            key,
-            &err.payload().to_bytes(),
-            WireFormat::of(err.encoding()),
-            limits,
-        )),
+        Err(err) => {
+            let payload = err.payload();
+            let format = WireFormat::of(err.encoding());
+            if let Err(e) = format.check_len(payload.len(), limits) {
+                return Err(NetError::Remote {
+                    key: key.to_string(),
+                    message: format!("an error reply that is not read: {e}"),
+                });
+            }
+            Err(decode_error_reply(key, &payload.to_bytes(), format, limits))
+        }
     }
 }
 

@@ -1,7 +1,7 @@
 //! Typed queryables ([`ZenohNode::queryable`], [`TypedQueryable`], [`IncomingQuery`]) and
 //! typed refusals of a query ([`refuse_query`]).
 
-use std::sync::mpsc::{self, Receiver, TrySendError};
+use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -10,7 +10,7 @@ use zenoh::Wait;
 
 use super::{NetError, OnFull, SubscribeOptions, WireFormat, ZenohNode};
 use crate::counters::{BadPayloadLog, Counters};
-use crate::envelope::{Header, Message, Meta};
+use crate::envelope::{DecodeLimits, Header, Message, Meta};
 use crate::refusal::{Refusal, RefusalKind};
 
 impl ZenohNode {
@@ -23,78 +23,17 @@ impl ZenohNode {
     ) -> Result<TypedQueryable<Req>, NetError> {
         let (tx, rx) = mpsc::sync_channel::<IncomingQuery<Req>>(opts.capacity.max(1));
         let counters = Arc::new(Counters::default());
-        let log = Arc::new(BadPayloadLog::default());
-        let c = counters.clone();
-        let limits = opts.limits;
-        let block = opts.on_full == OnFull::Block;
+        let handler = RequestHandler {
+            tx,
+            counters: counters.clone(),
+            log: BadPayloadLog::default(),
+            limits: opts.limits,
+            block: opts.on_full == OnFull::Block,
+        };
         let queryable = self
             .session()
             .declare_queryable(key.to_string())
-            .callback(move |query: Query| {
-                let key = query.key_expr().as_str().to_string();
-                let format = query.encoding().map(WireFormat::of).unwrap_or_default();
-                let Some(payload) = query.payload() else {
-                    c.on_received(0);
-                    c.on_malformed();
-                    let e = format!("empty request: expected a {} message", Req::NAME);
-                    log.log(&key, 0, &e);
-                    let _ = refuse_query(
-                        &query,
-                        &key,
-                        format,
-                        &Refusal::new(RefusalKind::BadRequest, e),
-                    );
-                    return;
-                };
-                c.on_received(payload.len());
-                let bytes = payload.to_bytes();
-                match format.decode::<Req>(&bytes, &limits) {
-                    Ok(env) => {
-                        let q = IncomingQuery {
-                            query,
-                            key,
-                            header: env.header,
-                            format,
-                            request: env.message,
-                        };
-                        if block {
-                            if tx.send(q).is_ok() {
-                                c.on_delivered();
-                            } else {
-                                c.on_dropped(1);
-                            }
-                        } else {
-                            match tx.try_send(q) {
-                                Ok(()) => c.on_delivered(),
-                                Err(TrySendError::Full(q)) => {
-                                    c.on_dropped(1);
-                                    let _ = q.refuse(&Refusal::new(
-                                        RefusalKind::Busy,
-                                        "server busy: request queue full",
-                                    ));
-                                }
-                                Err(TrySendError::Disconnected(q)) => {
-                                    c.on_dropped(1);
-                                    let _ = q.refuse(&Refusal::new(
-                                        RefusalKind::Busy,
-                                        "server stopping: request not taken",
-                                    ));
-                                }
-                            }
-                        }
-                    }
-                    Err(e) => {
-                        c.on_malformed();
-                        log.log(&key, bytes.len(), &e);
-                        let _ = refuse_query(
-                            &query,
-                            &key,
-                            format,
-                            &Refusal::new(RefusalKind::BadRequest, format!("bad request: {e}")),
-                        );
-                    }
-                }
-            })
+            .callback(move |query: Query| handler.on_query(query))
             .wait()
             .map_err(|e| NetError::zenoh("declare queryable", key, e))?;
         Ok(TypedQueryable {
@@ -103,6 +42,88 @@ impl ZenohNode {
             counters,
             key: key.to_string(),
         })
+    }
+}
+
+/// What a typed queryable does with each query, in the Zenoh callback: decode the request
+/// (its length checked first), refuse a bad one, and queue a good one for the owner.
+struct RequestHandler<Req> {
+    tx: SyncSender<IncomingQuery<Req>>,
+    counters: Arc<Counters>,
+    log: BadPayloadLog,
+    limits: DecodeLimits,
+    block: bool,
+}
+
+impl<Req: Message> RequestHandler<Req> {
+    fn on_query(&self, query: Query) {
+        let c = &self.counters;
+        let key = query.key_expr().as_str().to_string();
+        let format = query.encoding().map(WireFormat::of).unwrap_or_default();
+        let Some(payload) = query.payload() else {
+            c.on_received(0);
+            c.on_malformed();
+            let e = format!("empty request: expected a {} message", Req::NAME);
+            self.log.log(&key, 0, &e);
+            let _ = refuse_query(
+                &query,
+                &key,
+                format,
+                &Refusal::new(RefusalKind::BadRequest, e),
+            );
+            return;
+        };
+        let len = payload.len();
+        c.on_received(len);
+        match format.decode_zbytes::<Req>(payload, &self.limits) {
+            Ok(env) => self.queue(IncomingQuery {
+                query,
+                key,
+                header: env.header,
+                format,
+                request: env.message,
+            }),
+            Err(e) => {
+                c.on_malformed();
+                self.log.log(&key, len, &e);
+                let _ = refuse_query(
+                    &query,
+                    &key,
+                    format,
+                    &Refusal::new(RefusalKind::BadRequest, format!("bad request: {e}")),
+                );
+            }
+        }
+    }
+
+    /// Queues a decoded request; without room (and not blocking), refuses it as busy.
+    fn queue(&self, q: IncomingQuery<Req>) {
+        let c = &self.counters;
+        if self.block {
+            if self.tx.send(q).is_ok() {
+                c.on_delivered();
+            } else {
+                c.on_dropped(1);
+            }
+            return;
+        }
+        match self.tx.try_send(q) {
+            Ok(()) => c.on_delivered(),
+            Err(TrySendError::Full(q)) => {
+                c.on_dropped(1);
+                let _ = q.refuse(&Refusal::new(
+                    RefusalKind::Busy,
+                    "server busy: request queue full",
+                ));
+            }
+            Err(TrySendError::Disconnected(q)) => {
+                c.on_dropped(1);
+                let _ = q.refuse(&Refusal::new(
+                    RefusalKind::Busy,
+                    "server stopping: request not taken",
+                ));
+            }
+        }
     }
 }
 

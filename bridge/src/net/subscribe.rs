@@ -34,9 +34,8 @@ impl ZenohNode {
                 }
                 let payload = sample.payload();
                 c.on_received(payload.len());
-                let bytes = payload.to_bytes();
                 let format = WireFormat::of(sample.encoding());
-                match format.decode::<M>(&bytes, &limits) {
+                match format.decode_zbytes::<M>(payload, &limits) {
                     Ok(env) => {
                         let msg = Received {
                             key: sample.key_expr().as_str().to_string(),
@@ -48,7 +47,7 @@ impl ZenohNode {
                     }
                     Err(e) => {
                         c.on_malformed();
-                        log.log(sample.key_expr().as_str(), bytes.len(), &e);
+                        log.log(sample.key_expr().as_str(), payload.len(), &e);
                     }
                 }
             })
