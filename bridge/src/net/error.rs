@@ -68,6 +68,17 @@ pub enum NetError {
         /// The refusal: its kind and message.
         refusal: Refusal,
     },
+    /// A query's replies went past a bound of its options ([`super::QueryOptions`]: a
+    /// number of replies or of bytes); the replies past it were not read.
+    #[error("query {key:?}: the replies went past {limit} {what}; the rest were not read")]
+    TooManyReplies {
+        /// Key expression.
+        key: String,
+        /// The bound: `replies` or `bytes`.
+        what: &'static str,
+        /// Its value.
+        limit: u64,
+    },
     /// A query got no (good) reply before its timeout.
     #[error("query {key:?}: no reply within {timeout:?}")]
     NoReply {

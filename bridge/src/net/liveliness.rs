@@ -11,6 +11,12 @@ use zenoh::Wait;
 
 use super::{NetError, ZenohNode};
 
+/// Most keys [`ZenohNode::alive_now`] lists.
+pub const MAX_ALIVE_KEYS: usize = 65_536;
+
+/// Most key bytes, all keys together, [`ZenohNode::alive_now`] lists (16 MiB).
+pub const MAX_ALIVE_KEY_BYTES: usize = 16 << 20;
+
 impl ZenohNode {
     /// Watches liveliness tokens matching `selector` (e.g. [`crate::keys::ALIVE_ALL`]), including
     /// the ones that exist already.
@@ -47,7 +53,9 @@ impl ZenohNode {
         })
     }
 
-    /// The liveliness tokens matching `selector` right now (a liveliness query).
+    /// The liveliness tokens matching `selector` right now (a liveliness query): at most
+    /// [`MAX_ALIVE_KEYS`] keys of [`MAX_ALIVE_KEY_BYTES`] in all (past that, a warning is
+    /// logged and the rest are not listed).
     pub fn alive_now(&self, selector: &str, timeout: Duration) -> Result<Vec<String>, NetError> {
         let replies = self
             .session()
@@ -57,9 +65,21 @@ impl ZenohNode {
             .wait()
             .map_err(|e| NetError::zenoh("liveliness get", selector, e))?;
         let mut out = BTreeSet::new();
+        let mut bytes = 0usize;
         while let Ok(reply) = replies.recv() {
             if let Ok(sample) = reply.result() {
-                out.insert(sample.key_expr().as_str().to_string());
+                let key = sample.key_expr().as_str();
+                bytes = bytes.saturating_add(key.len());
+                if out.len() >= MAX_ALIVE_KEYS || bytes > MAX_ALIVE_KEY_BYTES {
+                    tracing::warn!(
+                        selector,
+                        keys = out.len(),
+                        "more liveliness tokens than {MAX_ALIVE_KEYS} keys or \
+                         {MAX_ALIVE_KEY_BYTES} bytes: the rest are not listed"
+                    );
+                    break;
+                }
+                out.insert(key.to_string());
             }
         }
         Ok(out.into_iter().collect())

@@ -30,10 +30,13 @@ pub use error::NetError;
 pub use format::{Received, WireFormat};
 pub use frame_publish::ZenohFramePublisher;
 pub use frame_subscribe::{split_frame_payload, OwnedFrame, ZenohFrame, ZenohFrameSubscriber};
-pub use liveliness::{AliveEvent, LivelinessWatcher};
+pub use liveliness::{AliveEvent, LivelinessWatcher, MAX_ALIVE_KEYS, MAX_ALIVE_KEY_BYTES};
 pub use node::ZenohNode;
-pub use options::{FrameSubscribeOptions, OnFull, PublishOptions, QueryOptions, SubscribeOptions};
+pub use options::{
+    FrameSubscribeOptions, OnFull, PublishOptions, QueryOptions, SubscribeOptions,
+    DEFAULT_MAX_REPLIES, DEFAULT_MAX_REPLY_BYTES,
+};
 pub use publish::TypedPublisher;
-pub use query::{decode_error_reply, PendingQuery};
+pub use query::{decode_error_reply, PendingQuery, MAX_ERROR_TEXT_BYTES};
 pub use queryable::{refuse_query, IncomingQuery, TypedQueryable};
 pub use subscribe::TypedSubscriber;

@@ -98,7 +98,19 @@ pub struct QueryOptions {
     pub target: QueryTarget,
     /// Limits for decoding replies.
     pub limits: DecodeLimits,
+    /// Most replies [`ZenohNode::query`](super::ZenohNode::query) collects (good or not);
+    /// the replies past it are not read.
+    pub max_replies: usize,
+    /// Most payload bytes [`ZenohNode::query`](super::ZenohNode::query) collects, all
+    /// replies together; the reply that would go past it and those after it are not read.
+    pub max_reply_bytes: usize,
 }
+
+/// Default of [`QueryOptions::max_replies`].
+pub const DEFAULT_MAX_REPLIES: usize = 1024;
+
+/// Default of [`QueryOptions::max_reply_bytes`] (256 MiB: four replies of the largest body).
+pub const DEFAULT_MAX_REPLY_BYTES: usize = 256 << 20;
 
 impl Default for QueryOptions {
     fn default() -> Self {
@@ -108,6 +120,8 @@ impl Default for QueryOptions {
             timeout: Duration::from_secs(10),
             target: QueryTarget::BestMatching,
             limits: DecodeLimits::default(),
+            max_replies: DEFAULT_MAX_REPLIES,
+            max_reply_bytes: DEFAULT_MAX_REPLY_BYTES,
         }
     }
 }
