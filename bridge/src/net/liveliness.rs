@@ -11,6 +11,10 @@ use zenoh::Wait;
 
 use super::{NetError, ZenohNode};
 
+/// Most liveliness changes a [`LivelinessWatcher`] queues for [`LivelinessWatcher::next_event`];
+/// later ones are dropped until it is read ([`LivelinessWatcher::alive`] stays exact).
+pub const MAX_QUEUED_EVENTS: usize = 4096;
+
 /// Most keys [`ZenohNode::alive_now`] lists.
 pub const MAX_ALIVE_KEYS: usize = 65_536;
 
@@ -19,10 +23,12 @@ pub const MAX_ALIVE_KEY_BYTES: usize = 16 << 20;
 
 impl ZenohNode {
     /// Watches liveliness tokens matching `selector` (e.g. [`crate::keys::ALIVE_ALL`]), including
-    /// the ones that exist already.
+    /// the ones that exist already. At most [`MAX_QUEUED_EVENTS`] changes wait to be read.
     pub fn watch_liveliness(&self, selector: &str) -> Result<LivelinessWatcher, NetError> {
         let alive = Arc::new(Mutex::new(BTreeSet::new()));
-        let (tx, rx) = mpsc::channel();
+        // bounded: peers decide how many events come; past the bound they are dropped (the
+        // set of alive keys stays exact)
+        let (tx, rx) = mpsc::sync_channel(MAX_QUEUED_EVENTS);
         let a = alive.clone();
         let subscriber = self
             .session()
@@ -39,7 +45,7 @@ impl ZenohNode {
                         set.remove(&key);
                     }
                 }
-                let _ = tx.send(AliveEvent {
+                let _ = tx.try_send(AliveEvent {
                     key,
                     alive: is_alive,
                 });

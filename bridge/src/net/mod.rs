@@ -30,7 +30,9 @@ pub use error::NetError;
 pub use format::{Received, WireFormat};
 pub use frame_publish::ZenohFramePublisher;
 pub use frame_subscribe::{split_frame_payload, OwnedFrame, ZenohFrame, ZenohFrameSubscriber};
-pub use liveliness::{AliveEvent, LivelinessWatcher, MAX_ALIVE_KEYS, MAX_ALIVE_KEY_BYTES};
+pub use liveliness::{
+    AliveEvent, LivelinessWatcher, MAX_ALIVE_KEYS, MAX_ALIVE_KEY_BYTES, MAX_QUEUED_EVENTS,
+};
 pub use node::ZenohNode;
 pub use options::{
     FrameSubscribeOptions, OnFull, PublishOptions, QueryOptions, SubscribeOptions,
