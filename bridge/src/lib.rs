@@ -7,7 +7,8 @@
 //!   little-endian complex f32 samples after the header.
 //! - [`net`]: typed Zenoh publishers, subscribers, queryables and queries, frames over Zenoh,
 //!   liveliness tokens `cellsar/alive/<role>/<instance>` and liveliness watching.
-//! - [`zconfig`]: the `-m/-e/-l/-c/--no-multicast-scouting` flags ([`ZenohArgs`]).
+//! - [`zconfig`]: the `-m/-e/-l/-c/--no-multicast-scouting/--zenoh-max-message-bytes` flags
+//!   ([`ZenohArgs`]), with the bound on the messages Zenoh reassembles.
 //! - [`zenoh_error`]: Zenoh's errors kept whole as causes ([`ZenohError`]), printed for people.
 //! - [`iox`]: zero-copy frame services over iceoryx2 (explicit sizing, event wake-ups,
 //!   stale-resource cleanup, isolated roots for tests).

@@ -30,6 +30,12 @@ use crate::envelope::{HEADER_LEN, MAX_BODY_BYTES};
 use crate::frame::{DEFAULT_MAX_FRAME_BYTES, MAX_FRAME_HARD_LIMIT, WIRE_PREFIX_LEN};
 use crate::zenoh_error::ZenohError;
 
+mod describe;
+mod error;
+
+pub use describe::{describe, effective_endpoints, effective_mode, waiting_client_json5};
+pub use error::ConfigError;
+
 /// The Zenoh session mode.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Mode {
@@ -114,58 +120,6 @@ pub struct ZenohArgs {
         value_name = "BYTES"
     )]
     pub max_message_bytes: Option<usize>,
-}
-
-/// A flag or file that does not make a valid Zenoh configuration. The message names the flag
-/// and its value (`--connect garbage`), the file, or the setting; Zenoh's reason is the
-/// [`source`](std::error::Error::source) ([`ZenohError`]: one line, without Zenoh's source
-/// locations), so that printing the chain (`cellsar_error::error_chain`) shows each once.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ConfigError {
-    /// A flag's value that Zenoh refuses (an endpoint of `--connect` or `--listen`).
-    #[error("invalid Zenoh configuration: {flag} {value}")]
-    Flag {
-        /// The flag.
-        flag: &'static str,
-        /// Its value.
-        value: String,
-        /// Why Zenoh refuses it.
-        #[source]
-        source: ZenohError,
-    },
-    /// The configuration file (`--config`) cannot be read or is no valid Zenoh configuration.
-    #[error("invalid Zenoh configuration: --config {}", path.display())]
-    File {
-        /// The file.
-        path: PathBuf,
-        /// Why Zenoh refuses it.
-        #[source]
-        source: ZenohError,
-    },
-    /// A flag's value outside the range this crate accepts.
-    #[error("invalid Zenoh configuration: {flag} {value}: {reason}")]
-    OutOfRange {
-        /// The flag.
-        flag: &'static str,
-        /// Its value.
-        value: String,
-        /// The range.
-        reason: String,
-    },
-    /// A setting that the flags make (on top of a `--config` file) and that Zenoh refuses.
-    #[error("invalid Zenoh configuration: {what} ({key} = {value})")]
-    Setting {
-        /// The flag (or default) that makes the setting.
-        what: &'static str,
-        /// The configuration key.
-        key: &'static str,
-        /// The value (JSON5).
-        value: String,
-        /// Why Zenoh refuses it.
-        #[source]
-        source: ZenohError,
-    },
 }
 
 impl ZenohArgs {
@@ -305,63 +259,6 @@ impl ZenohArgs {
             self.config.is_some() && config.get_json(MAX_MESSAGE_SIZE_KEY).ok() != zenoh_default;
         Ok((!own).then_some(DEFAULT_MAX_MESSAGE_BYTES))
     }
-}
-
-/// The Zenoh configuration (JSON5) of a client that connects to `endpoint` and, like
-/// `pipeline/deploy/client.json5`, waits for it as long as it takes: `connect.timeout_ms: -1`,
-/// no exit on a failed connection, no multicast scouting (what the tests of a service started
-/// before its router use).
-pub fn waiting_client_json5(endpoint: &str) -> String {
-    format!(
-        "{{ mode: 'client', connect: {{ endpoints: ['{endpoint}'], timeout_ms: -1, \
-         exit_on_failure: false }}, scouting: {{ multicast: {{ enabled: false }} }} }}"
-    )
-}
-
-/// A one-line description of the session `config` opens, for messages and logs: its mode and
-/// the endpoints it connects to and listens on as Zenoh will use them (those of a `--config`
-/// file included; a mode-dependent list resolved for the mode), e.g. `mode client, connect
-/// [tcp/192.168.1.10:7447], listen []`.
-pub fn describe(config: &Config) -> String {
-    let mode = effective_mode(config);
-    format!(
-        "mode {mode}, connect [{}], listen [{}]",
-        effective_endpoints(config, "connect", &mode).join(", "),
-        effective_endpoints(config, "listen", &mode).join(", ")
-    )
-}
-
-/// The session mode of `config` (`peer` when it sets none, as Zenoh does).
-pub fn effective_mode(config: &Config) -> String {
-    config
-        .get_json("mode")
-        .ok()
-        .and_then(|s| serde_json::from_str::<Option<String>>(&s).ok().flatten())
-        .unwrap_or_else(|| Mode::Peer.as_str().to_string())
-}
-
-/// The endpoints of `which` (`"connect"` or `"listen"`) in `config` for a session of `mode`:
-/// the list itself, or the entry for `mode` of a mode-dependent value (`{router: [...], peer:
-/// [...]}`); empty when there are none.
-pub fn effective_endpoints(config: &Config, which: &str, mode: &str) -> Vec<String> {
-    let Some(value) = config
-        .get_json(&format!("{which}/endpoints"))
-        .ok()
-        .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
-    else {
-        return Vec::new();
-    };
-    let list = match &value {
-        serde_json::Value::Object(per_mode) => per_mode.get(mode),
-        other => Some(other),
-    };
-    list.and_then(serde_json::Value::as_array)
-        .map(|a| {
-            a.iter()
-                .filter_map(|e| e.as_str().map(str::to_string))
-                .collect()
-        })
-        .unwrap_or_default()
 }
 
 fn json_str(s: &str) -> String {
@@ -528,78 +425,6 @@ mod tests {
                 assert!(!e.contains(noise), "{noise:?} in {e}");
             }
         }
-    }
-
-    /// What a session is described by in messages: the mode and the effective endpoints,
-    /// those of a configuration file included (mode-dependent lists resolved).
-    #[test]
-    fn the_waiting_client_configuration_is_a_client_of_its_endpoint() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("c.json5");
-        std::fs::write(&p, waiting_client_json5("tcp/127.0.0.1:17448")).unwrap();
-        let c = ZenohArgs {
-            config: Some(p),
-            ..Default::default()
-        }
-        .to_config()
-        .unwrap();
-        assert_eq!(
-            describe(&c),
-            "mode client, connect [tcp/127.0.0.1:17448], listen []"
-        );
-        let timeout = c.get_json("connect/timeout_ms").unwrap();
-        assert!(timeout.contains("-1"), "{timeout}");
-    }
-
-    #[test]
-    fn sessions_are_described_by_mode_and_endpoints() {
-        let a = ZenohArgs {
-            mode: Some(Mode::Client),
-            connect: vec!["tcp/127.0.0.1:7447".into()],
-            ..Default::default()
-        };
-        assert_eq!(
-            describe(&a.to_config().unwrap()),
-            "mode client, connect [tcp/127.0.0.1:7447], listen []"
-        );
-        assert_eq!(
-            describe(&ZenohArgs::default().to_config().unwrap()),
-            "mode peer, connect [], listen [tcp/127.0.0.1:0]"
-        );
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("r.json5");
-        std::fs::write(
-            &p,
-            "{ mode: 'router', listen: { endpoints: { router: ['tcp/127.0.0.1:17447'], peer: ['tcp/127.0.0.1:0'] } } }",
-        )
-        .unwrap();
-        let c = ZenohArgs {
-            config: Some(p),
-            ..Default::default()
-        }
-        .to_config()
-        .unwrap();
-        assert_eq!(
-            effective_endpoints(&c, "listen", &effective_mode(&c)),
-            ["tcp/127.0.0.1:17447"]
-        );
-        assert!(
-            describe(&c).starts_with("mode router, "),
-            "{}",
-            describe(&c)
-        );
-        // the deployment's client configuration
-        let client = ZenohArgs {
-            config: Some(
-                std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                    .join("../pipeline/deploy/client.json5"),
-            ),
-            ..Default::default()
-        };
-        assert_eq!(
-            describe(&client.to_config().unwrap()),
-            "mode client, connect [tcp/192.168.1.10:7447], listen []"
-        );
     }
 
     #[test]
