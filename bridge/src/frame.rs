@@ -269,7 +269,7 @@ impl FrameHeader {
             mission_id: MissionId(self.mission_id),
             seq: self.seq,
             time_unix_ns: self.time_unix_ns,
-            body_len: DESCRIPTOR_LEN as u64 + self.payload_len,
+            body_len: (DESCRIPTOR_LEN as u64).saturating_add(self.payload_len),
         };
         let mut out = [0u8; WIRE_PREFIX_LEN];
         out[..HEADER_LEN].copy_from_slice(&header.to_bytes());

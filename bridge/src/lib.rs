@@ -7,7 +7,9 @@
 //!   little-endian complex f32 samples after the header.
 //! - [`net`]: typed Zenoh publishers, subscribers, queryables and queries, frames over Zenoh,
 //!   liveliness tokens `cellsar/alive/<role>/<instance>` and liveliness watching.
-//! - [`zconfig`]: the `-m/-e/-l/-c/--no-multicast-scouting` flags ([`ZenohArgs`]).
+//! - [`zconfig`]: the `-m/-e/-l/-c/--no-multicast-scouting/--zenoh-max-message-bytes` flags
+//!   ([`ZenohArgs`]), with the bound on the messages Zenoh reassembles.
+//! - [`zenoh_error`]: Zenoh's errors kept whole as causes ([`ZenohError`]), printed for people.
 //! - [`iox`]: zero-copy frame services over iceoryx2 (explicit sizing, event wake-ups,
 //!   stale-resource cleanup, isolated roots for tests).
 //! - [`forward`]: the iceoryx2 <-> Zenoh forwarder behind the `cellsar-bridge` binary.
@@ -34,6 +36,7 @@ pub mod refusal;
 pub mod seq;
 pub mod stats;
 pub mod zconfig;
+pub mod zenoh_error;
 
 pub use counters::{CounterSnapshot, Counters};
 pub use envelope::{CodecError, DecodeLimits, Envelope, Header, Message, Meta, MissionId};
@@ -49,6 +52,7 @@ pub use net::{
 pub use refusal::{Refusal, RefusalKind};
 pub use seq::{SeqObservation, SeqTracker};
 pub use zconfig::ZenohArgs;
+pub use zenoh_error::ZenohError;
 
 /// Re-export of the complex sample type of IQ frames.
 pub use num_complex::Complex32;

@@ -337,6 +337,7 @@ fn launch(
             connect: vec![ep],
             listen: Vec::new(),
             no_multicast_scouting: true,
+            max_message_bytes: None,
         };
         Net {
             launcher: client.clone(),

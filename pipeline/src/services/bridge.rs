@@ -275,11 +275,7 @@ fn forward(
             }
         })
         .wait()
-        .map_err(|e| NetError::Zenoh {
-            op: "declare queryable",
-            key: stats_key.clone(),
-            reason: e.to_string(),
-        })?;
+        .map_err(|e| NetError::zenoh("declare queryable", &stats_key, e))?;
     tracing::info!(
         instance = %config.instance,
         routes = config.routes.len(),

@@ -69,11 +69,7 @@ impl PlanCache {
             .declare_queryable(ALL_PLANS)
             .callback(move |query: Query| answer_lookup(&p, &query, &m, &log))
             .wait()
-            .map_err(|e| bridge::NetError::Zenoh {
-                op: "declare queryable",
-                key: ALL_PLANS.into(),
-                reason: e.to_string(),
-            })?;
+            .map_err(|e| bridge::NetError::zenoh("declare queryable", ALL_PLANS, e))?;
         Ok(PlanCache {
             plans,
             dir: dir.map(Path::to_path_buf),

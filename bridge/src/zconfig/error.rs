@@ -1,0 +1,57 @@
+//! The error of a flag or file that makes no valid Zenoh configuration ([`ConfigError`]).
+
+use std::path::PathBuf;
+
+use crate::zenoh_error::ZenohError;
+
+/// A flag or file that does not make a valid Zenoh configuration. The message names the flag
+/// and its value (`--connect garbage`), the file, or the setting; Zenoh's reason is the
+/// [`source`](std::error::Error::source) ([`ZenohError`]: one line, without Zenoh's source
+/// locations), so that printing the chain (`cellsar_error::error_chain`) shows each once.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// A flag's value that Zenoh refuses (an endpoint of `--connect` or `--listen`).
+    #[error("invalid Zenoh configuration: {flag} {value}")]
+    Flag {
+        /// The flag.
+        flag: &'static str,
+        /// Its value.
+        value: String,
+        /// Why Zenoh refuses it.
+        #[source]
+        source: ZenohError,
+    },
+    /// The configuration file (`--config`) cannot be read or is no valid Zenoh configuration.
+    #[error("invalid Zenoh configuration: --config {}", path.display())]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// Why Zenoh refuses it.
+        #[source]
+        source: ZenohError,
+    },
+    /// A flag's value outside the range this crate accepts.
+    #[error("invalid Zenoh configuration: {flag} {value}: {reason}")]
+    OutOfRange {
+        /// The flag.
+        flag: &'static str,
+        /// Its value.
+        value: String,
+        /// The range.
+        reason: String,
+    },
+    /// A setting that the flags make (on top of a `--config` file) and that Zenoh refuses.
+    #[error("invalid Zenoh configuration: {what} ({key} = {value})")]
+    Setting {
+        /// The flag (or default) that makes the setting.
+        what: &'static str,
+        /// The configuration key.
+        key: &'static str,
+        /// The value (JSON5).
+        value: String,
+        /// Why Zenoh refuses it.
+        #[source]
+        source: ZenohError,
+    },
+}
