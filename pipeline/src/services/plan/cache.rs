@@ -156,11 +156,11 @@ fn answer_lookup(
 ) {
     let format = query.encoding().map(WireFormat::of).unwrap_or_default();
     if let Some(payload) = query.payload() {
-        let bytes = payload.to_bytes();
-        if let Err(e) = format.decode::<PlanLookup>(&bytes, &DecodeLimits::default()) {
+        // the size is checked before a fragmented payload is copied
+        if let Err(e) = format.decode_zbytes::<PlanLookup>(payload, &DecodeLimits::default()) {
             malformed.fetch_add(1, Ordering::Relaxed);
             let key = query.key_expr().as_str();
-            log.log(key, bytes.len(), &e);
+            log.log(key, payload.len(), &e);
             let refusal = Refusal::new(RefusalKind::BadRequest, format!("bad plan lookup: {e}"));
             if let Err(e) = bridge::net::refuse_query(query, key, format, &refusal) {
                 tracing::debug!(error = %e, "plan lookup refusal failed");
