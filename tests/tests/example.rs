@@ -15,8 +15,18 @@ use serde_json::Value;
 
 /// Keys whose values are times measured on the machine that ran the example.
 fn is_timing(key: &str) -> bool {
-    const TIMING: [&str; 7] = ["_s", "seconds", "cpu", "wall", "elapsed", "load", "process_us"];
-    TIMING.iter().any(|t| key.ends_with(t) || key.contains("cpu_") || key == *t)
+    const TIMING: [&str; 7] = [
+        "_s",
+        "seconds",
+        "cpu",
+        "wall",
+        "elapsed",
+        "load",
+        "process_us",
+    ];
+    TIMING
+        .iter()
+        .any(|t| key.ends_with(t) || key.contains("cpu_") || key == *t)
 }
 
 fn close(a: f64, b: f64) -> bool {
@@ -69,7 +79,11 @@ fn the_main_job_example_is_current() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let mission = planner::Mission::from_path(&root().join("missions/default-30m.toml")).unwrap();
-    closed_loop(&mission, &root().join("radar-sim/scenes/default.toml"), &out);
+    closed_loop(
+        &mission,
+        &root().join("radar-sim/scenes/default.toml"),
+        &out,
+    );
     for (committed, fresh) in [
         ("report.json", "report.json"),
         ("metrics.json", "processed/metrics.json"),
