@@ -4,7 +4,8 @@
 //! fixtures. Every child a helper starts is stopped and reaped when its guard drops.
 //!
 //! The binaries are those of the `pipeline` crate (`cellsar`, `cellsar-planner`,
-//! `cellsar-radar-sim`, `cellsar-bridge`) and this crate's `cellsar-bridge-bench`, found next
+//! `cellsar-radar-sim`, `cellsar-bridge`), the fmu crate's `package-fmu` and this crate's
+//! `cellsar-bridge-bench`, found next
 //! to the test executable: `cargo test --workspace` builds them all before any test runs
 //! (alone, `cargo test -p cellsar-tests` needs `cargo build -p pipeline --bins` first).
 
@@ -37,7 +38,7 @@ pub fn target_dir() -> PathBuf {
 }
 
 /// `target/<profile>`: two levels above the test executable (`target/<profile>/deps/test-…`).
-fn profile_dir() -> PathBuf {
+pub fn profile_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("the test executable's path");
     exe.parent()
         .and_then(Path::parent)
