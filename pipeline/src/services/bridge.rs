@@ -96,7 +96,7 @@ pub struct BridgeArgs {
     pub congestion: Congestion,
     /// Frames queued between Zenoh and a thread that re-publishes them on iceoryx2; 0
     /// re-publishes in Zenoh's callback without a thread hand-off (no latency gain measured on
-    /// a 2-vCPU host: see bridge/BENCHMARKS.md).
+    /// a 2-vCPU host: see bridge/BENCHMARKS.md, "Bridge B").
     #[arg(long, default_value_t = 4)]
     pub inbound_queue: usize,
     /// When a local subscriber's buffer is full: discard (skip and count; never stall: a
