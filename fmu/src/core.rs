@@ -92,6 +92,40 @@ pub const DEFAULT_MISSION_FILE: &str = "default_mission.toml";
 /// The default mission shipped in the FMU's `resources/`.
 pub const DEFAULT_MISSION_TOML: &str = include_str!("../../missions/default-30m.toml");
 
+/// Largest mission file the FMU reads (16 MiB): a larger file (or a device such as `/dev/zero`)
+/// is refused with an error naming it instead of exhausting the importer's memory.
+pub const MAX_MISSION_FILE_BYTES: u64 = 16 * 1024 * 1024;
+
+/// Reads a mission file as UTF-8 text, at most [`MAX_MISSION_FILE_BYTES`]; errors name the file.
+pub fn read_mission_text(path: &Path) -> Result<String, FmuError> {
+    use std::io::Read as _;
+    let shown = path.display();
+    let too_large = || {
+        FmuError::error(format!(
+            "mission file {shown} is larger than the limit of {MAX_MISSION_FILE_BYTES} bytes"
+        ))
+    };
+    let cannot =
+        |e: std::io::Error| FmuError::error(format!("cannot read mission file {shown}: {e}"));
+    let file = std::fs::File::open(path).map_err(cannot)?;
+    if file.metadata().map_err(cannot)?.len() > MAX_MISSION_FILE_BYTES {
+        return Err(too_large());
+    }
+    // devices and growing files report a wrong length: read one byte past the limit to tell
+    let mut bytes = Vec::new();
+    file.take(MAX_MISSION_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
+    if bytes.len() as u64 > MAX_MISSION_FILE_BYTES {
+        return Err(too_large());
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        FmuError::error(format!(
+            "cannot read mission file {shown}: not UTF-8 text ({e})"
+        ))
+    })
+}
+
 /// Which model an instance runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ModelKind {
@@ -686,8 +720,7 @@ impl PlannerCore {
     fn resolve_mission(&self, resources: Option<&Path>) -> Result<(Mission, PathBuf), FmuError> {
         let path = self.mission_path(resources)?;
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| FmuError::error(format!("cannot read mission file {shown}: {e}")))?;
+        let text = read_mission_text(&path)?;
         let is_json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
@@ -1503,5 +1536,29 @@ mod tests {
             e.message
         );
         assert!(started.elapsed().as_secs_f64() < 5.0);
+    }
+
+    #[test]
+    fn mission_file_size_is_bounded() {
+        let dir = tempfile::tempdir().unwrap();
+        let big = dir.path().join("big.toml");
+        let f = std::fs::File::create(&big).unwrap();
+        f.set_len(MAX_MISSION_FILE_BYTES + 1).unwrap();
+        let e = read_mission_text(&big).unwrap_err();
+        assert!(
+            e.message.contains("big.toml") && e.message.contains("limit"),
+            "{e}"
+        );
+        // a device reports length 0: the bounded read still stops
+        let e = read_mission_text(Path::new("/dev/zero")).unwrap_err();
+        assert!(
+            e.message.contains("/dev/zero") && e.message.contains("limit"),
+            "{e}"
+        );
+        let ok = dir.path().join("ok.toml");
+        std::fs::write(&ok, "a = 1").unwrap();
+        assert_eq!(read_mission_text(&ok).unwrap(), "a = 1");
+        let e = read_mission_text(&dir.path().join("none.toml")).unwrap_err();
+        assert!(e.message.contains("none.toml"), "{e}");
     }
 }
