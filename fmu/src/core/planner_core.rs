@@ -268,18 +268,19 @@ impl PlannerCore {
             Num(input[0]),
             Num(input[1])
         );
-        let reject = |message: String| {
-            FmuError::error(format!(
-                "t = {} s: landmark input ({}, {}) m rejected: {message}",
-                Num(tau_s),
-                Num(input[0]),
-                Num(input[1])
-            ))
+        let mv = LandmarkMove {
+            tau_s,
+            window,
+            from,
+            input,
+            what,
         };
+        let what = &mv.what;
         if !has_later_slots {
             // the window ended with the current slot: nothing is left to re-plan, but the
             // outputs report the moved landmark (and whether the current slot still sees it)
-            let mission = planning::moved_mission(&run.mission, window, input).map_err(reject)?;
+            let mission =
+                planning::moved_mission(&run.mission, window, input).map_err(|m| mv.reject(m))?;
             log.log(
                 Category::Events,
                 Status::Ok,
@@ -310,79 +311,118 @@ impl PlannerCore {
             Status::Ok,
             &format!("{what}; re-planning slots {}..{n}", from + 1),
         );
-        match planning::replan(
-            &run.mission,
-            &run.traj,
-            from,
-            window,
-            input,
-            &planning::ReplanOptions::default(),
-        ) {
-            Ok(re) => {
-                run.moved.insert(window);
-                run.eval = evaluate(&re.mission, &re.trajectory);
-                run.mission = re.mission;
-                run.traj = re.trajectory;
-                run.replans += 1;
-                run.solve_s = re.solve_s;
-                log.log(
-                    Category::Events,
-                    Status::Ok,
-                    &format!("re-planned: {}", re.summary),
-                );
-                let (count, slots) = run.out_of_view_from(from + 1);
-                if count == 0 {
-                    return Ok(StepReport::default());
-                }
-                let why = if re.window_dropped {
-                    format!(
-                        "landmark {window} cannot be brought into view in any slot of its window that is left, so the rest of the horizon was re-planned without it"
-                    )
-                } else if re.transition_slots > 0 {
-                    format!(
-                        "the UAV needs {} transition slot(s) to bring landmark {window} into view",
-                        re.transition_slots
-                    )
-                } else {
-                    "the new plan does not keep every landmark in view".to_string()
-                };
-                Ok(run.warn(
-                    format!(
-                        "{what}: {why}; {count} re-planned slot(s) are out of view: {slots} (output `slots_out_of_view` = {})",
-                        run.eval.slots_out_of_view
-                    ),
-                    log,
-                ))
+        replan_after_move(run, &mv, log)
+    }
+}
+
+/// A landmark move taken from the inputs of a doStep: which window, from which slot on it may
+/// be re-planned, and the log text describing it.
+struct LandmarkMove {
+    /// Mission time of the doStep.
+    tau_s: f64,
+    /// The moved landmark's window (0-based).
+    window: usize,
+    /// Slots up to this one are flown or committed.
+    from: usize,
+    /// The new landmark position.
+    input: [f64; 2],
+    /// What moved, for messages.
+    what: String,
+}
+
+impl LandmarkMove {
+    /// The error refusing this move.
+    fn reject(&self, message: String) -> FmuError {
+        FmuError::error(format!(
+            "t = {} s: landmark input ({}, {}) m rejected: {message}",
+            Num(self.tau_s),
+            Num(self.input[0]),
+            Num(self.input[1])
+        ))
+    }
+}
+
+/// Re-plans the rest of the horizon after a landmark move and reports the outcome: the new
+/// plan (with a warning when slots are out of view), or the previous plan kept on a planner
+/// failure (a warning); a refused move is an error.
+fn replan_after_move(
+    run: &mut Run,
+    mv: &LandmarkMove,
+    log: &dyn Log,
+) -> Result<StepReport, FmuError> {
+    let (what, window, from) = (&mv.what, mv.window, mv.from);
+    match planning::replan(
+        &run.mission,
+        &run.traj,
+        from,
+        window,
+        mv.input,
+        &planning::ReplanOptions::default(),
+    ) {
+        Ok(re) => {
+            run.moved.insert(window);
+            run.eval = evaluate(&re.mission, &re.trajectory);
+            run.mission = re.mission;
+            run.traj = re.trajectory;
+            run.replans += 1;
+            run.solve_s = re.solve_s;
+            log.log(
+                Category::Events,
+                Status::Ok,
+                &format!("re-planned: {}", re.summary),
+            );
+            let (count, slots) = run.out_of_view_from(from + 1);
+            if count == 0 {
+                return Ok(StepReport::default());
             }
-            Err(ReplanError::Mission(message)) => Err(reject(message)),
-            Err(ReplanError::Planner {
-                mission,
-                attempts,
-                solve_s,
-                ..
-            }) => {
-                run.moved.insert(window);
-                run.eval = evaluate(&mission, &run.traj);
-                run.mission = *mission;
-                run.solve_s = solve_s;
-                let (count, slots) = run.out_of_view_from(from + 1);
-                let seen = if count > 0 {
-                    format!(
-                        "; {count} slot(s) after the current one are out of view: {slots} (output `slots_out_of_view` = {})",
-                        run.eval.slots_out_of_view
-                    )
-                } else {
-                    String::new()
-                };
-                Ok(run.warn(
-                    format!(
-                        "{what}: the re-plan failed, so the previous plan is kept ({} planner call(s) in {solve_s:.3} s: {}){seen}",
-                        attempts.len(),
-                        planning::describe_attempts(&attempts)
-                    ),
-                    log,
-                ))
-            }
+            let why = if re.window_dropped {
+                format!(
+                    "landmark {window} cannot be brought into view in any slot of its window that is left, so the rest of the horizon was re-planned without it"
+                )
+            } else if re.transition_slots > 0 {
+                format!(
+                    "the UAV needs {} transition slot(s) to bring landmark {window} into view",
+                    re.transition_slots
+                )
+            } else {
+                "the new plan does not keep every landmark in view".to_string()
+            };
+            Ok(run.warn(
+                format!(
+                    "{what}: {why}; {count} re-planned slot(s) are out of view: {slots} (output `slots_out_of_view` = {})",
+                    run.eval.slots_out_of_view
+                ),
+                log,
+            ))
+        }
+        Err(ReplanError::Mission(message)) => Err(mv.reject(message)),
+        Err(ReplanError::Planner {
+            mission,
+            attempts,
+            solve_s,
+            ..
+        }) => {
+            run.moved.insert(window);
+            run.eval = evaluate(&mission, &run.traj);
+            run.mission = *mission;
+            run.solve_s = solve_s;
+            let (count, slots) = run.out_of_view_from(from + 1);
+            let seen = if count > 0 {
+                format!(
+                    "; {count} slot(s) after the current one are out of view: {slots} (output `slots_out_of_view` = {})",
+                    run.eval.slots_out_of_view
+                )
+            } else {
+                String::new()
+            };
+            Ok(run.warn(
+                format!(
+                    "{what}: the re-plan failed, so the previous plan is kept ({} planner call(s) in {solve_s:.3} s: {}){seen}",
+                    attempts.len(),
+                    planning::describe_attempts(&attempts)
+                ),
+                log,
+            ))
         }
     }
 }
