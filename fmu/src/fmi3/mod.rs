@@ -8,7 +8,6 @@
 //! Every function is `unsafe extern "C"`: the importer must pass the pointers the FMI 3.0
 //! standard describes and must not call one instance from two threads at once.
 #![allow(clippy::missing_safety_doc)]
-#![allow(clippy::too_many_arguments)]
 
 use std::ffi::{c_char, c_int, c_uint, c_void};
 use std::panic::{catch_unwind, AssertUnwindSafe};
