@@ -1,8 +1,11 @@
-//! Packaging: the `.fmu` zip archive (written here with deflate, no zip dependency) holding
+//! Packaging: the `.fmu` zip archive (written with the `zip` crate, deflated) holding
 //! `modelDescription.xml`, the shared library under `binaries/<platform>/<modelIdentifier>.so`
 //! and `resources/`.
 
-use std::io::Write as _;
+use std::io::{Cursor, Write as _};
+
+use zip::write::SimpleFileOptions;
+use zip::{CompressionMethod, DateTime};
 
 use crate::core::{FmiVersion, ModelInfo};
 use crate::xml;
@@ -41,123 +44,75 @@ pub fn entries(
     e
 }
 
+/// An error while writing an FMU archive, naming the archive entry it concerns.
+#[derive(Debug, thiserror::Error)]
+pub enum PackageError {
+    /// Adding an entry (header or data) to the archive failed.
+    #[error("adding {name} to the FMU archive: {source}")]
+    Entry {
+        /// The entry's path inside the archive.
+        name: String,
+        /// The zip writer's error.
+        #[source]
+        source: zip::result::ZipError,
+    },
+    /// Writing the central directory failed.
+    #[error("finishing the FMU archive (central directory): {0}")]
+    Finish(#[source] zip::result::ZipError),
+}
+
 /// The `.fmu` archive of a model.
 pub fn fmu_archive(
     info: &ModelInfo,
     version: FmiVersion,
     library: &[u8],
-) -> std::io::Result<Vec<u8>> {
+) -> Result<Vec<u8>, PackageError> {
     let mut zip = ZipWriter::default();
     for (name, data, exec) in entries(info, version, library) {
         zip.add(&name, &data, exec)?;
     }
-    Ok(zip.finish())
+    zip.finish()
 }
 
-struct CentralEntry {
-    name: String,
-    crc: u32,
-    compressed: u32,
-    size: u32,
-    method: u16,
-    offset: u32,
-    mode: u32,
-}
-
-/// A minimal zip writer: deflated (or stored, when deflate does not help) files, UTF-8 names,
-/// a fixed timestamp (1980-01-01) so archives are reproducible. No zip64: each file and the whole
-/// archive must stay below 4 GiB.
-#[derive(Default)]
+/// A zip writer for FMU archives (over the `zip` crate): deflated files, UTF-8 names, a fixed
+/// timestamp (1980-01-01) so archives are reproducible, Unix permissions (0755 for the shared
+/// library, 0644 otherwise). Entries of 4 GiB or more are written as zip64.
 pub struct ZipWriter {
-    out: Vec<u8>,
-    entries: Vec<CentralEntry>,
+    inner: zip::ZipWriter<Cursor<Vec<u8>>>,
 }
 
-fn u32_of(n: usize) -> std::io::Result<u32> {
-    u32::try_from(n).map_err(|_| std::io::Error::other("zip entry larger than 4 GiB"))
+impl Default for ZipWriter {
+    fn default() -> Self {
+        Self {
+            inner: zip::ZipWriter::new(Cursor::new(Vec::new())),
+        }
+    }
 }
-
-const DOS_TIME: u16 = 0;
-const DOS_DATE: u16 = (1 << 5) | 1; // 1980-01-01
 
 impl ZipWriter {
-    /// Adds a file.
-    pub fn add(&mut self, name: &str, data: &[u8], executable: bool) -> std::io::Result<()> {
-        let crc = crc32fast::hash(data);
-        let mut enc = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::best());
-        enc.write_all(data)?;
-        let deflated = enc.finish()?;
-        let (method, body) = if deflated.len() < data.len() {
-            (8u16, deflated)
-        } else {
-            (0u16, data.to_vec())
-        };
-        let offset = u32_of(self.out.len())?;
-        let e = CentralEntry {
+    /// Adds a file; errors name it.
+    pub fn add(&mut self, name: &str, data: &[u8], executable: bool) -> Result<(), PackageError> {
+        let entry_err = |source| PackageError::Entry {
             name: name.to_string(),
-            crc,
-            compressed: u32_of(body.len())?,
-            size: u32_of(data.len())?,
-            method,
-            offset,
-            mode: if executable { 0o100755 } else { 0o100644 },
+            source,
         };
-        let o = &mut self.out;
-        o.extend_from_slice(&0x0403_4b50u32.to_le_bytes());
-        o.extend_from_slice(&20u16.to_le_bytes()); // version needed
-        o.extend_from_slice(&0x0800u16.to_le_bytes()); // UTF-8 names
-        o.extend_from_slice(&e.method.to_le_bytes());
-        o.extend_from_slice(&DOS_TIME.to_le_bytes());
-        o.extend_from_slice(&DOS_DATE.to_le_bytes());
-        o.extend_from_slice(&e.crc.to_le_bytes());
-        o.extend_from_slice(&e.compressed.to_le_bytes());
-        o.extend_from_slice(&e.size.to_le_bytes());
-        o.extend_from_slice(
-            &(u16::try_from(name.len()).map_err(std::io::Error::other)?).to_le_bytes(),
-        );
-        o.extend_from_slice(&0u16.to_le_bytes());
-        o.extend_from_slice(name.as_bytes());
-        o.extend_from_slice(&body);
-        self.entries.push(e);
-        Ok(())
+        let options = SimpleFileOptions::default()
+            .compression_method(CompressionMethod::Deflated)
+            .last_modified_time(DateTime::default())
+            .unix_permissions(if executable { 0o755 } else { 0o644 })
+            .large_file(u32::try_from(data.len()).is_err());
+        self.inner.start_file(name, options).map_err(entry_err)?;
+        self.inner
+            .write_all(data)
+            .map_err(|e| entry_err(zip::result::ZipError::Io(e)))
     }
 
     /// Writes the central directory and returns the archive.
-    pub fn finish(mut self) -> Vec<u8> {
-        let cd_start = self.out.len();
-        for e in &self.entries {
-            let o = &mut self.out;
-            o.extend_from_slice(&0x0201_4b50u32.to_le_bytes());
-            o.extend_from_slice(&((3u16 << 8) | 20).to_le_bytes()); // made by: unix, 2.0
-            o.extend_from_slice(&20u16.to_le_bytes());
-            o.extend_from_slice(&0x0800u16.to_le_bytes());
-            o.extend_from_slice(&e.method.to_le_bytes());
-            o.extend_from_slice(&DOS_TIME.to_le_bytes());
-            o.extend_from_slice(&DOS_DATE.to_le_bytes());
-            o.extend_from_slice(&e.crc.to_le_bytes());
-            o.extend_from_slice(&e.compressed.to_le_bytes());
-            o.extend_from_slice(&e.size.to_le_bytes());
-            o.extend_from_slice(&(e.name.len() as u16).to_le_bytes());
-            o.extend_from_slice(&0u16.to_le_bytes()); // extra
-            o.extend_from_slice(&0u16.to_le_bytes()); // comment
-            o.extend_from_slice(&0u16.to_le_bytes()); // disk
-            o.extend_from_slice(&0u16.to_le_bytes()); // internal attributes
-            o.extend_from_slice(&(e.mode << 16).to_le_bytes());
-            o.extend_from_slice(&e.offset.to_le_bytes());
-            o.extend_from_slice(e.name.as_bytes());
-        }
-        let cd_size = self.out.len() - cd_start;
-        let n = self.entries.len() as u16;
-        let o = &mut self.out;
-        o.extend_from_slice(&0x0605_4b50u32.to_le_bytes());
-        o.extend_from_slice(&0u16.to_le_bytes());
-        o.extend_from_slice(&0u16.to_le_bytes());
-        o.extend_from_slice(&n.to_le_bytes());
-        o.extend_from_slice(&n.to_le_bytes());
-        o.extend_from_slice(&(cd_size as u32).to_le_bytes());
-        o.extend_from_slice(&(cd_start as u32).to_le_bytes());
-        o.extend_from_slice(&0u16.to_le_bytes());
-        self.out
+    pub fn finish(self) -> Result<Vec<u8>, PackageError> {
+        self.inner
+            .finish()
+            .map(Cursor::into_inner)
+            .map_err(PackageError::Finish)
     }
 }
 
@@ -195,12 +150,28 @@ mod tests {
         let big = vec![b'a'; 10_000];
         z.add("a/b.txt", &big, false).unwrap();
         z.add("x", b"y", true).unwrap();
-        let bytes = z.finish();
+        let bytes = z.finish().unwrap();
         assert_eq!(&bytes[..4], &[0x50, 0x4b, 0x03, 0x04]);
         // deflated: far smaller than the content
         assert!(bytes.len() < 1000, "{}", bytes.len());
         let eocd = &bytes[bytes.len() - 22..];
         assert_eq!(&eocd[..4], &0x0605_4b50u32.to_le_bytes());
         assert_eq!(u16::from_le_bytes([eocd[10], eocd[11]]), 2);
+    }
+
+    #[test]
+    fn archive_round_trip() {
+        let bytes = fmu_archive(&PLANNER_INFO, FmiVersion::Fmi3, b"library").unwrap();
+        let mut a = zip::ZipArchive::new(Cursor::new(bytes)).unwrap();
+        assert_eq!(a.len(), 3);
+        let lib = a
+            .by_name("binaries/x86_64-linux/CellsarPlanner.so")
+            .unwrap();
+        assert_eq!(lib.unix_mode().map(|m| m & 0o777), Some(0o755));
+        drop(lib);
+        let mut xml = String::new();
+        std::io::Read::read_to_string(&mut a.by_name("modelDescription.xml").unwrap(), &mut xml)
+            .unwrap();
+        assert_eq!(xml, xml::model_description(&PLANNER_INFO, FmiVersion::Fmi3));
     }
 }

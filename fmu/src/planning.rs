@@ -294,48 +294,12 @@ pub fn replan(
         .position(|l| *l == Some(window))
         .zip(later.iter().rposition(|l| *l == Some(window)))
         .map(|(a, b)| (a + 1, b + 1));
-    let mut plans = Vec::new();
-    let mut reach_note = String::new();
-    if let Some((first, last)) = moved_slots {
-        match planner::init::earliest_in_view_slot(&sub_params, moved_m, first, last) {
-            Some(t) => {
-                let d0 = if t > first { t - 1 } else { 0 };
-                if d0 > 0 {
-                    reach_note = format!(
-                        ", the moved landmark is out of reach before sub-mission slot {t} (delays below {d0} skipped)"
-                    );
-                }
-                let mut extra = 0usize;
-                while d0 + extra < last {
-                    plans.push(WindowPlan::Delayed(d0 + extra));
-                    extra = if extra == 0 { 1 } else { extra * 2 };
-                }
-            }
-            None => {
-                reach_note =
-                    ", the moved landmark is out of reach in every slot of its window".to_string()
-            }
-        }
-        plans.push(WindowPlan::Dropped);
-    } else {
-        plans.push(WindowPlan::Delayed(0));
-    }
+    let (plans, reach_note) = window_plans(&sub_params, moved_m, moved_slots);
     let mut attempts: Vec<Attempt> = Vec::new();
     let mut last_error = String::new();
     for plan in plans {
         let call_started = Instant::now();
-        let points: Vec<LandmarkWindow> = future
-            .iter()
-            .filter_map(|(i, w)| match plan {
-                _ if *i != window => Some(*w),
-                WindowPlan::Dropped => None,
-                WindowPlan::Delayed(0) => Some(*w),
-                WindowPlan::Delayed(d) => Some(LandmarkWindow {
-                    from_s: w.from_s.max(d as f64 * slot_s),
-                    ..*w
-                }),
-            })
-            .collect();
+        let points = sub_windows(&future, window, plan, slot_s);
         let sub = match Mission::new(
             format!("{} (re-plan from t = {} s)", mission.name(), Num(shift_s)),
             sub_params.clone(),
@@ -371,13 +335,7 @@ pub fn replan(
                 let mut pos_m = current.pos_m.get(..from_slot).unwrap_or(&[]).to_vec();
                 pos_m.extend_from_slice(&planned.trajectory.pos_m);
                 let solve_s = started.elapsed().as_secs_f64();
-                let (transition_slots, window_dropped) = match (plan, moved_slots) {
-                    (_, None) => (0, false),
-                    (WindowPlan::Dropped, Some((first, last))) => (last - first + 1, true),
-                    (WindowPlan::Delayed(d), Some((first, last))) => {
-                        ((d.min(last) + 1).saturating_sub(first), false)
-                    }
-                };
+                let (transition_slots, window_dropped) = transition(plan, moved_slots);
                 let outcome = if window_dropped {
                     format!("landmark {window}'s window left out")
                 } else {
@@ -422,6 +380,76 @@ pub fn replan(
         attempts,
         solve_s: started.elapsed().as_secs_f64(),
     })
+}
+
+/// The window plans to try after a move, in order (the moved window delayed by d0, d0 + 1, d0 + 2,
+/// d0 + 4, … slots while it keeps slots, where d0 skips the slots that cannot see it; then dropped),
+/// and a note on when the moved landmark is reachable.
+/// `moved_slots` are the moved window's first and last slot in the sub-mission (1-based).
+fn window_plans(
+    sub_params: &planner::Params,
+    moved_m: [f64; 2],
+    moved_slots: Option<(usize, usize)>,
+) -> (Vec<WindowPlan>, String) {
+    let mut plans = Vec::new();
+    let mut reach_note = String::new();
+    if let Some((first, last)) = moved_slots {
+        match planner::init::earliest_in_view_slot(sub_params, moved_m, first, last) {
+            Some(t) => {
+                let d0 = if t > first { t - 1 } else { 0 };
+                if d0 > 0 {
+                    reach_note = format!(
+                        ", the moved landmark is out of reach before sub-mission slot {t} (delays below {d0} skipped)"
+                    );
+                }
+                let mut extra = 0usize;
+                while d0 + extra < last {
+                    plans.push(WindowPlan::Delayed(d0 + extra));
+                    extra = if extra == 0 { 1 } else { extra * 2 };
+                }
+            }
+            None => {
+                reach_note =
+                    ", the moved landmark is out of reach in every slot of its window".to_string()
+            }
+        }
+        plans.push(WindowPlan::Dropped);
+    } else {
+        plans.push(WindowPlan::Delayed(0));
+    }
+    (plans, reach_note)
+}
+
+/// The sub-mission's landmark windows under a window plan for the moved `window`.
+fn sub_windows(
+    future: &[(usize, LandmarkWindow)],
+    window: usize,
+    plan: WindowPlan,
+    slot_s: f64,
+) -> Vec<LandmarkWindow> {
+    future
+        .iter()
+        .filter_map(|(i, w)| match plan {
+            _ if *i != window => Some(*w),
+            WindowPlan::Dropped => None,
+            WindowPlan::Delayed(0) => Some(*w),
+            WindowPlan::Delayed(d) => Some(LandmarkWindow {
+                from_s: w.from_s.max(d as f64 * slot_s),
+                ..*w
+            }),
+        })
+        .collect()
+}
+
+/// Transition slots and whether the moved window was dropped, for a plan that succeeded.
+fn transition(plan: WindowPlan, moved_slots: Option<(usize, usize)>) -> (usize, bool) {
+    match (plan, moved_slots) {
+        (_, None) => (0, false),
+        (WindowPlan::Dropped, Some((first, last))) => (last - first + 1, true),
+        (WindowPlan::Delayed(d), Some((first, last))) => {
+            ((d.min(last) + 1).saturating_sub(first), false)
+        }
+    }
 }
 
 #[cfg(test)]

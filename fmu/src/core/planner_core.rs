@@ -1,0 +1,428 @@
+//! [`PlannerCore`]: the planner model's state, its variables and its steps.
+
+use super::*;
+
+/// The planner model's state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PlannerCore {
+    /// Parameter values as set through FMI (the default parameters at start); after initialisation the
+    /// values in effect.
+    pub(super) params: Params,
+    /// Names of the parameters set through FMI to a value other than their start value: they
+    /// override the mission file. Array elements count one by one, under their FMI 2 names
+    /// (`start_m[1]`, `bs_m[2]`): setting one element keeps the file's other one.
+    pub(super) params_set: BTreeSet<String>,
+    /// `mission_file`.
+    pub(super) mission_file: String,
+    /// `landmark_x_in_m`, `landmark_y_in_m`.
+    pub(super) landmark_in_m: [f64; 2],
+    /// Test hook (hidden variable).
+    pub(super) debug_panic: i32,
+    /// The plan, after initialisation.
+    pub(super) run: Option<Run>,
+}
+
+impl Default for PlannerCore {
+    fn default() -> Self {
+        Self {
+            params: Params::default(),
+            params_set: BTreeSet::new(),
+            mission_file: DEFAULT_MISSION_FILE.to_string(),
+            landmark_in_m: [f64::NAN, f64::NAN],
+            debug_panic: 0,
+            run: None,
+        }
+    }
+}
+
+impl PlannerCore {
+    pub(super) fn get_real(&self, var: &Var, elem: usize, tau_s: f64) -> Result<f64, FmuError> {
+        match var.vr {
+            pv::START_M => return Ok(self.params.start_m[elem.min(1)]),
+            pv::BS_M => return Ok(self.params.bs_m[elem.min(1)]),
+            pv::LANDMARK_X_IN => return Ok(self.landmark_in_m[0]),
+            pv::LANDMARK_Y_IN => return Ok(self.landmark_in_m[1]),
+            _ => {}
+        }
+        if var.causality == crate::table::Causality::Parameter {
+            return self
+                .params
+                .get_by_name(var.name)
+                .ok_or_else(|| unknown(var));
+        }
+        let run = self.run.as_ref().ok_or_else(|| {
+            FmuError::error(format!(
+                "output `{}` is not available before the mission is planned",
+                var.name
+            ))
+        })?;
+        if var.vr == pv::SOLVE_TIME {
+            return Ok(run.solve_s);
+        }
+        let s = run.sample(tau_s);
+        Ok(match var.vr {
+            pv::X => s.pos_m[0],
+            pv::Y => s.pos_m[1],
+            pv::SPEED => s.speed_mps,
+            pv::HEADING => s.heading_rad,
+            pv::POWER => s.power_w,
+            pv::ENERGY => s.energy_j,
+            pv::XC => s.centre_m[0],
+            pv::YC => s.centre_m[1],
+            pv::LANDMARK_X => s.landmark_m[0],
+            pv::LANDMARK_Y => s.landmark_m[1],
+            pv::RANGE_RES => s.range_resolution_m,
+            pv::AZIMUTH_RES => s.azimuth_resolution_m,
+            pv::RANGE_RES_PAPER => s.range_resolution_paper_m,
+            pv::AZIMUTH_RES_PAPER => s.azimuth_resolution_paper_m,
+            pv::WORST_WIDTH => s.worst_cell_width_m,
+            _ => return Err(unknown(var)),
+        })
+    }
+
+    pub(super) fn check_real(&self, var: &Var, elem: usize, value: f64) -> Result<(), FmuError> {
+        if matches!(var.vr, pv::LANDMARK_X_IN | pv::LANDMARK_Y_IN) {
+            // NaN means "the plan's own landmark"; an infinite coordinate is no landmark at all
+            return if value.is_infinite() {
+                Err(FmuError::error(format!(
+                    "input `{}` = {}: must be a finite number (a landmark position) or NaN (the plan's own landmark)",
+                    var.name,
+                    Num(value)
+                )))
+            } else {
+                Ok(())
+            };
+        }
+        if var.causality != crate::table::Causality::Parameter || var.ty != VarType::Real {
+            return Err(unknown(var));
+        }
+        if !value.is_finite() {
+            return Err(FmuError::error(format!(
+                "parameter `{}` = {}: must be a finite number",
+                crate::table::fmi2_name(var, elem),
+                Num(value)
+            )));
+        }
+        match var.vr {
+            pv::START_M | pv::BS_M if elem < 2 => Ok(()),
+            pv::START_M | pv::BS_M => Err(unknown(var)),
+            _ if self.params.get_by_name(var.name).is_some() => Ok(()),
+            _ => Err(unknown(var)),
+        }
+    }
+
+    pub(super) fn set_real(&mut self, var: &Var, elem: usize, value: f64) -> Result<(), FmuError> {
+        self.check_real(var, elem, value)?;
+        let d = Params::default();
+        // A parameter overrides the mission file only while it differs from its start value, so
+        // importers that write every start value back do not undo the file.
+        let at_start = match var.vr {
+            pv::LANDMARK_X_IN => {
+                self.landmark_in_m[0] = value;
+                return Ok(());
+            }
+            pv::LANDMARK_Y_IN => {
+                self.landmark_in_m[1] = value;
+                return Ok(());
+            }
+            pv::START_M => {
+                self.params.start_m[elem] = value;
+                value == d.start_m[elem]
+            }
+            pv::BS_M => {
+                self.params.bs_m[elem] = value;
+                value == d.bs_m[elem]
+            }
+            _ => {
+                self.params
+                    .set_by_name(var.name, value)
+                    .map_err(|e| FmuError::error(e.to_string()))?;
+                Some(value) == d.get_by_name(var.name)
+            }
+        };
+        let key = crate::table::fmi2_name(var, elem);
+        if at_start {
+            self.params_set.remove(&key);
+        } else {
+            self.params_set.insert(key);
+        }
+        self.run = None;
+        Ok(())
+    }
+
+    pub(super) fn get_bool(&self, var: &Var, tau_s: f64) -> Result<bool, FmuError> {
+        if var.vr != pv::IN_VIEW {
+            return Err(unknown(var));
+        }
+        let run = self.run.as_ref().ok_or_else(|| {
+            FmuError::error("output `in_view` is not available before the mission is planned")
+        })?;
+        Ok(run.sample(tau_s).in_view)
+    }
+}
+
+impl PlannerCore {
+    pub(super) fn initialize(
+        &mut self,
+        resources: Option<&Path>,
+        log: &dyn Log,
+    ) -> Result<(), FmuError> {
+        if self.run.is_some() {
+            return Ok(());
+        }
+        let (mission, source) = self.resolve_mission(resources)?;
+        log.log(
+            Category::Events,
+            Status::Ok,
+            &format!(
+                "mission '{}' from {}: {} slots of {} s, {} landmark windows; planning the whole horizon",
+                mission.name(),
+                source.display(),
+                mission.slots(),
+                Num(mission.params().slot_s),
+                mission.schedule().landmarks.len()
+            ),
+        );
+        let planned = planning::plan(&mission, None).map_err(|e| {
+            FmuError::error(format!(
+                "mission '{}' ({}) cannot be flown: {e}",
+                mission.name(),
+                source.display()
+            ))
+        })?;
+        let eval = evaluate(&mission, &planned.trajectory);
+        log.log(
+            Category::Events,
+            Status::Ok,
+            &format!(
+                "planned mission '{}': {}; true energy {:.3} J, {} slot(s) out of view",
+                mission.name(),
+                planned.summary,
+                eval.energy_j,
+                eval.slots_out_of_view
+            ),
+        );
+        self.params = mission.params().clone();
+        self.run = Some(Run {
+            mission,
+            source,
+            traj: planned.trajectory,
+            eval,
+            replans: 0,
+            solve_s: planned.solve_s,
+            moved: BTreeSet::new(),
+        });
+        Ok(())
+    }
+
+    pub(super) fn step(&mut self, tau_s: f64, log: &dyn Log) -> Result<StepReport, FmuError> {
+        if self.debug_panic == PANIC_IN_DO_STEP {
+            panic!("injected panic in doStep (debug_inject_panic = {PANIC_IN_DO_STEP})");
+        }
+        let input = self.landmark_in_m;
+        let Some(run) = self.run.as_mut() else {
+            return Err(FmuError::error("doStep: the mission is not planned"));
+        };
+        match (input[0].is_nan(), input[1].is_nan()) {
+            (true, true) => return Ok(StepReport::default()),
+            (false, false) if input.iter().all(|v| v.is_finite()) => {}
+            _ => {
+                return Err(FmuError::error(format!(
+                    "t = {} s: landmark input (`landmark_x_in_m`, `landmark_y_in_m`) = ({}, {}) m refused: set both to finite numbers (a move) or both to NaN (no move); the step was not taken",
+                    Num(tau_s),
+                    Num(input[0]),
+                    Num(input[1])
+                )))
+            }
+        }
+        let slot_s = run.mission.params().slot_s;
+        let n = run.mission.slots();
+        // The input refers to the landmark the outputs report at τ (one rule for both, and for
+        // LandmarkMover, which reads those outputs): see `current_window`.
+        let current = slot_at(tau_s, slot_s, n);
+        let Some(window) = current_window(&run.mission, tau_s) else {
+            return Ok(StepReport::default());
+        };
+        let Some(w) = run.mission.schedule().landmarks.get(window).copied() else {
+            return Ok(StepReport::default());
+        };
+        let planned = w.pos_m();
+        if planner::geometry::distance(&input.into(), &planned.into()) <= 1e-6 {
+            return Ok(StepReport::default());
+        }
+        // slots up to `from` are flown or committed (the UAV is on its way to q_from)
+        let from = slot_at_committed(tau_s, slot_s, n);
+        let has_later_slots = run
+            .mission
+            .schedule()
+            .slot_landmark
+            .get(from..)
+            .is_some_and(|l| l.contains(&Some(window)));
+        let what = format!(
+            "t = {} s: landmark {window} (window ({}, {}] s) moved from ({}, {}) m to ({}, {}) m",
+            Num(tau_s),
+            Num(w.from_s),
+            Num(w.to_s),
+            Num(planned[0]),
+            Num(planned[1]),
+            Num(input[0]),
+            Num(input[1])
+        );
+        let mv = LandmarkMove {
+            tau_s,
+            window,
+            from,
+            input,
+            what,
+        };
+        let what = &mv.what;
+        if !has_later_slots {
+            // the window ended with the current slot: nothing is left to re-plan, but the
+            // outputs report the moved landmark (and whether the current slot still sees it)
+            let mission =
+                planning::moved_mission(&run.mission, window, input).map_err(|m| mv.reject(m))?;
+            log.log(
+                Category::Events,
+                Status::Ok,
+                &format!(
+                    "{what}; its window has no slot left (slot {current}, which ended at t = {} s, was its last): nothing re-planned",
+                    Num(current as f64 * slot_s)
+                ),
+            );
+            run.moved.insert(window);
+            run.eval = evaluate(&mission, &run.traj);
+            run.mission = mission;
+            let (count, _) = run.out_of_view_from(current);
+            let seen = if count > 0 {
+                format!("; slot {current} does not see it")
+            } else {
+                String::new()
+            };
+            return Ok(run.warn(
+                format!(
+                    "{what}: the move came when its window had no slot left (slot {current}, which ended at t = {} s, was its last), so nothing was re-planned{seen}",
+                    Num(current as f64 * slot_s)
+                ),
+                log,
+            ));
+        }
+        log.log(
+            Category::Events,
+            Status::Ok,
+            &format!("{what}; re-planning slots {}..{n}", from + 1),
+        );
+        replan_after_move(run, &mv, log)
+    }
+}
+
+/// A landmark move taken from the inputs of a doStep: which window, from which slot on it may
+/// be re-planned, and the log text describing it.
+struct LandmarkMove {
+    /// Mission time of the doStep.
+    tau_s: f64,
+    /// The moved landmark's window (0-based).
+    window: usize,
+    /// Slots up to this one are flown or committed.
+    from: usize,
+    /// The new landmark position.
+    input: [f64; 2],
+    /// What moved, for messages.
+    what: String,
+}
+
+impl LandmarkMove {
+    /// The error refusing this move.
+    fn reject(&self, message: String) -> FmuError {
+        FmuError::error(format!(
+            "t = {} s: landmark input ({}, {}) m rejected: {message}",
+            Num(self.tau_s),
+            Num(self.input[0]),
+            Num(self.input[1])
+        ))
+    }
+}
+
+/// Re-plans the rest of the horizon after a landmark move and reports the outcome: the new
+/// plan (with a warning when slots are out of view), or the previous plan kept on a planner
+/// failure (a warning); a refused move is an error.
+fn replan_after_move(
+    run: &mut Run,
+    mv: &LandmarkMove,
+    log: &dyn Log,
+) -> Result<StepReport, FmuError> {
+    let (what, window, from) = (&mv.what, mv.window, mv.from);
+    match planning::replan(
+        &run.mission,
+        &run.traj,
+        from,
+        window,
+        mv.input,
+        &planning::ReplanOptions::default(),
+    ) {
+        Ok(re) => {
+            run.moved.insert(window);
+            run.eval = evaluate(&re.mission, &re.trajectory);
+            run.mission = re.mission;
+            run.traj = re.trajectory;
+            run.replans += 1;
+            run.solve_s = re.solve_s;
+            log.log(
+                Category::Events,
+                Status::Ok,
+                &format!("re-planned: {}", re.summary),
+            );
+            let (count, slots) = run.out_of_view_from(from + 1);
+            if count == 0 {
+                return Ok(StepReport::default());
+            }
+            let why = if re.window_dropped {
+                format!(
+                    "landmark {window} cannot be brought into view in any slot of its window that is left, so the rest of the horizon was re-planned without it"
+                )
+            } else if re.transition_slots > 0 {
+                format!(
+                    "the UAV needs {} transition slot(s) to bring landmark {window} into view",
+                    re.transition_slots
+                )
+            } else {
+                "the new plan does not keep every landmark in view".to_string()
+            };
+            Ok(run.warn(
+                format!(
+                    "{what}: {why}; {count} re-planned slot(s) are out of view: {slots} (output `slots_out_of_view` = {})",
+                    run.eval.slots_out_of_view
+                ),
+                log,
+            ))
+        }
+        Err(ReplanError::Mission(message)) => Err(mv.reject(message)),
+        Err(ReplanError::Planner {
+            mission,
+            attempts,
+            solve_s,
+            ..
+        }) => {
+            run.moved.insert(window);
+            run.eval = evaluate(&mission, &run.traj);
+            run.mission = *mission;
+            run.solve_s = solve_s;
+            let (count, slots) = run.out_of_view_from(from + 1);
+            let seen = if count > 0 {
+                format!(
+                    "; {count} slot(s) after the current one are out of view: {slots} (output `slots_out_of_view` = {})",
+                    run.eval.slots_out_of_view
+                )
+            } else {
+                String::new()
+            };
+            Ok(run.warn(
+                format!(
+                    "{what}: the re-plan failed, so the previous plan is kept ({} planner call(s) in {solve_s:.3} s: {}){seen}",
+                    attempts.len(),
+                    planning::describe_attempts(&attempts)
+                ),
+                log,
+            ))
+        }
+    }
+}
