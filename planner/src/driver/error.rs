@@ -23,7 +23,8 @@ pub enum PlanError {
         /// The solver's error.
         error: SolveError,
     },
-    /// [`PlanOptions::time_limit_s`] passed before a feasible start was found.
+    /// [`PlanOptions::time_limit_s`](super::PlanOptions::time_limit_s) passed before a feasible
+    /// start was found.
     #[error(
         "time limit of {limit_s} s reached after {iterations} phase I iterations without a \
          feasible start (largest sensing violation {sensing_violation_m:.2} m)"
@@ -39,7 +40,7 @@ pub enum PlanError {
     /// An option is out of range.
     #[error("option `{field}` = {value}: {reason}")]
     InvalidOption {
-        /// The option's name (its field of [`PlanOptions`]).
+        /// The option's name (its field of [`PlanOptions`](super::PlanOptions)).
         field: &'static str,
         /// The offending value.
         value: f64,

@@ -86,14 +86,16 @@ pub struct PlanOptions {
     pub resolution: ResolutionMode,
     /// Wall-time limit of the whole run, s (`None`: none). The coarse levels are skipped once it
     /// has passed; the iterations stop at the first check after it with
-    /// [`TerminationReason::TimeLimit`] and return the last accepted iterate (feasible on the
+    /// [`TerminationReason::TimeLimit`](super::TerminationReason::TimeLimit) and return the last
+    /// accepted iterate (feasible on the
     /// exact geometry for the exact-geometry schemes); a phase I that has not found a feasible
     /// start by then fails with [`PlanError::TimeLimit`]. A check comes before every cone
     /// program, so the run ends within about one program's time (~0.1 s at 600 slots) after it.
     pub time_limit_s: Option<f64>,
     /// When a given start ([`PlanOptions::init`]) cannot be repaired, plan from the built-in
-    /// start instead (saying so in [`PlanResult::init_replaced`]); when false, fail with phase
-    /// I's error.
+    /// start instead (saying so in
+    /// [`PlanResult::init_replaced`](super::PlanResult::init_replaced)); when false, fail with
+    /// phase I's error.
     pub replace_unrepairable_init: bool,
 }
 

@@ -19,7 +19,8 @@ pub enum TerminationReason {
     SubproblemFailed(String),
     /// Steps kept being rejected by the exact-geometry check; the last accepted iterate is returned.
     NoProgress,
-    /// [`PlanOptions::time_limit_s`] passed; the last accepted iterate is returned.
+    /// [`PlanOptions::time_limit_s`](super::PlanOptions::time_limit_s) passed; the last accepted
+    /// iterate is returned.
     TimeLimit,
 }
 

@@ -1,4 +1,5 @@
-//! Look images and resolution measurements ([`Processor::image_look`], [`Processor::measure_resolution`], ...).
+//! Look images and resolution measurements ([`Processor::image_look`],
+//! [`Processor::measure_resolution`], ...).
 
 use rayon::prelude::*;
 use rustfft::num_complex::{Complex32, Complex64};

@@ -44,7 +44,8 @@ pub struct ApertureResult {
     /// CFAR exceedance pixels among the clear pixels.
     pub false_alarm_pixels: usize,
     /// Clear pixels: outside every truth object's gate, where the objects' predicted responses
-    /// sum to less than [`CLEAR_SIGNAL`] of the thermal noise, and in no exceedance region that
+    /// sum to less than [`CLEAR_SIGNAL`](super::CLEAR_SIGNAL) of the thermal noise, and in no
+    /// exceedance region that
     /// reaches an object's gate.
     pub clear_pixels: usize,
     /// Expected CFAR exceedance pixels on noise over the clear pixels: P_fa × `clear_pixels`.
@@ -75,7 +76,8 @@ pub struct ApertureResult {
     /// units of the thermal noise.
     pub image_floor: f64,
     /// The floor predicted from the truth: thermal noise plus the echoes' inter-symbol
-    /// interference ([`Processor::isi_power_w`]), in units of the thermal noise.
+    /// interference ([`Processor::isi_power_w`](super::Processor::isi_power_w)), in units of the
+    /// thermal noise.
     pub predicted_image_floor: f64,
     /// The matching gate used, m.
     pub gate_m: f64,
