@@ -7,8 +7,10 @@
 //! new values and call Clarabel's in-place `update_*` (presolve off), so the KKT ordering and
 //! symbolic factorisation are reused across SCA iterations.
 
+mod error;
 mod lin;
 mod pattern;
+mod settings;
 
 use std::time::Instant;
 
@@ -17,8 +19,10 @@ use clarabel::solver::{
     DefaultSettings, DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
 
+pub use error::SolveError;
 pub use lin::Lin;
 use pattern::Pattern;
+pub use settings::SocpSettings;
 
 /// A cone of the constraint rows s = b − A x.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -244,36 +248,6 @@ impl ProblemBuilder {
     }
 }
 
-/// Why a subproblem did not give a usable solution.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SolveError {
-    /// Clarabel rejected the problem data (a bug in the assembly; names the cause).
-    #[error("solver setup failed: {0}")]
-    Setup(String),
-    /// Clarabel proved the subproblem infeasible.
-    #[error("subproblem is infeasible (solver status {0:?})")]
-    Infeasible(SolverStatus),
-    /// Clarabel proved the subproblem unbounded.
-    #[error("subproblem is unbounded (solver status {0:?})")]
-    Unbounded(SolverStatus),
-    /// Clarabel stopped without a solution of the required accuracy.
-    #[error("solver stopped with status {status:?} (cone violation {violation:.3e})")]
-    Inaccurate {
-        /// Clarabel's status.
-        status: SolverStatus,
-        /// Our residual check: largest cone violation of the returned point.
-        violation: f64,
-    },
-}
-
-impl SolveError {
-    /// Whether a more accurate linear algebra could change the outcome (everything but a setup
-    /// error: an inaccurate stop, or an infeasibility or unboundedness certificate).
-    pub fn may_be_numerical(&self) -> bool {
-        !matches!(self, SolveError::Setup(_))
-    }
-}
-
 /// A solved subproblem.
 #[derive(Debug, Clone)]
 pub struct Solution {
@@ -289,69 +263,6 @@ pub struct Solution {
     pub seconds: f64,
     /// Largest cone violation of `x` by our own check.
     pub violation: f64,
-}
-
-/// Settings of the subproblem solver.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SocpSettings {
-    /// Maximum interior-point iterations per solve.
-    pub max_iter: u32,
-    /// Feasibility tolerance passed to Clarabel.
-    pub tol_feas: f64,
-    /// Relative duality-gap tolerance passed to Clarabel.
-    pub tol_gap_rel: f64,
-    /// Largest cone violation, relative to 1 + the largest constant of the cone's rows,
-    /// accepted for `AlmostSolved` (and 1e-6 for `Solved`).
-    pub almost_solved_violation: f64,
-    /// Reuse the pattern and update values in place (true), or build a new solver each time.
-    pub reuse: bool,
-    /// Largest number of iterative-refinement steps per KKT solve.
-    pub refine_max_iter: u32,
-    /// Relative tolerance of iterative refinement.
-    pub refine_reltol: f64,
-    /// When a solve with fewer than this many refinement steps fails (inaccurate, or a
-    /// certificate of infeasibility or unboundedness that an unrefined KKT solve can fake), it is
-    /// repeated once from scratch with this many; 0 = no retry.
-    pub retry_refine_max_iter: u32,
-    /// When a solve still stops inaccurate (not a certificate), try it again with other
-    /// linear-algebra settings, in order: the other refinement setting (none ↔ 10 steps), then
-    /// tolerances of 1e-6. Every answer must still pass our residual check, so a fallback can
-    /// only turn a failure into an accepted solution, never weaken what is accepted. (Found on
-    /// Fig. 11's random realisations 3 and 19, whose first `baseline` program Clarabel stopped
-    /// `AlmostSolved` at a relative cone violation of 1.5e-4 and 2.9e-4: the plan failed.)
-    pub fallbacks: bool,
-}
-
-impl SocpSettings {
-    /// The settings of the `exact` scheme's cone programs: Clarabel's iterative refinement off
-    /// (it is about half of the interior-point time on these well-scaled, banded programs and
-    /// changes the planned energies by less than 1 J), and a failed solve repeated with
-    /// Clarabel's default refinement (10 steps). The comparison schemes keep the defaults: the
-    /// paper's later iterates depend on the solver's path (erratum 10 (docs/paper-notes.md)), and the
-    /// least-distance SCA lands on slightly longer local optima without refinement.
-    pub fn exact_geometry() -> Self {
-        Self {
-            refine_max_iter: 0,
-            retry_refine_max_iter: 10,
-            ..Self::default()
-        }
-    }
-}
-
-impl Default for SocpSettings {
-    fn default() -> Self {
-        Self {
-            max_iter: 200,
-            tol_feas: 1e-8,
-            tol_gap_rel: 1e-8,
-            almost_solved_violation: 1e-4,
-            reuse: true,
-            refine_max_iter: 10,
-            refine_reltol: 1e-13,
-            retry_refine_max_iter: 0,
-            fallbacks: true,
-        }
-    }
 }
 
 /// A Clarabel solver that keeps the sparsity pattern across solves of the same structure.
@@ -620,193 +531,4 @@ pub fn csc_from_triplets(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// min x + y s.t. ‖(x, y)‖ ≤ 1: optimum x = y = −1/√2, objective −√2.
-    fn unit_disc_problem() -> ProblemBuilder {
-        let mut b = ProblemBuilder::new(2);
-        b.add_linear_cost(0, 1.0);
-        b.add_linear_cost(1, 1.0);
-        b.soc(
-            Lin::constant_only(1.0),
-            &[Lin::var(0, 1.0), Lin::var(1, 1.0)],
-        );
-        b
-    }
-
-    #[test]
-    fn tiny_socp() {
-        let b = unit_disc_problem();
-        let mut s = SocpSolver::new(SocpSettings::default());
-        let sol = s.solve(&b).unwrap();
-        let h = -1.0 / 2f64.sqrt();
-        assert!((sol.x[0] - h).abs() < 1e-6 && (sol.x[1] - h).abs() < 1e-6);
-        assert!((sol.objective - 2.0 * h).abs() < 1e-6);
-    }
-
-    /// Same structure, new values: the pattern is reused and the answer follows the data.
-    #[test]
-    fn in_place_update_follows_data() {
-        let mut s = SocpSolver::new(SocpSettings::default());
-        for r in [1.0, 2.0, 3.0] {
-            let mut b = ProblemBuilder::new(2);
-            b.add_linear_cost(0, 1.0);
-            b.add_square_cost(1, 1.0); // + y²
-            b.add_linear_cost(1, -2.0 * r); // − 2 r y → y = r
-            b.soc(Lin::constant_only(r), &[Lin::var(0, 1.0)]); // |x| ≤ r
-            let sol = s.solve(&b).unwrap();
-            assert!((sol.x[0] + r).abs() < 1e-6, "x = {}", sol.x[0]);
-            assert!((sol.x[1] - r).abs() < 1e-6, "y = {}", sol.x[1]);
-        }
-        assert_eq!(s.builds, 1);
-    }
-
-    /// A failed solve is repeated with refinement when (and only when) the settings ask for it,
-    /// then with the fallbacks when they are on; the last attempt's failure is what the caller
-    /// sees.
-    #[test]
-    fn failed_solve_is_retried_with_refinement_then_fallbacks() {
-        let b = unit_disc_problem();
-        // one interior-point iteration cannot solve it: every attempt stops at the limit
-        let starved = SocpSettings {
-            max_iter: 1,
-            fallbacks: false,
-            ..SocpSettings::exact_geometry()
-        };
-        let mut s = SocpSolver::new(starved);
-        assert!(matches!(s.solve(&b), Err(SolveError::Inaccurate { .. })));
-        assert_eq!(s.retries, 1);
-        let mut s = SocpSolver::new(SocpSettings {
-            max_iter: 1,
-            fallbacks: false,
-            ..SocpSettings::default()
-        });
-        assert!(s.solve(&b).is_err());
-        assert_eq!(s.retries, 0);
-        // with the fallbacks: the other refinement setting, then looser tolerances (for the
-        // exact settings the other refinement setting is the refinement retry itself)
-        for (settings, attempts) in [
-            (SocpSettings::exact_geometry(), 2),
-            (SocpSettings::default(), 2),
-        ] {
-            let mut s = SocpSolver::new(SocpSettings {
-                max_iter: 1,
-                ..settings
-            });
-            assert!(matches!(s.solve(&b), Err(SolveError::Inaccurate { .. })));
-            assert_eq!(s.retries, attempts);
-        }
-        // a solvable program needs no retry, and the fast settings find the same optimum
-        let mut s = SocpSolver::new(SocpSettings::exact_geometry());
-        let sol = s.solve(&b).unwrap();
-        assert_eq!(s.retries, 0);
-        assert!((sol.objective + 2f64.sqrt()).abs() < 1e-6);
-    }
-
-    /// A program that the default tolerances cannot finish within the iteration limit but the
-    /// looser fallback can is rescued, and the answer still passes the residual check.
-    #[test]
-    fn looser_fallback_rescues_an_inaccurate_stop() {
-        let b = unit_disc_problem();
-        let iterations = |tol: f64| {
-            SocpSolver::new(SocpSettings {
-                tol_feas: tol,
-                tol_gap_rel: tol,
-                ..SocpSettings::default()
-            })
-            .solve(&b)
-            .unwrap()
-            .iterations
-        };
-        let (tight, loose) = (iterations(1e-8), iterations(1e-6));
-        assert!(
-            loose < tight,
-            "1e-6 needs {loose}, 1e-8 needs {tight} iterations"
-        );
-        // stopped at the limit, Clarabel calls the point AlmostSolved: accept none here
-        let limited = SocpSettings {
-            max_iter: loose,
-            almost_solved_violation: -1.0,
-            ..SocpSettings::default()
-        };
-        let mut s = SocpSolver::new(SocpSettings {
-            fallbacks: false,
-            ..limited
-        });
-        let first = s.solve(&b);
-        assert!(
-            matches!(first, Err(SolveError::Inaccurate { .. })),
-            "{tight} {loose} {:?}",
-            first.map(|s| (s.status, s.iterations, s.violation))
-        );
-        let mut s = SocpSolver::new(limited);
-        let sol = s.solve(&b).unwrap();
-        assert_eq!(
-            s.retries, 2,
-            "other refinement first, then the looser tolerances"
-        );
-        assert!(sol.violation <= 1e-6, "{}", sol.violation);
-        assert!(
-            (sol.objective + 2f64.sqrt()).abs() < 1e-5,
-            "{}",
-            sol.objective
-        );
-    }
-
-    /// A variable index beyond the problem is a setup error naming it, not a panic.
-    #[test]
-    fn out_of_range_variables_are_setup_errors() {
-        let mut square = ProblemBuilder::new(2);
-        square.add_square_cost(5, 1.0);
-        let mut linear = ProblemBuilder::new(2);
-        linear.add_linear_cost(4, 1.0);
-        let mut row = ProblemBuilder::new(2);
-        row.nonneg(Lin::var(0, 1.0));
-        row.soc(Lin::var(1, 1.0), &[Lin::var(7, 1.0)]);
-        for (b, settings, needles) in [
-            (&square, SocpSettings::default(), &["(5, 5)"][..]),
-            (&linear, SocpSettings::default(), &["entry 4"][..]),
-            (
-                &row,
-                SocpSettings::exact_geometry(),
-                &["row 2", "variable 7"][..],
-            ),
-        ] {
-            let e = SocpSolver::new(settings).solve(b).unwrap_err();
-            assert!(
-                matches!(&e, SolveError::Setup(m) if needles.iter().all(|n| m.contains(n))),
-                "{e}"
-            );
-        }
-    }
-
-    #[test]
-    fn infeasible_is_reported() {
-        let mut b = ProblemBuilder::new(1);
-        b.nonneg(Lin::var(0, 1.0).plus_const(-2.0)); // x ≥ 2
-        b.nonneg(Lin::var(0, -1.0).plus_const(1.0)); // x ≤ 1
-        let mut s = SocpSolver::new(SocpSettings::default());
-        assert!(matches!(s.solve(&b), Err(SolveError::Infeasible(_))));
-    }
-
-    /// min t s.t. x² ≤ t·1, x = 3 → t = 9 (an equality cone and a rotated cone).
-    fn rotated_cone_problem() -> ProblemBuilder {
-        let mut b = ProblemBuilder::new(2);
-        b.add_linear_cost(1, 1.0);
-        b.zero(Lin::var(0, 1.0).plus_const(-3.0));
-        b.rotated_soc(
-            Lin::var(1, 1.0),
-            Lin::constant_only(1.0),
-            &[Lin::var(0, 1.0)],
-        );
-        b
-    }
-
-    #[test]
-    fn rotated_cone() {
-        let b = rotated_cone_problem();
-        let sol = SocpSolver::new(SocpSettings::default()).solve(&b).unwrap();
-        assert!((sol.x[1] - 9.0).abs() < 1e-5, "{}", sol.x[1]);
-    }
-}
+mod tests;

@@ -1,0 +1,211 @@
+//! Coarse-to-fine levels: the start solved on coarser slot grids first.
+
+use crate::init::guidance_start;
+use crate::schemes::exact::{ExactObjective, ExactTuning};
+use crate::socp::SocpSolver;
+use crate::{Mission, Trajectory};
+
+use super::iterate::run_exact;
+use super::options::Deadline;
+use super::phase_one::make_feasible;
+use super::{NoObserver, PlanOptions, Scheme};
+
+/// Slot lengths of the coarse levels, finest first, s: the mission is first solved on slots of
+/// about 10 s (one per landmark window of the paper's missions), that solution starts a solve on
+/// slots of about 5 s, that one a solve on slots of about 2.5 s, which starts the mission's own
+/// grid. (All divide the paper's 10 s landmark windows.) The 10 s level finds the shape of the
+/// track (the orbit of the 30 m mission) in a few cheap iterations: the default 30 m mission
+/// plans 2.3x faster with it (BENCHMARKS.md, "Planner"). The `exact` scheme starts one level
+/// earlier, on 20 s slots ([`EXACT_COARSE_LEVELS_S`]).
+const COARSE_LEVELS_S: [f64; 3] = [2.5, 5.0, 10.0];
+
+/// The coarse levels of the `exact` scheme's built-in start: [`COARSE_LEVELS_S`] and a first
+/// solve on slots of about 20 s. A 20 s slot senses only the landmark of its end time (the 10 s
+/// level then repairs the others), but it finds the orbit of compact missions that the 10 s level
+/// can miss: random-9 and random-18 of Fig. 11 plan in 0.2 s instead of 6–16 s, at the floor
+/// instead of 5–6 J above it, and the staircase in 0.65 s instead of 1.3 s (BENCHMARKS.md).
+/// The comparison schemes keep [`COARSE_LEVELS_S`], so that their starts do not change.
+const EXACT_COARSE_LEVELS_S: [f64; 4] = [2.5, 5.0, 10.0, 20.0];
+
+/// The coarse levels for a scheme and purpose (optimising `exact`, or anything else).
+pub(super) fn coarse_levels(options: &PlanOptions, optimise: bool) -> &'static [f64] {
+    if optimise && options.scheme == Scheme::Exact {
+        &EXACT_COARSE_LEVELS_S
+    } else {
+        &COARSE_LEVELS_S
+    }
+}
+
+/// The factor k (n divisible by k, at least 12 coarse slots) whose slot length k δ is closest to
+/// `target_s`, within a factor 1.5 of it.
+pub(super) fn coarse_factor(n: usize, delta: f64, target_s: f64) -> Option<usize> {
+    (2..=n / 12)
+        .filter(|&k| n.is_multiple_of(k))
+        .map(|k| (k, ((k as f64 * delta) / target_s).ln().abs()))
+        .filter(|(_, d)| *d <= 1.5f64.ln())
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k)
+}
+
+/// Solves the mission on coarser grids ([`coarse_levels`]) and interpolates the result to the
+/// mission's slots. `None` when no suitable coarse grid exists or it fails (a stalled finest
+/// level included: see [`LevelStart::solved`]).
+pub(super) fn coarse_start(
+    mission: &Mission,
+    objective: ExactObjective,
+    optimise: bool,
+    options: &PlanOptions,
+    deadline: Deadline,
+) -> Option<Trajectory> {
+    coarse_start_from(mission, objective, optimise, options, deadline, None, 0)
+        .and_then(LevelStart::solved)
+}
+
+/// What a coarse level hands to the next finer one, interpolated to that one's slots.
+pub(super) enum LevelStart {
+    /// Feasible at its level (and optimised there when asked).
+    Solved(Trajectory),
+    /// The last accepted (least-merit) iterate of a phase I that stalled (only for `exact`):
+    /// the level's windows cannot all be held over its whole slots, but the track has the right
+    /// shape.
+    Stalled(Trajectory),
+}
+
+impl LevelStart {
+    /// The track when it is feasible at its level. The finest coarse level hands only such a
+    /// track to the fine grid (a stalled one there would replace the guidance start or a given
+    /// `--init` path, which the fine phase I repairs itself).
+    pub(super) fn solved(self) -> Option<Trajectory> {
+        match self {
+            LevelStart::Solved(t) => Some(t),
+            LevelStart::Stalled(_) => None,
+        }
+    }
+}
+
+/// [`coarse_start`] at coarse level `level`, from a given fine-grid trajectory (sampled at the
+/// coarse slot ends) or else from the next coarser level (or the guidance law).
+///
+/// For `exact`, when the next coarser level stalled, this level is solved from both its
+/// stalled track and the guidance law and keeps the cheaper result (when both stall here too,
+/// the track that came from the coarser level is handed on): the stalled track is the
+/// better start on Fig. 11's random realisations (19: 149 fine iterations to 7 J above the
+/// floor from the guidance law, 1 iteration to the floor from the stalled 20 s track), the
+/// guidance law on the square of Fig. 9 (H = 1000 m: 35 440 J against 39 380 J).
+pub(super) fn coarse_start_from(
+    mission: &Mission,
+    objective: ExactObjective,
+    optimise: bool,
+    options: &PlanOptions,
+    deadline: Deadline,
+    warm: Option<&Trajectory>,
+    level: usize,
+) -> Option<LevelStart> {
+    if deadline.passed() {
+        return None;
+    }
+    let n = mission.slots();
+    let delta = mission.params().slot_s;
+    let target = coarse_levels(options, optimise).get(level)?;
+    let factor = coarse_factor(n, delta, *target)?;
+    let coarse = mission.coarsened(factor)?;
+    let tuning = ExactTuning {
+        whole_slot_sensing: true,
+        resolution: options.resolution,
+        ..ExactTuning::default()
+    };
+    let exact_rules = optimise && options.scheme == Scheme::Exact;
+    let starts: Vec<Trajectory> = match warm {
+        Some(w) => vec![Trajectory {
+            slot_s: coarse.params().slot_s,
+            start_m: w.start_m,
+            pos_m: (1..=coarse.slots()).map(|k| w.q(k * factor)).collect(),
+        }],
+        None => match coarse_start_from(
+            &coarse,
+            objective,
+            optimise,
+            options,
+            deadline,
+            None,
+            level + 1,
+        ) {
+            Some(LevelStart::Solved(t)) => vec![t],
+            Some(LevelStart::Stalled(t)) => vec![t, guidance_start(&coarse, options.resolution)],
+            None => vec![guidance_start(&coarse, options.resolution)],
+        },
+    };
+    let mut best: Option<(f64, Trajectory)> = None;
+    let mut stalled: Option<Trajectory> = None;
+    for start in starts {
+        let mut solver = SocpSolver::new(options.scheme_socp());
+        let feasible = make_feasible(
+            &coarse,
+            start,
+            objective,
+            &tuning,
+            &mut solver,
+            &mut NoObserver,
+            exact_rules,
+            deadline,
+        );
+        let start = match feasible {
+            Ok((start, _)) => start,
+            Err(f) => {
+                tracing::debug!(factor, error = %f.error, "coarse level: no feasible track");
+                if exact_rules && stalled.is_none() {
+                    stalled = f.stalled;
+                }
+                continue;
+            }
+        };
+        let tr: (f64, Trajectory) = if optimise {
+            let sub_options = PlanOptions {
+                init: None,
+                coarse: false,
+                ..options.clone()
+            };
+            let mut solver = SocpSolver::new(options.scheme_socp());
+            let solved = match run_exact(
+                &coarse,
+                start,
+                objective,
+                &tuning,
+                &sub_options,
+                deadline,
+                &mut solver,
+                &mut NoObserver,
+            ) {
+                Ok(solved) => solved,
+                Err(e) => {
+                    tracing::debug!(factor, error = %e, "coarse level: optimisation failed");
+                    continue;
+                }
+            };
+            tracing::debug!(
+                factor,
+                iterations = solved.iterations,
+                energy_j = solved.evaluation.energy_j,
+                "coarse solve"
+            );
+            (objective.true_value(&solved.evaluation), solved.trajectory)
+        } else {
+            // not optimised: the comparison schemes, which always have one start (two starts
+            // come only after a stalled level, which needs the exact scheme's optimisation)
+            (0.0, start)
+        };
+        if best.as_ref().is_none_or(|(b, _)| tr.0 < *b) {
+            best = Some(tr);
+        }
+    }
+    let to_fine = |tr: Trajectory| Trajectory {
+        slot_s: delta,
+        start_m: tr.start_m,
+        pos_m: (1..=n).map(|t| tr.position_at(t as f64 * delta)).collect(),
+    };
+    match (best, stalled) {
+        (Some((_, tr)), _) => Some(LevelStart::Solved(to_fine(tr))),
+        (None, Some(tr)) => Some(LevelStart::Stalled(to_fine(tr))),
+        (None, None) => None,
+    }
+}

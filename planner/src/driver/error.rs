@@ -1,0 +1,64 @@
+//! Why planning failed: [`PlanError`].
+
+use crate::init::Infeasibility;
+use crate::socp::SolveError;
+
+/// Why planning failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    /// The mission cannot be flown (found before or during phase I).
+    #[error(transparent)]
+    Infeasible(#[from] Infeasibility),
+    /// The given start trajectory does not fit the mission.
+    #[error("start trajectory: {0}")]
+    InvalidInit(String),
+    /// The first subproblem could not be solved.
+    ///
+    /// The solver's error is part of the message (not a separate `source`), so that printing
+    /// the error chain names it once.
+    #[error("iteration {iteration}: {error}")]
+    Solver {
+        /// Iteration (0 = phase I).
+        iteration: usize,
+        /// The solver's error.
+        error: SolveError,
+    },
+    /// [`PlanOptions::time_limit_s`](super::PlanOptions::time_limit_s) passed before a feasible
+    /// start was found.
+    #[error(
+        "time limit of {limit_s} s reached after {iterations} phase I iterations without a \
+         feasible start (largest sensing violation {sensing_violation_m:.2} m)"
+    )]
+    TimeLimit {
+        /// The limit, s.
+        limit_s: f64,
+        /// Phase I iterations run on the mission's own grid.
+        iterations: usize,
+        /// Largest sensing violation of the last accepted repair iterate, m.
+        sensing_violation_m: f64,
+    },
+    /// An option is out of range.
+    #[error("option `{field}` = {value}: {reason}")]
+    InvalidOption {
+        /// The option's name (its field of [`PlanOptions`](super::PlanOptions)).
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What it must satisfy.
+        reason: &'static str,
+    },
+}
+
+impl From<PlanError> for cellsar_error::exit::Failure {
+    /// An infeasible mission exits 3, a start trajectory that does not fit or a bad option 2, a
+    /// solver failure or a time limit 1.
+    fn from(e: PlanError) -> Self {
+        use cellsar_error::exit::FailureKind as K;
+        let kind = match &e {
+            PlanError::Infeasible(_) => K::Infeasible,
+            PlanError::InvalidInit(_) | PlanError::InvalidOption { .. } => K::BadInput,
+            PlanError::Solver { .. } | PlanError::TimeLimit { .. } => K::Runtime,
+        };
+        Self::new(kind, e)
+    }
+}

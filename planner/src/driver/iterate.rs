@@ -1,0 +1,299 @@
+//! The iteration loops of the schemes (exact-geometry SCA, Algorithm 1) and their records.
+
+use std::time::Instant;
+
+use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
+use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
+use crate::schemes::paper::{PaperObjective, PaperState};
+use crate::socp::SocpSolver;
+use crate::{Mission, Trajectory};
+
+use super::options::Deadline;
+use super::{
+    IterationRecord, Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason,
+};
+
+pub(super) fn record(
+    iteration: usize,
+    objective: f64,
+    ev: &Evaluation,
+    ipm: u32,
+    seconds: f64,
+    accepted: bool,
+) -> IterationRecord {
+    IterationRecord {
+        iteration,
+        objective,
+        true_energy_j: ev.energy_j,
+        sensing_violation_m: ev.violations.sensing_m,
+        speed_violation_mps: ev.violations.min_speed_mps,
+        ipm_iterations: ipm,
+        seconds,
+        accepted,
+    }
+}
+
+#[allow(clippy::too_many_arguments)] // a private constructor of PlanResult
+pub(super) fn finish(
+    mission: &Mission,
+    trajectory: Trajectory,
+    objective: f64,
+    objective_history: Vec<f64>,
+    true_energy_history: Vec<f64>,
+    records: Vec<IterationRecord>,
+    termination: TerminationReason,
+    cone_programs: usize,
+) -> PlanResult {
+    let evaluation = evaluate(mission, &trajectory);
+    PlanResult {
+        scheme: Scheme::Exact,
+        iterations: records.len(),
+        converged: termination == TerminationReason::Converged,
+        trajectory,
+        evaluation,
+        objective,
+        objective_history,
+        true_energy_history,
+        records,
+        termination,
+        solve_seconds: 0.0,
+        start_energy_j: 0.0,
+        repair_iterations: 0,
+        cone_programs,
+        resolution: ResolutionMode::Paper,
+        init_replaced: None,
+    }
+}
+
+/// The exact-geometry SCA loop (monotone: a step is accepted only if it is feasible on the exact
+/// geometry and does not increase the true objective; otherwise a trust region is tightened).
+#[allow(clippy::too_many_arguments)] // private: the run's state, passed explicitly
+pub(super) fn run_exact(
+    mission: &Mission,
+    start: Trajectory,
+    objective: ExactObjective,
+    base: &ExactTuning,
+    options: &PlanOptions,
+    deadline: Deadline,
+    solver: &mut SocpSolver,
+    observer: &mut dyn Observer,
+) -> Result<PlanResult, PlanError> {
+    let true_value = |ev: &Evaluation| objective.true_value(ev);
+    let mut current = start;
+    let mut ev = evaluate(mission, &current);
+    let mut value = true_value(&ev);
+    let mut tuning = *base;
+    let mut records = Vec::new();
+    let mut obj_hist = Vec::new();
+    let mut energy_hist = Vec::new();
+    let mut last_objective = value;
+    let mut rejects = 0;
+    let mut programs = 0;
+    let mut termination = TerminationReason::MaxIterations;
+    for it in 1..=options.max_iterations {
+        if deadline.passed() {
+            termination = TerminationReason::TimeLimit;
+            break;
+        }
+        let t0 = Instant::now();
+        let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
+        programs += 1;
+        let sol = match solver.solve(&sub.builder) {
+            Ok(s) => s,
+            Err(e) => {
+                if it == 1 && tuning.trust_radius_m.is_none() && records.is_empty() {
+                    tracing::warn!(error = %e, "first subproblem failed; retrying with a trust region");
+                }
+                rejects += 1;
+                tuning.trust_radius_m = Some(tuning.trust_radius_m.map_or(2.0, |r| r * 0.5));
+                records.push(record(
+                    it,
+                    f64::NAN,
+                    &ev,
+                    0,
+                    t0.elapsed().as_secs_f64(),
+                    false,
+                ));
+                if rejects > 8 {
+                    if obj_hist.is_empty() && it <= 9 {
+                        return Err(PlanError::Solver {
+                            iteration: it,
+                            error: e,
+                        });
+                    }
+                    termination = TerminationReason::SubproblemFailed(e.to_string());
+                    break;
+                }
+                continue;
+            }
+        };
+        let mut cand = sub.trajectory(&sol.x, &current);
+        let mut cand_ev = evaluate(mission, &cand);
+        let mut cand_value = true_value(&cand_ev);
+        // over-relaxation: SCA steps limited by the conservative centre bound tend to repeat in
+        // the same direction; try longer steps along it and keep the best that stays feasible.
+        let mode = base.resolution;
+        if options.over_relaxation && cand_ev.is_feasible_for(mode) && cand_value < value {
+            for alpha in [2.0, 4.0] {
+                let trial = extrapolate(&current, &cand, alpha);
+                let ev = evaluate(mission, &trial);
+                let v = true_value(&ev);
+                if ev.is_feasible_for(mode) && v < cand_value {
+                    cand = trial;
+                    cand_ev = ev;
+                    cand_value = v;
+                } else {
+                    break;
+                }
+            }
+        }
+        let own = sub.physical_objective(sol.objective);
+        let ok = cand_ev.is_feasible_for(mode) && cand_value <= value * (1.0 + 1e-9) + 1e-9;
+        let rec = record(
+            it,
+            own,
+            &cand_ev,
+            sol.iterations,
+            t0.elapsed().as_secs_f64(),
+            ok,
+        );
+        observer.on_iteration(&rec);
+        records.push(rec);
+        if !ok && tuning.kappa_scale < 1.0 {
+            // the optimistic model overreached: fall back to the proven bound and re-solve
+            tuning.kappa_scale = (tuning.kappa_scale * 2.0).min(1.0);
+            continue;
+        }
+        if !ok {
+            rejects += 1;
+            tracing::debug!(
+                iteration = it,
+                feasible = cand_ev.is_feasible_for(mode),
+                value = cand_value,
+                previous = value,
+                "step rejected"
+            );
+            tuning.trust_radius_m = Some(tuning.trust_radius_m.map_or(2.0, |r| r * 0.5));
+            if rejects > 8 {
+                termination = TerminationReason::NoProgress;
+                break;
+            }
+            continue;
+        }
+        rejects = 0;
+        let rel = (value - cand_value).abs() / value.abs().max(1e-12);
+        current = cand;
+        ev = cand_ev;
+        value = cand_value;
+        last_objective = own;
+        obj_hist.push(own);
+        energy_hist.push(ev.energy_j);
+        tracing::debug!(
+            iteration = it,
+            objective = own,
+            true_value = value,
+            rel,
+            "accepted"
+        );
+        if rel < options.tolerance {
+            termination = TerminationReason::Converged;
+            break;
+        }
+        // a successful step relaxes the trust region again and makes the centre model bolder
+        tuning.trust_radius_m = tuning.trust_radius_m.map(|r| r * 4.0).filter(|r| *r < 50.0);
+        tuning.kappa_scale = (tuning.kappa_scale * 0.8).max(options.min_kappa_scale);
+    }
+    Ok(finish(
+        mission,
+        current,
+        last_objective,
+        obj_hist,
+        energy_hist,
+        records,
+        termination,
+        programs,
+    ))
+}
+
+/// `from + alpha (to − from)`, slot by slot.
+pub(super) fn extrapolate(from: &Trajectory, to: &Trajectory, alpha: f64) -> Trajectory {
+    Trajectory {
+        slot_s: to.slot_s,
+        start_m: to.start_m,
+        pos_m: from
+            .pos_m
+            .iter()
+            .zip(&to.pos_m)
+            .map(|(a, b)| [a[0] + alpha * (b[0] - a[0]), a[1] + alpha * (b[1] - a[1])])
+            .collect(),
+    }
+}
+
+/// Algorithm 1 (or the baseline) exactly as printed: alternate (p5) and (p6) from the start.
+pub(super) fn run_paper(
+    mission: &Mission,
+    start: Trajectory,
+    objective: PaperObjective,
+    options: &PlanOptions,
+    deadline: Deadline,
+    solver: &mut SocpSolver,
+    observer: &mut dyn Observer,
+) -> Result<PlanResult, PlanError> {
+    let mut state = PaperState::from_trajectory(mission, &start);
+    let mut p6_solver = SocpSolver::new(options.socp);
+    let mut records = Vec::new();
+    let mut obj_hist: Vec<f64> = Vec::new();
+    let mut energy_hist = Vec::new();
+    let mut termination = TerminationReason::MaxIterations;
+    let mut programs = 0;
+    let mut traj = start;
+    for it in 1..=options.max_iterations {
+        if deadline.passed() {
+            termination = TerminationReason::TimeLimit;
+            break;
+        }
+        let t0 = Instant::now();
+        let p5 = state.solve_p5(mission, objective, solver);
+        programs += 1;
+        let (own, ipm) = match p5 {
+            Ok(v) => v,
+            Err(e) => {
+                if obj_hist.is_empty() {
+                    return Err(PlanError::Solver {
+                        iteration: it,
+                        error: e,
+                    });
+                }
+                termination = TerminationReason::SubproblemFailed(e.to_string());
+                break;
+            }
+        };
+        let ipm6 = state.solve_p6(mission, &mut p6_solver);
+        programs += 1;
+        traj = state.trajectory(&traj);
+        let ev = evaluate(mission, &traj);
+        let rec = record(it, own, &ev, ipm + ipm6, t0.elapsed().as_secs_f64(), true);
+        observer.on_iteration(&rec);
+        records.push(rec);
+        let prev = obj_hist.last().copied();
+        obj_hist.push(own);
+        energy_hist.push(ev.energy_j);
+        if let Some(prev) = prev {
+            if (prev - own).abs() / prev.abs().max(1e-12) < options.tolerance {
+                termination = TerminationReason::Converged;
+                break;
+            }
+        }
+    }
+    let last = obj_hist.last().copied().unwrap_or(f64::NAN);
+    Ok(finish(
+        mission,
+        traj,
+        last,
+        obj_hist,
+        energy_hist,
+        records,
+        termination,
+        programs,
+    ))
+}

@@ -1,0 +1,189 @@
+//! The planner's options ([`PlanOptions`], [`Scheme`]) and the run's deadline.
+
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+
+use crate::evaluate::ResolutionMode;
+use crate::socp::SocpSettings;
+use crate::Trajectory;
+
+use super::PlanError;
+
+/// Which planner to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Scheme {
+    /// SCA on the exact geometry; every iterate feasible on it (the default).
+    Exact,
+    /// The paper's Algorithm 1 as printed: SCA + BCD between (p5) and (p6).
+    Paper,
+    /// The paper's baseline: least flight distance under the paper's convexification.
+    Baseline,
+    /// Least flight distance on the exact geometry (a baseline that is truly feasible).
+    BaselineExact,
+}
+
+impl Scheme {
+    /// All schemes.
+    pub const ALL: [Scheme; 4] = [
+        Scheme::Exact,
+        Scheme::Paper,
+        Scheme::Baseline,
+        Scheme::BaselineExact,
+    ];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::Exact => "exact",
+            Scheme::Paper => "paper",
+            Scheme::Baseline => "baseline",
+            Scheme::BaselineExact => "baseline-exact",
+        }
+    }
+}
+
+impl std::fmt::Display for Scheme {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Options of a planning run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanOptions {
+    /// The scheme.
+    pub scheme: Scheme,
+    /// Largest number of SCA/BCD iterations.
+    pub max_iterations: usize,
+    /// Stop when the relative change of the objective is below this.
+    pub tolerance: f64,
+    /// Start from this trajectory instead of the built-in guidance start.
+    pub init: Option<Trajectory>,
+    /// Settings of the cone-program solver for the comparison schemes (`paper`, `baseline`,
+    /// `baseline-exact`).
+    pub socp: SocpSettings,
+    /// Settings of the cone-program solver for the `exact` scheme, its coarse start and its
+    /// repair. Its default skips Clarabel's iterative refinement (about twice as fast, the same
+    /// energies); the comparison schemes keep the refinement because their flat or
+    /// solver-dependent objectives land on other local optima without it (`baseline-exact`
+    /// up to 1.2 % longer).
+    pub exact_socp: SocpSettings,
+    /// Smallest factor on the proven centre-error bound that the exact scheme tries after
+    /// successful steps (1 = always use the proven bound).
+    pub min_kappa_scale: f64,
+    /// For the exact-geometry schemes without a given start: first solve the mission on slots
+    /// about 2 s long and start from that solution (fewer, larger steps make the SCA converge
+    /// in far fewer iterations; the fine solve then only polishes). When false, the coarse grid
+    /// only provides a feasible start.
+    pub coarse: bool,
+    /// Try longer steps along each accepted SCA step of the exact scheme (2× and 4×, kept when
+    /// still feasible and better). Off gives the plain SCA sequence.
+    pub over_relaxation: bool,
+    /// Resolution requirement of the exact-geometry schemes (the paper's schemes always use the
+    /// paper's, as printed).
+    pub resolution: ResolutionMode,
+    /// Wall-time limit of the whole run, s (`None`: none). The coarse levels are skipped once it
+    /// has passed; the iterations stop at the first check after it with
+    /// [`TerminationReason::TimeLimit`](super::TerminationReason::TimeLimit) and return the last
+    /// accepted iterate (feasible on the
+    /// exact geometry for the exact-geometry schemes); a phase I that has not found a feasible
+    /// start by then fails with [`PlanError::TimeLimit`]. A check comes before every cone
+    /// program, so the run ends within about one program's time (~0.1 s at 600 slots) after it.
+    pub time_limit_s: Option<f64>,
+    /// When a given start ([`PlanOptions::init`]) cannot be repaired, plan from the built-in
+    /// start instead (saying so in
+    /// [`PlanResult::init_replaced`](super::PlanResult::init_replaced)); when false, fail with
+    /// phase I's error.
+    pub replace_unrepairable_init: bool,
+}
+
+impl PlanOptions {
+    /// Checks the numeric options; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        let bad = |field, value, reason| {
+            Err(PlanError::InvalidOption {
+                field,
+                value,
+                reason,
+            })
+        };
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return bad("tolerance", self.tolerance, "must be a finite number > 0");
+        }
+        if !(self.min_kappa_scale.is_finite()
+            && self.min_kappa_scale > 0.0
+            && self.min_kappa_scale <= 1.0)
+        {
+            return bad(
+                "min_kappa_scale",
+                self.min_kappa_scale,
+                "must lie in (0, 1]",
+            );
+        }
+        if let Some(limit) = self.time_limit_s {
+            if !(limit.is_finite() && limit > 0.0) {
+                return bad(
+                    "time_limit_s",
+                    limit,
+                    "must be a finite number of seconds > 0",
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The cone-program settings of this run's scheme.
+    pub fn scheme_socp(&self) -> SocpSettings {
+        match self.scheme {
+            Scheme::Exact => self.exact_socp,
+            Scheme::BaselineExact | Scheme::Paper | Scheme::Baseline => self.socp,
+        }
+    }
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        Self {
+            scheme: Scheme::Exact,
+            max_iterations: 200,
+            tolerance: 1e-4,
+            init: None,
+            socp: SocpSettings::default(),
+            exact_socp: SocpSettings::exact_geometry(),
+            min_kappa_scale: 1.0 / 16.0,
+            coarse: true,
+            over_relaxation: true,
+            resolution: ResolutionMode::Paper,
+            time_limit_s: None,
+            replace_unrepairable_init: true,
+        }
+    }
+}
+
+/// When a planning run must stop: [`PlanOptions::time_limit_s`] after it started.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Deadline {
+    pub(super) at: Option<Instant>,
+    /// The limit, s (for messages; infinite without one).
+    pub(super) limit_s: f64,
+}
+
+impl Deadline {
+    /// `limit_s` after `started` (a limit too large to represent is no limit).
+    pub(super) fn after(started: Instant, limit_s: Option<f64>) -> Self {
+        let at = limit_s
+            .and_then(|s| Duration::try_from_secs_f64(s).ok())
+            .and_then(|d| started.checked_add(d));
+        Self {
+            at,
+            limit_s: limit_s.unwrap_or(f64::INFINITY),
+        }
+    }
+
+    /// Whether it has passed.
+    pub(super) fn passed(self) -> bool {
+        self.at.is_some_and(|at| Instant::now() >= at)
+    }
+}

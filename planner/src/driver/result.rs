@@ -1,0 +1,64 @@
+//! What a planning run returns: [`PlanResult`] and [`TerminationReason`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::evaluate::{Evaluation, ResolutionMode};
+use crate::Trajectory;
+
+use super::{IterationRecord, Scheme};
+
+/// Why the iterations stopped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "reason", content = "detail")]
+pub enum TerminationReason {
+    /// The relative change of the objective fell below the tolerance.
+    Converged,
+    /// The iteration limit was reached.
+    MaxIterations,
+    /// A subproblem failed even after backing off; the last accepted iterate is returned.
+    SubproblemFailed(String),
+    /// Steps kept being rejected by the exact-geometry check; the last accepted iterate is returned.
+    NoProgress,
+    /// [`PlanOptions::time_limit_s`](super::PlanOptions::time_limit_s) passed; the last accepted
+    /// iterate is returned.
+    TimeLimit,
+}
+
+/// The result of a planning run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanResult {
+    /// The scheme that produced it.
+    pub scheme: Scheme,
+    /// The planned trajectory.
+    pub trajectory: Trajectory,
+    /// Its exact-geometry evaluation (true energy, violations, per-slot values).
+    pub evaluation: Evaluation,
+    /// The optimiser's own final objective (J for energy schemes, m for distance schemes).
+    pub objective: f64,
+    /// The optimiser's objective after each accepted iteration.
+    pub objective_history: Vec<f64>,
+    /// True energy after each accepted iteration, J.
+    pub true_energy_history: Vec<f64>,
+    /// All iterations (accepted and rejected).
+    pub records: Vec<IterationRecord>,
+    /// Number of iterations run.
+    pub iterations: usize,
+    /// True when stopped by the tolerance.
+    pub converged: bool,
+    /// Why it stopped.
+    pub termination: TerminationReason,
+    /// Wall time of the whole run (start, repair and iterations), s.
+    pub solve_seconds: f64,
+    /// True energy of the start trajectory, J.
+    pub start_energy_j: f64,
+    /// Phase-I iterations spent repairing the start.
+    pub repair_iterations: usize,
+    /// Cone programs solved.
+    pub cone_programs: usize,
+    /// The resolution requirement the plan was made for.
+    pub resolution: ResolutionMode,
+    /// Why a given start (`PlanOptions::init`) was not used: it could not be repaired (made
+    /// feasible) and the plan starts from the built-in start instead. `None` when the given
+    /// start was used or none was given.
+    pub init_replaced: Option<String>,
+}
