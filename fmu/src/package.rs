@@ -46,6 +46,7 @@ pub fn entries(
 
 /// An error while writing an FMU archive, naming the archive entry it concerns.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PackageError {
     /// Adding an entry (header or data) to the archive failed.
     #[error("adding {name} to the FMU archive: {source}")]

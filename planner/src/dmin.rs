@@ -25,6 +25,7 @@ pub enum CdfForm {
 
 /// Invalid input to the E\[d_min\] functions.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum DminError {
     /// The radius must be finite and positive.
     #[error("radius_m = {0}: must be a finite number > 0")]

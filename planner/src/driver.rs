@@ -25,7 +25,7 @@ pub use options::{PlanOptions, Scheme};
 pub use result::{PlanResult, TerminationReason};
 
 use coarse::{coarse_start, coarse_start_from, LevelStart};
-use iterate::{run_exact, run_paper};
+use iterate::{run_exact, run_paper, Means};
 use options::Deadline;
 use phase_one::make_feasible;
 
@@ -78,10 +78,12 @@ pub fn plan_with_observer(
                 start,
                 objective,
                 &base,
-                &mut repair_solver,
-                observer,
                 exact_rules,
-                deadline,
+                Means {
+                    solver: &mut repair_solver,
+                    observer: &mut *observer,
+                    deadline,
+                },
             ) {
                 Ok(repaired) => repaired,
                 // A given path phase I cannot repair (far outside the speed limits, or so far
@@ -106,10 +108,12 @@ pub fn plan_with_observer(
                         start,
                         objective,
                         &base,
-                        &mut repair_solver,
-                        observer,
                         exact_rules,
-                        deadline,
+                        Means {
+                            solver: &mut repair_solver,
+                            observer: &mut *observer,
+                            deadline,
+                        },
                     )?
                 }
                 Err(failure) => return Err(failure.into()),
@@ -125,9 +129,11 @@ pub fn plan_with_observer(
             ExactObjective::Energy,
             &base,
             options,
-            deadline,
-            &mut solver,
-            observer,
+            Means {
+                solver: &mut solver,
+                observer: &mut *observer,
+                deadline,
+            },
         )?,
         Scheme::BaselineExact => run_exact(
             mission,
@@ -135,9 +141,11 @@ pub fn plan_with_observer(
             ExactObjective::Distance,
             &base,
             options,
-            deadline,
-            &mut solver,
-            observer,
+            Means {
+                solver: &mut solver,
+                observer: &mut *observer,
+                deadline,
+            },
         )?,
         Scheme::Paper => run_paper(
             mission,

@@ -151,6 +151,7 @@ pub struct LandmarksSpec {
 
 /// A schedule that cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ScheduleError {
     /// The `[landmarks]` table is malformed; `field` names the bad entry.
     #[error("landmarks.{field}: {reason}")]

@@ -18,6 +18,7 @@ use crate::params::{ParamError, Params, ParamsOverride};
 
 /// A mission that cannot be read or built. Every variant names the file, field or slot.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum MissionError {
     /// The file could not be read.
     #[error("cannot read mission file {path}: {source}")]

@@ -11,6 +11,7 @@ pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 
 /// A parameter that failed validation.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ParamError {
     /// A value is NaN, infinite, or outside its allowed range.
     #[error("parameter `{field}` = {value}: {reason}")]

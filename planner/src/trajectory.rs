@@ -9,6 +9,7 @@ use crate::geometry::{heading_rad, Length, Point2, Vector2};
 
 /// A trajectory that cannot be read or does not fit its mission.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum TrajectoryError {
     /// The file could not be read.
     #[error("cannot read trajectory {path}: {source}")]

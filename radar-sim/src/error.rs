@@ -2,6 +2,7 @@
 
 /// Everything that can go wrong in the radar library.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RadarError {
     /// A configuration value is invalid; `field` is its dotted name in the scene file.
     #[error("{field}: {reason}")]

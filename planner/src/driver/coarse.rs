@@ -5,7 +5,7 @@ use crate::schemes::exact::{ExactObjective, ExactTuning};
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
-use super::iterate::run_exact;
+use super::iterate::{run_exact, Means};
 use super::options::Deadline;
 use super::phase_one::make_feasible;
 use super::{NoObserver, PlanOptions, Scheme};
@@ -144,10 +144,12 @@ pub(super) fn coarse_start_from(
             start,
             objective,
             &tuning,
-            &mut solver,
-            &mut NoObserver,
             exact_rules,
-            deadline,
+            Means {
+                solver: &mut solver,
+                observer: &mut NoObserver,
+                deadline,
+            },
         );
         let start = match feasible {
             Ok((start, _)) => start,
@@ -172,9 +174,11 @@ pub(super) fn coarse_start_from(
                 objective,
                 &tuning,
                 &sub_options,
-                deadline,
-                &mut solver,
-                &mut NoObserver,
+                Means {
+                    solver: &mut solver,
+                    observer: &mut NoObserver,
+                    deadline,
+                },
             ) {
                 Ok(solved) => solved,
                 Err(e) => {

@@ -5,6 +5,7 @@ use crate::socp::SolveError;
 
 /// Why planning failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum PlanError {
     /// The mission cannot be flown (found before or during phase I).
     #[error(transparent)]

@@ -33,17 +33,35 @@ pub(super) fn record(
     }
 }
 
-#[allow(clippy::too_many_arguments)] // a private constructor of PlanResult
-pub(super) fn finish(
-    mission: &Mission,
-    trajectory: Trajectory,
-    objective: f64,
-    objective_history: Vec<f64>,
-    true_energy_history: Vec<f64>,
-    records: Vec<IterationRecord>,
-    termination: TerminationReason,
-    cone_programs: usize,
-) -> PlanResult {
+/// The means a loop runs with: the cone-program solver, the observer it reports to, the
+/// deadline.
+pub(super) struct Means<'s> {
+    pub solver: &'s mut SocpSolver,
+    pub observer: &'s mut dyn Observer,
+    pub deadline: Deadline,
+}
+
+/// What an iteration loop leaves: its last own objective, its histories, why it stopped, the
+/// cone programs it solved.
+pub(super) struct LoopEnd {
+    pub objective: f64,
+    pub objective_history: Vec<f64>,
+    pub true_energy_history: Vec<f64>,
+    pub records: Vec<IterationRecord>,
+    pub termination: TerminationReason,
+    pub cone_programs: usize,
+}
+
+/// The result of a loop that ended with `trajectory`.
+pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) -> PlanResult {
+    let LoopEnd {
+        objective,
+        objective_history,
+        true_energy_history,
+        records,
+        termination,
+        cone_programs,
+    } = end;
     let evaluation = evaluate(mission, &trajectory);
     PlanResult {
         scheme: Scheme::Exact,
@@ -67,17 +85,19 @@ pub(super) fn finish(
 
 /// The exact-geometry SCA loop (monotone: a step is accepted only if it is feasible on the exact
 /// geometry and does not increase the true objective; otherwise a trust region is tightened).
-#[allow(clippy::too_many_arguments)] // private: the run's state, passed explicitly
 pub(super) fn run_exact(
     mission: &Mission,
     start: Trajectory,
     objective: ExactObjective,
     base: &ExactTuning,
     options: &PlanOptions,
-    deadline: Deadline,
-    solver: &mut SocpSolver,
-    observer: &mut dyn Observer,
+    means: Means<'_>,
 ) -> Result<PlanResult, PlanError> {
+    let Means {
+        solver,
+        observer,
+        deadline,
+    } = means;
     let true_value = |ev: &Evaluation| objective.true_value(ev);
     let mut current = start;
     let mut ev = evaluate(mission, &current);
@@ -206,12 +226,14 @@ pub(super) fn run_exact(
     Ok(finish(
         mission,
         current,
-        last_objective,
-        obj_hist,
-        energy_hist,
-        records,
-        termination,
-        programs,
+        LoopEnd {
+            objective: last_objective,
+            objective_history: obj_hist,
+            true_energy_history: energy_hist,
+            records,
+            termination,
+            cone_programs: programs,
+        },
     ))
 }
 
@@ -289,11 +311,13 @@ pub(super) fn run_paper(
     Ok(finish(
         mission,
         traj,
-        last,
-        obj_hist,
-        energy_hist,
-        records,
-        termination,
-        programs,
+        LoopEnd {
+            objective: last,
+            objective_history: obj_hist,
+            true_energy_history: energy_hist,
+            records,
+            termination,
+            cone_programs: programs,
+        },
     ))
 }

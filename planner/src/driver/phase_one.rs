@@ -4,12 +4,10 @@ use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
 use crate::geometry::{distance, Point2, Vector2};
 use crate::init::Infeasibility;
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
-use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
-use super::iterate::extrapolate;
-use super::options::Deadline;
-use super::{Observer, PlanError};
+use super::iterate::{extrapolate, Means};
+use super::PlanError;
 
 /// Per-slot violation used by the elastic phase: the largest of the sensing excess (m), the
 /// azimuth speed shortfall (m/s) and the range keep-out shortfall (m) of each landmark slot,
@@ -62,17 +60,19 @@ pub(super) fn total_violation(
 /// and a step rejected at the proven centre bound shortens the next one (trust region) instead
 /// of repeating the same subproblem. The comparison schemes keep the earlier rules, so that
 /// their starts, and the results compared with the paper, do not change.
-#[allow(clippy::too_many_arguments)] // private: the run's state, passed explicitly
 pub(super) fn make_feasible(
     mission: &Mission,
     start: Trajectory,
     objective: ExactObjective,
     base: &ExactTuning,
-    solver: &mut SocpSolver,
-    observer: &mut dyn Observer,
     exact_rules: bool,
-    deadline: Deadline,
+    means: Means<'_>,
 ) -> Result<(Trajectory, usize), PhaseOneFailure> {
+    let Means {
+        solver,
+        observer,
+        deadline,
+    } = means;
     let mode = base.resolution;
     let mut current = start;
     let mut ev = evaluate(mission, &current);

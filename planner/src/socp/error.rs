@@ -4,6 +4,7 @@ use clarabel::solver::SolverStatus;
 
 /// Why a subproblem did not give a usable solution.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SolveError {
     /// Clarabel rejected the problem data (a bug in the assembly; names the cause).
     #[error("solver setup failed: {0}")]

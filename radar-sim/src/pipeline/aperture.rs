@@ -21,6 +21,18 @@ pub const CLEAR_SIGNAL: f64 = 0.1;
 /// (their responses reach into the image).
 pub const NEAR_OBJECT_REACH: f64 = 2.0;
 
+/// One aperture's images and detections, before scoring.
+pub(super) struct Imaged {
+    /// The multilook image, power over noise.
+    multilook: Vec<f32>,
+    /// The complex look images (kept with `processing.save_complex`).
+    looks: Vec<Vec<Complex32>>,
+    /// CFAR's detections.
+    det: Detected,
+    /// The noise variance of one look image.
+    noise_var: f64,
+}
+
 impl Processor {
     /// Processes one aperture: cancellation, compression, look images, multilook, CFAR,
     /// clustering, scoring against `objects` inside the grid.
@@ -60,35 +72,40 @@ impl Processor {
         let floor_w =
             echo_power_w + self.noise_power_w() * c.cancel.noise_retained(self.setup.num.fft_size);
         let image_floor_pred = 1.0 + self.isi_power_w(objects, pulses) / self.noise_power_w();
-        self.score_aperture(
-            ap,
-            pulses,
+        let imaged = Imaged {
             multilook,
             looks,
             det,
-            (c.cancel, echo_power_w, floor_w, image_floor_pred),
             noise_var,
+        };
+        self.score_aperture(
+            ap,
+            pulses,
+            imaged,
+            (c.cancel, echo_power_w, floor_w, image_floor_pred),
             objects,
         )
     }
 
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn score_aperture(
         &self,
         ap: &Aperture,
         pulses: &[PulseMeta],
-        multilook: Vec<f32>,
-        looks: Vec<Vec<Complex32>>,
-        det: Detected,
+        imaged: Imaged,
         (cancel, echo_power_w, predicted_floor_w, predicted_image_floor): (
             CancelStats,
             f64,
             f64,
             f64,
         ),
-        noise_var: f64,
         objects: &[SceneObject],
     ) -> Result<ApertureResult> {
+        let Imaged {
+            multilook,
+            looks,
+            det,
+            noise_var,
+        } = imaged;
         let grid = self.setup.grid(ap);
         let pc = &self.setup.scene.processing;
         let ppl = ap.pulses_per_look;
