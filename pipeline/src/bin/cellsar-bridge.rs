@@ -13,8 +13,6 @@
 //! Zenoh or iceoryx2, a forwarding thread that dies).
 
 use std::process::ExitCode;
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 
 use bridge::iox::init_iceoryx_logging;
 use cellsar_error::exit::Failure;
@@ -35,24 +33,13 @@ struct Cli {
 fn main() -> ExitCode {
     init_tracing();
     let cli = Cli::parse();
+    // SIGINT and SIGTERM set the flag; the bridge then stops cleanly (exit 0)
+    let stop = pipeline::services::os::stop_on_signals().map_err(Failure::runtime);
     // printed once, on stderr (tracing's own output also goes there)
-    match stop_on_signals().and_then(|stop| service::run(&cli.bridge, &stop)) {
+    match stop.and_then(|stop| service::run(&cli.bridge, &stop)) {
         Ok(_) => ExitCode::SUCCESS,
         Err(f) => f.report(),
     }
-}
-
-/// A flag that SIGINT and SIGTERM set (the bridge then stops cleanly, exit 0).
-fn stop_on_signals() -> Result<Arc<AtomicBool>, Failure> {
-    let stop = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register(sig, stop.clone()).map_err(|e| {
-            Failure::runtime(
-                anyhow::Error::new(e).context(format!("installing the handler of signal {sig}")),
-            )
-        })?;
-    }
-    Ok(stop)
 }
 
 fn init_tracing() {

@@ -8,9 +8,8 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::plan::{PlanCache, StatusBoard};
-use crate::protocol::keys::{self as pkeys, ALL_PLANS};
-use crate::protocol::{Plan, MAX_PLAN_BYTES};
-use bridge::envelope::DecodeLimits;
+use crate::protocol::keys as pkeys;
+use crate::protocol::Plan;
 use bridge::iox::FramePublisherOptions;
 use bridge::net::{IncomingQuery, PublishOptions, SubscribeOptions, TypedPublisher};
 use bridge::zenoh::qos::CongestionControl;
@@ -160,17 +159,7 @@ impl<'a> Echo<'a> {
     }
 
     fn run(&mut self, stop: &AtomicBool) -> ServiceResult<EchoReport> {
-        let plans = self.node.subscriber::<Plan>(
-            ALL_PLANS,
-            SubscribeOptions {
-                capacity: 16,
-                limits: DecodeLimits {
-                    max_body_bytes: MAX_PLAN_BYTES,
-                    verify_crc: true,
-                },
-                ..SubscribeOptions::default()
-            },
-        )?;
+        let plans = PlanCache::subscribe_plans(self.node)?;
         let requests = self.node.queryable::<ApertureRequest>(
             pkeys::ALL_ECHO_REQUESTS,
             SubscribeOptions {
@@ -178,13 +167,8 @@ impl<'a> Echo<'a> {
                 ..SubscribeOptions::default()
             },
         )?;
-        match PlanCache::lookup(self.node, ALL_PLANS, Duration::from_secs(2)) {
-            Ok(found) => {
-                for p in found {
-                    self.add_plan(p);
-                }
-            }
-            Err(e) => tracing::warn!(error = %e, "plan lookup at start failed"),
+        for p in PlanCache::plans_known_at_start(self.node) {
+            self.add_plan(p);
         }
         tracing::info!(instance = %self.args.instance, "echo ready");
         let interval = self.args.status_interval_s.duration();

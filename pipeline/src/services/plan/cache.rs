@@ -119,6 +119,34 @@ impl PlanCache {
             .unwrap_or_default()
     }
 
+    /// Subscribes to every mission's plans as they are published (bounded to
+    /// [`MAX_PLAN_BYTES`]); the echo and the processor take their missions from it.
+    pub fn subscribe_plans(
+        node: &ZenohNode,
+    ) -> Result<bridge::net::TypedSubscriber<Plan>, bridge::NetError> {
+        node.subscriber::<Plan>(
+            ALL_PLANS,
+            bridge::net::SubscribeOptions {
+                capacity: 16,
+                limits: DecodeLimits {
+                    max_body_bytes: MAX_PLAN_BYTES,
+                    verify_crc: true,
+                },
+                ..bridge::net::SubscribeOptions::default()
+            },
+        )
+    }
+
+    /// The plans other processes already hold (a service that starts late or restarts takes
+    /// them instead of waiting for the next publication); a failed lookup is logged and gives
+    /// none.
+    pub fn plans_known_at_start(node: &ZenohNode) -> Vec<Plan> {
+        Self::lookup(node, ALL_PLANS, Duration::from_secs(2)).unwrap_or_else(|e| {
+            tracing::warn!(error = %e, "plan lookup at start failed");
+            Vec::new()
+        })
+    }
+
     /// Asks every process for the plans matching `selector` (e.g. [`ALL_PLANS`] or
     /// `cellsar/<mission>/plan`); replies that do not decode are logged and skipped.
     pub fn lookup(

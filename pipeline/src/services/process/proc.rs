@@ -7,7 +7,7 @@ use std::sync::mpsc::{Receiver, Sender};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use bridge::envelope::{DecodeLimits, Meta};
+use bridge::envelope::Meta;
 use bridge::net::SubscribeOptions;
 use bridge::{MissionId, ZenohNode};
 use radar_sim::config::SceneFile;
@@ -21,7 +21,7 @@ use super::store::{restore, store, store_metrics};
 use super::work::{Job, JobResult, RequestDone, RequestJob};
 use super::{ProcessArgs, ProcessReport};
 use crate::protocol::keys::{self as pkeys, ALL_PLANS};
-use crate::protocol::{MissionMetrics, Plan, ResultRequest, MAX_PLAN_BYTES};
+use crate::protocol::{MissionMetrics, Plan, ResultRequest};
 use crate::services::plan::{PlanCache, StatusBoard};
 use crate::services::radar::ServiceResult;
 
@@ -82,17 +82,7 @@ impl Proc<'_> {
         inbox: &Inbox,
         loss: &FrameLoss,
     ) -> ServiceResult<ProcessReport> {
-        let plans = self.node.subscriber::<Plan>(
-            ALL_PLANS,
-            SubscribeOptions {
-                capacity: 16,
-                limits: DecodeLimits {
-                    max_body_bytes: MAX_PLAN_BYTES,
-                    verify_crc: true,
-                },
-                ..SubscribeOptions::default()
-            },
-        )?;
+        let plans = PlanCache::subscribe_plans(self.node)?;
         let result_requests = self.node.queryable::<ResultRequest>(
             pkeys::ALL_RESULTS,
             SubscribeOptions {
@@ -101,13 +91,8 @@ impl Proc<'_> {
             },
         )?;
         let mut last_lookup = Instant::now();
-        match PlanCache::lookup(self.node, ALL_PLANS, Duration::from_secs(2)) {
-            Ok(found) => {
-                for p in found {
-                    self.add_plan(p);
-                }
-            }
-            Err(e) => tracing::warn!(error = %e, "plan lookup at start failed"),
+        for p in PlanCache::plans_known_at_start(self.node) {
+            self.add_plan(p);
         }
         tracing::info!(instance = %self.args.instance, frames = ?self.args.frames, "processor ready");
         let interval = self.args.status_interval_s.duration();
