@@ -54,6 +54,11 @@ impl World {
     }
 
     fn start(&self, role: &str) -> Service {
+        self.start_with(role, &[])
+    }
+
+    /// Starts `role` with `extra` flags after the usual ones.
+    fn start_with(&self, role: &str, extra: &[&str]) -> Service {
         let mut a: Vec<String> = match role {
             "planner" => vec!["planner".into()],
             "echo" => vec![
@@ -73,6 +78,7 @@ impl World {
         if role != "planner" {
             a.extend(self.iox.clone());
         }
+        a.extend(extra.iter().map(|s| s.to_string()));
         Service::start(role, self.dir.path(), &a)
     }
 }
@@ -123,10 +129,19 @@ impl Client {
     }
 
     fn plan(&self) -> Plan {
+        self.plan_named(None)
+    }
+
+    /// The plan of the short mission, renamed `name` (another mission id) if given.
+    fn plan_named(&self, name: Option<&str>) -> Plan {
         let m = planner::Mission::from_path(&mission()).unwrap();
         let m = radar_sim::run::shorten(&m, H).unwrap();
+        let mut file = m.to_file_struct();
+        if let Some(n) = name {
+            file.name = Some(n.to_string());
+        }
         let req = PlanRequest {
-            mission: m.to_file_struct(),
+            mission: file,
             options: Default::default(),
         };
         self.node
@@ -147,8 +162,9 @@ impl Client {
     }
 }
 
-/// Collects the mission's results into `out` and checks them against the closed loop.
-fn collect_and_check(c: &Client, plan: &Plan, out: &Path, started: Vec<Service>) {
+/// Collects the mission's results into `out` and checks them against the closed loop; stops
+/// the services and hands them back (for their logs).
+fn collect_and_check(c: &Client, plan: &Plan, out: &Path, started: Vec<Service>) -> Vec<Service> {
     let det = c
         .node
         .subscriber::<ApertureDetections>(pkeys::ALL_DETECTIONS, SubscribeOptions::default())
@@ -214,7 +230,8 @@ fn collect_and_check(c: &Client, plan: &Plan, out: &Path, started: Vec<Service>)
             "{a}"
         );
     }
-    for mut s in started {
+    let mut started = started;
+    for s in &mut started {
         assert!(
             s.stop(Duration::from_secs(20)).success(),
             "{}",
@@ -222,6 +239,7 @@ fn collect_and_check(c: &Client, plan: &Plan, out: &Path, started: Vec<Service>)
         );
         assert!(s.log_text().contains("final_counters=true"));
     }
+    started
 }
 
 #[test]
@@ -291,4 +309,144 @@ fn late_echo_and_a_json_client() {
     std::thread::sleep(Duration::from_secs(2));
     let e = w.start("echo");
     collect_and_check(&c, &plan, &w.dir.path().join("out"), vec![p, e, pl]);
+}
+
+// Hostile or broken peers: bounded work, nothing lost.
+
+/// Waits (at most 60 s) until `s`'s log holds `n` lines containing `marker`.
+fn wait_log_lines(s: &Service, marker: &str, n: usize) {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let got = s.log_text().lines().filter(|l| l.contains(marker)).count();
+        if got >= n {
+            return;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{got} of {n} lines with {marker:?}:\n{}",
+            s.log_text()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// A peer that makes the planner publish plan after plan cannot make the processor or the echo
+/// hold more than `--max-missions` missions; a result request cannot make the processor answer
+/// or publish more than the mission has.
+#[test]
+fn plan_and_request_floods_are_bounded() {
+    let w = World::new();
+    let c = Client::new(&w);
+    let pl = w.start("planner");
+    let mut p = w.start_with("processor", &["--max-missions", "2"]);
+    c.wait_alive("planner");
+    c.wait_alive("processor");
+    let plans: Vec<Plan> = (0..5)
+        .map(|i| c.plan_named(Some(&format!("flood-{i}"))))
+        .collect();
+    let ids: std::collections::BTreeSet<_> = plans.iter().map(|p| p.mission_id).collect();
+    assert_eq!(ids.len(), 5, "five distinct missions");
+    // no echo: the first two missions stay in progress, the other three are refused
+    wait_log_lines(&p, "plan refused", 3);
+
+    // duplicated apertures: answered once; an unknown mission: the answer stays bounded
+    let ask = |id, apertures: Vec<u32>| {
+        c.node
+            .query_one::<_, pipeline::protocol::ResultAck>(
+                &pkeys::results(id).unwrap(),
+                &pipeline::protocol::ResultRequest {
+                    mission_id: id,
+                    apertures,
+                    metrics: true,
+                },
+                &QueryOptions {
+                    timeout: Duration::from_secs(10),
+                    ..QueryOptions::default()
+                },
+            )
+            .unwrap()
+            .message
+    };
+    let held = plans[0].mission_id;
+    let ack = ask(held, vec![0; 100_000]);
+    assert_eq!(ack.missing, vec![0], "duplicates asked once");
+    assert!(ack.republished.is_empty() && !ack.metrics);
+    let refused = plans[4].mission_id;
+    let ack = ask(refused, (0..100_000).collect());
+    assert_eq!(
+        ack.missing.len(),
+        4096,
+        "an unknown mission's answer is capped"
+    );
+
+    assert!(
+        p.stop(Duration::from_secs(20)).success(),
+        "{}",
+        p.log_text()
+    );
+    let log = p.log_text();
+    assert_eq!(
+        counter(&log, "final_counters=true", "plans_refused"),
+        Some(3),
+        "{log}"
+    );
+    assert_eq!(
+        counter(&log, "final_counters=true", "evicted"),
+        Some(0),
+        "{log}"
+    );
+    assert_eq!(
+        counter(&log, "final_counters=true", "republished"),
+        Some(0),
+        "{log}"
+    );
+
+    // an echo that joins now learns the five plans and keeps the two it took last
+    let mut e = w.start_with("echo", &["--max-missions", "2"]);
+    wait_log_lines(&e, "mission let go", 3);
+    assert!(
+        e.stop(Duration::from_secs(20)).success(),
+        "{}",
+        e.log_text()
+    );
+    let log = e.log_text();
+    assert_eq!(
+        counter(&log, "final_counters=true", "evicted"),
+        Some(3),
+        "{log}"
+    );
+    assert_eq!(
+        counter(&log, "final_counters=true", "plans_refused"),
+        Some(0),
+        "{log}"
+    );
+    drop(pl);
+}
+
+/// A processor whose state directory cannot be written (here: a file stands where the
+/// directory should be) says so, and still processes and publishes every aperture.
+#[test]
+fn a_processor_that_cannot_save_its_state_keeps_serving() {
+    let w = World::new();
+    let c = Client::new(&w);
+    let blocked = w.dir.path().join("state-is-a-file");
+    std::fs::write(&blocked, b"not a directory").unwrap();
+    let blocked = blocked.display().to_string();
+    let p = w.start_with("processor", &["--state-dir", &blocked]);
+    let e = w.start("echo");
+    let pl = w.start("planner");
+    for r in ["processor", "echo", "planner"] {
+        c.wait_alive(r);
+    }
+    let plan = c.plan();
+    let stopped = collect_and_check(&c, &plan, &w.dir.path().join("out"), vec![p, e, pl]);
+    let log = stopped[0].log_text();
+    assert!(log.contains("not saved to the state directory"), "{log}");
+    let errors = counter(&log, "final_counters=true", "state_errors").unwrap();
+    assert!(errors >= 1, "{log}");
+    assert_eq!(
+        counter(&log, "final_counters=true", "missions"),
+        Some(1),
+        "{log}"
+    );
 }

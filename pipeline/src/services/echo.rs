@@ -26,6 +26,7 @@ use radar_sim::limits::IqLimits;
 use radar_sim::synth::{Components, Synthesizer};
 use radar_sim::track::PulseMeta;
 
+use super::admission::{admit, Admission, DEFAULT_MAX_MISSIONS};
 use super::process::MissionContext;
 use super::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
 use crate::protocol::{ApertureRequest, FrameInfo, FrameSlot, RequestAck};
@@ -49,6 +50,11 @@ pub struct EchoArgs {
     /// Requests the echo queues at most (more are refused as busy).
     #[arg(long, default_value_t = 64)]
     pub max_queue: usize,
+    /// Missions held at once: at the cap, a new plan replaces the mission least recently asked
+    /// for that has no request queued (it is taken up again if a processor asks for it), and
+    /// is refused while every held mission has requests queued.
+    #[arg(long, default_value_t = DEFAULT_MAX_MISSIONS, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=4096))]
+    pub max_missions: usize,
     /// Limits on a mission's IQ and on one aperture's memory (a plan above them is refused).
     #[command(flatten)]
     pub limits: IqLimitArgs,
@@ -79,6 +85,10 @@ pub struct EchoReport {
     pub jobs: u64,
     /// Payload bytes sent.
     pub bytes: u64,
+    /// Plans refused because `--max-missions` missions had requests queued.
+    pub plans_refused: u64,
+    /// Missions let go to make room for new ones (`--max-missions`).
+    pub evicted: u64,
 }
 
 struct EchoMission {
@@ -86,6 +96,8 @@ struct EchoMission {
     synth: Synthesizer,
     publisher: Option<FramePublisher>,
     info: TypedPublisher<FrameInfo>,
+    /// When a processor last asked for it (or when its plan arrived).
+    last_used: Instant,
 }
 
 struct Job {
@@ -227,6 +239,8 @@ impl<'a> Echo<'a> {
             skipped_full = self.report.skipped_full,
             send_errors = self.report.send_errors,
             jobs = self.report.jobs,
+            plans_refused = self.report.plans_refused,
+            evicted = self.report.evicted,
             plans_malformed = c.malformed,
             requests_malformed = q.malformed,
             lookups_malformed = self.cache.malformed(),
@@ -238,6 +252,9 @@ impl<'a> Echo<'a> {
     fn add_plan(&mut self, plan: Plan) {
         let id = plan.mission_id;
         if self.missions.contains_key(&id) {
+            return;
+        }
+        if !self.make_room(id) {
             return;
         }
         match self.open_mission(plan) {
@@ -252,6 +269,34 @@ impl<'a> Echo<'a> {
                 self.missions.insert(id, m);
             }
             Err(e) => tracing::warn!(mission = %id, error = %e, "plan not usable"),
+        }
+    }
+
+    /// Makes room for mission `id` under `--max-missions`; false when it must be refused.
+    fn make_room(&mut self, id: MissionId) -> bool {
+        let mut held: Vec<(Instant, MissionId)> = self
+            .missions
+            .iter()
+            .map(|(k, m)| (m.last_used, *k))
+            .collect();
+        held.sort();
+        let queued = |m: &MissionId| self.queue.iter().any(|j| j.mission == *m);
+        match admit(held.iter().map(|(_, m)| !queued(m)), self.args.max_missions) {
+            Admission::Admit => true,
+            Admission::Evict(i) => {
+                let (_, old) = held[i];
+                self.missions.remove(&old);
+                self.cache.remove(old);
+                self.report.evicted += 1;
+                tracing::info!(mission = %old, "mission let go to make room (--max-missions)");
+                true
+            }
+            Admission::Refuse => {
+                self.report.plans_refused += 1;
+                tracing::warn!(mission = %id, max_missions = self.args.max_missions,
+                    "plan refused: every held mission has requests queued (--max-missions)");
+                false
+            }
         }
     }
 
@@ -284,6 +329,7 @@ impl<'a> Echo<'a> {
             synth,
             publisher: Some(publisher),
             info,
+            last_used: Instant::now(),
         })
     }
 
@@ -333,12 +379,13 @@ impl<'a> Echo<'a> {
     /// (ask again later), `bad_request` naming what does not fit this echo.
     fn accept(&mut self, r: &ApertureRequest) -> Result<RequestAck, Refusal> {
         let bad = |message: String| Refusal::new(RefusalKind::BadRequest, message);
-        let Some(m) = self.missions.get(&r.mission_id) else {
+        let Some(m) = self.missions.get_mut(&r.mission_id) else {
             return Err(bad(format!(
                 "unknown mission {}: this echo has no plan for it (is a planner running?)",
                 r.mission_id
             )));
         };
+        m.last_used = Instant::now();
         let ctx = &m.ctx;
         let ap = r.aperture as usize;
         let Some(aperture) = ctx.apertures.get(ap) else {

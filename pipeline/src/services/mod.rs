@@ -6,12 +6,14 @@
 //!   the apertures a processor asks for and publishes it as frames on iceoryx2;
 //! - [`process`]: the BS side (`cellsar-radar-sim process-service`, `cellsar process`): pulls
 //!   apertures, cancels, images, detects, publishes detections, images and metrics;
+//! - [`admission`]: how many missions a service holds, and which result requests it serves;
 //! - [`os`]: what every service needs from the OS (stop on signals, atomic state files);
 //! - [`radar`]: what the two radar services share (their error, the frame size);
 //! - [`bridge`]: the iceoryx2 <-> Zenoh bridge as a process (`cellsar-bridge`, `cellsar bridge`).
 //!
 //! Their messages and keys are in [`crate::protocol`].
 
+pub mod admission;
 pub mod bridge;
 pub mod echo;
 pub mod os;

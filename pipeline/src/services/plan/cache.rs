@@ -83,8 +83,13 @@ impl PlanCache {
         self.malformed.load(Ordering::Relaxed)
     }
 
-    /// Adds (or replaces) a plan; stores it when the cache has a directory.
+    /// Adds (or replaces) a plan; stores it when the cache has a directory. The plan is held
+    /// (and answered to lookups) even when storing it fails; the error says why it was not
+    /// stored.
     pub fn insert(&self, plan: Arc<Plan>) -> Result<(), ServiceError> {
+        if let Ok(mut p) = self.plans.lock() {
+            p.insert(plan.mission_id, plan.clone());
+        }
         if let Some(d) = &self.dir {
             let bytes = envelope::encode(
                 plan.as_ref(),
@@ -100,10 +105,14 @@ impl PlanCache {
             let path = d.join(format!("{}.plan", plan.mission_id));
             write_atomic(&path, &bytes)?;
         }
-        if let Ok(mut p) = self.plans.lock() {
-            p.insert(plan.mission_id, plan);
-        }
         Ok(())
+    }
+
+    /// Lets go of the plan of `id` (no longer answered to lookups; a stored copy stays).
+    pub fn remove(&self, id: MissionId) {
+        if let Ok(mut p) = self.plans.lock() {
+            p.remove(&id);
+        }
     }
 
     /// The plan of `id`, if held.

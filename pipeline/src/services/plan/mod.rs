@@ -49,6 +49,11 @@ pub use cache::PlanCache;
 pub use error::ServiceError;
 pub use status::StatusBoard;
 
+/// The default wall-time limit of one plan request, s (`--plan-time-limit-s`): the paper's
+/// missions plan in seconds; a request that would run longer answers with its last feasible
+/// iterate.
+pub const DEFAULT_PLAN_TIME_LIMIT_S: &str = "600";
+
 /// Flags of `cellsar-planner serve`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ServeArgs {
@@ -60,9 +65,10 @@ pub struct ServeArgs {
     pub state_dir: Option<PathBuf>,
     /// Wall-time limit of each plan, s: the planner stops iterating at the limit and answers
     /// with its last accepted (feasible) iterate, termination `time_limit` in the summary; a
-    /// request whose start is still being repaired then is refused (`internal`). Default: none.
-    #[arg(long, value_name = "SECONDS", value_parser = bridge::flags::parse_seconds)]
-    pub plan_time_limit_s: Option<bridge::flags::Seconds>,
+    /// request whose start is still being repaired then is refused (`internal`). A request
+    /// from the network cannot keep the service busy longer than this.
+    #[arg(long, value_name = "SECONDS", default_value = DEFAULT_PLAN_TIME_LIMIT_S, value_parser = bridge::flags::parse_seconds)]
+    pub plan_time_limit_s: bridge::flags::Seconds,
     /// Zenoh flags.
     #[command(flatten)]
     pub zenoh: ZenohArgs,
@@ -79,6 +85,8 @@ pub struct ServeReport {
     pub errors: u64,
     /// Malformed requests (counted by the queryable).
     pub malformed: u64,
+    /// Plans that could not be saved to the state directory (still answered and published).
+    pub state_errors: u64,
 }
 
 /// Sends planner progress from the planning thread to the service loop (at most every 0.5 s).
@@ -195,7 +203,7 @@ fn serve_on(
                 Ok(p)
             }
             None => {
-                let limit = args.plan_time_limit_s.map(|s| s.as_secs_f64());
+                let limit = Some(args.plan_time_limit_s.as_secs_f64());
                 plan_in_thread(node, &board, &req, &args.instance, limit, stop).map(Arc::new)
             }
         };
@@ -210,7 +218,12 @@ fn serve_on(
                     seq,
                     time_unix_ns: 0,
                 };
-                cache.insert(plan.clone())?;
+                if let Err(e) = cache.insert(plan.clone()) {
+                    // the plan is still answered and published; only a restart forgets it
+                    report.state_errors += 1;
+                    tracing::error!(mission = %plan.mission_id, error = %e,
+                        "plan not saved to the state directory; serving it from memory");
+                }
                 if let Err(e) = q.reply(plan.as_ref(), meta) {
                     tracing::warn!(error = %e, "plan reply failed");
                 }
@@ -242,6 +255,7 @@ fn serve_on(
         cached = report.cached,
         errors = report.errors,
         malformed = report.malformed,
+        state_errors = report.state_errors,
         final_counters = true,
         "plan service stopping"
     );
@@ -384,7 +398,7 @@ mod tests {
         let args = ServeArgs {
             instance: "waits".into(),
             state_dir: None,
-            plan_time_limit_s: None,
+            plan_time_limit_s: bridge::flags::parse_seconds(DEFAULT_PLAN_TIME_LIMIT_S).unwrap(),
             zenoh: client_without_router(&dir),
         };
         let stop = Arc::new(AtomicBool::new(false));
@@ -402,6 +416,29 @@ mod tests {
             .unwrap();
         assert_eq!(report, ServeReport::default());
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A plan request from the network cannot keep the service busy without bound: the
+    /// default limit is 600 s, and a limit can be given but not removed.
+    #[test]
+    fn plan_requests_have_a_default_time_limit() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            serve: ServeArgs,
+        }
+        let c = Cli::try_parse_from(["serve"]).unwrap();
+        assert_eq!(c.serve.plan_time_limit_s.as_secs_f64(), 600.0);
+        let c = Cli::try_parse_from(["serve", "--plan-time-limit-s", "2.5"]).unwrap();
+        assert_eq!(c.serve.plan_time_limit_s.as_secs_f64(), 2.5);
+        for bad in ["0", "-1", "inf", "none"] {
+            let flag = format!("--plan-time-limit-s={bad}");
+            let e = Cli::try_parse_from(["serve", flag.as_str()])
+                .err()
+                .expect("refused");
+            assert!(e.to_string().contains("--plan-time-limit-s"), "{bad}: {e}");
+        }
     }
 
     fn tempfile_dir(tag: &str) -> PathBuf {

@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::args::IqLimitArgs;
 use crate::protocol::keys as pkeys;
+use crate::services::admission::DEFAULT_MAX_MISSIONS;
 use crate::services::plan::{PlanCache, StatusBoard};
 use crate::services::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
 use proc::{Inbox, Proc};
@@ -82,6 +83,10 @@ pub struct ProcessArgs {
     /// Seconds between status publications.
     #[arg(long, default_value = "1", value_parser = bridge::flags::parse_seconds)]
     pub status_interval_s: Seconds,
+    /// Missions held at once: at the cap, a new plan replaces the oldest finished (or given
+    /// up) mission, and is refused while every held mission is still in progress.
+    #[arg(long, default_value_t = DEFAULT_MAX_MISSIONS, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=4096))]
+    pub max_missions: usize,
     /// Limits on a mission's IQ and on one aperture's memory (a plan above them is refused).
     #[command(flatten)]
     pub limits: IqLimitArgs,
@@ -124,6 +129,12 @@ pub struct ProcessReport {
     pub request_errors: u64,
     /// Results published again on request or after a restart.
     pub republished: u64,
+    /// Plans refused because `--max-missions` missions were in progress.
+    pub plans_refused: u64,
+    /// Missions let go to make room for new ones (`--max-missions`).
+    pub evicted: u64,
+    /// Outcomes or metrics that could not be saved to the state directory (still published).
+    pub state_errors: u64,
 }
 
 /// Runs the processor service until `stop` is set. A stop while the Zenoh session still

@@ -22,8 +22,9 @@ use super::work::{Job, JobResult, RequestDone, RequestJob};
 use super::{ProcessArgs, ProcessReport};
 use crate::protocol::keys::{self as pkeys, ALL_PLANS};
 use crate::protocol::{MissionMetrics, Plan, ResultRequest};
+use crate::services::admission::{admit, Admission};
 use crate::services::plan::{PlanCache, StatusBoard};
-use crate::services::radar::ServiceResult;
+use crate::services::radar::{ServiceError, ServiceResult};
 
 /// What the service loop receives from its threads.
 pub(super) struct Inbox {
@@ -176,6 +177,20 @@ impl Proc<'_> {
         if self.runs.iter().any(|r| r.ctx.base.mission_id == id) {
             return;
         }
+        let droppable = self
+            .runs
+            .iter()
+            .map(|r| r.metrics.is_some() || r.failed.is_some());
+        match admit(droppable, self.args.max_missions) {
+            Admission::Admit => {}
+            Admission::Evict(i) => self.let_go(i),
+            Admission::Refuse => {
+                self.report.plans_refused += 1;
+                tracing::warn!(mission = %id, max_missions = self.args.max_missions,
+                    "plan refused: --max-missions missions are in progress");
+                return;
+            }
+        }
         let plan = Arc::new(plan);
         let made =
             MissionContext::with_limits(&plan, self.scene, self.args.max_frame_bytes, &self.limits)
@@ -225,6 +240,20 @@ impl Proc<'_> {
         if self.runs[idx].metrics.is_some() {
             self.publish_metrics(idx);
         }
+    }
+
+    /// Lets go of mission `i` (finished or given up) to make room: its plan, publishers and
+    /// frame subscription; what its state directory holds stays.
+    fn let_go(&mut self, i: usize) {
+        let run = self.runs.remove(i);
+        let id = run.ctx.base.mission_id;
+        self.cache.remove(id);
+        self.publishers.detections.remove(&id);
+        self.publishers.metrics.remove(&id);
+        self.publishers.images.retain(|(m, _), _| *m != id);
+        let _ = self.cmd_tx.send(ReceiverCmd::Unwatch(id));
+        self.report.evicted += 1;
+        tracing::info!(mission = %id, "mission let go to make room (--max-missions)");
     }
 
     /// The index of mission `id` in `runs`.
@@ -508,7 +537,12 @@ impl Proc<'_> {
                     Ok(o) => {
                         let k = o.aperture();
                         if let Some(d) = &run.dir {
-                            store(d, &o)?;
+                            if let Err(e) = store(d, &o) {
+                                // still published; after a restart it is processed again
+                                self.report.state_errors += 1;
+                                tracing::error!(mission = %id, aperture = k, error = %e,
+                                    "aperture not saved to the state directory; serving it from memory");
+                            }
                         }
                         tracing::info!(mission = %id, aperture = k, detections = o.tally.rows.len(),
                             seconds = format!("{:.2}", o.process_s), "aperture done");
@@ -529,6 +563,14 @@ impl Proc<'_> {
                         }
                     }
                 }
+            }
+            JobResult::Panicked(what) => {
+                // the worker is gone: fail, so that the supervisor restarts this process (it
+                // resumes from its state directory)
+                tracing::error!("the processing worker panicked on {what}; exiting for a restart");
+                return Err(ServiceError::Internal(format!(
+                    "the processing worker panicked on {what}"
+                )));
             }
             JobResult::Resolution(id, res, (k, look)) => {
                 let Some(i) = self.run_index(id) else {
@@ -554,7 +596,11 @@ impl Proc<'_> {
                     metrics,
                 };
                 if let Some(d) = &run.dir {
-                    store_metrics(d, &mm)?;
+                    if let Err(e) = store_metrics(d, &mm) {
+                        self.report.state_errors += 1;
+                        tracing::error!(mission = %id, error = %e,
+                            "metrics not saved to the state directory; serving them from memory");
+                    }
                 }
                 tracing::info!(mission = %id, pd = mm.metrics.pd, false_alarms = mm.metrics.false_alarms,
                     seconds = format!("{:.1}", run.started.elapsed().as_secs_f64()), "mission done");

@@ -13,6 +13,7 @@ use crate::protocol::keys as pkeys;
 use crate::protocol::{
     ApertureDetections, ApertureImage, MissionMetrics, ResultAck, ResultRequest,
 };
+use crate::services::admission::requested_apertures;
 use crate::services::radar::ServiceError;
 
 /// The processor's result publishers, made on first use.
@@ -25,6 +26,10 @@ pub(super) struct Publishers {
     /// Metrics, per mission.
     pub(super) metrics: HashMap<MissionId, TypedPublisher<MissionMetrics>>,
 }
+
+/// At most this many apertures are named missing in the answer to a request for a mission the
+/// processor does not hold.
+const MAX_UNKNOWN_MISSING: usize = 4096;
 
 impl Proc<'_> {
     /// Publishes aperture `k` of mission `i`: its detections and its image.
@@ -137,10 +142,21 @@ impl Proc<'_> {
             metrics: false,
         };
         let Some(i) = self.run_index(req.mission_id) else {
-            ack.missing = req.apertures.clone();
+            // bounded: a request cannot make the answer larger than the mission could be
+            ack.missing = req
+                .apertures
+                .iter()
+                .copied()
+                .take(MAX_UNKNOWN_MISSING)
+                .collect();
             return ack;
         };
-        for &k in &req.apertures {
+        let n = self.runs[i].ctx.base.apertures.len();
+        if req.apertures.len() > n {
+            tracing::warn!(mission = %req.mission_id, asked = req.apertures.len(), apertures = n,
+                "result request names more apertures than the mission has");
+        }
+        for k in requested_apertures(&req.apertures, n) {
             if self.runs[i].outcomes.contains_key(&(k as usize)) {
                 self.publish_outcome(i, k as usize);
                 self.report.republished += 1;
@@ -229,6 +245,9 @@ impl Proc<'_> {
             resends = r.resends,
             request_errors = r.request_errors,
             republished = r.republished,
+            plans_refused = r.plans_refused,
+            evicted = r.evicted,
+            state_errors = r.state_errors,
             plans_malformed,
             result_requests_malformed,
             lookups_malformed = self.cache.malformed(),

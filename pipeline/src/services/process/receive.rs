@@ -32,6 +32,8 @@ pub(super) struct RawFrame {
 pub(super) enum ReceiverCmd {
     /// Subscribe to the frames of this mission.
     Watch(MissionId),
+    /// Drop the subscription to this mission's frames (the mission was let go).
+    Unwatch(MissionId),
 }
 
 /// Frames lost before they reached the service loop, counted by the receiver thread.
@@ -135,7 +137,14 @@ pub(super) fn receive_iox(
     }
     let mut subs: Vec<(MissionId, bridge::FrameSubscriber, u64)> = Vec::new();
     while !out.stop.load(Ordering::Relaxed) {
-        while let Ok(ReceiverCmd::Watch(id)) = control.cmds.try_recv() {
+        while let Ok(cmd) = control.cmds.try_recv() {
+            let id = match cmd {
+                ReceiverCmd::Watch(id) => id,
+                ReceiverCmd::Unwatch(id) => {
+                    subs.retain(|(m, _, _)| *m != id);
+                    continue;
+                }
+            };
             if subs.iter().any(|(m, _, _)| *m == id) {
                 continue;
             }

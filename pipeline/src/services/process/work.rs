@@ -50,6 +50,33 @@ pub(super) enum JobResult {
         ServiceResult<Option<(MeasuredResolution, MeasuredResolution)>>,
         (usize, usize),
     ),
+    /// The worker panicked on a job (named, with the panic's message) and stopped: the
+    /// process must fail so that its supervisor restarts it.
+    Panicked(String),
+}
+
+impl Job {
+    /// The job, in words (for a panic's report).
+    fn describe(&self) -> String {
+        match self {
+            Job::Aperture { ctx, k, .. } => format!("mission {} aperture {k}", ctx.base.mission_id),
+            Job::Resolution { ctx, k, look, .. } => {
+                format!("mission {} aperture {k} look {look}", ctx.base.mission_id)
+            }
+        }
+    }
+
+    /// Runs the job.
+    fn run(self) -> JobResult {
+        match self {
+            Job::Aperture { ctx, k, iq } => {
+                JobResult::Aperture(ctx.base.mission_id, Box::new(ctx.process(k, &iq)))
+            }
+            Job::Resolution { ctx, k, look, iq } => {
+                JobResult::Resolution(ctx.base.mission_id, ctx.resolution(k, look, &iq), (k, look))
+            }
+        }
+    }
 }
 
 /// A request for the requester thread: ask the echo for an aperture (or one look).
@@ -76,15 +103,34 @@ pub(super) struct RequestDone {
     pub(super) result: Result<RequestAck, String>,
 }
 
-/// The worker thread: runs jobs until either channel closes.
+/// The worker thread: runs jobs until either channel closes, or until a job panics (then it
+/// reports [`JobResult::Panicked`] and stops).
 pub(super) fn worker(jobs: Receiver<Job>, results: Sender<JobResult>) {
+    run_jobs(jobs, results, Job::describe, Job::run, JobResult::Panicked)
+}
+
+/// Runs `run` on each job until either channel closes; a panic in `run` is caught, reported
+/// as `panicked("<job>: <message>")` and ends the loop (state a panic left behind is not
+/// trusted).
+fn run_jobs<J, R>(
+    jobs: Receiver<J>,
+    results: Sender<R>,
+    describe: impl Fn(&J) -> String,
+    run: impl Fn(J) -> R,
+    panicked: impl Fn(String) -> R,
+) {
     while let Ok(job) = jobs.recv() {
-        let r = match job {
-            Job::Aperture { ctx, k, iq } => {
-                JobResult::Aperture(ctx.base.mission_id, Box::new(ctx.process(k, &iq)))
-            }
-            Job::Resolution { ctx, k, look, iq } => {
-                JobResult::Resolution(ctx.base.mission_id, ctx.resolution(k, look, &iq), (k, look))
+        let what = describe(&job);
+        let r = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(job))) {
+            Ok(r) => r,
+            Err(payload) => {
+                let msg = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| (*s).to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "a panic without a message".into());
+                let _ = results.send(panicked(format!("{what}: {msg}")));
+                return;
             }
         };
         if results.send(r).is_err() {
@@ -136,5 +182,68 @@ pub(super) fn requester(
         if done.send(d).is_err() {
             break;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::run_jobs;
+    use std::sync::mpsc;
+
+    #[derive(Debug, PartialEq)]
+    enum Out {
+        Done(u32),
+        Panicked(String),
+    }
+
+    #[test]
+    fn a_panicking_job_is_reported_by_name_and_stops_the_worker() {
+        let (job_tx, job_rx) = mpsc::channel::<u32>();
+        let (res_tx, res_rx) = mpsc::channel::<Out>();
+        for j in [1, 2, 3, 4] {
+            job_tx.send(j).unwrap();
+        }
+        let h = std::thread::spawn(move || {
+            run_jobs(
+                job_rx,
+                res_tx,
+                |j| format!("job {j}"),
+                |j| {
+                    assert!(j != 3, "job three is broken");
+                    Out::Done(j * 10)
+                },
+                Out::Panicked,
+            )
+        });
+        // the worker ends by itself after the panic (the channel to it is still open)
+        h.join().expect("the worker thread itself does not panic");
+        let got: Vec<Out> = res_rx.try_iter().collect();
+        assert_eq!(got.len(), 3, "{got:?}");
+        assert_eq!(got[0], Out::Done(10));
+        assert_eq!(got[1], Out::Done(20));
+        match &got[2] {
+            Out::Panicked(m) => {
+                assert!(m.starts_with("job 3: "), "{m}");
+                assert!(m.contains("job three is broken"), "{m}");
+            }
+            other => panic!("expected a panic report, got {other:?}"),
+        }
+        drop(job_tx);
+    }
+
+    #[test]
+    fn the_worker_ends_when_its_jobs_end() {
+        let (job_tx, job_rx) = mpsc::channel::<u32>();
+        let (res_tx, res_rx) = mpsc::channel::<Out>();
+        job_tx.send(7).unwrap();
+        drop(job_tx);
+        run_jobs(
+            job_rx,
+            res_tx,
+            |j| j.to_string(),
+            |j| Out::Done(j),
+            Out::Panicked,
+        );
+        assert_eq!(res_rx.try_iter().collect::<Vec<_>>(), vec![Out::Done(7)]);
     }
 }

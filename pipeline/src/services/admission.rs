@@ -1,0 +1,77 @@
+//! How many missions a service holds at once: a peer that publishes plan after plan must not
+//! make a service hold (and work on) every one of them.
+
+/// The default cap on the missions a radar service holds at once (`--max-missions`).
+pub const DEFAULT_MAX_MISSIONS: usize = 16;
+
+/// What to do with a new mission, given those held.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Admission {
+    /// Below the cap: take it.
+    Admit,
+    /// At the cap: first drop the held mission at this index, then take it.
+    Evict(usize),
+    /// At the cap and nothing may be dropped: refuse it.
+    Refuse,
+}
+
+/// Decides on a new mission when `held` missions are held, each with whether it may be dropped
+/// (finished, given up or idle), oldest first; the oldest droppable one makes room.
+pub fn admit(held: impl ExactSizeIterator<Item = bool>, cap: usize) -> Admission {
+    if held.len() < cap {
+        return Admission::Admit;
+    }
+    let mut held = held;
+    match held.position(|droppable| droppable) {
+        Some(i) => Admission::Evict(i),
+        None => Admission::Refuse,
+    }
+}
+
+/// The apertures a result request may make a processor publish again: the distinct indices
+/// below `apertures`, in ascending order, at most `apertures` of them (a request cannot make
+/// the processor publish one aperture twice or walk through indices it never had).
+pub fn requested_apertures(requested: &[u32], apertures: usize) -> Vec<u32> {
+    let set: std::collections::BTreeSet<u32> = requested
+        .iter()
+        .copied()
+        .filter(|&k| (k as usize) < apertures)
+        .collect();
+    set.into_iter().collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn below_the_cap_admits() {
+        assert_eq!(admit([false, false].into_iter(), 3), Admission::Admit);
+        assert_eq!(admit(std::iter::empty::<bool>(), 1), Admission::Admit);
+    }
+
+    #[test]
+    fn at_the_cap_the_oldest_droppable_makes_room() {
+        assert_eq!(
+            admit([false, true, true].into_iter(), 3),
+            Admission::Evict(1)
+        );
+        assert_eq!(admit([true, false].into_iter(), 2), Admission::Evict(0));
+    }
+
+    #[test]
+    fn at_the_cap_with_nothing_droppable_refuses() {
+        assert_eq!(admit([false, false].into_iter(), 2), Admission::Refuse);
+        // a cap of zero takes nothing
+        assert_eq!(admit(std::iter::empty::<bool>(), 0), Admission::Refuse);
+    }
+
+    #[test]
+    fn requests_are_deduplicated_sorted_and_bounded() {
+        assert_eq!(requested_apertures(&[3, 1, 3, 1, 2], 4), vec![1, 2, 3]);
+        assert_eq!(requested_apertures(&[7, u32::MAX, 0], 4), vec![0]);
+        let flood: Vec<u32> = (0..100_000).map(|i| i % 5).collect();
+        assert_eq!(requested_apertures(&flood, 3), vec![0, 1, 2]);
+        assert!(requested_apertures(&[0, 1], 0).is_empty());
+    }
+}
