@@ -804,6 +804,65 @@ fn full_queue_drops_and_counts() {
     assert_eq!(c.dropped, c.received - 3);
 }
 
+/// A queue is bounded by wire bytes as well as by count: with room for 1000 messages but a
+/// byte budget of about three, three are queued and the rest dropped and counted; taking
+/// them gives the budget back.
+#[test]
+fn queue_byte_budget_drops_and_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = pair(dir.path(), "bytes");
+    let key = "cellsar/test/bytes";
+    let p = a
+        .publisher::<PlanSummary>(key, PublishOptions::default())
+        .unwrap();
+    // the wire size of one message, measured on a probe subscriber
+    let probe = b
+        .subscriber::<PlanSummary>(key, SubscribeOptions::default())
+        .unwrap();
+    wait_until("probe message", T, || {
+        p.put(&summary(0)).unwrap();
+        probe.counters().snapshot().received > 0
+    });
+    let one = probe.counters().snapshot().bytes_in as usize
+        / probe.counters().snapshot().received as usize;
+    drop(probe);
+    let sub = b
+        .subscriber::<PlanSummary>(
+            key,
+            SubscribeOptions {
+                capacity: 1000,
+                max_queued_bytes: 3 * one + one / 2,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    wait_until("first message", T, || {
+        p.put(&summary(0)).unwrap();
+        sub.counters().snapshot().received > 0
+    });
+    let before = sub.counters().snapshot().received;
+    for i in 0..50 {
+        p.put(&summary(i)).unwrap();
+    }
+    wait_until("all counted", T, || {
+        sub.counters().snapshot().received >= before + 50
+    });
+    std::thread::sleep(Duration::from_millis(100));
+    let c = sub.counters().snapshot();
+    assert_eq!(c.delivered, 3, "budget of three messages, never drained");
+    assert_eq!(c.dropped, c.received - 3);
+    assert_eq!(sub.queued_bytes(), 3 * one);
+    // taking the messages gives the budget back, and new ones fit again
+    for _ in 0..3 {
+        assert!(sub.try_recv().is_some());
+    }
+    assert_eq!(sub.queued_bytes(), 0);
+    wait_until("a message after draining", T, || {
+        p.put(&summary(1)).unwrap();
+        sub.counters().snapshot().delivered > 3
+    });
+}
+
 #[test]
 fn frames_over_zenoh_are_fragmented_and_reassembled() {
     let dir = tempfile::tempdir().unwrap();

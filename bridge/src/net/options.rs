@@ -72,7 +72,14 @@ pub struct SubscribeOptions {
     pub limits: DecodeLimits,
     /// Which publishers are heard (default: any).
     pub allowed_origin: Locality,
+    /// Wire bytes the queue holds at most (of a typed subscriber; counted as received
+    /// payload bytes): a message that would go over is dropped as if the queue were full, so
+    /// that `capacity` messages of the largest decodable size cannot pile up unread.
+    pub max_queued_bytes: usize,
 }
+
+/// The default [`SubscribeOptions::max_queued_bytes`]: 256 MiB.
+pub const DEFAULT_MAX_QUEUED_BYTES: usize = 256 << 20;
 
 impl Default for SubscribeOptions {
     fn default() -> Self {
@@ -81,6 +88,7 @@ impl Default for SubscribeOptions {
             on_full: OnFull::Drop,
             limits: DecodeLimits::default(),
             allowed_origin: Locality::Any,
+            max_queued_bytes: DEFAULT_MAX_QUEUED_BYTES,
         }
     }
 }

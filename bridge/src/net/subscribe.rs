@@ -1,6 +1,7 @@
 //! Typed subscribers ([`ZenohNode::subscriber`], [`TypedSubscriber`]): payloads decoded in
 //! the Zenoh callback, counted, and queued for the consumer.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, SyncSender};
 use std::sync::Arc;
 use std::time::Duration;
@@ -19,10 +20,13 @@ impl ZenohNode {
         key: &str,
         opts: SubscribeOptions,
     ) -> Result<TypedSubscriber<M>, NetError> {
-        let (tx, rx) = mpsc::sync_channel::<Received<M>>(opts.capacity.max(1));
+        let (tx, rx) = mpsc::sync_channel::<(Received<M>, usize)>(opts.capacity.max(1));
         let counters = Arc::new(Counters::default());
         let log = Arc::new(BadPayloadLog::default());
         let c = counters.clone();
+        let queued = Arc::new(AtomicUsize::new(0));
+        let q = queued.clone();
+        let max_queued = opts.max_queued_bytes;
         let limits = opts.limits;
         let block = opts.on_full == OnFull::Block;
         let subscriber = self
@@ -33,7 +37,24 @@ impl ZenohNode {
                     return;
                 }
                 let payload = sample.payload();
-                c.on_received(payload.len());
+                let bytes = payload.len();
+                c.on_received(bytes);
+                // the byte budget is taken before decoding (nothing is allocated for a message
+                // that would not fit) and given back when the consumer takes it
+                // (a blocking subscriber is bounded by its capacity: the sender waits)
+                let admitted = if block {
+                    q.fetch_add(bytes, Ordering::AcqRel);
+                    true
+                } else {
+                    q.fetch_update(Ordering::AcqRel, Ordering::Acquire, |held| {
+                        held.checked_add(bytes).filter(|&n| n <= max_queued)
+                    })
+                    .is_ok()
+                };
+                if !admitted {
+                    c.on_dropped(1);
+                    return;
+                }
                 let format = WireFormat::of(sample.encoding());
                 match format.decode_zbytes::<M>(payload, &limits) {
                     Ok(env) => {
@@ -43,9 +64,12 @@ impl ZenohNode {
                             format,
                             message: env.message,
                         };
-                        deliver(&tx, msg, block, &c);
+                        if !deliver(&tx, (msg, bytes), block, &c) {
+                            q.fetch_sub(bytes, Ordering::AcqRel);
+                        }
                     }
                     Err(e) => {
+                        q.fetch_sub(bytes, Ordering::AcqRel);
                         c.on_malformed();
                         log.log(sample.key_expr().as_str(), payload.len(), &e);
                     }
@@ -59,44 +83,58 @@ impl ZenohNode {
             rx,
             counters,
             key: key.to_string(),
+            queued,
         })
     }
 }
 
-pub(super) fn deliver<T>(tx: &SyncSender<T>, item: T, block: bool, c: &Counters) {
-    if block {
-        match tx.send(item) {
-            Ok(()) => c.on_delivered(),
-            Err(_) => c.on_dropped(1),
-        }
+/// Queues `item` (blocking or not); false when it was dropped (counted).
+pub(super) fn deliver<T>(tx: &SyncSender<T>, item: T, block: bool, c: &Counters) -> bool {
+    let sent = if block {
+        tx.send(item).is_ok()
     } else {
-        match tx.try_send(item) {
-            Ok(()) => c.on_delivered(),
-            Err(_) => c.on_dropped(1),
-        }
+        tx.try_send(item).is_ok()
+    };
+    if sent {
+        c.on_delivered();
+    } else {
+        c.on_dropped(1);
     }
+    sent
 }
 
 /// A subscriber of `M` (undeclared when dropped).
 pub struct TypedSubscriber<M> {
     _subscriber: zenoh::pubsub::Subscriber<()>,
-    rx: Receiver<Received<M>>,
+    rx: Receiver<(Received<M>, usize)>,
     counters: Arc<Counters>,
     key: String,
+    /// Wire bytes of the queued messages.
+    queued: Arc<AtomicUsize>,
 }
 
 impl<M> TypedSubscriber<M> {
     /// Waits up to `timeout` for the next message.
     pub fn recv_timeout(&self, timeout: Duration) -> Option<Received<M>> {
         match self.rx.recv_timeout(timeout) {
-            Ok(m) => Some(m),
+            Ok(m) => Some(self.taken(m)),
             Err(RecvTimeoutError::Timeout) | Err(RecvTimeoutError::Disconnected) => None,
         }
     }
 
     /// The next message if one is queued.
     pub fn try_recv(&self) -> Option<Received<M>> {
-        self.rx.try_recv().ok()
+        self.rx.try_recv().ok().map(|m| self.taken(m))
+    }
+
+    /// Wire bytes of the messages queued now.
+    pub fn queued_bytes(&self) -> usize {
+        self.queued.load(Ordering::Acquire)
+    }
+
+    fn taken(&self, (m, bytes): (Received<M>, usize)) -> Received<M> {
+        self.queued.fetch_sub(bytes, Ordering::AcqRel);
+        m
     }
 
     /// Counters of this subscriber.
