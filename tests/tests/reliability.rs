@@ -426,3 +426,53 @@ fn ten_thousand_malformed_payloads_on_every_key() {
         "nothing logged"
     );
 }
+
+/// Shared memory: a run removes what it made and what runs whose launcher died left behind,
+/// never what belongs to a live user of the same iceoryx2 prefix.
+#[test]
+fn shared_memory_of_dead_runs_goes_and_of_live_users_stays() {
+    let reference = reference(H);
+    // a run whose launcher was killed with -9 left a segment (its pid is dead now)
+    let mut gone = std::process::Command::new("true").spawn().unwrap();
+    let dead = gone.id();
+    gone.wait().unwrap();
+    let leftover = format!("/dev/shm/cs{dead}_leftover_of_a_killed_run");
+    std::fs::write(&leftover, b"x").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut l = Launch::start(dir.path(), H, &["--strict"]);
+    expect_exit(&mut l, &reference);
+    assert!(
+        !std::path::Path::new(&leftover).exists(),
+        "the dead run's segment is still there"
+    );
+    assert!(shm_files(&format!("cs{}_", l.child.id())).is_empty());
+
+    // a user-given prefix may be shared: another live user's segment survives the run
+    let prefix = format!("csshared{}_", std::process::id());
+    let other = format!("/dev/shm/{prefix}another_live_user");
+    std::fs::write(&other, b"x").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("iox");
+    let mut l = Launch::start(
+        dir.path(),
+        H,
+        &[
+            "--strict",
+            "--iox-prefix",
+            &prefix,
+            "--iox-root",
+            root.to_str().unwrap(),
+        ],
+    );
+    expect_exit(&mut l, &reference);
+    assert!(
+        std::path::Path::new(&other).exists(),
+        "another user's segment was removed"
+    );
+    std::fs::remove_file(&other).unwrap();
+    // iceoryx2's per-prefix management segment stays for other users of the prefix; this
+    // test's prefix is its own, so it goes
+    for f in shm_files(&prefix) {
+        let _ = std::fs::remove_file(format!("/dev/shm/{f}"));
+    }
+}

@@ -21,12 +21,14 @@
 //! 5. Stops every child (SIGTERM, then SIGKILL after a grace period) at the end, on SIGINT or
 //!    SIGTERM, or when a child keeps failing: one clean-up path for every ending, and an
 //!    `interrupted` event for every interrupted run (also while the Zenoh session opens).
+//!    Shared memory: only what this run made is removed ([`shm`]).
 
 mod imaging;
 mod net;
 mod outputs;
 mod plan;
 mod session;
+mod shm;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -307,10 +309,12 @@ fn launch(
     let exe = std::env::current_exe().context("locating the cellsar executable")?;
 
     // 2. iceoryx2 environment and Zenoh network
-    let iox = if args.iox.root.is_none() && args.iox.prefix.is_none() && args.iox.config.is_none() {
+    let own_iox = args.iox.root.is_none() && args.iox.prefix.is_none() && args.iox.config.is_none();
+    let iox = if own_iox {
+        shm::clean_dead_runs();
         IoxArgs {
             root: Some(state.join("iox")),
-            prefix: Some(format!("cs{}_", std::process::id())),
+            prefix: Some(shm::own_prefix()),
             config: None,
         }
     } else {
@@ -396,7 +400,7 @@ fn launch(
             tracing::debug!(error = %e, "closing the launcher's session");
         }
     }
-    remove_shm(&iox);
+    shm::clean_after(&iox, own_iox);
     if let Ok(o) = &result {
         if *o != Outcome::Interrupted && !args.keep_state {
             let _ = std::fs::remove_dir_all(&state);
@@ -452,17 +456,6 @@ fn run_on(mut s: Session<'_>, mission: &planner::Mission) -> Result<Outcome> {
         plan_s,
     };
     s.finish(&planned, &collected)
-}
-
-fn remove_shm(iox: &IoxArgs) {
-    let Some(prefix) = &iox.prefix else { return };
-    if let Ok(rd) = std::fs::read_dir("/dev/shm") {
-        for e in rd.flatten() {
-            if e.file_name().to_string_lossy().starts_with(prefix.as_str()) {
-                let _ = std::fs::remove_file(e.path());
-            }
-        }
-    }
 }
 
 #[cfg(test)]
