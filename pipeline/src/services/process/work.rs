@@ -241,7 +241,7 @@ mod tests {
             job_rx,
             res_tx,
             |j| j.to_string(),
-            |j| Out::Done(j),
+            Out::Done,
             Out::Panicked,
         );
         assert_eq!(res_rx.try_iter().collect::<Vec<_>>(), vec![Out::Done(7)]);
