@@ -13,6 +13,8 @@
 //!   the event log (`pipeline.json`, `--events-json`);
 //! - [`report`]: a plan directory (files and plots) and `cellsar-planner reproduce` (the
 //!   paper's figures);
+//! - [`senders`]: which instance the launcher accepts a status or detections from;
+//!   [`certs`]: `cellsar certs`, a test CA and per-role certificates for mutual TLS;
 //! - [`args`]: flags shared by several binaries; [`exit`]: the exit codes of `cellsar`.
 //!
 //! The `cellsar` binary is also every child: `cellsar planner` is `cellsar-planner serve`,
@@ -23,6 +25,7 @@
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod args;
+pub mod certs;
 pub mod collect;
 pub mod events;
 pub mod exit;
@@ -30,5 +33,6 @@ pub mod launch;
 pub mod protocol;
 pub mod report;
 pub mod roles;
+pub mod senders;
 pub mod services;
 pub mod supervise;

@@ -386,15 +386,26 @@ impl Service {
 
     /// As [`Service::start`], the command prefixed by `prefix` (e.g. `ip netns exec NS`).
     pub fn start_in(prefix: &[&str], name: &str, dir: &Path, args: &[String]) -> Service {
+        Service::start_exe_in(prefix, &exe(), name, dir, args)
+    }
+
+    /// As [`Service::start_in`], another binary than `cellsar` (e.g. a frame tool).
+    pub fn start_exe_in(
+        prefix: &[&str],
+        program: &Path,
+        name: &str,
+        dir: &Path,
+        args: &[String],
+    ) -> Service {
         let log = dir.join(format!("{name}.log"));
         let f = std::fs::File::create(&log).unwrap();
         let mut cmd = match prefix.split_first() {
             Some((p, rest)) => {
                 let mut c = Command::new(p);
-                c.args(rest).arg(exe());
+                c.args(rest).arg(program);
                 c
             }
-            None => Command::new(exe()),
+            None => Command::new(program),
         };
         let child = cmd
             .args(args)

@@ -48,6 +48,9 @@ enum Command {
     Bridge(BridgeArgs),
     /// A plain Zenoh router (what `zenohd` does without plugins).
     Router(RouterArgs),
+    /// Make a test CA and one certificate and key per role for a deployment with mutual TLS
+    /// (pipeline/deploy/tls/): DIR/ca.pem, ca.key, <role>.pem, <role>.key.
+    Certs(pipeline::certs::CertsArgs),
 }
 
 fn init_tracing(default: &str) {
@@ -69,6 +72,21 @@ fn check_radar_service(
     zenoh.to_config().map_err(Failure::bad_input)?;
     iox.env().map_err(Failure::bad_input)?;
     Ok(())
+}
+
+/// `cellsar certs`: bad flags and a set that exists already are bad input (exit 2).
+fn make_certs(a: &pipeline::certs::CertsArgs) -> Result<(), Failure> {
+    use pipeline::certs::CertsError;
+    match pipeline::certs::make_certs(a) {
+        Ok(files) => {
+            for f in files {
+                println!("{}", f.display());
+            }
+            Ok(())
+        }
+        Err(e @ (CertsError::Flag { .. } | CertsError::Exists(_))) => Err(Failure::bad_input(e)),
+        Err(e) => Err(Failure::runtime(e)),
+    }
 }
 
 fn main() -> ExitCode {
@@ -119,6 +137,7 @@ fn main() -> ExitCode {
         .map(|r| tracing::info!(?r, "processor stopped")),
         Command::Bridge(a) => pipeline::services::bridge::run(&a, &stop).map(|_| ()),
         Command::Router(a) => roles::run_router(&a, &stop),
+        Command::Certs(a) => make_certs(&a),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -103,6 +103,10 @@ impl Session<'_> {
         let events = self.setup.events;
         let mut progressed = false;
         while let Some(d) = self.subs.detections.try_recv() {
+            if self.senders.detections(&d.key, &d.message).is_err() {
+                c.col.foreign += 1;
+                continue;
+            }
             let k = d.message.aperture;
             if c.col.add_detections(d.message) == Added::New {
                 progressed = true;
@@ -137,10 +141,10 @@ impl Session<'_> {
             }
         }
         while let Some(s) = self.subs.statuses.try_recv() {
-            let s = s.message;
-            if s.mission_id != id {
+            if s.message.mission_id != id || self.senders.status(&s.key, &s.message).is_err() {
                 continue;
             }
+            let s = s.message;
             if s.role == "processor" && s.state == "failed" {
                 bail!("the processor gave up the mission: {}", s.message);
             }

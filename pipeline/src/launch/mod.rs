@@ -101,6 +101,11 @@ pub struct RunArgs {
     /// host, a container) and is found on the Zenoh network. Repeatable.
     #[arg(long = "external", value_name = "ROLE", value_parser = ["planner", "echo", "processor", "bridge"])]
     pub external: Vec<String>,
+    /// The Zenoh configuration file of the children of one role, instead of the launcher's
+    /// `-c` (`ROLE=FILE`, ROLE one of planner, echo, processor, bridge): a deployment with a
+    /// certificate per role (`pipeline/deploy/tls/`). Repeatable.
+    #[arg(long = "child-config", value_name = "ROLE=FILE", value_parser = net::parse_child_config)]
+    pub child_config: Vec<(String, PathBuf)>,
     /// Restarts allowed per child before the run is given up.
     #[arg(long, default_value_t = 5)]
     pub max_restarts: u32,

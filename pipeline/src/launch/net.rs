@@ -1,5 +1,6 @@
 //! The launcher's Zenoh network: its own session and the flags its children get.
 
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -79,6 +80,43 @@ fn reachable_endpoint(listen: &str) -> std::result::Result<String, String> {
     Ok(format!("{proto}/{host}:{port}{meta}"))
 }
 
+/// The roles whose children `--child-config` configures.
+const CHILD_ROLES: [&str; 4] = ["planner", "echo", "processor", "bridge"];
+
+/// clap value parser of `--child-config ROLE=FILE`: a child role and a Zenoh configuration
+/// file that Zenoh reads (checked now, so that a bad file is refused before anything starts).
+pub fn parse_child_config(s: &str) -> std::result::Result<(String, PathBuf), String> {
+    let (role, file) = s
+        .split_once('=')
+        .ok_or_else(|| format!("{s:?}: expected ROLE=FILE, e.g. echo=deploy/tls/echo.json5"))?;
+    if !CHILD_ROLES.contains(&role) {
+        return Err(format!(
+            "{role:?}: the role must be one of {}",
+            CHILD_ROLES.join(", ")
+        ));
+    }
+    let file = PathBuf::from(file);
+    ZenohArgs {
+        config: Some(file.clone()),
+        ..ZenohArgs::default()
+    }
+    .to_config()
+    .map_err(|e| cellsar_error::error_chain(&e))?;
+    Ok((role.to_string(), file))
+}
+
+/// A child's command line with its Zenoh configuration file replaced by `file` (`--config`
+/// added when it had none). The children's Zenoh flags come from [`ZenohArgs::to_cli_args`],
+/// which writes the file as `--config FILE`.
+pub(super) fn with_child_config(mut args: Vec<String>, file: &Path) -> Vec<String> {
+    let file = file.display().to_string();
+    match args.iter().position(|a| a == "--config") {
+        Some(i) if i + 1 < args.len() => args[i + 1] = file,
+        _ => args.extend(["--config".to_string(), file]),
+    }
+    args
+}
+
 /// Opens the launcher's session: an open that fails (a listen endpoint still taken, say) is
 /// tried again for 15 s; one that waits (a client whose router is not up yet) waits for as
 /// long as it takes. `None` once `stop` is set (SIGINT/SIGTERM), also in the middle of an
@@ -97,5 +135,53 @@ pub(super) fn open_with_retry(z: &ZenohArgs, stop: &AtomicBool) -> Result<Option
             }
             Err(e) => return Err(e).context("opening the launcher's Zenoh session"),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn child_config_replaces_or_adds_the_file() {
+        let a = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let f = Path::new("/etc/cellsar/echo.json5");
+        assert_eq!(
+            with_child_config(a(&["echo", "--config", "l.json5", "--mode", "client"]), f),
+            a(&[
+                "echo",
+                "--config",
+                "/etc/cellsar/echo.json5",
+                "--mode",
+                "client"
+            ])
+        );
+        assert_eq!(
+            with_child_config(a(&["echo", "--scene", "s.toml"]), f),
+            a(&[
+                "echo",
+                "--scene",
+                "s.toml",
+                "--config",
+                "/etc/cellsar/echo.json5"
+            ])
+        );
+    }
+
+    #[test]
+    fn child_config_flags_are_checked() {
+        let dir = tempfile::tempdir().unwrap();
+        let ok = dir.path().join("echo.json5");
+        std::fs::write(&ok, "{ mode: 'client' }").unwrap();
+        let (role, file) = parse_child_config(&format!("echo={}", ok.display())).unwrap();
+        assert_eq!((role.as_str(), file.as_path()), ("echo", ok.as_path()));
+        assert!(parse_child_config("echo")
+            .unwrap_err()
+            .contains("ROLE=FILE"));
+        assert!(parse_child_config(&format!("router={}", ok.display()))
+            .unwrap_err()
+            .contains("planner, echo, processor, bridge"));
+        let e = parse_child_config("echo=/nonexistent/x.json5").unwrap_err();
+        assert!(e.contains("/nonexistent/x.json5"), "{e}");
     }
 }

@@ -16,6 +16,7 @@ use super::net::Net;
 use super::{RunArgs, Transport};
 use crate::events::Events;
 use crate::protocol::{self, ApertureDetections, ApertureImage, MissionMetrics, ServiceStatus};
+use crate::senders::Senders;
 use crate::supervise::{ChildSpec, Supervised};
 
 /// What a run is given: its options, its places, its network, its event log.
@@ -74,6 +75,8 @@ pub(super) struct Session<'a> {
     pub subs: Subscriptions,
     children: &'a mut Vec<Supervised>,
     alive: LivelinessWatcher,
+    /// The instances seen alive, which statuses and detections must come from.
+    pub senders: Senders,
     /// `--timeout-s` from the start; `None`: no limit (also for one past what an `Instant`
     /// can hold, rather than a panic).
     deadline: Option<Instant>,
@@ -89,6 +92,7 @@ impl<'a> Session<'a> {
     ) -> Result<Self> {
         Ok(Session {
             alive: node.watch_liveliness(keys::ALIVE_ALL)?,
+            senders: Senders::default(),
             subs: Subscriptions::open(node)?,
             deadline: setup
                 .args
@@ -116,6 +120,10 @@ impl<'a> Session<'a> {
     }
 
     fn start(&mut self, role: &str, args: Vec<String>) -> Result<()> {
+        let args = match self.args().child_config.iter().find(|(r, _)| r == role) {
+            Some((_, file)) => super::net::with_child_config(args, file),
+            None => args,
+        };
         let child = Supervised::start((self.setup.spec)(role, args), self.setup.events)?;
         self.children.push(child);
         Ok(())
@@ -204,6 +212,9 @@ impl<'a> Session<'a> {
         }
         while let Some(e) = self.alive.next_event(std::time::Duration::ZERO) {
             if let Some((role, instance)) = keys::parse_alive(&e.key) {
+                if e.alive {
+                    self.senders.saw(role, instance);
+                }
                 if !e.alive {
                     tracing::warn!(role, instance, "liveliness lost");
                 }

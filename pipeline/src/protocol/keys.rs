@@ -83,6 +83,13 @@ pub fn metrics(id: MissionId) -> Result<String, KeyError> {
 pub fn results(id: MissionId) -> Result<String, KeyError> {
     mission(id, "results")
 }
+/// The role of a status key `cellsar/<m>/status/<role>`; `None` for any other key.
+pub fn status_role(key: &str) -> Option<&str> {
+    match key.split('/').collect::<Vec<_>>().as_slice() {
+        ["cellsar", m, "status", role] if !m.is_empty() && !role.is_empty() => Some(*role),
+        _ => None,
+    }
+}
 /// The bridge route that carries the echo frames of mission `id` out to Zenoh
 /// (`cellsar/<m>/echo@out`).
 pub fn echo_route_out(id: MissionId) -> Result<String, KeyError> {
@@ -118,5 +125,14 @@ mod tests {
             "cellsar/00000000000000ff/echo@out"
         );
         assert!(status(id, "a/b").is_err());
+        assert_eq!(status_role(&status(id, "echo").unwrap()), Some("echo"));
+        for bad in [
+            "cellsar/1/status",
+            "cellsar/1/status/a/b",
+            "x/1/status/a",
+            "cellsar//status/a",
+        ] {
+            assert_eq!(status_role(bad), None, "{bad}");
+        }
     }
 }

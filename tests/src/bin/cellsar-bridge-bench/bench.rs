@@ -103,6 +103,49 @@ pub(super) struct BenchCtx {
     inbound_queue: usize,
 }
 
+/// Zenoh configurations of the bridged path over mutual TLS: bridge B (listens), bridge A and
+/// the probe (connect), each with its own certificate of a test CA.
+pub(super) struct TlsConfigs {
+    b: PathBuf,
+    a: PathBuf,
+    probe: PathBuf,
+}
+
+impl TlsConfigs {
+    /// Makes a test CA and the certificates (`cellsar certs`' code) and the three
+    /// configurations in `dir`.
+    fn make(dir: &Path) -> Result<Self> {
+        let certs = dir.join("certs");
+        pipeline::certs::make_certs(&pipeline::certs::CertsArgs {
+            out: certs.clone(),
+            roles: vec![s("bridge-a"), s("bridge-b"), s("probe")],
+            hosts: vec![s("127.0.0.1")],
+            days: 1,
+            force: true,
+        })?;
+        let ca = certs.join("ca.pem");
+        let write = |name: &str, side: &str, role: &str| -> Result<PathBuf> {
+            let path = |p: &Path| serde_json::Value::String(p.display().to_string());
+            let text = format!(
+                "{{ mode: 'peer', transport: {{ link: {{ tls: {{ root_ca_certificate: {}, \
+                 {side}_private_key: {}, {side}_certificate: {}, enable_mtls: true, \
+                 verify_name_on_connect: true }} }} }} }}",
+                path(&ca),
+                path(&certs.join(format!("{role}.key"))),
+                path(&certs.join(format!("{role}.pem"))),
+            );
+            let p = dir.join(name);
+            std::fs::write(&p, text)?;
+            Ok(p)
+        };
+        Ok(TlsConfigs {
+            b: write("bridge-b.json5", "listen", "bridge-b")?,
+            a: write("bridge-a.json5", "connect", "bridge-a")?,
+            probe: write("probe.json5", "connect", "probe")?,
+        })
+    }
+}
+
 impl BenchCtx {
     fn prefix(&mut self, tag: &str) -> String {
         self.run += 1;
@@ -205,8 +248,9 @@ impl BenchCtx {
         Ok((publ.report(t)?, sub.report(t)?))
     }
 
-    /// iceoryx2 producer (host A) -> bridge A -> Zenoh (TCP loopback) -> bridge B -> iceoryx2
-    /// consumer (host B); the "hosts" are two isolated iceoryx2 environments.
+    /// iceoryx2 producer (host A) -> bridge A -> Zenoh (TCP loopback, or TLS over it with
+    /// `tls`) -> bridge B -> iceoryx2 consumer (host B); the "hosts" are two isolated iceoryx2
+    /// environments.
     fn bridged(
         &mut self,
         bytes: usize,
@@ -214,9 +258,17 @@ impl BenchCtx {
         rate: f64,
         block: bool,
         key: &str,
+        tls: Option<&TlsConfigs>,
     ) -> Result<(TxReport, RxReport)> {
         let port = free_port()?;
-        let ep = format!("tcp/127.0.0.1:{port}");
+        let ep = format!(
+            "{}/127.0.0.1:{port}",
+            if tls.is_some() { "tls" } else { "tcp" }
+        );
+        let config = |side: fn(&TlsConfigs) -> &PathBuf| -> Vec<String> {
+            tls.map(|t| vec![s("-c"), side(t).display().to_string()])
+                .unwrap_or_default()
+        };
         let pa = self.prefix("a");
         let pb = self.prefix("b");
         let bridge_args = |instance: &str, prefix: &str, dir: &str, z: &[String]| -> Vec<String> {
@@ -246,6 +298,7 @@ impl BenchCtx {
             s("--inbound-queue"),
             self.inbound_queue.to_string(),
         ];
+        zb.extend(config(|t| &t.b));
         if block {
             zb.extend([s("--inbound-backpressure"), s("block")]);
         }
@@ -259,12 +312,14 @@ impl BenchCtx {
         sub_args.extend([s("--frames"), frames.to_string(), s("--idle-s"), s("10")]);
         let mut sub = Proc::spawn("iox-sub(b)", &self.me, &sub_args)?;
         sub.ready()?;
+        let mut za = vec![s("-e"), ep.clone()];
+        za.extend(config(|t| &t.a));
         let ba = Proc::spawn(
             "bridge-a",
             &self.bridge_exe,
-            &bridge_args("bench-a", &pa, "out", &[s("-e"), ep.clone()]),
+            &bridge_args("bench-a", &pa, "out", &za),
         )?;
-        wait_bridged(&ep, key, Duration::from_secs(30))?;
+        wait_bridged(&ep, key, Duration::from_secs(30), tls.map(|t| &t.probe))?;
         let mut pub_args = vec![s("iox-pub")];
         pub_args.extend(self.svc(&pa));
         pub_args.extend(tx_args(frames, bytes, rate));
@@ -355,6 +410,11 @@ pub(super) fn bench(args: &BenchArgs) -> Result<()> {
         args.json_out.as_deref(),
         args.bridge_inbound_queue,
     );
+    let tls_dir = tempfile::tempdir()?;
+    let tls = args
+        .tls
+        .then(|| TlsConfigs::make(tls_dir.path()))
+        .transpose()?;
     let me = std::env::current_exe()?;
     let bridge_exe = me.with_file_name("cellsar-bridge");
     if !bridge_exe.exists() {
@@ -397,26 +457,43 @@ pub(super) fn bench(args: &BenchArgs) -> Result<()> {
         // paced well below the path's capacity so latency is not queueing delay
         let lat_rate = latency_rate_hz.min(latency_budget_mb_s * 1e6 / bytes as f64);
         for rep in 0..repeats {
-            // reference: one process copying the same bytes (the memory bandwidth the
-            // iceoryx2 producer's copy into shared memory is bound by)
-            let r = memcpy_baseline(bytes, frames);
-            push(&mut rows, "memcpy", "throughput", mib, rep, 0.0, r);
-            let r = ctx.iox(bytes, frames, lat_rate, false, false)?;
-            push(&mut rows, "iceoryx2", "latency", mib, rep, lat_rate, r);
-            let r = ctx.iox(bytes, frames, lat_rate, false, true)?;
-            push(&mut rows, "iceoryx2", "latency-spin", mib, rep, lat_rate, r);
-            let r = ctx.iox(bytes, frames, 0.0, true, false)?;
-            push(&mut rows, "iceoryx2", "throughput", mib, rep, 0.0, r);
+            if !args.only_network {
+                // reference: one process copying the same bytes (the memory bandwidth the
+                // iceoryx2 producer's copy into shared memory is bound by)
+                let r = memcpy_baseline(bytes, frames);
+                push(&mut rows, "memcpy", "throughput", mib, rep, 0.0, r);
+                let r = ctx.iox(bytes, frames, lat_rate, false, false)?;
+                push(&mut rows, "iceoryx2", "latency", mib, rep, lat_rate, r);
+                let r = ctx.iox(bytes, frames, lat_rate, false, true)?;
+                push(&mut rows, "iceoryx2", "latency-spin", mib, rep, lat_rate, r);
+                let r = ctx.iox(bytes, frames, 0.0, true, false)?;
+                push(&mut rows, "iceoryx2", "throughput", mib, rep, 0.0, r);
+            }
             // plain Zenoh and the bridged path alternate, so load changes hit both alike
             let key = format!("bench/{mib}/{rep}");
             let r = ctx.zenoh(bytes, frames, lat_rate, &format!("{key}/zl"))?;
             push(&mut rows, "zenoh", "latency", mib, rep, lat_rate, r);
-            let r = ctx.bridged(bytes, frames, lat_rate, false, &format!("{key}/bl"))?;
+            let r = ctx.bridged(bytes, frames, lat_rate, false, &format!("{key}/bl"), None)?;
             push(&mut rows, "bridge", "latency", mib, rep, lat_rate, r);
+            if let Some(t) = &tls {
+                let r = ctx.bridged(
+                    bytes,
+                    frames,
+                    lat_rate,
+                    false,
+                    &format!("{key}/sl"),
+                    Some(t),
+                )?;
+                push(&mut rows, "bridge-tls", "latency", mib, rep, lat_rate, r);
+            }
             let r = ctx.zenoh(bytes, frames, 0.0, &format!("{key}/zt"))?;
             push(&mut rows, "zenoh", "throughput", mib, rep, 0.0, r);
-            let r = ctx.bridged(bytes, frames, 0.0, true, &format!("{key}/bt"))?;
+            let r = ctx.bridged(bytes, frames, 0.0, true, &format!("{key}/bt"), None)?;
             push(&mut rows, "bridge", "throughput", mib, rep, 0.0, r);
+            if let Some(t) = &tls {
+                let r = ctx.bridged(bytes, frames, 0.0, true, &format!("{key}/st"), Some(t))?;
+                push(&mut rows, "bridge-tls", "throughput", mib, rep, 0.0, r);
+            }
         }
     }
     let _ = std::fs::remove_dir_all(&root);
@@ -483,6 +560,9 @@ pub(super) fn bench(args: &BenchArgs) -> Result<()> {
         }
         println!("| {mib} MiB | {:.3} | {:.3} |", median(tp), median(lat));
     }
+    if tls.is_some() {
+        ratio_table(&rows, sizes_mib, repeats, ("bridge-tls", "bridge"));
+    }
     if let Some(p) = json_out {
         std::fs::write(p, serde_json::to_string_pretty(&rows)?)?;
     }
@@ -491,8 +571,14 @@ pub(super) fn bench(args: &BenchArgs) -> Result<()> {
 
 /// Waits until bridge A's route on `key` is up and sees bridge B's subscriber (its stats say
 /// `remote_subscribers`), so no frame is sent before it can be delivered.
-pub(super) fn wait_bridged(endpoint: &str, key: &str, timeout: Duration) -> Result<()> {
+pub(super) fn wait_bridged(
+    endpoint: &str,
+    key: &str,
+    timeout: Duration,
+    config: Option<&PathBuf>,
+) -> Result<()> {
     let args = ZenohArgs {
+        config: config.cloned(),
         no_multicast_scouting: true,
         connect: vec![endpoint.to_string()],
         mode: Some(bridge::zconfig::Mode::Peer),
@@ -527,4 +613,29 @@ pub(super) fn wait_bridged(endpoint: &str, key: &str, timeout: Duration) -> Resu
     }
     node.close()?;
     Ok(())
+}
+
+/// A table of `paths.0` / `paths.1` throughput and p50 latency per frame size (medians of the
+/// per-repetition ratios, so that load changes between repetitions cancel).
+fn ratio_table(rows: &[BenchRow], sizes_mib: &[usize], repeats: usize, paths: (&str, &str)) {
+    let (num, den) = paths;
+    println!("\n| frame | {num} / {den} throughput | {num} / {den} p50 latency |");
+    println!("|---:|---:|---:|");
+    for &mib in sizes_mib {
+        let pick = |path: &str, mode: &str, rep: usize| {
+            rows.iter()
+                .find(|r| r.path == path && r.mode == mode && r.frame_mib == mib && r.rep == rep)
+        };
+        let (mut tp, mut lat) = (Vec::new(), Vec::new());
+        for rep in 0..repeats {
+            if let (Some(a), Some(b)) = (pick(num, "throughput", rep), pick(den, "throughput", rep))
+            {
+                tp.push(a.rx.throughput_mb_s / b.rx.throughput_mb_s);
+            }
+            if let (Some(a), Some(b)) = (pick(num, "latency", rep), pick(den, "latency", rep)) {
+                lat.push(a.rx.lat_us_p50 / b.rx.lat_us_p50);
+            }
+        }
+        println!("| {mib} MiB | {:.3} | {:.3} |", median(tp), median(lat));
+    }
 }

@@ -5,7 +5,9 @@
 //! - `iox-pub` / `iox-sub`: publish / consume frames on an iceoryx2 frame service;
 //! - `z-pub` / `z-sub`: publish / consume the same frames on a plain Zenoh key;
 //! - `z-flood`: send malformed and oversized frame payloads on a Zenoh key (each one checked
-//!   to be rejected by this crate's own decoder before it is sent).
+//!   to be rejected by this crate's own decoder before it is sent);
+//! - `forge`: a hostile peer publishing a forged processor status and forged detections for
+//!   every mission it learns of.
 //!
 //! `bench` runs them as child processes: the iceoryx2 hand-off (latency, throughput) for each
 //! frame size, then a plain Zenoh publisher/subscriber against the path through two
@@ -33,6 +35,7 @@ use clap::{Parser, Subcommand};
 use serde::{Deserialize, Serialize};
 
 mod bench;
+mod forge;
 mod tools;
 
 use bench::bench;
@@ -178,6 +181,8 @@ enum Cmd {
         #[command(flatten)]
         zenoh: ZenohArgs,
     },
+    /// Publish a forged processor status and forged detections (a hostile peer).
+    Forge(forge::ForgeArgs),
     /// Run the benchmark and print a Markdown table.
     Bench(BenchArgs),
 }
@@ -207,6 +212,13 @@ struct BenchArgs {
     /// `--inbound-queue` of the receiving bridge (0: re-publish in Zenoh's callback).
     #[arg(long, default_value_t = 4)]
     bridge_inbound_queue: usize,
+    /// Also run the bridged path over mutual TLS (`bridge-tls`, certificates of a test CA
+    /// made for the run), alternating with the plain TCP one.
+    #[arg(long)]
+    tls: bool,
+    /// Only the bridged paths (and plain Zenoh): skip memcpy and iceoryx2.
+    #[arg(long)]
+    only_network: bool,
 }
 
 /// What a receiver saw.
@@ -279,6 +291,7 @@ fn run(cli: Cli) -> Result<()> {
             wait_matching,
             zenoh,
         } => z_flood(&key, count, max_frame_bytes, seed, wait_matching, &zenoh),
+        Cmd::Forge(args) => forge::forge(&args),
         Cmd::Bench(args) => bench(&args),
     }
 }

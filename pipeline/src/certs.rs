@@ -1,0 +1,478 @@
+//! `cellsar certs`: a test certificate authority and one certificate per role for a deployment
+//! with mutual TLS (`pipeline/deploy/tls/`).
+//!
+//! Into one directory it writes `ca.pem` and `ca.key` (the deployment's CA), and for every role
+//! `<role>.pem` and `<role>.key`: a certificate signed by the CA whose common name is the role
+//! (the router's access control matches it, `cert_common_names`) and whose subject alternative
+//! names are the given host names and addresses (a client checks the router's against the
+//! address it connects to). Keys are ECDSA P-256, PKCS#8 PEM, mode 0600. Every file is written
+//! atomically (a unique temporary file, synced, renamed), and nothing is written when one of
+//! the files exists already, unless `--force`.
+
+use std::fs::{File, Permissions};
+use std::io::Write;
+use std::os::unix::fs::PermissionsExt;
+use std::path::{Path, PathBuf};
+
+use rcgen::{
+    BasicConstraints, CertificateParams, DnType, ExtendedKeyUsagePurpose, IsCa, Issuer, KeyPair,
+    KeyUsagePurpose,
+};
+
+/// The roles `cellsar certs` makes certificates for by default: the router and every process
+/// of the pipeline (`launcher` is `cellsar run`, the collector of the results).
+pub const DEFAULT_ROLES: [&str; 6] = [
+    "router",
+    "planner",
+    "echo",
+    "processor",
+    "bridge",
+    "launcher",
+];
+
+/// The host names of the certificates when no `--host` is given.
+pub const DEFAULT_HOSTS: [&str; 2] = ["localhost", "127.0.0.1"];
+
+/// Longest validity accepted, days (10 years).
+pub const MAX_DAYS: u32 = 3650;
+
+/// Flags of `cellsar certs`.
+#[derive(clap::Args, Debug, Clone, PartialEq, Eq)]
+pub struct CertsArgs {
+    /// Directory to write into (created if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// A role to make a certificate for (its common name; repeatable)
+    /// [default: router, planner, echo, processor, bridge, launcher].
+    #[arg(long = "role", value_name = "ROLE")]
+    pub roles: Vec<String>,
+    /// A host name or IP address of the certificates' subject alternative names (repeatable;
+    /// the router's must include the address clients connect to) [default: localhost,
+    /// 127.0.0.1].
+    #[arg(long = "host", value_name = "NAME_OR_IP")]
+    pub hosts: Vec<String>,
+    /// Days the certificates are valid.
+    #[arg(long, default_value_t = 365)]
+    pub days: u32,
+    /// Replace files that exist already.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Why `cellsar certs` made nothing.
+#[derive(Debug, thiserror::Error)]
+pub enum CertsError {
+    /// A flag out of range or malformed; names the flag.
+    #[error("{flag} {value:?}: {reason}")]
+    Flag {
+        /// The flag.
+        flag: &'static str,
+        /// The value given.
+        value: String,
+        /// What it needs.
+        reason: String,
+    },
+    /// A file of the set exists and `--force` was not given.
+    #[error("{0} exists; give --force to replace the certificates in its directory")]
+    Exists(PathBuf),
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// Making a key or a certificate failed.
+    #[error("making the {what}: {source}")]
+    Cert {
+        /// Which certificate.
+        what: String,
+        /// The cause.
+        source: rcgen::Error,
+    },
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> CertsError + '_ {
+    move |source| CertsError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// One file of the set: its name, contents and mode.
+struct Output {
+    name: String,
+    text: String,
+    mode: u32,
+}
+
+/// The roles to make (the default set when none is given), each checked as a key chunk (it is
+/// the common name the ACL matches and a file name) and given once.
+fn roles(args: &CertsArgs) -> Result<Vec<String>, CertsError> {
+    let given: Vec<String> = if args.roles.is_empty() {
+        DEFAULT_ROLES.iter().map(|r| r.to_string()).collect()
+    } else {
+        args.roles.clone()
+    };
+    let mut out: Vec<String> = Vec::new();
+    for r in given {
+        let bad = |reason: String| CertsError::Flag {
+            flag: "--role",
+            value: r.clone(),
+            reason,
+        };
+        bridge::keys::chunk("role", &r).map_err(|e| bad(e.reason.to_string()))?;
+        if r == "ca" {
+            return Err(bad("is the CA's file name".into()));
+        }
+        if out.contains(&r) {
+            return Err(bad("given twice".into()));
+        }
+        out.push(r);
+    }
+    Ok(out)
+}
+
+fn validity(days: u32) -> Result<(time::OffsetDateTime, time::OffsetDateTime), CertsError> {
+    if !(1..=MAX_DAYS).contains(&days) {
+        return Err(CertsError::Flag {
+            flag: "--days",
+            value: days.to_string(),
+            reason: format!("must be in 1..={MAX_DAYS}"),
+        });
+    }
+    let now = time::OffsetDateTime::now_utc();
+    // an hour back, for clocks of the hosts that differ a little
+    Ok((
+        now - time::Duration::hours(1),
+        now + time::Duration::days(i64::from(days)),
+    ))
+}
+
+/// Makes the CA and every role's certificate and key in memory (nothing written yet).
+fn make_all(args: &CertsArgs) -> Result<Vec<Output>, CertsError> {
+    let roles = roles(args)?;
+    let (not_before, not_after) = validity(args.days)?;
+    let hosts: Vec<String> = if args.hosts.is_empty() {
+        DEFAULT_HOSTS.iter().map(|h| h.to_string()).collect()
+    } else {
+        args.hosts.clone()
+    };
+    let cert_err = |what: &str| {
+        let what = what.to_string();
+        move |source| CertsError::Cert { what, source }
+    };
+    let ca_key = KeyPair::generate().map_err(cert_err("CA key"))?;
+    let mut ca = CertificateParams::default();
+    ca.distinguished_name
+        .push(DnType::CommonName, "cellsar deployment CA");
+    ca.is_ca = IsCa::Ca(BasicConstraints::Constrained(0));
+    ca.key_usages = vec![
+        KeyUsagePurpose::KeyCertSign,
+        KeyUsagePurpose::CrlSign,
+        KeyUsagePurpose::DigitalSignature,
+    ];
+    ca.not_before = not_before;
+    ca.not_after = not_after;
+    let ca_cert = ca
+        .self_signed(&ca_key)
+        .map_err(cert_err("CA certificate"))?;
+    let mut out = vec![
+        Output {
+            name: "ca.pem".into(),
+            text: ca_cert.pem(),
+            mode: 0o644,
+        },
+        Output {
+            name: "ca.key".into(),
+            text: ca_key.serialize_pem(),
+            mode: 0o600,
+        },
+    ];
+    let issuer = Issuer::new(ca, ca_key);
+    for role in roles {
+        let mut p = CertificateParams::new(hosts.clone()).map_err(|e| CertsError::Flag {
+            flag: "--host",
+            value: hosts.join(","),
+            reason: e.to_string(),
+        })?;
+        p.distinguished_name.push(DnType::CommonName, role.as_str());
+        p.key_usages = vec![
+            KeyUsagePurpose::DigitalSignature,
+            KeyUsagePurpose::KeyEncipherment,
+        ];
+        // every process is a TLS client of the router, the router a server; a role's
+        // certificate serves both ways (a peer listens and connects)
+        p.extended_key_usages = vec![
+            ExtendedKeyUsagePurpose::ServerAuth,
+            ExtendedKeyUsagePurpose::ClientAuth,
+        ];
+        p.not_before = not_before;
+        p.not_after = not_after;
+        let what = format!("certificate of {role}");
+        let key = KeyPair::generate().map_err(cert_err(&what))?;
+        let cert = p.signed_by(&key, &issuer).map_err(cert_err(&what))?;
+        out.push(Output {
+            name: format!("{role}.pem"),
+            text: cert.pem(),
+            mode: 0o644,
+        });
+        out.push(Output {
+            name: format!("{role}.key"),
+            text: key.serialize_pem(),
+            mode: 0o600,
+        });
+    }
+    Ok(out)
+}
+
+/// Writes `text` to `path` atomically with `mode`: a unique temporary file in the same
+/// directory, created with `mode` (a key is never readable by others, not even for a moment),
+/// synced, renamed over `path` (or, without `replace`, linked to `path` only if no file is
+/// there).
+fn write_file(path: &Path, text: &str, mode: u32, replace: bool) -> Result<(), CertsError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".cellsar-certs.")
+        .suffix(".tmp")
+        .permissions(Permissions::from_mode(mode))
+        .tempfile_in(dir)
+        .map_err(io(path))?;
+    tmp.write_all(text.as_bytes())
+        .and_then(|()| tmp.as_file().sync_all())
+        .map_err(io(path))?;
+    let persisted = if replace {
+        tmp.persist(path).map(drop)
+    } else {
+        tmp.persist_noclobber(path).map(drop)
+    };
+    persisted.map_err(|e| {
+        if e.error.kind() == std::io::ErrorKind::AlreadyExists {
+            CertsError::Exists(path.to_path_buf())
+        } else {
+            io(path)(e.error)
+        }
+    })
+}
+
+/// Makes the CA and the roles' certificates of `args` in `args.out`; the paths written, in
+/// order (`ca.pem`, `ca.key`, then `<role>.pem`, `<role>.key` for each role).
+pub fn make_certs(args: &CertsArgs) -> Result<Vec<PathBuf>, CertsError> {
+    let files = make_all(args)?;
+    std::fs::create_dir_all(&args.out).map_err(io(&args.out))?;
+    if !args.force {
+        for f in &files {
+            let p = args.out.join(&f.name);
+            if p.symlink_metadata().is_ok() {
+                return Err(CertsError::Exists(p));
+            }
+        }
+    }
+    let mut written = Vec::new();
+    for f in &files {
+        let p = args.out.join(&f.name);
+        write_file(&p, &f.text, f.mode, args.force)?;
+        written.push(p);
+    }
+    File::open(&args.out)
+        .and_then(|d| d.sync_all())
+        .map_err(io(&args.out))?;
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rustls_pki_types::pem::PemObject;
+    use rustls_pki_types::{CertificateDer, ServerName, UnixTime};
+
+    fn args(dir: &Path) -> CertsArgs {
+        CertsArgs {
+            out: dir.to_path_buf(),
+            roles: vec!["router".into(), "echo".into()],
+            hosts: vec!["10.0.0.1".into(), "router.example".into()],
+            days: 30,
+            force: false,
+        }
+    }
+
+    fn der(path: &Path) -> CertificateDer<'static> {
+        CertificateDer::from_pem_file(path).unwrap()
+    }
+
+    /// Each role's certificate chains to the CA (for a client and for a server), names the
+    /// role as its common name and the hosts asked for (and no other) as its alternative
+    /// names; a certificate of another CA does not chain.
+    #[test]
+    fn certificates_chain_to_the_ca_with_the_names_asked_for() {
+        let dir = tempfile::tempdir().unwrap();
+        let written = make_certs(&args(dir.path())).unwrap();
+        let names: Vec<String> = written
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "ca.pem",
+                "ca.key",
+                "router.pem",
+                "router.key",
+                "echo.pem",
+                "echo.key"
+            ]
+        );
+        let ca = der(&dir.path().join("ca.pem"));
+        let anchor = webpki::anchor_from_trusted_cert(&ca).unwrap();
+        let now = UnixTime::now();
+        for role in ["router", "echo"] {
+            let leaf = der(&dir.path().join(format!("{role}.pem")));
+            let ee = webpki::EndEntityCert::try_from(&leaf).unwrap();
+            for usage in [
+                webpki::KeyUsage::client_auth(),
+                webpki::KeyUsage::server_auth(),
+            ] {
+                ee.verify_for_usage(
+                    webpki::ALL_VERIFICATION_ALGS,
+                    std::slice::from_ref(&anchor),
+                    &[],
+                    now,
+                    usage,
+                    None,
+                    None,
+                )
+                .unwrap_or_else(|e| panic!("{role}: {e:?}"));
+            }
+            for ok in ["10.0.0.1", "router.example"] {
+                let n = ServerName::try_from(ok).unwrap();
+                ee.verify_is_valid_for_subject_name(&n)
+                    .unwrap_or_else(|e| panic!("{role} {ok}: {e:?}"));
+            }
+            for bad in ["10.0.0.2", "localhost", "other.example"] {
+                let n = ServerName::try_from(bad).unwrap();
+                assert!(ee.verify_is_valid_for_subject_name(&n).is_err(), "{bad}");
+            }
+            let (_, x) = x509_parser::parse_x509_certificate(&leaf).unwrap();
+            let cns: Vec<&str> = x
+                .subject()
+                .iter_common_name()
+                .map(|c| c.as_str().unwrap())
+                .collect();
+            assert_eq!(cns, [role]);
+            let issuer: Vec<&str> = x
+                .issuer()
+                .iter_common_name()
+                .map(|c| c.as_str().unwrap())
+                .collect();
+            assert_eq!(issuer, ["cellsar deployment CA"]);
+            let days =
+                (x.validity().not_after.timestamp() - x.validity().not_before.timestamp()) / 86_400;
+            assert_eq!(days, 30, "{role}");
+        }
+        // another CA's certificate does not chain to this one
+        let other = tempfile::tempdir().unwrap();
+        make_certs(&args(other.path())).unwrap();
+        let stranger = der(&other.path().join("echo.pem"));
+        let ee = webpki::EndEntityCert::try_from(&stranger).unwrap();
+        assert!(ee
+            .verify_for_usage(
+                webpki::ALL_VERIFICATION_ALGS,
+                &[anchor],
+                &[],
+                now,
+                webpki::KeyUsage::client_auth(),
+                None,
+                None,
+            )
+            .is_err());
+    }
+
+    /// Keys are 0600, certificates 0644; no temporary file is left; an existing set is kept
+    /// (every byte) unless --force, which replaces it with a new CA.
+    #[test]
+    fn keys_are_private_and_nothing_is_overwritten_without_force() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = args(dir.path());
+        make_certs(&a).unwrap();
+        let mode = |n: &str| {
+            std::fs::metadata(dir.path().join(n))
+                .unwrap()
+                .permissions()
+                .mode()
+                & 0o777
+        };
+        for n in ["ca.key", "router.key", "echo.key"] {
+            assert_eq!(mode(n), 0o600, "{n}");
+        }
+        for n in ["ca.pem", "router.pem", "echo.pem"] {
+            assert_eq!(mode(n), 0o644, "{n}");
+        }
+        let listing = || {
+            let mut v: Vec<String> = std::fs::read_dir(dir.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(listing().len(), 6, "{:?}", listing());
+        let ca_before = std::fs::read(dir.path().join("ca.pem")).unwrap();
+        // one file of the set exists: nothing is written
+        let mut b = a.clone();
+        b.roles = vec!["planner".into(), "echo".into()];
+        let e = make_certs(&b).unwrap_err();
+        assert!(matches!(e, CertsError::Exists(_)), "{e}");
+        assert!(e.to_string().contains("--force"), "{e}");
+        assert!(!dir.path().join("planner.pem").exists());
+        assert_eq!(std::fs::read(dir.path().join("ca.pem")).unwrap(), ca_before);
+        b.force = true;
+        make_certs(&b).unwrap();
+        assert_ne!(std::fs::read(dir.path().join("ca.pem")).unwrap(), ca_before);
+        assert_eq!(mode("planner.key"), 0o600);
+        assert_eq!(listing().len(), 8, "{:?}", listing());
+    }
+
+    #[test]
+    fn bad_flags_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        for (roles, hosts, days, flag) in [
+            (vec!["a/b"], vec![], 1, "--role"),
+            (vec!["ca"], vec![], 1, "--role"),
+            (vec!["echo", "echo"], vec![], 1, "--role"),
+            (vec!["echo"], vec![], 0, "--days"),
+            (vec!["echo"], vec![], MAX_DAYS + 1, "--days"),
+        ] {
+            let a = CertsArgs {
+                out: dir.path().join("x"),
+                roles: roles.into_iter().map(String::from).collect(),
+                hosts,
+                days,
+                force: false,
+            };
+            let e = make_certs(&a).unwrap_err().to_string();
+            assert!(e.starts_with(flag), "{e}");
+        }
+        assert!(!dir.path().join("x").exists());
+    }
+
+    #[test]
+    fn default_roles_and_hosts() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = CertsArgs {
+            out: dir.path().join("certs"),
+            roles: vec![],
+            hosts: vec![],
+            days: 1,
+            force: false,
+        };
+        let written = make_certs(&a).unwrap();
+        assert_eq!(written.len(), 2 + 2 * DEFAULT_ROLES.len());
+        let leaf = der(&a.out.join("launcher.pem"));
+        let ee = webpki::EndEntityCert::try_from(&leaf).unwrap();
+        for h in DEFAULT_HOSTS {
+            ee.verify_is_valid_for_subject_name(&ServerName::try_from(h).unwrap())
+                .unwrap();
+        }
+    }
+}

@@ -1,0 +1,157 @@
+//! `forge`: a hostile peer of the pipeline. It learns the mission ids from the keys it may
+//! see (plans, statuses) and, for each, keeps publishing a forged processor status
+//! `{role: "processor", state: "failed"}` and forged detections of every aperture (one
+//! detection far off the scene at `FORGED_X_M`), under an instance name of its own.
+
+use std::collections::BTreeSet;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use bridge::net::{PublishOptions, TypedPublisher};
+use bridge::zenoh::sample::Sample;
+use bridge::zenoh::Wait;
+use bridge::{MissionId, ZenohArgs};
+use pipeline::protocol::{keys, ApertureDetections, Detection, ServiceStatus};
+use serde::Serialize;
+
+use super::{ready, report, tools::z_node};
+
+/// x of the forged detection, m: far from any scene's landmarks.
+pub(super) const FORGED_X_M: f64 = 987_654.0;
+
+/// The flags of `forge`.
+#[derive(clap::Args, Debug, Clone)]
+pub(super) struct ForgeArgs {
+    /// The instance name the forged messages claim.
+    #[arg(long, default_value = "intruder")]
+    instance: String,
+    /// Apertures to forge detections for (0..N).
+    #[arg(long, default_value_t = 16)]
+    apertures: u32,
+    /// Keep forging for this many seconds.
+    #[arg(long, default_value = "30", value_parser = bridge::flags::parse_seconds)]
+    duration_s: bridge::flags::Seconds,
+    /// Pause between two rounds, ms.
+    #[arg(long, default_value_t = 200)]
+    interval_ms: u64,
+    #[command(flatten)]
+    zenoh: ZenohArgs,
+}
+
+#[derive(Debug, Default, Serialize)]
+struct ForgeReport {
+    missions: usize,
+    statuses: u64,
+    detections: u64,
+    errors: u64,
+}
+
+fn mission_of(key: &str) -> Option<MissionId> {
+    let m = key.split('/').nth(1)?;
+    (m.len() == 16)
+        .then(|| u64::from_str_radix(m, 16).ok())
+        .flatten()
+        .map(MissionId)
+}
+
+struct Forger {
+    status: TypedPublisher<ServiceStatus>,
+    detections: TypedPublisher<ApertureDetections>,
+}
+
+pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
+    let node = z_node(&a.zenoh, "forge")?;
+    let seen: Arc<Mutex<BTreeSet<MissionId>>> = Arc::default();
+    // whatever the router lets through: plans (the echo's certificate may read them) or
+    // statuses (anyone on a plain mesh)
+    let mut subs = Vec::new();
+    for sel in [keys::ALL_PLANS, keys::ALL_STATUS] {
+        let s = seen.clone();
+        subs.push(
+            node.session()
+                .declare_subscriber(sel)
+                .callback(move |sample: Sample| {
+                    if let (Some(id), Ok(mut s)) =
+                        (mission_of(sample.key_expr().as_str()), s.lock())
+                    {
+                        s.insert(id);
+                    }
+                })
+                .wait()
+                .map_err(|e| anyhow::anyhow!("subscribing to {sel}: {e}"))?,
+        );
+    }
+    ready();
+    let mut forgers: Vec<(MissionId, Forger)> = Vec::new();
+    let mut r = ForgeReport::default();
+    let end = Instant::now() + a.duration_s.duration();
+    while Instant::now() < end {
+        let ids: Vec<MissionId> = seen
+            .lock()
+            .map(|s| s.iter().copied().collect())
+            .unwrap_or_default();
+        for id in ids {
+            if !forgers.iter().any(|(i, _)| *i == id) {
+                eprintln!("forging for mission {id}");
+                let opts = PublishOptions {
+                    mission_id: id,
+                    ..PublishOptions::json()
+                };
+                forgers.push((
+                    id,
+                    Forger {
+                        status: node.publisher(&keys::status(id, "processor")?, opts)?,
+                        detections: node.publisher(&keys::detections(id)?, opts)?,
+                    },
+                ));
+            }
+        }
+        for (id, f) in &forgers {
+            let status = ServiceStatus {
+                role: "processor".into(),
+                instance: a.instance.clone(),
+                mission_id: *id,
+                state: "failed".into(),
+                message: "forged".into(),
+                ..ServiceStatus::default()
+            };
+            match f.status.put(&status) {
+                Ok(_) => r.statuses += 1,
+                Err(_) => r.errors += 1,
+            }
+            for k in 0..a.apertures {
+                let d = ApertureDetections {
+                    mission_id: *id,
+                    aperture: k,
+                    apertures: a.apertures,
+                    landmark: None,
+                    landmark_detected: Some(true),
+                    landmark_snr_db: None,
+                    detections: vec![Detection {
+                        aperture: k as usize,
+                        x_m: FORGED_X_M,
+                        y_m: 0.0,
+                        snr_db: 99.0,
+                        pixels: 1,
+                        truth_id: None,
+                        error_m: None,
+                    }],
+                    false_alarms: 0,
+                    process_s: 0.0,
+                    processor: a.instance.clone(),
+                };
+                match f.detections.put(&d) {
+                    Ok(_) => r.detections += 1,
+                    Err(_) => r.errors += 1,
+                }
+            }
+        }
+        std::thread::sleep(Duration::from_millis(a.interval_ms));
+    }
+    r.missions = forgers.len();
+    drop(subs);
+    report(&r)?;
+    node.close()?;
+    Ok(())
+}

@@ -1,0 +1,141 @@
+//! Hosts emulated with Linux network namespaces (two namespaces joined by a veth pair), and
+//! the deployment configurations of `pipeline/deploy/` adapted to them.
+//!
+//! Needs `ip` (iproute2) and the right to create network namespaces (root or CAP_NET_ADMIN):
+//! [`two_namespaces`] gives `None`, saying why, only when `ip netns add` is refused for lack
+//! of permission.
+
+use std::path::Path;
+use std::process::Command;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use crate::root;
+
+/// The namespaces of a test, deleted (with their veth ends) on drop.
+pub struct Netns {
+    names: Vec<String>,
+}
+
+impl Drop for Netns {
+    fn drop(&mut self) {
+        for n in &self.names {
+            let _ = Command::new("ip").args(["netns", "del", n]).status();
+        }
+    }
+}
+
+/// Two namespaces and the addresses in them.
+pub struct TwoHosts {
+    /// Deletes the namespaces on drop.
+    pub guard: Netns,
+    /// Namespace A (the router's).
+    pub a: String,
+    /// Namespace B.
+    pub b: String,
+    /// The address of A.
+    pub ip_a: String,
+    /// The address of B.
+    pub ip_b: String,
+}
+
+impl TwoHosts {
+    /// `ip netns exec A`: the prefix of a command run on host A.
+    pub fn in_a(&self) -> [&str; 4] {
+        ["ip", "netns", "exec", self.a.as_str()]
+    }
+
+    /// `ip netns exec B`.
+    pub fn in_b(&self) -> [&str; 4] {
+        ["ip", "netns", "exec", self.b.as_str()]
+    }
+}
+
+/// Runs `ip ARGS`, panicking with its error output when it fails.
+pub fn ip(args: &[&str]) {
+    let o = Command::new("ip").args(args).output().expect("running ip");
+    assert!(
+        o.status.success(),
+        "ip {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// Two namespaces joined by veth, addresses 10.X.Y.1 (A) and 10.X.Y.2 (B); None (with the
+/// reason printed) when namespaces may not be created here. Names are unique per process and
+/// call, so tests of one binary may run in parallel.
+pub fn two_namespaces() -> Option<TwoHosts> {
+    static NEXT: AtomicU32 = AtomicU32::new(0);
+    let pid = std::process::id();
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    let (a, b) = (format!("csa{pid}x{n}"), format!("csb{pid}x{n}"));
+    let o = match Command::new("ip").args(["netns", "add", &a]).output() {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("SKIPPED: cannot run `ip` ({e}); install iproute2");
+            return None;
+        }
+    };
+    if !o.status.success() {
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        if err.contains("Permission denied") || err.contains("Operation not permitted") {
+            eprintln!(
+                "SKIPPED: `ip netns add` is not permitted here ({})",
+                err.trim()
+            );
+            return None;
+        }
+        panic!("ip netns add {a}: {err}");
+    }
+    let guard = Netns {
+        names: vec![a.clone(), b.clone()],
+    };
+    ip(&["netns", "add", &b]);
+    // interface names: at most 15 characters
+    let (va, vb) = (format!("cva{pid}x{n}"), format!("cvb{pid}x{n}"));
+    ip(&["link", "add", &va, "type", "veth", "peer", "name", &vb]);
+    ip(&["link", "set", &va, "netns", &a]);
+    ip(&["link", "set", &vb, "netns", &b]);
+    let net = format!("10.{}.{}", 100 + pid % 100, (pid / 100) % 250);
+    let (ip_a, ip_b) = (format!("{net}.1"), format!("{net}.2"));
+    ip(&["-n", &a, "addr", "add", &format!("{ip_a}/24"), "dev", &va]);
+    ip(&["-n", &b, "addr", "add", &format!("{ip_b}/24"), "dev", &vb]);
+    for (ns, v) in [(&a, &va), (&b, &vb)] {
+        ip(&["-n", ns, "link", "set", v, "up"]);
+        ip(&["-n", ns, "link", "set", "lo", "up"]);
+    }
+    Some(TwoHosts {
+        guard,
+        a,
+        b,
+        ip_a,
+        ip_b,
+    })
+}
+
+/// The example router address of the configurations in `pipeline/deploy/`.
+pub const EXAMPLE_ROUTER: &str = "192.168.1.10";
+/// The example certificate directory of the configurations in `pipeline/deploy/tls/`.
+pub const EXAMPLE_CERTS: &str = "/etc/cellsar/certs/";
+
+/// A deployment config of `pipeline/deploy/` (`name` relative to it, e.g. `router.json5` or
+/// `tls/echo.json5`) written into `dir` with the router address replaced by `router` and,
+/// when given, the certificate directory by `certs`; its path.
+pub fn config(dir: &Path, name: &str, router: &str, certs: Option<&Path>) -> String {
+    let text = std::fs::read_to_string(root().join("pipeline/deploy").join(name)).unwrap();
+    assert!(
+        text.contains(EXAMPLE_ROUTER),
+        "{name} lost its example address"
+    );
+    let mut text = text.replace(EXAMPLE_ROUTER, router);
+    if let Some(c) = certs {
+        assert!(
+            text.contains(EXAMPLE_CERTS),
+            "{name} lost its example certificate directory"
+        );
+        text = text.replace(EXAMPLE_CERTS, &format!("{}/", c.display()));
+    }
+    let p = dir.join(name.replace('/', "-"));
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}

@@ -1,0 +1,76 @@
+//! A hostile peer on the launcher's own mesh (loopback, no authentication): it forges a
+//! processor status `{role: "processor", state: "failed"}` and detections of every aperture
+//! under an instance name of its own, before and during a normal run. The launcher accepts
+//! statuses and detections only from the instances that announced themselves in their role
+//! (liveliness), so the run neither aborts nor takes a forged result: it completes with the
+//! closed loop's detections, and the forgeries are counted as foreign.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::time::Duration;
+
+use harness::pipeline::*;
+
+#[test]
+fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
+    const H: f64 = 30.0;
+    let reference = reference(H);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let hub = format!("tcp/127.0.0.1:{}", harness::free_port());
+    let mut l = Launch::start(d, H, &["-l", &hub, "--no-multicast-scouting"]);
+    let forger = Service::start_exe_in(
+        &[],
+        &harness::bin("cellsar-bridge-bench"),
+        "forger",
+        d,
+        &[
+            "forge".into(),
+            "--duration-s".into(),
+            "600".into(),
+            "--interval-ms".into(),
+            "5".into(),
+            "-m".into(),
+            "peer".into(),
+            "-e".into(),
+            hub,
+            "-l".into(),
+            "tcp/127.0.0.1:0".into(),
+            "--no-multicast-scouting".into(),
+        ],
+    );
+    let st = l.finish(Duration::from_secs(240));
+    assert!(
+        st.success(),
+        "{st:?}\n{}\nforger:\n{}",
+        l.stderr_tail(),
+        forger.log_text()
+    );
+    assert_same_as_reference(&l.out, &reference);
+    assert!(
+        forger.log_text().contains("forging for mission"),
+        "{}",
+        forger.log_text()
+    );
+    let p = l.pipeline_json();
+    // forged detections arrived and were skipped; so were the forged statuses
+    assert!(
+        p["collector"]["foreign"].as_u64().unwrap() > 0,
+        "{}",
+        p["collector"]
+    );
+    assert!(
+        p["collector"]["refused_senders"].as_u64().unwrap()
+            > p["collector"]["foreign"].as_u64().unwrap(),
+        "{}",
+        p["collector"]
+    );
+    let log = std::fs::read_to_string(d.join("launcher.err")).unwrap();
+    assert!(
+        log.contains("foreign status skipped"),
+        "{}\n{log}",
+        p["collector"]
+    );
+    assert!(log.contains("foreign detections skipped"), "{log}");
+    assert!(!log.contains("gave up the mission"), "{log}");
+}
