@@ -77,7 +77,13 @@ pub(super) struct Session<'a> {
     /// `--timeout-s` from the start; `None`: no limit (also for one past what an `Instant`
     /// can hold, rather than a panic).
     deadline: Option<Instant>,
+    /// What the launcher waits for now, since when, and when it says so next.
+    waiting: Option<(String, Instant, Instant)>,
 }
+
+/// A wait is first logged after this long, then every [`WAIT_NOTICE_EVERY`].
+const WAIT_NOTICE_AFTER: std::time::Duration = std::time::Duration::from_secs(2);
+const WAIT_NOTICE_EVERY: std::time::Duration = std::time::Duration::from_secs(30);
 
 impl<'a> Session<'a> {
     /// Subscribes to the results and to the liveliness of every process, before any child
@@ -97,7 +103,66 @@ impl<'a> Session<'a> {
             setup,
             node,
             children,
+            waiting: None,
         })
+    }
+
+    /// Notes what the launcher waits for (`None`: nothing): says so in the log and as a
+    /// `waiting` event from 2 s on and every 30 s, with the session's endpoints; an error once
+    /// it has waited `limit` for the same thing (`limit_flag` names the option).
+    pub fn waiting_for(
+        &mut self,
+        what: Option<&str>,
+        limit: Option<(std::time::Duration, &str)>,
+    ) -> Result<()> {
+        let Some(what) = what else {
+            self.waiting = None;
+            return Ok(());
+        };
+        let now = Instant::now();
+        if self.waiting.as_ref().is_none_or(|(w, _, _)| w != what) {
+            self.waiting = Some((what.to_string(), now, now + WAIT_NOTICE_AFTER));
+        }
+        let Some((_, since, notice_at)) = self.waiting.as_mut() else {
+            return Ok(());
+        };
+        let waited = now.duration_since(*since);
+        if let Some((limit, flag)) = limit {
+            if waited >= limit {
+                bail!(
+                    "gave up waiting for {what} after {flag} {} s, on the launcher's Zenoh \
+                     session ({})",
+                    limit.as_secs_f64(),
+                    self.node.describe()
+                );
+            }
+        }
+        if now >= *notice_at {
+            *notice_at = now + WAIT_NOTICE_EVERY;
+            let (routers, peers) = self.node.connected();
+            let until = match limit {
+                Some((l, flag)) => format!("gives up after {flag} {} s", l.as_secs_f64()),
+                None => "no limit".to_string(),
+            };
+            tracing::warn!(
+                session = %self.node.describe(),
+                routers,
+                peers,
+                waited_s = waited.as_secs(),
+                "waiting for {what} ({until})"
+            );
+            self.setup.events.emit(
+                "waiting",
+                &[
+                    ("for", what.into()),
+                    ("session", self.node.describe().into()),
+                    ("routers", routers.into()),
+                    ("peers", peers.into()),
+                    ("waited_s", waited.as_secs().into()),
+                ],
+            );
+        }
+        Ok(())
     }
 
     /// The run's options.
@@ -222,10 +287,33 @@ impl<'a> Session<'a> {
 
     /// Whether a planner's liveliness token is up.
     pub fn planner_alive(&self) -> bool {
+        self.role_alive("planner")
+    }
+
+    /// Whether a liveliness token of `role` is up.
+    pub fn role_alive(&self, role: &str) -> bool {
         self.alive
             .alive()
             .iter()
-            .any(|k| keys::parse_alive(k).is_some_and(|(role, _)| role == "planner"))
+            .any(|k| keys::parse_alive(k).is_some_and(|(r, _)| r == role))
+    }
+
+    /// The first of the roles imaging needs (the echo, the processor, and the bridge with
+    /// `--transport zenoh`) whose liveliness token is not up, as the launcher says it waits
+    /// for it.
+    pub fn missing_peer(&self) -> Option<String> {
+        let mut roles = vec!["echo", "processor"];
+        if self.args().transport == Transport::Zenoh {
+            roles.push("bridge");
+        }
+        roles.into_iter().find(|r| !self.role_alive(r)).map(|r| {
+            let how = if self.local(r) {
+                format!("see logs/{r}.log")
+            } else {
+                "--external: start it with the same Zenoh flags".to_string()
+            };
+            format!("the {r} to announce itself (cellsar/alive/{r}/*; {how})")
+        })
     }
 
     /// An error once `--timeout-s` has passed, naming what the run was doing.

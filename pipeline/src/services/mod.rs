@@ -8,7 +8,8 @@
 //!   apertures, cancels, images, detects, publishes detections, images and metrics;
 //! - [`os`]: what every service needs from the OS (stop on signals, atomic state files);
 //! - [`radar`]: what the two radar services share (their error, the frame size);
-//! - [`bridge`]: the iceoryx2 <-> Zenoh bridge as a process (`cellsar-bridge`, `cellsar bridge`).
+//! - [`bridge`]: the iceoryx2 <-> Zenoh bridge as a process (`cellsar-bridge`, `cellsar bridge`);
+//! - [`wait`]: what a service waits for, said in its log.
 //!
 //! Their messages and keys are in [`crate::protocol`].
 
@@ -20,3 +21,4 @@ pub mod process;
 pub mod radar;
 #[cfg(test)]
 mod radar_tests;
+pub mod wait;
