@@ -199,8 +199,8 @@ fn a_launcher_without_its_router_gives_up_after_the_peer_timeout() {
     assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
 }
 
-/// The planner, echo and processor, started with nobody to talk to, each say within 5 s what
-/// they wait for and on which endpoints, and that they wait until stopped.
+/// The planner, echo, processor and bridge, started with nobody to talk to, each say within
+/// 5 s what they wait for and on which endpoints, and that they wait until stopped.
 #[test]
 fn services_say_what_they_wait_for_within_5_s() {
     let dir = tempfile::tempdir().unwrap();
@@ -232,6 +232,19 @@ fn services_say_what_they_wait_for_within_5_s() {
             "processor",
             [&["process".to_string(), "--scene".into(), scene][..], &iox].concat(),
             "waiting for a plan (cellsar/*/plan",
+        ),
+        (
+            "bridge",
+            [
+                &[
+                    "bridge".to_string(),
+                    "--service".into(),
+                    "cellsar/0123456789abcdef/echo@out".into(),
+                ][..],
+                &iox,
+            ]
+            .concat(),
+            "waiting for frames on iceoryx2 cellsar/0123456789abcdef/echo",
         ),
     ]
     .into_iter()

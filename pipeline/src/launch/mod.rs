@@ -128,9 +128,9 @@ pub struct RunArgs {
     pub plan_timeout_s: Seconds,
     /// Longest wait for a peer, s: for the launcher's Zenoh session to open (a router or peer
     /// to answer), and, while imaging, for the echo and the processor (and the bridge with
-    /// `--transport zenoh`) to announce themselves when none is up; then the run fails (exit
-    /// 1) naming what it waited for and the session's endpoints. What it waits for is logged
-    /// from 2 s on.
+    /// `--transport zenoh`) to announce themselves when none is up; then the run fails, exit
+    /// code 1, naming what it waited for and the session's endpoints. What it waits for is
+    /// logged from 2 s on.
     #[arg(long, default_value = "60", value_parser = flags::parse_seconds)]
     pub peer_timeout_s: Seconds,
     /// Print events (children started/exited, liveliness, apertures) as JSON lines on stdout.
