@@ -199,6 +199,32 @@ fn a_launcher_without_its_router_gives_up_after_the_peer_timeout() {
     assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
 }
 
+/// A launcher whose `--external processor` never comes gives up waiting for it after
+/// `--peer-timeout-s` (exit 1), naming the role and the session's endpoints.
+#[test]
+fn a_launcher_gives_up_on_a_processor_that_never_comes() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = cellsar_bounded(
+        &run_args(
+            dir.path(),
+            &["--external", "processor", "--peer-timeout-s", "3"],
+        ),
+        dir.path(),
+        Duration::from_secs(120),
+        |_| {},
+    );
+    assert_eq!(e.code, Some(1), "{}", e.stderr);
+    for needle in [
+        "waiting for the processor to announce itself",
+        "gave up waiting for the processor",
+        "--peer-timeout-s 3 s",
+        "mode peer, connect [], listen [tcp/127.0.0.1:",
+    ] {
+        assert!(e.stderr.contains(needle), "{needle:?} in\n{}", e.stderr);
+    }
+    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
+}
+
 /// The planner, echo, processor and bridge, started with nobody to talk to, each say within
 /// 5 s what they wait for and on which endpoints, and that they wait until stopped.
 #[test]

@@ -16,6 +16,7 @@ use super::net::Net;
 use super::{RunArgs, Transport};
 use crate::events::Events;
 use crate::protocol::{self, ApertureDetections, ApertureImage, MissionMetrics, ServiceStatus};
+use crate::services::wait::WaitLog;
 use crate::supervise::{ChildSpec, Supervised};
 
 /// What a run is given: its options, its places, its network, its event log.
@@ -77,13 +78,9 @@ pub(super) struct Session<'a> {
     /// `--timeout-s` from the start; `None`: no limit (also for one past what an `Instant`
     /// can hold, rather than a panic).
     deadline: Option<Instant>,
-    /// What the launcher waits for now, since when, and when it says so next.
-    waiting: Option<(String, Instant, Instant)>,
+    /// What the launcher waits for now, and since when.
+    waits: WaitLog,
 }
-
-/// A wait is first logged after this long, then every [`WAIT_NOTICE_EVERY`].
-const WAIT_NOTICE_AFTER: std::time::Duration = std::time::Duration::from_secs(2);
-const WAIT_NOTICE_EVERY: std::time::Duration = std::time::Duration::from_secs(30);
 
 impl<'a> Session<'a> {
     /// Subscribes to the results and to the liveliness of every process, before any child
@@ -103,7 +100,8 @@ impl<'a> Session<'a> {
             setup,
             node,
             children,
-            waiting: None,
+            // the launcher's waits are said from 2 s on, as its session's
+            waits: WaitLog::after(std::time::Duration::from_secs(2)),
         })
     }
 
@@ -115,20 +113,12 @@ impl<'a> Session<'a> {
         what: Option<&str>,
         limit: Option<(std::time::Duration, &str)>,
     ) -> Result<()> {
-        let Some(what) = what else {
-            self.waiting = None;
+        let Some(w) = self.waits.note(what) else {
             return Ok(());
         };
-        let now = Instant::now();
-        if self.waiting.as_ref().is_none_or(|(w, _, _)| w != what) {
-            self.waiting = Some((what.to_string(), now, now + WAIT_NOTICE_AFTER));
-        }
-        let Some((_, since, notice_at)) = self.waiting.as_mut() else {
-            return Ok(());
-        };
-        let waited = now.duration_since(*since);
+        let what = what.unwrap_or_default();
         if let Some((limit, flag)) = limit {
-            if waited >= limit {
+            if w.waited >= limit {
                 bail!(
                     "gave up waiting for {what} after {flag} {} s, on the launcher's Zenoh \
                      session ({})",
@@ -137,8 +127,7 @@ impl<'a> Session<'a> {
                 );
             }
         }
-        if now >= *notice_at {
-            *notice_at = now + WAIT_NOTICE_EVERY;
+        if w.notice_due {
             let (routers, peers) = self.node.connected();
             let until = match limit {
                 Some((l, flag)) => format!("gives up after {flag} {} s", l.as_secs_f64()),
@@ -148,7 +137,7 @@ impl<'a> Session<'a> {
                 session = %self.node.describe(),
                 routers,
                 peers,
-                waited_s = waited.as_secs(),
+                waited_s = w.waited.as_secs(),
                 "waiting for {what} ({until})"
             );
             self.setup.events.emit(
@@ -158,7 +147,7 @@ impl<'a> Session<'a> {
                     ("session", self.node.describe().into()),
                     ("routers", routers.into()),
                     ("peers", peers.into()),
-                    ("waited_s", waited.as_secs().into()),
+                    ("waited_s", w.waited.as_secs().into()),
                 ],
             );
         }
