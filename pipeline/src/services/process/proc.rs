@@ -162,16 +162,18 @@ impl Proc<'_> {
                 last_status = Instant::now();
                 self.publish_status();
             }
+            let echo_wait;
             let waiting = if self.runs.iter().all(|r| r.metrics.is_some()) {
-                Some(plan_wait.clone())
+                Some(plan_wait.as_str())
+            } else if let Some(m) = self.echo_unanswered {
+                echo_wait = format!(
+                    "an echo to answer the requests of mission {m} (cellsar/{m}/echo/request)"
+                );
+                Some(echo_wait.as_str())
             } else {
-                self.echo_unanswered.map(|m| {
-                    format!(
-                        "an echo to answer the requests of mission {m} (cellsar/{m}/echo/request)"
-                    )
-                })
+                None
             };
-            self.waits.waiting_for(self.node, waiting.as_deref());
+            self.waits.waiting_for(self.node, waiting);
             if idle {
                 if let Ok(f) = inbox.frames.recv_timeout(Duration::from_millis(10)) {
                     self.on_frame(f);
