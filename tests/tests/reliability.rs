@@ -114,6 +114,17 @@ fn kill9_processor() {
     assert!(c["apertures"].as_u64().unwrap() <= 5, "{c}");
 }
 
+/// `--router` (the launcher and every child clients of a router child) with a `kill -9` of
+/// the processor: restarted, it finds the mesh through the router and resumes.
+#[test]
+fn kill9_processor_behind_the_router() {
+    let l = kill_mid_mission("processor", &["--router"]);
+    let p = l.pipeline_json();
+    let c = &p["services"]["processor"]["counters"];
+    assert!(c["restored"].as_u64().unwrap() >= 1, "{c}");
+    assert_eq!(p["router"], true);
+}
+
 #[test]
 fn kill9_bridge() {
     let l = kill_mid_mission("bridge", &["--transport", "zenoh"]);

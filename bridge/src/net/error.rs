@@ -40,6 +40,18 @@ pub enum NetError {
         /// What happened to the thread.
         reason: String,
     },
+    /// No router or peer made the Zenoh session open within the time given
+    /// ([`super::ZenohNode::open_within`]).
+    #[error(
+        "no Zenoh router or peer reachable within {} s: the session ({session}) did not open",
+        waited.as_secs_f64()
+    )]
+    OpenTimeout {
+        /// What was being opened: the mode and the endpoints ([`crate::zconfig::describe`]).
+        session: String,
+        /// How long it waited.
+        waited: Duration,
+    },
     /// A key was invalid.
     #[error(transparent)]
     Key(#[from] KeyError),

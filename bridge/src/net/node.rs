@@ -18,6 +18,8 @@ pub struct ZenohNode {
     session: Session,
     role: String,
     instance: String,
+    /// The session's mode and endpoints in words ([`zconfig::describe`]).
+    described: String,
     _token: LivelinessToken,
 }
 
@@ -49,7 +51,7 @@ impl ZenohNode {
         let alive = keys::alive(role, instance)?;
         let described = zconfig::describe(&config);
         let session = zenoh::open(config).wait().map_err(|e| NetError::Open {
-            session: described,
+            session: described.clone(),
             error: e.into(),
         })?;
         let token = session
@@ -57,11 +59,12 @@ impl ZenohNode {
             .declare_token(alive.clone())
             .wait()
             .map_err(|e| NetError::zenoh("declare liveliness token", &alive, e))?;
-        tracing::info!(%alive, zid = %session.zid(), "zenoh session open");
+        tracing::info!(%alive, zid = %session.zid(), session = %described, "zenoh session open");
         Ok(ZenohNode {
             session,
             role: role.to_string(),
             instance: instance.to_string(),
+            described,
             _token: token,
         })
     }
@@ -71,12 +74,25 @@ impl ZenohNode {
     /// open. Zenoh opens it on a thread of its own, which is left behind when `stop` is set
     /// first (the process is about to exit). While no router or peer answers (a client
     /// started before its router waits for it), it logs every 30 s, from 2 s on, what it
-    /// waits for; a stop is logged too.
+    /// waits for; a stop is logged too. It waits as long as Zenoh does: with
+    /// `connect.timeout_ms: -1`, until stopped ([`ZenohNode::open_within`] bounds it).
     pub fn open_until(
         config: Config,
         role: &str,
         instance: &str,
         stop: &AtomicBool,
+    ) -> Result<Option<Self>, NetError> {
+        Self::open_within(config, role, instance, stop, None)
+    }
+
+    /// [`ZenohNode::open_until`], giving up after `limit` (when given) with
+    /// [`NetError::OpenTimeout`], which names the session's endpoints.
+    pub fn open_within(
+        config: Config,
+        role: &str,
+        instance: &str,
+        stop: &AtomicBool,
+        limit: Option<Duration>,
     ) -> Result<Option<Self>, NetError> {
         keys::alive(role, instance)?;
         let session = zconfig::describe(&config);
@@ -92,6 +108,7 @@ impl ZenohNode {
                 reason: format!("starting the thread that opens it: {e}"),
             })?;
         let started = Instant::now();
+        let deadline = limit.and_then(|l| started.checked_add(l));
         let mut notice_at = started + OPEN_NOTICE_AFTER;
         loop {
             if stop.load(Ordering::Relaxed) {
@@ -105,13 +122,23 @@ impl ZenohNode {
             match rx.recv_timeout(OPEN_POLL) {
                 Ok(opened) => return opened.map(Some),
                 Err(RecvTimeoutError::Timeout) => {
-                    if Instant::now() >= notice_at {
+                    let now = Instant::now();
+                    if let (Some(d), Some(l)) = (deadline, limit) {
+                        if now >= d {
+                            return Err(NetError::OpenTimeout { session, waited: l });
+                        }
+                    }
+                    if now >= notice_at {
                         notice_at += OPEN_NOTICE_EVERY;
+                        let until = match limit {
+                            Some(l) => format!("gives up after {} s", l.as_secs_f64()),
+                            None => "waits until SIGINT/SIGTERM stops it".to_string(),
+                        };
                         tracing::warn!(
                             %session,
                             waited_s = started.elapsed().as_secs(),
                             "waiting for the Zenoh session to open: no router or peer \
-                             reachable yet (SIGINT/SIGTERM stops)"
+                             reachable yet ({until})"
                         );
                     }
                 }
@@ -123,6 +150,22 @@ impl ZenohNode {
                 }
             }
         }
+    }
+
+    /// The session's mode and endpoints in words, as configured ([`zconfig::describe`]),
+    /// e.g. `mode client, connect [tcp/192.168.1.10:7447], listen []`: what a process names
+    /// when it says what it waits for.
+    pub fn describe(&self) -> &str {
+        &self.described
+    }
+
+    /// How many routers and peers this session is connected to now.
+    pub fn connected(&self) -> (usize, usize) {
+        let info = self.session.info();
+        (
+            info.routers_zid().wait().count(),
+            info.peers_zid().wait().count(),
+        )
     }
 
     /// The underlying session (for anything this wrapper does not cover).

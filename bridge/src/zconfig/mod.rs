@@ -48,7 +48,8 @@ pub enum Mode {
 }
 
 impl Mode {
-    fn as_str(self) -> &'static str {
+    /// The mode as Zenoh and the `-m` flag spell it.
+    pub fn as_str(self) -> &'static str {
         match self {
             Mode::Peer => "peer",
             Mode::Client => "client",

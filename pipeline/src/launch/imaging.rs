@@ -70,6 +70,9 @@ impl Session<'_> {
             }
             self.check_time("collecting results")?;
             self.tick()?;
+            let missing = self.missing_peer();
+            let limit = self.args().peer_timeout_s.duration();
+            self.waiting_for(missing.as_deref(), Some((limit, "--peer-timeout-s")))?;
             let progressed = self.receive(id, &mut c, &mut p)?;
             if progressed {
                 let done = c.col.done();

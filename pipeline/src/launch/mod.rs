@@ -5,9 +5,12 @@
 //!    exit code 2), and the mission's necessary conditions of feasibility
 //!    ([`FailureKind::Infeasible`], exit code 3). (The seconds options were checked when
 //!    parsed, into [`Seconds`].)
-//! 2. Chooses the Zenoh network: by default an isolated mesh on loopback (the launcher listens on
-//!    a free port, every child connects to it; no multicast, no router); with `--router` a
-//!    router child and every process its client; with Zenoh flags, those flags for everyone.
+//! 2. Chooses the Zenoh network ([`network`]): by default an isolated mesh on loopback (the
+//!    launcher listens on a free port, every child connects to it; no multicast, no router);
+//!    with `--router` a router child and every process its client; with Zenoh flags, the
+//!    launcher's flags, and children that connect to the launcher (or, for a client launcher,
+//!    to the same routers). Opening the launcher's session and waiting for the children are
+//!    bounded by `--peer-timeout-s`, and what it waits for is logged.
 //! 3. Starts the planner, echo and processor (and the bridge for `--transport zenoh` or
 //!    `--bridge`), watches their liveliness tokens, restarts a child that dies (at most
 //!    `--max-restarts` times each).
@@ -37,7 +40,6 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, Context, Result};
 use bridge::flags::{self, Seconds};
-use bridge::zconfig::Mode;
 use bridge::{FrameServiceSpec, IoxArgs, Message, NetError, Refusal, RefusalKind, ZenohArgs};
 use radar_sim::config::SceneFile;
 use serde_json::json;
@@ -47,8 +49,8 @@ use crate::exit::{Failure, FailureKind};
 use crate::protocol::{self, FrameLayout};
 use crate::services::process::MissionContext;
 use crate::supervise::{stop_all, ChildSpec, Supervised};
-pub use net::children_zenoh;
-use net::{free_port, open_with_retry, user_gave_zenoh, Net};
+use net::{free_port, open_with_retry};
+pub use net::{network, Net};
 use outputs::Planned;
 use session::{Session, Setup};
 
@@ -94,7 +96,8 @@ pub struct RunArgs {
     /// Start the bridge (iceoryx2 -> Zenoh) even with `--transport iox`.
     #[arg(long)]
     pub bridge: bool,
-    /// Start a Zenoh router child; every process is its client.
+    /// Start a Zenoh router child; every process is its client (refused with `-m`, `-e`, `-l`
+    /// or `-c`, which it would not use).
     #[arg(long)]
     pub router: bool,
     /// Do not start this role (planner, echo, processor, bridge): it runs elsewhere (another
@@ -130,6 +133,13 @@ pub struct RunArgs {
     /// or an `--external planner`) and for its answer together; then the run fails (exit 1).
     #[arg(long, default_value = "900", value_parser = flags::parse_seconds)]
     pub plan_timeout_s: Seconds,
+    /// Longest wait for a peer, s: for the launcher's Zenoh session to open (a router or peer
+    /// to answer), and, while imaging, for the echo and the processor (and the bridge with
+    /// `--transport zenoh`) to announce themselves when none is up; then the run fails, exit
+    /// code 1, naming what it waited for and the session's endpoints. What it waits for is
+    /// logged from 2 s on.
+    #[arg(long, default_value = "60", value_parser = flags::parse_seconds)]
+    pub peer_timeout_s: Seconds,
     /// Print events (children started/exited, liveliness, apertures) as JSON lines on stdout.
     #[arg(long)]
     pub events_json: bool,
@@ -208,11 +218,14 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     tracing_subscriber::EnvFilter::try_new(&args.child_log)
         .map_err(|e| Failure::bad_input(anyhow!("--child-log {:?}: {e}", args.child_log)))?;
     args.zenoh.to_config().map_err(Failure::bad_input)?;
-    if !args.router && user_gave_zenoh(&args.zenoh) {
-        children_zenoh(&args.zenoh)
-            .map_err(|e| Failure::bad_input(anyhow!(e)))?
-            .to_config()
-            .map_err(Failure::bad_input)?;
+    // every process's flags as the run would give them (any free port stands for the hub's)
+    let net =
+        network(args.router, &args.zenoh, 7447).map_err(|e| Failure::bad_input(anyhow!(e)))?;
+    for z in [Some(&net.launcher), Some(&net.child), net.router.as_ref()]
+        .into_iter()
+        .flatten()
+    {
+        z.to_config().map_err(Failure::bad_input)?;
     }
     // the iceoryx2 configuration file and prefix as every child reads them (the root is
     // created by the children)
@@ -333,37 +346,12 @@ fn launch(
         log: logs.join(format!("{role}.log")),
         rust_log: Some(args.child_log.clone()),
     };
-    let net = if args.router {
-        let port = free_port()?;
-        let ep = format!("tcp/127.0.0.1:{port}");
-        let router = ZenohArgs::isolated(std::slice::from_ref(&ep), &[]);
+    let net = network(args.router, &args.zenoh, free_port()?).map_err(|e| anyhow!(e))?;
+    if let Some(router) = &net.router {
         let mut ra = vec!["router".to_string(), "--instance".into(), "router".into()];
         ra.extend(router.to_cli_args());
         children.push(Supervised::start(spec("router", ra), &events)?);
-        let client = ZenohArgs {
-            config: None,
-            mode: Some(Mode::Client),
-            connect: vec![ep],
-            listen: Vec::new(),
-            no_multicast_scouting: true,
-            max_message_bytes: None,
-        };
-        Net {
-            launcher: client.clone(),
-            child: client,
-        }
-    } else if user_gave_zenoh(&args.zenoh) {
-        Net {
-            launcher: args.zenoh.clone(),
-            child: children_zenoh(&args.zenoh).map_err(|e| anyhow!(e))?,
-        }
-    } else {
-        let hub = format!("tcp/127.0.0.1:{}", free_port()?);
-        Net {
-            launcher: ZenohArgs::isolated(std::slice::from_ref(&hub), &[]),
-            child: ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[hub]),
-        }
-    };
+    }
     events.emit(
         "network",
         &[
@@ -374,7 +362,8 @@ fn launch(
     );
     // 3.-5. the run on the launcher's Zenoh session; then one clean-up, however it ended
     // (SIGINT/SIGTERM while the session opens included)
-    let (node, result) = match open_with_retry(&net.launcher, &stop) {
+    let (node, result) = match open_with_retry(&net.launcher, &stop, args.peer_timeout_s.duration())
+    {
         Ok(Some(node)) => {
             let setup = Setup {
                 args,

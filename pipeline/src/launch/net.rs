@@ -5,14 +5,17 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use bridge::zconfig::Mode;
-use bridge::{ZenohArgs, ZenohNode};
+use bridge::zconfig::{self, Mode, DEFAULT_LISTEN};
+use bridge::{NetError, ZenohArgs, ZenohNode};
 
-pub(super) struct Net {
+/// The Zenoh flags of the launcher, of its children and of its router child ([`network`]).
+pub struct Net {
     /// The launcher's own flags.
     pub launcher: ZenohArgs,
     /// The flags every child gets.
     pub child: ZenohArgs,
+    /// The flags of the router child (`--router`), if any.
+    pub router: Option<ZenohArgs>,
 }
 
 pub(super) fn free_port() -> Result<u16> {
@@ -20,43 +23,169 @@ pub(super) fn free_port() -> Result<u16> {
     Ok(l.local_addr().context("finding a free port")?.port())
 }
 
-pub(super) fn user_gave_zenoh(z: &ZenohArgs) -> bool {
+/// Whether the user gave the launcher a Zenoh network of their own (a mode, an endpoint or a
+/// configuration file; `--no-multicast-scouting` and `--zenoh-max-message-bytes` alone keep
+/// the isolated mesh, which has no multicast anyway).
+fn user_gave_zenoh(z: &ZenohArgs) -> bool {
     z.config.is_some() || z.mode.is_some() || !z.connect.is_empty() || !z.listen.is_empty()
 }
 
-/// The Zenoh flags of the children when the user gave the launcher's: the same flags, except
-/// that the launcher's own listen endpoints become endpoints every child connects to (on
-/// loopback when the launcher listens on every address), and a child that connects to the
-/// launcher listens on a free loopback port of its own so that the children find each other
-/// (gossip) without multicast scouting. A client launcher cannot listen, and a listen port 0
-/// cannot be told to the children: both are refused naming `--listen`.
-pub fn children_zenoh(user: &ZenohArgs) -> std::result::Result<ZenohArgs, String> {
+/// The Zenoh network of a run, from `--router` and the Zenoh flags; `hub_port` is a free
+/// loopback port for the launcher to listen on where the user gave it none. Every
+/// combination accepted here forms one mesh of the launcher and its children; one that
+/// cannot is refused, naming the flag (the launcher exits 2 before anything starts):
+///
+/// - no Zenoh flag: an isolated mesh on loopback, the launcher its hub;
+/// - `--router`: a router child on `hub_port`, the launcher and every child its clients
+///   (refused together with `-m`, `-e`, `-l` or `-c`, which it would not use);
+/// - a client launcher (`-m client`, or a `-c` file in client mode): every child gets the
+///   same flags and is a client of the same routers; refused when it has no router to
+///   connect to (no `-e`, no connect endpoint in the file) and multicast scouting is off,
+///   and with `-l` (a client cannot listen);
+/// - a peer or router launcher: it is the children's hub. It listens where `-l` (or the
+///   `-c` file) says, or, when neither says, on `hub_port` of loopback; every child is a
+///   peer that connects to those endpoints (an unspecified address becomes loopback) and to
+///   the launcher's own connect endpoints, and listens on a free loopback port of its own
+///   so that the children find each other (gossip) without multicast scouting. A listen
+///   endpoint with port 0 is refused (its port cannot be told to the children: Zenoh reports
+///   the ports it bound only for non-loopback addresses, in an unstable API). A `-c` file
+///   is passed on, so the children keep its other settings.
+pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Result<Net, String> {
+    let hub = format!("tcp/127.0.0.1:{hub_port}");
+    if router {
+        if let Some(flag) = zenoh_flag_given(user) {
+            return Err(format!(
+                "--router with {flag}: the launcher's router child is the whole network (the \
+                 launcher and every child its clients); give either --router or Zenoh flags"
+            ));
+        }
+        let client = ZenohArgs {
+            mode: Some(Mode::Client),
+            connect: vec![hub.clone()],
+            no_multicast_scouting: true,
+            max_message_bytes: user.max_message_bytes,
+            ..ZenohArgs::default()
+        };
+        return Ok(Net {
+            launcher: client.clone(),
+            child: client,
+            router: Some(ZenohArgs {
+                max_message_bytes: user.max_message_bytes,
+                ..ZenohArgs::isolated(std::slice::from_ref(&hub), &[])
+            }),
+        });
+    }
+    if !user_gave_zenoh(user) {
+        let with_limit = |z: ZenohArgs| ZenohArgs {
+            max_message_bytes: user.max_message_bytes,
+            ..z
+        };
+        return Ok(Net {
+            launcher: with_limit(ZenohArgs::isolated(std::slice::from_ref(&hub), &[])),
+            child: with_limit(ZenohArgs::isolated(&[DEFAULT_LISTEN.to_string()], &[hub])),
+            router: None,
+        });
+    }
+    let config = user.to_config().map_err(|e| e.to_string())?;
+    let mode = zconfig::effective_mode(&config);
+    let connect = zconfig::effective_endpoints(&config, "connect", &mode);
+    if mode == "client" {
+        if let Some(l) = user.listen.first() {
+            return Err(format!(
+                "--listen {l}: a client (-m client) cannot listen; give the router with -e instead"
+            ));
+        }
+        let scouting = config.get_json("scouting/multicast/enabled").ok();
+        if connect.is_empty() && scouting.as_deref() == Some("false") {
+            return Err(format!(
+                "{}: a client with no router to connect to and multicast scouting off never \
+                 joins a network; give the router with -e ROUTER (or connect endpoints in the \
+                 -c file)",
+                client_source(user)
+            ));
+        }
+        return Ok(Net {
+            launcher: user.clone(),
+            child: user.clone(),
+            router: None,
+        });
+    }
+    // a peer or router launcher: the children's hub
+    let mut launcher = user.clone();
+    let listen: Vec<(String, String)> = if !user.listen.is_empty() {
+        user.listen
+            .iter()
+            .map(|l| (l.clone(), format!("--listen {l}")))
+            .collect()
+    } else if user.config.is_some() && file_sets_listen(&config) {
+        let file = user
+            .config
+            .as_ref()
+            .map(|f| f.display().to_string())
+            .unwrap_or_default();
+        zconfig::effective_endpoints(&config, "listen", &mode)
+            .into_iter()
+            .map(|l| (l.clone(), format!("-c {file}: listen endpoint {l}")))
+            .collect()
+    } else {
+        launcher.listen = vec![hub.clone()];
+        vec![(hub.clone(), format!("--listen {hub}"))]
+    };
     let mut child = user.clone();
-    child.listen.clear();
-    if user.listen.is_empty() {
-        return Ok(child);
-    }
-    if user.mode == Some(Mode::Client) {
-        return Err(format!(
-            "--listen {}: a client (-m client) cannot listen; give the router with -e instead",
-            user.listen[0]
-        ));
-    }
-    for ep in &user.listen {
-        child.connect.push(reachable_endpoint(ep)?);
+    child.mode = Some(Mode::Peer);
+    child.connect = connect;
+    for (ep, source) in &listen {
+        let reachable = reachable_endpoint(ep, source)?;
+        if !child.connect.contains(&reachable) {
+            child.connect.push(reachable);
+        }
     }
     // children are peers of the launcher (a router launcher routes for them)
-    child.mode = Some(Mode::Peer);
-    child.listen.push("tcp/127.0.0.1:0".to_string());
-    Ok(child)
+    child.listen = vec![DEFAULT_LISTEN.to_string()];
+    Ok(Net {
+        launcher,
+        child,
+        router: None,
+    })
+}
+
+/// The first of `-c`, `-m`, `-e`, `-l` given, as the user wrote it.
+fn zenoh_flag_given(z: &ZenohArgs) -> Option<String> {
+    if let Some(c) = &z.config {
+        Some(format!("-c {}", c.display()))
+    } else if let Some(m) = z.mode {
+        Some(format!("-m {}", m.as_str()))
+    } else if let Some(e) = z.connect.first() {
+        Some(format!("-e {e}"))
+    } else {
+        z.listen.first().map(|l| format!("-l {l}"))
+    }
+}
+
+/// What made the launcher a client: `-m client`, or the `-c` file.
+fn client_source(z: &ZenohArgs) -> String {
+    match (&z.mode, &z.config) {
+        (Some(Mode::Client), _) | (_, None) => "-m client".to_string(),
+        (_, Some(f)) => format!("-c {} (mode client)", f.display()),
+    }
+}
+
+/// Whether a configuration file set listen endpoints of its own (Zenoh's default listens on
+/// every address at a port of its choice, which the children could not be told).
+fn file_sets_listen(config: &bridge::zenoh::Config) -> bool {
+    let default = bridge::zenoh::Config::default()
+        .get_json("listen/endpoints")
+        .ok();
+    config.get_json("listen/endpoints").ok() != default
 }
 
 /// The endpoint a child on this host connects to for a listen endpoint: an unspecified address
-/// (`0.0.0.0`, `[::]`) becomes loopback; port 0 is refused (the port is not known in advance).
-fn reachable_endpoint(listen: &str) -> std::result::Result<String, String> {
-    let (proto, rest) = listen.split_once('/').ok_or_else(|| {
-        format!("--listen {listen}: expected PROTOCOL/ADDRESS, e.g. tcp/127.0.0.1:7447")
-    })?;
+/// (`0.0.0.0`, `[::]`) becomes loopback; port 0 is refused (the port is not known in advance),
+/// naming `source` (the flag or the file's entry).
+fn reachable_endpoint(listen: &str, source: &str) -> std::result::Result<String, String> {
+    let (proto, rest) = listen
+        .split_once('/')
+        .ok_or_else(|| format!("{source}: expected PROTOCOL/ADDRESS, e.g. tcp/127.0.0.1:7447"))?;
     if proto == "unixsock-stream" {
         return Ok(listen.to_string());
     }
@@ -66,10 +195,10 @@ fn reachable_endpoint(listen: &str) -> std::result::Result<String, String> {
     };
     let (host, port) = addr
         .rsplit_once(':')
-        .ok_or_else(|| format!("--listen {listen}: no port"))?;
+        .ok_or_else(|| format!("{source}: no port"))?;
     if port == "0" {
         return Err(format!(
-            "--listen {listen}: port 0 cannot be passed on to the children; give a port"
+            "{source}: port 0 cannot be passed on to the children; give a port"
         ));
     }
     let host = match host {
@@ -117,23 +246,47 @@ pub(super) fn with_child_config(mut args: Vec<String>, file: &Path) -> Vec<Strin
     args
 }
 
-/// Opens the launcher's session: an open that fails (a listen endpoint still taken, say) is
-/// tried again for 15 s; one that waits (a client whose router is not up yet) waits for as
-/// long as it takes. `None` once `stop` is set (SIGINT/SIGTERM), also in the middle of an
-/// open ([`ZenohNode::open_until`]).
-pub(super) fn open_with_retry(z: &ZenohArgs, stop: &AtomicBool) -> Result<Option<ZenohNode>> {
+/// Opens the launcher's session within `limit` (`--peer-timeout-s`): an open that fails (a
+/// listen endpoint still taken, a client whose router does not answer) is tried again, one
+/// that waits (a client configured to wait for its router) waits; either says so in the
+/// log from the first failure or from 2 s on, naming the session's endpoints, and gives up
+/// at `limit` with an error naming them. `None` once `stop` is set (SIGINT/SIGTERM), also in
+/// the middle of an open ([`ZenohNode::open_within`]).
+pub(super) fn open_with_retry(
+    z: &ZenohArgs,
+    stop: &AtomicBool,
+    limit: Duration,
+) -> Result<Option<ZenohNode>> {
     let config = z.to_config()?;
+    let described = zconfig::describe(&config);
     let instance = format!("launcher-{}", std::process::id());
-    let deadline = Instant::now() + Duration::from_secs(15);
+    let started = Instant::now();
+    let deadline = started.checked_add(limit);
+    let mut notice_at = started;
+    let gave_up = || {
+        anyhow::anyhow!(
+            "no Zenoh router or peer reachable within --peer-timeout-s {} s: the launcher's \
+             session ({described}) did not open",
+            limit.as_secs_f64()
+        )
+    };
     loop {
-        match ZenohNode::open_until(config.clone(), "launcher", &instance, stop) {
+        let left = deadline.map(|d| d.saturating_duration_since(Instant::now()));
+        match ZenohNode::open_within(config.clone(), "launcher", &instance, stop, left) {
             Ok(n) => return Ok(n),
             Err(_) if stop.load(Ordering::Relaxed) => return Ok(None),
-            Err(e) if Instant::now() < deadline => {
-                tracing::debug!(error = %e, "opening the Zenoh session; retrying");
-                std::thread::sleep(Duration::from_millis(200));
+            Err(NetError::OpenTimeout { .. }) => return Err(gave_up()),
+            Err(e) if deadline.is_none_or(|d| Instant::now() < d) => {
+                if Instant::now() >= notice_at {
+                    notice_at = Instant::now() + Duration::from_secs(10);
+                    tracing::warn!(error = %e, session = %described,
+                        waited_s = started.elapsed().as_secs(),
+                        "waiting for the Zenoh session to open; trying again until \
+                         --peer-timeout-s {} s", limit.as_secs_f64());
+                }
+                std::thread::sleep(Duration::from_millis(500));
             }
-            Err(e) => return Err(e).context("opening the launcher's Zenoh session"),
+            Err(e) => return Err(anyhow::Error::new(e).context(gave_up())),
         }
     }
 }
@@ -183,5 +336,159 @@ mod tests {
             .contains("planner, echo, processor, bridge"));
         let e = parse_child_config("echo=/nonexistent/x.json5").unwrap_err();
         assert!(e.contains("/nonexistent/x.json5"), "{e}");
+    }
+
+    fn flags(connect: &[&str], listen: &[&str], mode: Option<Mode>) -> ZenohArgs {
+        ZenohArgs {
+            mode,
+            connect: connect.iter().map(|s| s.to_string()).collect(),
+            listen: listen.iter().map(|s| s.to_string()).collect(),
+            ..ZenohArgs::default()
+        }
+    }
+
+    /// Every accepted combination: the children connect to where the launcher listens (or to
+    /// the same routers), and every flag set builds a configuration.
+    #[test]
+    fn children_join_the_launchers_network() {
+        let hub = "tcp/127.0.0.1:17000";
+        // no flag: the isolated mesh; the message limit is passed on
+        let n = network(
+            false,
+            &ZenohArgs {
+                max_message_bytes: Some(1 << 20),
+                ..ZenohArgs::default()
+            },
+            17000,
+        )
+        .unwrap();
+        assert_eq!(n.launcher.listen, [hub]);
+        assert_eq!(n.child.connect, [hub]);
+        assert_eq!(n.child.max_message_bytes, Some(1 << 20));
+        // a peer or router launcher without -l: it listens on the hub, the children connect
+        for mode in [None, Some(Mode::Peer), Some(Mode::Router)] {
+            let user = ZenohArgs {
+                no_multicast_scouting: true,
+                ..flags(&["tcp/10.0.0.1:7447"], &[], mode)
+            };
+            let n = network(false, &user, 17000).unwrap();
+            assert_eq!(n.launcher.listen, [hub], "{mode:?}");
+            assert_eq!(n.launcher.mode, mode);
+            assert_eq!(n.child.mode, Some(Mode::Peer));
+            assert_eq!(n.child.connect, ["tcp/10.0.0.1:7447", hub], "{mode:?}");
+            assert_eq!(n.child.listen, [DEFAULT_LISTEN]);
+            assert!(n.child.no_multicast_scouting);
+        }
+        // -l on every address: the children connect on loopback
+        let n = network(false, &flags(&[], &["tcp/0.0.0.0:7447"], None), 17000).unwrap();
+        assert_eq!(n.launcher.listen, ["tcp/0.0.0.0:7447"]);
+        assert_eq!(n.child.connect, ["tcp/127.0.0.1:7447"]);
+        // a client launcher: the children get the same flags
+        let user = flags(&["tcp/127.0.0.1:7447"], &[], Some(Mode::Client));
+        let n = network(false, &user, 17000).unwrap();
+        assert_eq!((&n.launcher, &n.child), (&user, &user));
+        // --router: everyone a client of the router child
+        let n = network(true, &ZenohArgs::default(), 17000).unwrap();
+        assert_eq!(n.router.as_ref().unwrap().listen, [hub]);
+        assert_eq!(n.child.connect, [hub]);
+        assert_eq!(n.launcher.mode, Some(Mode::Client));
+        for z in [&n.launcher, &n.child, n.router.as_ref().unwrap()] {
+            z.to_config().unwrap();
+        }
+    }
+
+    /// A `-c` file: the children get the same file, as peers, with its listen endpoints as
+    /// connections (and its connect endpoints); one without listen endpoints gets the hub.
+    #[test]
+    fn a_configuration_file_is_passed_on_with_connections_to_the_launcher() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("z.json5");
+        std::fs::write(
+            &file,
+            "{ mode: 'router', listen: { endpoints: ['tcp/[::]:17447'] }, \
+             connect: { endpoints: ['tcp/10.0.0.2:7447'] } }",
+        )
+        .unwrap();
+        let user = ZenohArgs {
+            config: Some(file.clone()),
+            ..ZenohArgs::default()
+        };
+        let n = network(false, &user, 17000).unwrap();
+        assert_eq!(n.launcher, user);
+        assert_eq!(n.child.config.as_deref(), Some(file.as_path()));
+        assert_eq!(n.child.mode, Some(Mode::Peer));
+        assert_eq!(n.child.connect, ["tcp/10.0.0.2:7447", "tcp/[::1]:17447"]);
+        assert_eq!(n.child.listen, [DEFAULT_LISTEN]);
+        n.child.to_config().unwrap();
+        let bare = dir.path().join("bare.json5");
+        std::fs::write(&bare, "{ mode: 'peer' }").unwrap();
+        let n = network(
+            false,
+            &ZenohArgs {
+                config: Some(bare),
+                ..ZenohArgs::default()
+            },
+            17000,
+        )
+        .unwrap();
+        assert_eq!(n.launcher.listen, ["tcp/127.0.0.1:17000"]);
+        assert_eq!(n.child.connect, ["tcp/127.0.0.1:17000"]);
+    }
+
+    /// What cannot form a mesh is refused, naming the flag or the file.
+    #[test]
+    fn combinations_that_cannot_form_a_mesh_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let port0 = dir.path().join("p0.json5");
+        std::fs::write(&port0, "{ listen: { endpoints: ['tcp/127.0.0.1:0'] } }").unwrap();
+        let from_file = ZenohArgs {
+            config: Some(port0.clone()),
+            ..ZenohArgs::default()
+        };
+        let cases: Vec<(bool, ZenohArgs, Vec<String>)> = vec![
+            (
+                false,
+                flags(&[], &["tcp/127.0.0.1:0"], None),
+                vec!["--listen tcp/127.0.0.1:0".into(), "port 0".into()],
+            ),
+            (
+                false,
+                from_file.clone(),
+                vec![format!("-c {}", port0.display()), "port 0".into()],
+            ),
+            (true, from_file, vec!["--router with -c".into()]),
+            (
+                true,
+                flags(&["tcp/127.0.0.1:7447"], &[], None),
+                vec!["--router with -e tcp/127.0.0.1:7447".into()],
+            ),
+            (
+                false,
+                flags(
+                    &["tcp/127.0.0.1:7447"],
+                    &["tcp/127.0.0.1:7448"],
+                    Some(Mode::Client),
+                ),
+                vec!["--listen tcp/127.0.0.1:7448".into(), "-m client".into()],
+            ),
+            (
+                false,
+                ZenohArgs {
+                    no_multicast_scouting: true,
+                    ..flags(&[], &[], Some(Mode::Client))
+                },
+                vec!["-m client".into(), "-e ROUTER".into()],
+            ),
+        ];
+        for (router, user, named) in cases {
+            let e = network(router, &user, 17000)
+                .err()
+                .unwrap_or_else(|| panic!("{user:?} accepted"));
+            for n in named {
+                assert!(e.contains(&n), "{n:?} in {e}");
+            }
+        }
+        // a client that may find its router by multicast scouting is accepted
+        assert!(network(false, &flags(&[], &[], Some(Mode::Client)), 17000).is_ok());
     }
 }

@@ -118,7 +118,14 @@ impl Session<'_> {
 
     /// Waits for a planner's token; `false` when interrupted.
     fn wait_for_planner(&mut self, clock: &PlanClock) -> Result<bool> {
+        let what = if self.local("planner") {
+            "the planner to announce itself (cellsar/alive/planner/*; see logs/planner.log)"
+        } else {
+            "an external planner to announce itself (cellsar/alive/planner/*)"
+        };
         while !self.planner_alive() {
+            // bounded by --plan-timeout-s below
+            self.waiting_for(Some(what), None)?;
             if self.stopped() {
                 return Ok(false);
             }
@@ -134,6 +141,7 @@ impl Session<'_> {
             self.tick()?;
             std::thread::sleep(Duration::from_millis(20));
         }
+        self.waiting_for(None, None)?;
         Ok(true)
     }
 

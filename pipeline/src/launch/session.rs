@@ -17,6 +17,7 @@ use super::{RunArgs, Transport};
 use crate::events::Events;
 use crate::protocol::{self, ApertureDetections, ApertureImage, MissionMetrics, ServiceStatus};
 use crate::senders::Senders;
+use crate::services::wait::WaitLog;
 use crate::supervise::{ChildSpec, Supervised};
 
 /// What a run is given: its options, its places, its network, its event log.
@@ -80,6 +81,8 @@ pub(super) struct Session<'a> {
     /// `--timeout-s` from the start; `None`: no limit (also for one past what an `Instant`
     /// can hold, rather than a panic).
     deadline: Option<Instant>,
+    /// What the launcher waits for now, and since when.
+    waits: WaitLog,
 }
 
 impl<'a> Session<'a> {
@@ -101,7 +104,58 @@ impl<'a> Session<'a> {
             setup,
             node,
             children,
+            // the launcher's waits are said from 2 s on, as its session's
+            waits: WaitLog::after(std::time::Duration::from_secs(2)),
         })
+    }
+
+    /// Notes what the launcher waits for (`None`: nothing): says so in the log and as a
+    /// `waiting` event from 2 s on and every 30 s, with the session's endpoints; an error once
+    /// it has waited `limit` for the same thing (`limit_flag` names the option).
+    pub fn waiting_for(
+        &mut self,
+        what: Option<&str>,
+        limit: Option<(std::time::Duration, &str)>,
+    ) -> Result<()> {
+        let Some(w) = self.waits.note(what) else {
+            return Ok(());
+        };
+        let what = what.unwrap_or_default();
+        if let Some((limit, flag)) = limit {
+            if w.waited >= limit {
+                bail!(
+                    "gave up waiting for {what} after {flag} {} s, on the launcher's Zenoh \
+                     session ({})",
+                    limit.as_secs_f64(),
+                    self.node.describe()
+                );
+            }
+        }
+        if w.notice_due {
+            let (routers, peers) = self.node.connected();
+            let until = match limit {
+                Some((l, flag)) => format!("gives up after {flag} {} s", l.as_secs_f64()),
+                None => "no limit".to_string(),
+            };
+            tracing::warn!(
+                session = %self.node.describe(),
+                routers,
+                peers,
+                waited_s = w.waited.as_secs(),
+                "waiting for {what} ({until})"
+            );
+            self.setup.events.emit(
+                "waiting",
+                &[
+                    ("for", what.into()),
+                    ("session", self.node.describe().into()),
+                    ("routers", routers.into()),
+                    ("peers", peers.into()),
+                    ("waited_s", w.waited.as_secs().into()),
+                ],
+            );
+        }
+        Ok(())
     }
 
     /// The run's options.
@@ -233,10 +287,33 @@ impl<'a> Session<'a> {
 
     /// Whether a planner's liveliness token is up.
     pub fn planner_alive(&self) -> bool {
+        self.role_alive("planner")
+    }
+
+    /// Whether a liveliness token of `role` is up.
+    pub fn role_alive(&self, role: &str) -> bool {
         self.alive
             .alive()
             .iter()
-            .any(|k| keys::parse_alive(k).is_some_and(|(role, _)| role == "planner"))
+            .any(|k| keys::parse_alive(k).is_some_and(|(r, _)| r == role))
+    }
+
+    /// The first of the roles imaging needs (the echo, the processor, and the bridge with
+    /// `--transport zenoh`) whose liveliness token is not up, as the launcher says it waits
+    /// for it.
+    pub fn missing_peer(&self) -> Option<String> {
+        let mut roles = vec!["echo", "processor"];
+        if self.args().transport == Transport::Zenoh {
+            roles.push("bridge");
+        }
+        roles.into_iter().find(|r| !self.role_alive(r)).map(|r| {
+            let how = if self.local(r) {
+                format!("see logs/{r}.log")
+            } else {
+                "--external: start it with the same Zenoh flags".to_string()
+            };
+            format!("the {r} to announce itself (cellsar/alive/{r}/*; {how})")
+        })
     }
 
     /// An error once `--timeout-s` has passed, naming what the run was doing.

@@ -284,12 +284,31 @@ fn forward(
         BridgeStats::NAME
     );
     let mut last = Instant::now();
+    let mut last_wait_check = Instant::now();
+    let mut waits = super::wait::WaitLog::default();
+    let routes: Vec<String> = config
+        .routes
+        .iter()
+        .map(|r| format!("iceoryx2 {} <-> Zenoh {}", r.service.name, r.key))
+        .collect();
+    let waiting = format!("frames on {}", routes.join(", "));
+    let mut waiting_done = false;
     let mut failed = false;
     while !stop.load(Ordering::Relaxed) {
         std::thread::sleep(Duration::from_millis(50));
         if !forwarder.is_running() {
             failed = true;
             break;
+        }
+        // until the first frame passes, say what the bridge waits for
+        if !waiting_done && last_wait_check.elapsed() >= Duration::from_millis(500) {
+            last_wait_check = Instant::now();
+            waiting_done = forwarder
+                .stats()
+                .routes
+                .iter()
+                .any(|r| r.to_zenoh.received + r.from_zenoh.received > 0);
+            waits.waiting_for(node, (!waiting_done).then_some(waiting.as_str()));
         }
         if last.elapsed() >= interval {
             last = Instant::now();

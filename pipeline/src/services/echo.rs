@@ -179,6 +179,12 @@ impl<'a> Echo<'a> {
                 ..SubscribeOptions::default()
             },
         )?;
+        let plan_wait = format!(
+            "a plan ({}: published by a planner, or held by any process)",
+            pkeys::ALL_PLANS
+        );
+        let mut waits = super::wait::WaitLog::default();
+        waits.waiting_for(self.node, Some(&plan_wait));
         for p in PlanCache::plans_known_at_start(self.node) {
             self.add_plan(p);
         }
@@ -190,6 +196,8 @@ impl<'a> Echo<'a> {
         // first interval
         let mut known_missions = 0;
         while !stop.load(Ordering::Relaxed) {
+            let waiting = self.missions.is_empty().then_some(plan_wait.as_str());
+            waits.waiting_for(self.node, waiting);
             while let Some(p) = plans.try_recv() {
                 self.add_plan(p.message);
             }

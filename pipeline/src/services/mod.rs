@@ -9,7 +9,8 @@
 //! - [`admission`]: how many missions a service holds, and which result requests it serves;
 //! - [`os`]: what every service needs from the OS (stop on signals, atomic state files);
 //! - [`radar`]: what the two radar services share (their error, the frame size);
-//! - [`bridge`]: the iceoryx2 <-> Zenoh bridge as a process (`cellsar-bridge`, `cellsar bridge`).
+//! - [`bridge`]: the iceoryx2 <-> Zenoh bridge as a process (`cellsar-bridge`, `cellsar bridge`);
+//! - [`wait`]: what a service waits for, said in its log.
 //!
 //! Their messages and keys are in [`crate::protocol`].
 
@@ -22,3 +23,4 @@ pub mod process;
 pub mod radar;
 #[cfg(test)]
 mod radar_tests;
+pub mod wait;

@@ -185,11 +185,19 @@ fn serve_on(
         HashMap::new();
     let mut report = ServeReport::default();
     let mut seq = 0u64;
-    tracing::info!(key = PLAN_KEY, instance = %args.instance, "plan service ready");
+    tracing::info!(key = PLAN_KEY, instance = %args.instance, session = %node.describe(),
+        "plan service ready: answers plan requests until SIGINT/SIGTERM stops it");
+    let mut waits = super::wait::WaitLog::default();
+    let waiting = format!("a plan request on {PLAN_KEY}");
     while !stop.load(Ordering::Relaxed) {
         let Some(q) = requests.recv_timeout(Duration::from_millis(100)) else {
+            // nobody asked yet: say so (a client that cannot reach this planner is the usual cause)
+            if report.plans + report.errors == 0 {
+                waits.waiting_for(node, Some(&waiting));
+            }
             continue;
         };
+        waits.waiting_for(node, None);
         let req = q.request.clone();
         let cached = Mission::from_file_struct(&req.mission)
             .ok()

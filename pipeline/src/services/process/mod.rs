@@ -239,6 +239,8 @@ fn serve(
             job_tx,
             worker_busy: false,
             malformed: 0,
+            echo_unanswered: None,
+            waits: Default::default(),
             frames_over_zenoh: args.frames == FrameSource::Zenoh,
         };
         let result = p.run(stop, &inbox, &loss);

@@ -25,6 +25,7 @@ use crate::protocol::{MissionMetrics, Plan, ResultRequest};
 use crate::services::admission::{admit, Admission};
 use crate::services::plan::{PlanCache, StatusBoard};
 use crate::services::radar::{ServiceError, ServiceResult};
+use crate::services::wait::WaitLog;
 
 /// What the service loop receives from its threads.
 pub(super) struct Inbox {
@@ -69,6 +70,10 @@ pub(super) struct Proc<'a> {
     pub(super) worker_busy: bool,
     /// Malformed plans, result requests and plan lookups.
     pub(super) malformed: u64,
+    /// The mission whose last request to the echo failed (none answers yet), if any.
+    pub(super) echo_unanswered: Option<MissionId>,
+    /// Says what the service waits for.
+    pub(super) waits: WaitLog,
     /// Frames come over Zenoh (every mission's frames arrive without subscribing).
     pub(super) frames_over_zenoh: bool,
 }
@@ -92,6 +97,9 @@ impl Proc<'_> {
             },
         )?;
         let mut last_lookup = Instant::now();
+        let plan_wait =
+            format!("a plan ({ALL_PLANS}: published by a planner, or held by any process)");
+        self.waits.waiting_for(self.node, Some(&plan_wait));
         for p in PlanCache::plans_known_at_start(self.node) {
             self.add_plan(p);
         }
@@ -155,6 +163,18 @@ impl Proc<'_> {
                 last_status = Instant::now();
                 self.publish_status();
             }
+            let echo_wait;
+            let waiting = if self.runs.iter().all(|r| r.metrics.is_some()) {
+                Some(plan_wait.as_str())
+            } else if let Some(m) = self.echo_unanswered {
+                echo_wait = format!(
+                    "an echo to answer the requests of mission {m} (cellsar/{m}/echo/request)"
+                );
+                Some(echo_wait.as_str())
+            } else {
+                None
+            };
+            self.waits.waiting_for(self.node, waiting);
             if idle {
                 if let Ok(f) = inbox.frames.recv_timeout(Duration::from_millis(10)) {
                     self.on_frame(f);
@@ -509,12 +529,14 @@ impl Proc<'_> {
         a.request_pending = false;
         match d.result {
             Ok(ack) => {
+                self.echo_unanswered = None;
                 let expected: Vec<u64> = run.ctx.base.layout.seqs(d.aperture, d.look);
                 if ack.seqs != expected {
                     tracing::warn!(mission = %d.mission, aperture = d.aperture, "the echo announced other frames than expected");
                 }
             }
             Err(e) => {
+                self.echo_unanswered = Some(d.mission);
                 self.report.request_errors += 1;
                 tracing::warn!(mission = %d.mission, aperture = d.aperture, attempt = a.attempts, "request failed: {e}");
                 // retry soon, whether frames flow or not
