@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use cellsar_error::exit::Failure;
+use pipeline::exit::{plan_failure, Failure};
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -243,7 +243,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let pb = spinner();
             let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));
             pb.finish_and_clear();
-            let result = result?;
+            let result = result.map_err(plan_failure)?;
             let files = report::write_plan_dir(&out, &m, &result)
                 .with_context(|| format!("writing {}", out.display()))?;
             let s = Summary::new(&m, &result);
@@ -368,7 +368,7 @@ fn default_log_filter(command: &Command) -> &'static str {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    planner::init_logging(default_log_filter(&cli.command));
+    cellsar_error::init_logging(default_log_filter(&cli.command));
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => f.report(),

@@ -51,7 +51,7 @@ enum Command {
 }
 
 fn init_tracing(default: &str) {
-    planner::init_logging(default);
+    cellsar_error::init_logging(default);
     bridge::iox::init_iceoryx_logging();
 }
 
