@@ -88,7 +88,7 @@ enum Cmd {
         /// The resolution requirement of the plan: `paper` (the paper's δ_r, δ_a ≤ d_min) or
         /// `general` (the worst width of the true bistatic cell ≤ d_min in every landmark slot;
         /// see the top-level docs/user-guide.md, "Resolution: paper or general").
-        #[arg(long, default_value = "paper", value_parser = planner::evaluate::ResolutionMode::parse)]
+        #[arg(long, default_value = "paper", value_parser = pipeline::args::enum_parser::<planner::evaluate::ResolutionMode>())]
         resolution: planner::evaluate::ResolutionMode,
     },
     /// Resolution report: measured −3 dB region of a point response vs the predicted cell at
