@@ -163,10 +163,16 @@ fn simulate(plan: &Path, scene: &Path, out: &Path, limits: &IqLimits) -> Result<
 fn process(input: &Path, out: &Path, limits: &IqLimits) -> Result<run::Metrics> {
     let b = bar(1, "process");
     let t = Instant::now();
-    let m = run::process_limited(input, out, limits, &mut |d, n| {
-        b.set_length(n);
-        b.set_position(d);
-    });
+    let m = run::process_limited(
+        input,
+        out,
+        limits,
+        &mut |d, n| {
+            b.set_length(n);
+            b.set_position(d);
+        },
+        &mut pipeline::report::image_svg::write_aperture_view,
+    );
     b.finish();
     let m = m.map_err(radar_failure)?;
     println!(

@@ -1,6 +1,7 @@
 //! Output files of a plan: `mission.toml`, `trajectory.csv`, `summary.json`, `trajectory.svg`,
 //! `energy.svg`, `convergence.svg`; and reading a plan directory back.
 
+pub mod image_svg;
 pub mod plot;
 pub mod reproduce;
 
