@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use planner::{Mission, MissionFile};
 
 fn main() -> Result<()> {
-    planner::init_logging("error");
+    cellsar_error::init_logging("error");
     let mission = Mission::from_file_struct(
         &MissionFile::from_toml_str(fmu::core::DEFAULT_MISSION_TOML).map_err(anyhow::Error::msg)?,
     )?;

@@ -319,8 +319,9 @@ pub mod planner_vr {
     pub const SLOTS_OUT_OF_VIEW: u32 = 317;
     /// `plan_solve_time_s` (local).
     pub const SOLVE_TIME: u32 = 400;
-    /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests: setting it to
-    /// [`crate::core::PANIC_IN_DO_STEP`] makes the next doStep panic inside the model core,
+    /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests, settable only in
+    /// a build with the `test-hooks` feature (elsewhere an unknown value reference): setting it
+    /// to [`crate::core::PANIC_IN_DO_STEP`] makes the next doStep panic inside the model core,
     /// to prove that no panic crosses the C boundary.
     pub const DEBUG_INJECT_PANIC: u32 = 0x7FFF_0001;
 }

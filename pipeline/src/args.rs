@@ -31,3 +31,61 @@ impl IqLimitArgs {
         IqLimits::from_gib(self.max_iq_gib, self.max_aperture_gib)
     }
 }
+
+/// The clap value parser of a string-valued enum of the maths crates (which do not depend on
+/// clap): the enum's own names (strum's `VARIANTS`) become clap's possible values, so a bad
+/// value is refused with the flag's name and the list of valid values, and `--help` lists them.
+pub fn enum_parser<E>() -> impl clap::builder::TypedValueParser<Value = E>
+where
+    E: strum::VariantNames + std::str::FromStr + Clone + Send + Sync + 'static,
+    E::Err: std::error::Error + Send + Sync + 'static,
+{
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(E::VARIANTS.iter().copied())
+        .try_map(|name| name.parse::<E>())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+    use planner::evaluate::ResolutionMode;
+    use planner::Scheme;
+
+    #[derive(Parser, Debug)]
+    struct Flags {
+        #[arg(long, default_value = "exact", value_parser = enum_parser::<Scheme>())]
+        scheme: Scheme,
+        #[arg(long, default_value = "paper", value_parser = enum_parser::<ResolutionMode>())]
+        resolution: ResolutionMode,
+    }
+
+    #[test]
+    fn every_name_parses_and_a_bad_one_names_the_flag_and_the_values() {
+        let f = Flags::try_parse_from(["x"]).unwrap();
+        assert_eq!(
+            (f.scheme, f.resolution),
+            (Scheme::Exact, ResolutionMode::Paper)
+        );
+        for s in Scheme::ALL {
+            let f = Flags::try_parse_from(["x", "--scheme", s.name()]).unwrap();
+            assert_eq!(f.scheme, s);
+        }
+        for r in ResolutionMode::ALL {
+            let f = Flags::try_parse_from(["x", "--resolution", r.name()]).unwrap();
+            assert_eq!(f.resolution, r);
+        }
+        let e = Flags::try_parse_from(["x", "--scheme", "fast"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--scheme"), "{e}");
+        assert!(e.contains("exact, paper, baseline, baseline-exact"), "{e}");
+        let e = Flags::try_parse_from(["x", "--resolution", "Paper"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--resolution") && e.contains("paper, general"),
+            "{e}"
+        );
+    }
+}

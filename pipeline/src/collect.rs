@@ -6,11 +6,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use crate::protocol::{ApertureDetections, ApertureImage, MissionMetrics};
+use crate::report::image_svg::write_aperture_view;
 use anyhow::{Context, Result};
 use bridge::MissionId;
-use radar_sim::io::{
-    write_image_svg, write_json, write_png_db, ImageFrame, NpyType, NpyWriter, IMAGE_RANGE_DB,
-};
+use radar_sim::io::{write_json, write_png_db, ImageFrame, NpyType, NpyWriter, IMAGE_RANGE_DB};
 use radar_sim::run::{DetectionRow, Metrics};
 
 /// Results of one mission as they arrive.
@@ -183,18 +182,13 @@ pub fn write_image(dir: &Path, img: &ApertureImage) -> Result<()> {
         IMAGE_RANGE_DB,
         &markers,
     )?;
-    write_image_svg(
-        &dir.join(format!("{stem}.svg")),
-        &format!("{stem}.png"),
-        &ImageFrame {
-            aperture: img.aperture as usize,
-            centre_m: img.centre_m,
-            spacing_m: img.spacing_m,
-            nx,
-            ny,
-        },
-        &img.multilook,
-        IMAGE_RANGE_DB,
-    )?;
+    let frame = ImageFrame {
+        aperture: img.aperture as usize,
+        centre_m: img.centre_m,
+        spacing_m: img.spacing_m,
+        nx,
+        ny,
+    };
+    write_aperture_view(dir, &frame, &img.multilook)?;
     Ok(())
 }

@@ -15,9 +15,25 @@ use crate::{Mission, Trajectory};
 /// Default tolerance for calling a trajectory feasible: metres for distances, m/s for speeds.
 pub const FEASIBILITY_TOL: f64 = 1e-4;
 
-/// Which resolution requirement a plan must meet in every landmark slot.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+/// Which resolution requirement a plan must meet in every landmark slot. Its names are the
+/// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    Default,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::Display,
+    strum::IntoStaticStr,
+    strum::VariantNames,
+)]
 #[serde(rename_all = "lowercase")]
+#[strum(serialize_all = "lowercase")]
 pub enum ResolutionMode {
     /// The paper's: δ_r ≤ d_min and δ_a ≤ d_min with its formulas (errata 2 (docs/paper-notes.md), 11).
     #[default]
@@ -33,25 +49,7 @@ impl ResolutionMode {
 
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
-        match self {
-            ResolutionMode::Paper => "paper",
-            ResolutionMode::General => "general",
-        }
-    }
-
-    /// Parses a name as printed by [`ResolutionMode::name`]; the error lists the names (a clap
-    /// value parser for `--resolution` in every binary).
-    pub fn parse(name: &str) -> Result<Self, String> {
-        Self::ALL
-            .into_iter()
-            .find(|r| r.name() == name)
-            .ok_or_else(|| {
-                let names: Vec<&str> = Self::ALL.into_iter().map(Self::name).collect();
-                format!(
-                    "unknown resolution `{name}`; expected one of: {}",
-                    names.join(", ")
-                )
-            })
+        self.into()
     }
 }
 

@@ -40,5 +40,3 @@ pub use params::{ParamError, Params, ParamsOverride};
 pub use power::PowerModel;
 pub use summary::Summary;
 pub use trajectory::{Trajectory, TrajectoryError};
-
-pub use cellsar_error::{error_chain, init_logging};

@@ -2,11 +2,10 @@
 //! its trajectory table (`trajectory.csv`, which [`crate::Trajectory::from_csv_path`] reads
 //! back).
 
-use std::fmt::Write as _;
-
 use serde::{Deserialize, Serialize};
 
 use crate::driver::{PlanResult, Scheme, TerminationReason};
+use crate::evaluate::SlotEval;
 use crate::power::PowerModel;
 use crate::Mission;
 
@@ -135,46 +134,161 @@ impl Summary {
 /// The columns of `trajectory.csv`.
 pub const TRAJECTORY_COLUMNS: &str = "t_s,x_m,y_m,speed_mps,heading_rad,xc_m,yc_m,landmark_x_m,landmark_y_m,in_view,centre_error_m,power_w,energy_j,range_resolution_paper_m,range_resolution_general_m,azimuth_resolution_m,bistatic_angle_deg,grad_norm,psi_rad,along_track_width_m,cross_track_width_m,worst_width_m";
 
-/// `trajectory.csv`: one row per slot plus the start at t = 0 (undefined values are `nan`).
-pub fn trajectory_csv(result: &PlanResult) -> String {
-    let mut s = String::with_capacity(200 * (result.evaluation.slots.len() + 2));
-    s.push_str(TRAJECTORY_COLUMNS);
-    s.push('\n');
-    let st = result.trajectory.start_m;
-    let _ = writeln!(
-        s,
-        "0,{},{},nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,nan,nan",
-        st[0], st[1]
-    );
-    for e in &result.evaluation.slots {
+/// A number of a CSV table as Rust's `{}` prints it (shortest round trip, `1` for 1.0), NaN as
+/// `nan`: the csv crate's own float format (ryu: `1.0`, `1e20`) would change the published
+/// tables, and NumPy and pandas read `nan`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CsvNum(pub f64);
+
+impl std::fmt::Display for CsvNum {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0.is_nan() {
+            f.write_str("nan")
+        } else {
+            std::fmt::Display::fmt(&self.0, f)
+        }
+    }
+}
+
+impl Serialize for CsvNum {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+/// One row of `trajectory.csv` (field names are the columns, [`TRAJECTORY_COLUMNS`]).
+#[derive(Debug, Clone, Serialize)]
+struct TrajectoryRow {
+    t_s: CsvNum,
+    x_m: CsvNum,
+    y_m: CsvNum,
+    speed_mps: CsvNum,
+    heading_rad: CsvNum,
+    xc_m: CsvNum,
+    yc_m: CsvNum,
+    landmark_x_m: CsvNum,
+    landmark_y_m: CsvNum,
+    in_view: CsvNum,
+    centre_error_m: CsvNum,
+    power_w: CsvNum,
+    energy_j: CsvNum,
+    range_resolution_paper_m: CsvNum,
+    range_resolution_general_m: CsvNum,
+    azimuth_resolution_m: CsvNum,
+    bistatic_angle_deg: CsvNum,
+    grad_norm: CsvNum,
+    psi_rad: CsvNum,
+    along_track_width_m: CsvNum,
+    cross_track_width_m: CsvNum,
+    worst_width_m: CsvNum,
+}
+
+impl TrajectoryRow {
+    /// The start at t = 0: position and zero energy, the rest undefined.
+    fn start(start_m: [f64; 2]) -> Self {
+        let nan = CsvNum(f64::NAN);
+        TrajectoryRow {
+            t_s: CsvNum(0.0),
+            x_m: CsvNum(start_m[0]),
+            y_m: CsvNum(start_m[1]),
+            speed_mps: nan,
+            heading_rad: nan,
+            xc_m: nan,
+            yc_m: nan,
+            landmark_x_m: nan,
+            landmark_y_m: nan,
+            in_view: nan,
+            centre_error_m: nan,
+            power_w: nan,
+            energy_j: CsvNum(0.0),
+            range_resolution_paper_m: nan,
+            range_resolution_general_m: nan,
+            azimuth_resolution_m: nan,
+            bistatic_angle_deg: nan,
+            grad_norm: nan,
+            psi_rad: nan,
+            along_track_width_m: nan,
+            cross_track_width_m: nan,
+            worst_width_m: nan,
+        }
+    }
+
+    /// The end of one slot.
+    fn slot(e: &SlotEval) -> Self {
         let (lx, ly) = e.landmark_m.map_or((f64::NAN, f64::NAN), |l| (l[0], l[1]));
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            e.t_s,
-            e.pos_m[0],
-            e.pos_m[1],
-            e.speed_mps,
-            e.heading_rad,
-            e.centre_m[0],
-            e.centre_m[1],
-            lx,
-            ly,
-            u8::from(e.in_view),
-            e.centre_error_m.unwrap_or(f64::NAN),
-            e.power_w,
-            e.energy_j,
-            e.range_resolution_paper_m,
-            e.range_resolution_general_m,
-            e.azimuth_resolution_paper_m,
-            e.bistatic_angle_rad.to_degrees(),
-            e.grad_norm,
-            e.psi_rad,
-            e.along_track_width_m,
-            e.cross_track_width_m,
-            e.worst_width_m
+        TrajectoryRow {
+            t_s: CsvNum(e.t_s),
+            x_m: CsvNum(e.pos_m[0]),
+            y_m: CsvNum(e.pos_m[1]),
+            speed_mps: CsvNum(e.speed_mps),
+            heading_rad: CsvNum(e.heading_rad),
+            xc_m: CsvNum(e.centre_m[0]),
+            yc_m: CsvNum(e.centre_m[1]),
+            landmark_x_m: CsvNum(lx),
+            landmark_y_m: CsvNum(ly),
+            in_view: CsvNum(f64::from(u8::from(e.in_view))),
+            centre_error_m: CsvNum(e.centre_error_m.unwrap_or(f64::NAN)),
+            power_w: CsvNum(e.power_w),
+            energy_j: CsvNum(e.energy_j),
+            range_resolution_paper_m: CsvNum(e.range_resolution_paper_m),
+            range_resolution_general_m: CsvNum(e.range_resolution_general_m),
+            azimuth_resolution_m: CsvNum(e.azimuth_resolution_paper_m),
+            bistatic_angle_deg: CsvNum(e.bistatic_angle_rad.to_degrees()),
+            grad_norm: CsvNum(e.grad_norm),
+            psi_rad: CsvNum(e.psi_rad),
+            along_track_width_m: CsvNum(e.along_track_width_m),
+            cross_track_width_m: CsvNum(e.cross_track_width_m),
+            worst_width_m: CsvNum(e.worst_width_m),
+        }
+    }
+}
+
+/// `trajectory.csv`: one row per slot plus the start at t = 0 (undefined values are `nan`).
+pub fn trajectory_csv(result: &PlanResult) -> Result<String, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::with_capacity(
+        200 * (result.evaluation.slots.len() + 2),
+    ));
+    w.serialize(TrajectoryRow::start(result.trajectory.start_m))?;
+    for e in &result.evaluation.slots {
+        w.serialize(TrajectoryRow::slot(e))?;
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| csv::Error::from(e.into_error()))?;
+    // every field is ASCII, so nothing is replaced
+    Ok(String::from_utf8_lossy(&bytes).into_owned())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_print_as_rust_prints_them_and_nan_as_nan() {
+        let cells: Vec<String> = [1.0, -0.0, 0.1 + 0.2, 1e20, 2.5e-7, f64::NAN, -f64::NAN]
+            .map(|v| CsvNum(v).to_string())
+            .into();
+        assert_eq!(
+            cells,
+            [
+                "1",
+                "-0",
+                "0.30000000000000004",
+                "100000000000000000000",
+                "0.00000025",
+                "nan",
+                "nan"
+            ]
         );
     }
-    // Rust prints NaN as "NaN": NumPy and pandas read both, keep one spelling
-    s.replace("NaN", "nan")
+
+    #[test]
+    fn the_header_is_the_documented_columns_and_the_start_row_is_unchanged() {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.serialize(TrajectoryRow::start([-12.5, 3.0])).unwrap();
+        let text = String::from_utf8(w.into_inner().unwrap()).unwrap();
+        let start =
+            "-12.5,3,nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,nan,nan";
+        assert_eq!(text, format!("{TRAJECTORY_COLUMNS}\n0,{start}\n"));
+    }
 }

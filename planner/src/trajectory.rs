@@ -165,40 +165,48 @@ impl Trajectory {
             location,
             reason,
         };
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-        let (_, header) = lines
-            .next()
-            .ok_or_else(|| err("line 1".into(), "empty file".into()))?;
-        let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+        let mut rd = csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .trim(csv::Trim::All)
+            .flexible(true)
+            .from_reader(text.as_bytes());
+        let cols = rd
+            .headers()
+            .map_err(|e| err("header".into(), e.to_string()))?
+            .clone();
+        if cols.iter().all(str::is_empty) {
+            return Err(err("line 1".into(), "empty file".into()));
+        }
         let col = |name: &str| {
             cols.iter()
-                .position(|c| *c == name)
+                .position(|c| c == name)
                 .ok_or_else(|| err("header".into(), format!("missing column `{name}`")))
         };
         let (ct, cx, cy) = (col("t_s")?, col("x_m")?, col("y_m")?);
         let mut start = start_m;
         let mut pos = Vec::with_capacity(slots);
-        for (i, line) in lines {
-            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        for record in rd.records() {
+            let fields = record.map_err(|e| {
+                let line = e.position().map_or(0, |p| line_of(text, p));
+                err(format!("line {line}"), e.to_string())
+            })?;
+            if fields.iter().all(str::is_empty) {
+                continue;
+            }
+            let line = fields.position().map_or(0, |p| line_of(text, p));
             let get = |c: usize, n: &str| -> Result<f64, TrajectoryError> {
                 let s = fields.get(c).ok_or_else(|| {
-                    err(
-                        format!("line {}, column {n}", i + 1),
-                        "missing value".into(),
-                    )
+                    err(format!("line {line}, column {n}"), "missing value".into())
                 })?;
                 let v: f64 = s.parse().map_err(|_| {
                     err(
-                        format!("line {}, column {n}", i + 1),
+                        format!("line {line}, column {n}"),
                         format!("`{s}` is not a number"),
                     )
                 })?;
                 if !v.is_finite() {
                     return Err(err(
-                        format!("line {}, column {n}", i + 1),
+                        format!("line {line}, column {n}"),
                         format!("{v} is not finite"),
                     ));
                 }
@@ -212,7 +220,7 @@ impl Trajectory {
             let expected = (pos.len() + 1) as f64 * slot_s;
             if (t - expected).abs() > 1e-6 * expected.max(1.0) {
                 return Err(err(
-                    format!("line {}, column t_s", i + 1),
+                    format!("line {line}, column t_s"),
                     format!(
                         "expected t_s = {expected} (slot {}), found {t}",
                         pos.len() + 1
@@ -236,6 +244,24 @@ impl Trajectory {
             pos_m: pos,
         })
     }
+}
+
+/// The 1-based line of `text` that holds the record at `position` (csv's own line count and
+/// byte offset include the comment and blank lines before the record: skip them).
+fn line_of(text: &str, position: &csv::Position) -> usize {
+    let start = usize::try_from(position.byte()).unwrap_or(usize::MAX);
+    let first = text
+        .as_bytes()
+        .iter()
+        .take(start)
+        .filter(|&&b| b == b'\n')
+        .count();
+    let skipped = text
+        .lines()
+        .skip(first)
+        .take_while(|l| l.trim().is_empty() || l.starts_with('#'))
+        .count();
+    1 + first + skipped
 }
 
 #[cfg(test)]
@@ -287,5 +313,15 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("line 2, column y_m"), "{e}");
+        // comments and blank lines keep the line numbers of the file
+        let commented = "# a plan\nt_s,x_m,y_m\n\n0.5,3,4\n# note\n1.5,5,6\n";
+        let e = Trajectory::from_csv_str(commented, "x.csv", 0.5, 2, [0.0, 0.0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 6, column t_s"), "{e}");
+        let e = Trajectory::from_csv_str("", "x.csv", 0.5, 1, [0.0, 0.0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("empty file"), "{e}");
     }
 }

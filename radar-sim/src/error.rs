@@ -113,12 +113,5 @@ impl RadarError {
     }
 }
 
-impl From<RadarError> for cellsar_error::exit::Failure {
-    /// Bad input ([`RadarError::is_bad_input`]) exits 2, the rest 1.
-    fn from(e: RadarError) -> Self {
-        Self::bad_input_or_runtime(e.is_bad_input(), e)
-    }
-}
-
 /// Result alias of the radar library.
 pub type Result<T> = std::result::Result<T, RadarError>;

@@ -1,6 +1,6 @@
 //! File formats: NPY v1 (complex64 `<c8`, `<f4`, `<f8`; streaming writer; reading by npyz),
-//! CSV tables of serde rows, JSON, PNG images in dB with a perceptual colormap and their
-//! annotated SVG views. Every output file is written atomically ([`AtomicFile`]).
+//! CSV tables of serde rows, JSON, PNG images in dB with a perceptual colormap and where they lie on
+//! the ground ([`ImageFrame`], for the apps layer's annotated SVG views). Every output file is written atomically ([`AtomicFile`]).
 
 use std::path::Path;
 
@@ -11,13 +11,11 @@ use crate::error::{RadarError, Result};
 mod atomic;
 mod image;
 mod npy;
-mod svg;
 mod table;
 
 pub use atomic::{write_atomic, write_bytes, AtomicFile};
-pub use image::{viridis, write_png_db, IMAGE_RANGE_DB};
+pub use image::{check_image_shape, peak_db, viridis, write_png_db, ImageFrame, IMAGE_RANGE_DB};
 pub use npy::{NpyReader, NpyType, NpyWriter};
-pub use svg::{write_image_svg, ImageFrame};
 pub use table::{read_csv_rows, write_csv_rows, Fixed, Sci};
 
 /// Writes `value` as pretty JSON (and a final newline), atomically.

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::SceneFile;
 use crate::error::{RadarError, Result};
+use crate::io::ImageFrame;
 use crate::track::Aperture;
 use crate::waveform::Numerology;
 
@@ -81,6 +82,16 @@ pub struct RecordingMeta {
 
 /// Progress callback: (done, total).
 pub type Progress<'a> = &'a mut dyn FnMut(u64, u64);
+
+/// What the caller adds to each aperture's images once their NPY and PNG are written: called
+/// with the images directory, where the image lies and its multilook power (the apps layer
+/// writes the annotated SVG view there; [`no_image_views`] adds nothing).
+pub type ImageViews<'a> = &'a mut dyn FnMut(&Path, &ImageFrame, &[f32]) -> Result<()>;
+
+/// An [`ImageViews`] that adds nothing.
+pub fn no_image_views(_dir: &Path, _frame: &ImageFrame, _power: &[f32]) -> Result<()> {
+    Ok(())
+}
 
 fn mkdir(p: &Path) -> Result<()> {
     std::fs::create_dir_all(p).map_err(|e| RadarError::io(p, e))

@@ -59,6 +59,7 @@ pub fn closed_loop(mission: &planner::Mission, scene: &Path, out: &Path) {
         &out.join("recording"),
         &out.join("processed"),
         &mut |_, _| {},
+        &mut pipeline::report::image_svg::write_aperture_view,
     )
     .unwrap();
     let report = radar_sim::run::loop_report(&m2, &result.evaluation, metrics);

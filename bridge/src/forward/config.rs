@@ -51,14 +51,8 @@ impl Route {
         };
         let (rest, direction) = match spec.rsplit_once('@') {
             Some((r, d)) => {
-                let dir = match d {
-                    "both" => Direction::Both,
-                    "out" => Direction::Out,
-                    "in" => Direction::In,
-                    other => {
-                        return Err(bad(format!("unknown direction {other:?} (both, out, in)")))
-                    }
-                };
+                let dir = <Direction as clap::ValueEnum>::from_str(d, false)
+                    .map_err(|_| bad(format!("unknown direction {d:?} (both, out, in)")))?;
                 (r, dir)
             }
             None => (spec, Direction::Both),

@@ -95,7 +95,7 @@ fn build_library() -> Result<PathBuf> {
 }
 
 fn main() -> Result<()> {
-    planner::init_logging("info");
+    cellsar_error::init_logging("info");
     let args = Args::parse();
     let lib = match args.lib {
         Some(l) => l,

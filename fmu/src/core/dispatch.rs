@@ -79,6 +79,7 @@ impl Core {
     /// Checks that an Integer may be set by value reference, without setting it.
     pub fn check_int(&self, vr: u32) -> Result<(), FmuError> {
         match (self, vr) {
+            #[cfg(feature = "test-hooks")]
             (Core::Planner(_), pv::DEBUG_INJECT_PANIC) => Ok(()),
             _ => Err(FmuError::error(format!(
                 "value reference {vr} is not a settable Integer"
@@ -86,12 +87,16 @@ impl Core {
         }
     }
 
-    /// Sets an Integer by value reference (also the hidden debug variable).
+    /// Sets an Integer by value reference (only the hidden debug variable, with the
+    /// `test-hooks` feature: no model has a settable Integer otherwise).
     pub fn set_int(&mut self, vr: u32, value: i32) -> Result<(), FmuError> {
         self.check_int(vr)?;
+        #[cfg(feature = "test-hooks")]
         if let Core::Planner(c) = self {
             c.debug_panic = value;
         }
+        #[cfg(not(feature = "test-hooks"))]
+        let _ = value;
         Ok(())
     }
 
@@ -166,8 +171,9 @@ impl Core {
         }
     }
 
-    /// Called before a get: panics when the test hook asks for it.
+    /// Called before a get: panics when the test hook asks for it (`test-hooks` feature).
     pub fn before_get(&self) {
+        #[cfg(feature = "test-hooks")]
         if let Core::Planner(c) = self {
             if c.debug_panic == PANIC_IN_GET {
                 panic!("injected panic in a get call (debug_inject_panic = {PANIC_IN_GET})");

@@ -81,9 +81,11 @@ pub trait Log {
     fn log(&self, category: Category, status: Status, message: &str);
 }
 
-/// Value of [`crate::table::planner_vr::DEBUG_INJECT_PANIC`] that makes the next doStep panic.
+/// Value of [`crate::table::planner_vr::DEBUG_INJECT_PANIC`] that makes the next doStep panic
+/// (`test-hooks` feature).
 pub const PANIC_IN_DO_STEP: i32 = 1;
-/// Value of [`crate::table::planner_vr::DEBUG_INJECT_PANIC`] that makes the next get panic.
+/// Value of [`crate::table::planner_vr::DEBUG_INJECT_PANIC`] that makes the next get panic
+/// (`test-hooks` feature).
 pub const PANIC_IN_GET: i32 = 2;
 
 /// The file name of the default mission inside the FMU's `resources/` directory.

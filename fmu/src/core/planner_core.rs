@@ -16,7 +16,8 @@ pub struct PlannerCore {
     pub(super) mission_file: String,
     /// `landmark_x_in_m`, `landmark_y_in_m`.
     pub(super) landmark_in_m: [f64; 2],
-    /// Test hook (hidden variable).
+    /// Test hook (hidden variable; only with the `test-hooks` feature).
+    #[cfg(feature = "test-hooks")]
     pub(super) debug_panic: i32,
     /// The plan, after initialisation.
     pub(super) run: Option<Run>,
@@ -29,6 +30,7 @@ impl Default for PlannerCore {
             params_set: BTreeSet::new(),
             mission_file: DEFAULT_MISSION_FILE.to_string(),
             landmark_in_m: [f64::NAN, f64::NAN],
+            #[cfg(feature = "test-hooks")]
             debug_panic: 0,
             run: None,
         }
@@ -216,6 +218,7 @@ impl PlannerCore {
     }
 
     pub(super) fn step(&mut self, tau_s: f64, log: &dyn Log) -> Result<StepReport, FmuError> {
+        #[cfg(feature = "test-hooks")]
         if self.debug_panic == PANIC_IN_DO_STEP {
             panic!("injected panic in doStep (debug_inject_panic = {PANIC_IN_DO_STEP})");
         }

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use cellsar_error::exit::Failure;
+use pipeline::exit::{plan_failure, Failure};
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -41,7 +41,7 @@ enum Command {
         /// exact (default): feasible on the exact geometry; paper: Algorithm 1 as printed;
         /// baseline: the paper's least-distance scheme; baseline-exact: least distance on the
         /// exact geometry.
-        #[arg(long, default_value = "exact", value_parser = parse_scheme)]
+        #[arg(long, default_value = "exact", value_parser = pipeline::args::enum_parser::<Scheme>())]
         scheme: Scheme,
         /// Output directory.
         #[arg(long)]
@@ -65,7 +65,7 @@ enum Command {
         plain_sca: bool,
         /// Resolution requirement of the exact-geometry schemes: general (the worst width of the
         /// 2-D resolution cell ≤ d_min, away from blind geometry) or paper (δ_r, δ_a ≤ d_min).
-        #[arg(long, default_value = "paper", value_parser = ResolutionMode::parse)]
+        #[arg(long, default_value = "paper", value_parser = pipeline::args::enum_parser::<ResolutionMode>())]
         resolution: ResolutionMode,
         /// Wall-time limit of the whole run, s: the iterations stop at the first check after it
         /// and the last accepted (feasible) iterate is written, with termination `time_limit`;
@@ -132,26 +132,6 @@ macro_rules! out {
             }
         }
     }};
-}
-
-/// Parses one of a closed set of names (`what` names the option in the message).
-fn parse_named<T: Copy>(
-    s: &str,
-    all: &[T],
-    name: fn(T) -> &'static str,
-    what: &str,
-) -> Result<T, String> {
-    all.iter().copied().find(|&v| name(v) == s).ok_or_else(|| {
-        let names: Vec<&str> = all.iter().map(|&v| name(v)).collect();
-        format!(
-            "unknown {what} `{s}`; expected one of: {}",
-            names.join(", ")
-        )
-    })
-}
-
-fn parse_scheme(s: &str) -> Result<Scheme, String> {
-    parse_named(s, &Scheme::ALL, Scheme::name, "scheme")
 }
 
 fn bad(e: impl Into<anyhow::Error>) -> Failure {
@@ -243,7 +223,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let pb = spinner();
             let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));
             pb.finish_and_clear();
-            let result = result?;
+            let result = result.map_err(plan_failure)?;
             let files = report::write_plan_dir(&out, &m, &result)
                 .with_context(|| format!("writing {}", out.display()))?;
             let s = Summary::new(&m, &result);
@@ -368,7 +348,7 @@ fn default_log_filter(command: &Command) -> &'static str {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    planner::init_logging(default_log_filter(&cli.command));
+    cellsar_error::init_logging(default_log_filter(&cli.command));
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => f.report(),

@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use cellsar_error::exit::Failure;
+use pipeline::exit::{plan_failure, radar_failure, Failure};
 use std::time::Instant;
 
 use anyhow::Context;
@@ -88,7 +88,7 @@ enum Cmd {
         /// The resolution requirement of the plan: `paper` (the paper's δ_r, δ_a ≤ d_min) or
         /// `general` (the worst width of the true bistatic cell ≤ d_min in every landmark slot;
         /// see the top-level docs/user-guide.md, "Resolution: paper or general").
-        #[arg(long, default_value = "paper", value_parser = planner::evaluate::ResolutionMode::parse)]
+        #[arg(long, default_value = "paper", value_parser = pipeline::args::enum_parser::<planner::evaluate::ResolutionMode>())]
         resolution: planner::evaluate::ResolutionMode,
     },
     /// Resolution report: measured −3 dB region of a point response vs the predicted cell at
@@ -134,7 +134,7 @@ fn simulate(plan: &Path, scene: &Path, out: &Path, limits: &IqLimits) -> Result<
     let (mission, traj) = pipeline::report::read_plan_dir(plan)
         .with_context(|| format!("reading plan directory {}", plan.display()))
         .map_err(bad)?;
-    let scene = SceneFile::from_path(scene)?;
+    let scene = SceneFile::from_path(scene).map_err(radar_failure)?;
     let b = bar(1, "simulate");
     let t = Instant::now();
     let meta = run::simulate_limited(&mission, &traj, &scene, out, limits, &mut |d, n| {
@@ -142,7 +142,7 @@ fn simulate(plan: &Path, scene: &Path, out: &Path, limits: &IqLimits) -> Result<
         b.set_position(d);
     });
     b.finish();
-    let meta = meta?;
+    let meta = meta.map_err(radar_failure)?;
     for w in &meta.warnings {
         tracing::warn!("{w}");
     }
@@ -163,12 +163,18 @@ fn simulate(plan: &Path, scene: &Path, out: &Path, limits: &IqLimits) -> Result<
 fn process(input: &Path, out: &Path, limits: &IqLimits) -> Result<run::Metrics> {
     let b = bar(1, "process");
     let t = Instant::now();
-    let m = run::process_limited(input, out, limits, &mut |d, n| {
-        b.set_length(n);
-        b.set_position(d);
-    });
+    let m = run::process_limited(
+        input,
+        out,
+        limits,
+        &mut |d, n| {
+            b.set_length(n);
+            b.set_position(d);
+        },
+        &mut pipeline::report::image_svg::write_aperture_view,
+    );
     b.finish();
-    let m = m?;
+    let m = m.map_err(radar_failure)?;
     println!(
         "processed in {:.1} s: {}",
         t.elapsed().as_secs_f64(),
@@ -195,14 +201,14 @@ fn closed_loop(
             .with_context(|| format!("--horizon-s {h}"))
             .map_err(bad)?;
     }
-    let scene_file = SceneFile::from_path(scene)?;
+    let scene_file = SceneFile::from_path(scene).map_err(radar_failure)?;
     // everything the run will make is known from the windows and the scene: refuse before
     // planning
-    let setup = RadarSetup::new(m.params(), &scene_file)?;
-    radar_sim::limits::check_mission(&setup, &m, limits)?;
+    let setup = RadarSetup::new(m.params(), &scene_file).map_err(radar_failure)?;
+    radar_sim::limits::check_mission(&setup, &m, limits).map_err(radar_failure)?;
     let t = Instant::now();
     let result = planner::plan(&m, plan_options)
-        .map_err(|e| Failure::from(e).context(format!("planning {}", mission.display())))?;
+        .map_err(|e| plan_failure(e).context(format!("planning {}", mission.display())))?;
 
     println!(
         "planned {} slots in {:.1} s: energy {:.0} J, feasible {}",
@@ -224,7 +230,7 @@ fn closed_loop(
         b.set_position(d);
     });
     b.finish();
-    sim?;
+    sim.map_err(radar_failure)?;
     let metrics = process(&rec, &out.join("processed"), limits)?;
     let report = run::loop_report(&m2, &result.evaluation, metrics);
     radar_sim::io::write_json(&out.join("report.json"), &report).map_err(anyhow::Error::new)?;
@@ -264,7 +270,8 @@ fn resolution(out: &Path, bandwidths_mhz: &[f64]) -> Result<()> {
     let cases = radar_sim::psf::default_cases();
     let b = bar((bandwidths_mhz.len() * cases.len()) as u64, "resolution");
     let hz: Vec<f64> = bandwidths_mhz.iter().map(|m| m * 1e6).collect();
-    let rows = radar_sim::psf::write_report(out, &hz, &cases, &mut |d, _| b.set_position(d))?;
+    let rows = radar_sim::psf::write_report(out, &hz, &cases, &mut |d, _| b.set_position(d))
+        .map_err(radar_failure)?;
     b.finish();
     for r in &rows {
         let c = &r.cell;
@@ -300,7 +307,7 @@ fn default_log_filter(cmd: &Cmd) -> &'static str {
 
 fn run_cli() -> Result<()> {
     let cli = Cli::parse();
-    planner::init_logging(default_log_filter(&cli.cmd));
+    cellsar_error::init_logging(default_log_filter(&cli.cmd));
     bridge::iox::init_iceoryx_logging();
     match cli.cmd {
         Cmd::Simulate {
@@ -308,14 +315,20 @@ fn run_cli() -> Result<()> {
             scene,
             out,
             limits,
-        } => simulate(&plan, &scene, &out, &limits.limits()?),
+        } => simulate(
+            &plan,
+            &scene,
+            &out,
+            &limits.limits().map_err(radar_failure)?,
+        ),
         Cmd::Process {
             input,
             out,
             max_aperture_gib,
         } => {
             let limits =
-                IqLimits::from_gib(radar_sim::limits::DEFAULT_MAX_IQ_GIB, max_aperture_gib)?;
+                IqLimits::from_gib(radar_sim::limits::DEFAULT_MAX_IQ_GIB, max_aperture_gib)
+                    .map_err(radar_failure)?;
             process(&input, &out, &limits).map(|_| ())
         }
         Cmd::ClosedLoop {
@@ -335,7 +348,7 @@ fn run_cli() -> Result<()> {
                 &scene,
                 &out,
                 horizon_s,
-                &limits.limits()?,
+                &limits.limits().map_err(radar_failure)?,
                 &plan_options,
             )? {
                 return Err(Failure::missed_landmark(anyhow::anyhow!(

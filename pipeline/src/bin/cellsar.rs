@@ -54,7 +54,7 @@ enum Command {
 }
 
 fn init_tracing(default: &str) {
-    planner::init_logging(default);
+    cellsar_error::init_logging(default);
     bridge::iox::init_iceoryx_logging();
 }
 

@@ -88,7 +88,7 @@ pub struct RunArgs {
     /// (the worst width of the true bistatic cell ≤ d_min in every landmark slot; top-level
     /// docs/user-guide.md, "Resolution: paper or general"). Sent with the plan request; `cellsar-radar-sim closed-loop
     /// --resolution` gives the same results.
-    #[arg(long, default_value = "paper", value_parser = planner::evaluate::ResolutionMode::parse)]
+    #[arg(long, default_value = "paper", value_parser = crate::args::enum_parser::<planner::evaluate::ResolutionMode>())]
     pub resolution: planner::evaluate::ResolutionMode,
     /// How IQ frames reach the processor.
     #[arg(long, value_enum, default_value_t = Transport::Iox)]

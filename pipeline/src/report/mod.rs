@@ -1,6 +1,7 @@
 //! Output files of a plan: `mission.toml`, `trajectory.csv`, `summary.json`, `trajectory.svg`,
 //! `energy.svg`, `convergence.svg`; and reading a plan directory back.
 
+pub mod image_svg;
 pub mod plot;
 pub mod reproduce;
 
@@ -94,7 +95,11 @@ pub fn write_plan_dir(
     written.push(path);
 
     let path = dir.join("trajectory.csv");
-    write_file(&path, &trajectory_csv(result))?;
+    let csv = trajectory_csv(result).map_err(|e| ReportError::Encode {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    write_file(&path, &csv)?;
     written.push(path);
 
     let path = dir.join("summary.json");

@@ -77,7 +77,13 @@ fn aperture_processing_matches_the_file_pipeline() {
     assert_eq!(meta.noise_power_w.to_bits(), ctx.noise_power_w.to_bits());
     // the same numbers out
     let out = dir.path().join("out");
-    let metrics = run::process(&rec, &out, &mut |_, _| {}).unwrap();
+    let metrics = run::process(
+        &rec,
+        &out,
+        &mut |_, _| {},
+        &mut crate::report::image_svg::write_aperture_view,
+    )
+    .unwrap();
     let mut rd = NpyReader::open(&rec.join("iq/aperture_000.npy")).unwrap();
     let n = rd.shape[0] * rd.shape[1];
     let iq = rd.read_c8(0, n).unwrap();

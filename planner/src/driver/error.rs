@@ -49,17 +49,3 @@ pub enum PlanError {
         reason: &'static str,
     },
 }
-
-impl From<PlanError> for cellsar_error::exit::Failure {
-    /// An infeasible mission exits 3, a start trajectory that does not fit or a bad option 2, a
-    /// solver failure or a time limit 1.
-    fn from(e: PlanError) -> Self {
-        use cellsar_error::exit::FailureKind as K;
-        let kind = match &e {
-            PlanError::Infeasible(_) => K::Infeasible,
-            PlanError::InvalidInit(_) | PlanError::InvalidOption { .. } => K::BadInput,
-            PlanError::Solver { .. } | PlanError::TimeLimit { .. } => K::Runtime,
-        };
-        Self::new(kind, e)
-    }
-}

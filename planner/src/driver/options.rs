@@ -10,9 +10,24 @@ use crate::Trajectory;
 
 use super::PlanError;
 
-/// Which planner to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// Which planner to run. Its names (`exact`, `paper`, `baseline`, `baseline-exact`) are the
+/// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::Display,
+    strum::IntoStaticStr,
+    strum::VariantNames,
+)]
 #[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case")]
 pub enum Scheme {
     /// SCA on the exact geometry; every iterate feasible on it (the default).
     Exact,
@@ -35,18 +50,7 @@ impl Scheme {
 
     /// The name used on the command line and in reports.
     pub fn name(self) -> &'static str {
-        match self {
-            Scheme::Exact => "exact",
-            Scheme::Paper => "paper",
-            Scheme::Baseline => "baseline",
-            Scheme::BaselineExact => "baseline-exact",
-        }
-    }
-}
-
-impl std::fmt::Display for Scheme {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+        self.into()
     }
 }
 

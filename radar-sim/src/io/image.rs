@@ -33,8 +33,24 @@ pub fn viridis(t: f64) -> [u8; 3] {
     o
 }
 
+/// Where an image lies on the ground: centre, pixel spacing and size (as
+/// [`crate::backproject::Grid`], repeated here so that the image writers need no processor types).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImageFrame {
+    /// Aperture index (the title).
+    pub aperture: usize,
+    /// Ground position of the centre pixel, m.
+    pub centre_m: [f64; 2],
+    /// Pixel spacing, m.
+    pub spacing_m: f64,
+    /// Columns (east).
+    pub nx: usize,
+    /// Rows (north).
+    pub ny: usize,
+}
+
 /// `Err` naming `path` unless `power` holds a non-empty `ny × nx` image.
-pub(crate) fn check_image_shape(path: &Path, power: &[f32], nx: usize, ny: usize) -> Result<()> {
+pub fn check_image_shape(path: &Path, power: &[f32], nx: usize, ny: usize) -> Result<()> {
     if power.len() != nx * ny || power.is_empty() {
         return Err(RadarError::Shape {
             what: format!("image {}", path.display()),
@@ -46,7 +62,7 @@ pub(crate) fn check_image_shape(path: &Path, power: &[f32], nx: usize, ny: usize
 }
 
 /// The image's peak in dB (of the power's unit), the top of its colour mapping.
-pub(crate) fn peak_db(power: &[f32]) -> f64 {
+pub fn peak_db(power: &[f32]) -> f64 {
     10.0 * (power.iter().cloned().fold(f32::MIN_POSITIVE, f32::max) as f64).log10()
 }
 

@@ -1,4 +1,4 @@
-//! `process`: a recording directory → images (NPY, PNG, SVG), `detections.csv/.json` and
+//! `process`: a recording directory → images (NPY, PNG; the caller adds views), `detections.csv/.json` and
 //! `metrics.json`, one aperture at a time.
 
 use std::path::Path;
@@ -6,11 +6,10 @@ use std::path::Path;
 use rustfft::num_complex::Complex32;
 
 use super::recording::{read_pulses, read_truth, write_detections};
-use super::{iq_path, mkdir, DetectionRow, Metrics, Progress, RecordingMeta, FORMAT};
+use super::{iq_path, mkdir, DetectionRow, ImageViews, Metrics, Progress, RecordingMeta, FORMAT};
 use crate::error::{RadarError, Result};
 use crate::io::{
-    write_image_svg, write_json, write_png_db, ImageFrame, NpyReader, NpyType, NpyWriter,
-    IMAGE_RANGE_DB,
+    write_json, write_png_db, ImageFrame, NpyReader, NpyType, NpyWriter, IMAGE_RANGE_DB,
 };
 use crate::limits::{IqBudget, IqLimits};
 use crate::pipeline::{ApertureResult, Processor, RadarSetup};
@@ -19,8 +18,13 @@ use crate::track::{Aperture, PulseMeta};
 
 /// Processes the recording in `input` into `out`, refusing apertures above the default
 /// [`IqLimits`] (see [`process_limited`]).
-pub fn process(input: &Path, out: &Path, progress: Progress<'_>) -> Result<Metrics> {
-    process_limited(input, out, &IqLimits::default(), progress)
+pub fn process(
+    input: &Path,
+    out: &Path,
+    progress: Progress<'_>,
+    views: ImageViews<'_>,
+) -> Result<Metrics> {
+    process_limited(input, out, &IqLimits::default(), progress, views)
 }
 
 /// Reads `meta.json` of the recording in `input` and checks its format tag.
@@ -41,12 +45,14 @@ fn read_meta(input: &Path) -> Result<RecordingMeta> {
 
 /// Processes the recording in `input` into `out`. Each aperture is held in memory at once, so
 /// before anything is read, the memory of the largest one is checked against
-/// `limits.max_aperture_bytes` (the recording's total size does not matter here).
+/// `limits.max_aperture_bytes` (the recording's total size does not matter here). `views` is
+/// called with each aperture's image after its NPY and PNG are written.
 pub fn process_limited(
     input: &Path,
     out: &Path,
     limits: &IqLimits,
     progress: Progress<'_>,
+    views: ImageViews<'_>,
 ) -> Result<Metrics> {
     let meta = read_meta(input)?;
     let setup = RadarSetup::new(&meta.params, &meta.scene)?;
@@ -90,7 +96,7 @@ pub fn process_limited(
         }
         let iq = read_aperture_iq(input, ap.index, pulses.len(), meta.samples_per_pulse)?;
         let r = proc.process_aperture(ap, &pulses, &iq, &truth)?;
-        write_images(&out.join("images"), ap.index, &r)?;
+        write_images(&out.join("images"), ap.index, &r, views)?;
         tallies.push(ApertureTally::new(ap, &r, meta.noise_power_w));
         progress(k as u64 + 1, total);
     }
@@ -138,8 +144,9 @@ fn read_aperture_iq(
 }
 
 /// Writes aperture `index`'s images into `dir`: the multilook power (NPY, PNG with the
-/// detections marked, annotated SVG) and, when kept, each look's complex image (NPY).
-fn write_images(dir: &Path, index: usize, r: &ApertureResult) -> Result<()> {
+/// detections marked) and, when kept, each look's complex image (NPY); then hands the power
+/// image to `views`.
+fn write_images(dir: &Path, index: usize, r: &ApertureResult, views: ImageViews<'_>) -> Result<()> {
     let mut w = NpyWriter::create(
         &dir.join(format!("aperture_{index:03}.npy")),
         NpyType::F4,
@@ -166,17 +173,12 @@ fn write_images(dir: &Path, index: usize, r: &ApertureResult) -> Result<()> {
         IMAGE_RANGE_DB,
         &markers,
     )?;
-    write_image_svg(
-        &dir.join(format!("aperture_{index:03}.svg")),
-        &png_name,
-        &ImageFrame {
-            aperture: index,
-            centre_m: r.grid.centre_m,
-            spacing_m: r.grid.spacing_m,
-            nx: r.grid.nx,
-            ny: r.grid.ny,
-        },
-        &r.multilook,
-        IMAGE_RANGE_DB,
-    )
+    let frame = ImageFrame {
+        aperture: index,
+        centre_m: r.grid.centre_m,
+        spacing_m: r.grid.spacing_m,
+        nx: r.grid.nx,
+        ny: r.grid.ny,
+    };
+    views(dir, &frame, &r.multilook)
 }

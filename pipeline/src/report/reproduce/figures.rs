@@ -79,12 +79,12 @@ impl<'a> FigureRun<'a> {
     /// Energy per slot of every scheme of `groups` as CSV columns `<group>_<scheme>_j`.
     fn energy_csv(&self, path: &Path, groups: &[&str]) -> Result<(), ReportError> {
         let mut rows = Vec::new();
-        let mut header = String::from("t_s");
+        let mut header = vec!["t_s".to_string()];
         let mut cols: Vec<&PlanResult> = Vec::new();
         for g in groups {
             for s in SCHEMES {
                 if let Some(r) = self.get(&format!("{g}/{}", s.name())) {
-                    let _ = write!(header, ",{g}_{}_j", s.name());
+                    header.push(format!("{g}_{}_j", s.name()));
                     cols.push(r);
                 }
             }
@@ -138,10 +138,12 @@ impl<'a> FigureRun<'a> {
         trajectory_plot(&dir.join(file), title, mission, &tracks)?;
         for s in schemes {
             if let Some(r) = self.get(&format!("{group}/{}", s.name())) {
-                write_file(
-                    &dir.join(format!("{group}-{}.csv", s.name())),
-                    &planner::summary::trajectory_csv(r),
-                )?;
+                let path = dir.join(format!("{group}-{}.csv", s.name()));
+                let csv = planner::summary::trajectory_csv(r).map_err(|e| ReportError::Encode {
+                    path: path.display().to_string(),
+                    message: e.to_string(),
+                })?;
+                write_file(&path, &csv)?;
             }
         }
         Ok(())
@@ -192,7 +194,14 @@ fn fig4a(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
     }
     csv_write(
         &d.join("dmin.csv"),
-        "objects,radius_m,correct_m,as_printed_m,monte_carlo_m,monte_carlo_se_m",
+        &[
+            "objects",
+            "radius_m",
+            "correct_m",
+            "as_printed_m",
+            "monte_carlo_m",
+            "monte_carlo_se_m",
+        ],
         &rows,
     )?;
     line_plot(
@@ -265,7 +274,13 @@ fn fig4b(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
     }
     csv_write(
         &d.join("convergence.csv"),
-        "spacing_m,scheme_is_exact,iteration,objective_j,true_energy_j",
+        &[
+            "spacing_m",
+            "scheme_is_exact",
+            "iteration",
+            "objective_j",
+            "true_energy_j",
+        ],
         &rows,
     )?;
     line_plot(
@@ -307,7 +322,7 @@ fn fig4c(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
         .collect();
     csv_write(
         &d.join("power.csv"),
-        "speed_mps,power_w,blade_w,induced_w,parasite_w",
+        &["speed_mps", "power_w", "blade_w", "induced_w", "parasite_w"],
         &rows,
     )?;
     line_plot(
@@ -451,7 +466,7 @@ fn fig11(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
     let d = f.fig_dir("fig11")?;
     let mut series = Vec::new();
     let mut rows: Vec<Vec<f64>> = Vec::new();
-    let mut header = String::from("t_s");
+    let mut header = vec!["t_s".to_string()];
     let mut line = String::new();
     for s in SCHEMES {
         let runs: Vec<&PlanResult> = (0..f.realisations)
@@ -479,7 +494,7 @@ fn fig11(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
             "`{s}` {total:.0} J ({feasible}/{} feasible); ",
             runs.len()
         );
-        let _ = write!(header, ",{}_mean_j", s.name());
+        header.push(format!("{}_mean_j", s.name()));
         if rows.is_empty() {
             rows = avg.iter().map(|(t, _)| vec![*t]).collect();
         }
@@ -587,7 +602,7 @@ fn table3(f: &mut FigureRun<'_>) -> Result<(), ReportError> {
     let _ = writeln!(f.report, "\nThese use the paper's formula, valid only when the BS→point and UAV→point ground directions coincide (erratum 11 (docs/paper-notes.md)). The general value along each plan is in the `range_resolution_general_m` column of every trajectory CSV.\n");
     csv_write(
         &d.join("table3.csv"),
-        "bandwidth_mhz,range_resolution_m,paper_m",
+        &["bandwidth_mhz", "range_resolution_m", "paper_m"],
         &rows,
     )?;
     f.produced.push("table3/table3.csv".into());

@@ -3,6 +3,7 @@
 
 mod figures;
 
+use planner::summary::CsvNum;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -158,16 +159,29 @@ fn mission_of(
     Mission::from_file_struct(&file).map_err(ReportError::from)
 }
 
-pub(crate) fn csv_write(path: &Path, header: &str, rows: &[Vec<f64>]) -> Result<(), ReportError> {
-    let mut s = String::with_capacity(32 * rows.len() * 4 + header.len());
-    s.push_str(header);
-    s.push('\n');
+/// Writes a table of numbers as CSV: the header, then each row, numbers as
+/// [`planner::summary::CsvNum`] prints them.
+pub(crate) fn csv_write<H: AsRef<str>>(
+    path: &Path,
+    header: &[H],
+    rows: &[Vec<f64>],
+) -> Result<(), ReportError> {
+    let encode = |e: csv::Error| ReportError::Encode {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    };
+    let mut w = csv::Writer::from_writer(Vec::with_capacity(32 * rows.len() * 4));
+    w.write_record(header.iter().map(|h| h.as_ref()))
+        .map_err(encode)?;
     for r in rows {
-        let line: Vec<String> = r.iter().map(|v| format!("{v}")).collect();
-        s.push_str(&line.join(","));
-        s.push('\n');
+        w.write_record(r.iter().map(|v| CsvNum(*v).to_string()))
+            .map_err(encode)?;
     }
-    write_file(path, &s.replace("NaN", "nan"))
+    let bytes = w
+        .into_inner()
+        .map_err(|e| encode(csv::Error::from(e.into_error())))?;
+    // headers and numbers are ASCII, so nothing is replaced
+    write_file(path, &String::from_utf8_lossy(&bytes))
 }
 
 /// The start of `missions/default-30m-far-start.toml`: the default mission's start moved to the
