@@ -30,7 +30,7 @@ pub mod summary;
 pub mod trajectory;
 
 pub use driver::{
-    plan, plan_with_observer, IterationRecord, NoObserver, Observer, PlanError, PlanOptions,
+    plan, plan_with_observer, plan_with_stop, IterationRecord, NoObserver, Observer, PlanError, PlanOptions,
     PlanResult, Scheme, TerminationReason,
 };
 pub use evaluate::{evaluate, Evaluation, SlotEval, Violations};

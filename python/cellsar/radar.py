@@ -1,0 +1,1 @@
+"""The radar chain: ``simulate`` a plan's recording, ``process`` it into images and detections."""
