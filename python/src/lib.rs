@@ -10,6 +10,7 @@ mod json;
 mod maths;
 mod mission;
 mod plan;
+mod radar;
 mod run;
 
 use pyo3::prelude::*;
@@ -24,9 +25,15 @@ fn _cellsar(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(maths::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(maths::dmin, m)?)?;
     m.add_function(wrap_pyfunction!(maths::power_w, m)?)?;
+    let radar = PyModule::new(py, "radar")?;
+    radar::register(&radar)?;
+    m.add_submodule(&radar)?;
     m.add("MissionError", py.get_type::<errors::MissionError>())?;
     m.add("PlanError", py.get_type::<errors::PlanError>())?;
-    m.add("InfeasibleMission", py.get_type::<errors::InfeasibleMission>())?;
+    m.add(
+        "InfeasibleMission",
+        py.get_type::<errors::InfeasibleMission>(),
+    )?;
     m.add("RadarError", py.get_type::<errors::RadarError>())?;
     Ok(())
 }

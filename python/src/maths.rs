@@ -68,7 +68,9 @@ pub fn dmin(
 ) -> PyResult<f64> {
     let bad = |e: planner::dmin::DminError| PyValueError::new_err(e.to_string());
     match method {
-        "exact" => py.detach(|| expected_dmin_m(radius_m, objects, CdfForm::Correct)).map_err(bad),
+        "exact" => py
+            .detach(|| expected_dmin_m(radius_m, objects, CdfForm::Correct))
+            .map_err(bad),
         "printed" => py
             .detach(|| expected_dmin_m(radius_m, objects, CdfForm::AsPrinted))
             .map_err(bad),

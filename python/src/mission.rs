@@ -32,7 +32,7 @@ impl PyMission {
 /// Builds a mission from the JSON text of a mission file's structure; `what` names the source
 /// in messages.
 fn from_json(text: &str, what: &str) -> PyResult<PyMission> {
-    let file = planner::MissionFile::from_json_str(text)
+    let file: planner::MissionFile = json::from_text(text)
         .map_err(|message| MissionError::new_err(format!("{what}: {message}")))?;
     planner::Mission::from_file_struct(&file)
         .map(PyMission::wrap)
@@ -59,8 +59,8 @@ impl PyMission {
                 d.get_type().name()?
             )));
         }
-        let text = json::dumps(d)
-            .map_err(|e| MissionError::new_err(format!("mission dict: {e}")))?;
+        let text =
+            json::dumps(d).map_err(|e| MissionError::new_err(format!("mission dict: {e}")))?;
         from_json(&text, "mission dict")
     }
 

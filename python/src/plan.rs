@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use numpy::{PyArray1, PyArrayLike1, AllowTypeChange};
+use numpy::{AllowTypeChange, PyArray1, PyArrayLike1};
 use pyo3::exceptions::{PyAttributeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -30,7 +30,11 @@ pub struct PyPlan {
 
 impl PyPlan {
     fn column_vec(&self, name: &str) -> Option<Vec<f64>> {
-        columns::column(name, &self.result.evaluation, self.result.trajectory.start_m)
+        columns::column(
+            name,
+            &self.result.evaluation,
+            self.result.trajectory.start_m,
+        )
     }
 }
 
@@ -160,7 +164,12 @@ fn summary_value(
 }
 
 /// Parses one of a closed set of names; the error lists them.
-fn parse_named<T: Copy>(s: &str, all: &[T], name: fn(T) -> &'static str, what: &str) -> PyResult<T> {
+fn parse_named<T: Copy>(
+    s: &str,
+    all: &[T],
+    name: fn(T) -> &'static str,
+    what: &str,
+) -> PyResult<T> {
     all.iter().copied().find(|&v| name(v) == s).ok_or_else(|| {
         let names: Vec<&str> = all.iter().map(|&v| name(v)).collect();
         PyValueError::new_err(format!(
