@@ -16,7 +16,10 @@ use harness::{bin, pytest, root, run, target_dir};
 /// build backend.
 fn install_package() {
     let python = harness::python();
-    let venv_bin = python.parent().expect("the venv's bin directory").to_path_buf();
+    let venv_bin = python
+        .parent()
+        .expect("the venv's bin directory")
+        .to_path_buf();
     let path = std::env::var_os("PATH").unwrap_or_default();
     let mut paths = vec![venv_bin];
     paths.extend(std::env::split_paths(&path));

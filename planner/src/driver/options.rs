@@ -177,7 +177,11 @@ pub(super) struct Deadline<'a> {
 impl<'a> Deadline<'a> {
     /// `limit_s` after `started` (a limit too large to represent is no limit), or when `stop` is
     /// set.
-    pub(super) fn after(started: Instant, limit_s: Option<f64>, stop: Option<&'a AtomicBool>) -> Self {
+    pub(super) fn after(
+        started: Instant,
+        limit_s: Option<f64>,
+        stop: Option<&'a AtomicBool>,
+    ) -> Self {
         let at = limit_s
             .and_then(|s| Duration::try_from_secs_f64(s).ok())
             .and_then(|d| started.checked_add(d));
