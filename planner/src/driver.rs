@@ -1,6 +1,7 @@
 //! The planning driver: feasibility pre-check, start trajectory (with phase-I repair), the SCA /
 //! BCD iterations of each scheme, the stopping rule and the observer.
 
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use crate::evaluate::{evaluate, ResolutionMode};
@@ -40,9 +41,33 @@ pub fn plan_with_observer(
     options: &PlanOptions,
     observer: &mut dyn Observer,
 ) -> Result<PlanResult, PlanError> {
+    run_plan(mission, options, observer, None)
+}
+
+/// Plans `mission` like [`plan_with_observer`], and stops early once `stop` is set (from
+/// another thread or a signal handler; a host language's interrupt, say). The flag is read
+/// where the time limit is checked, before every cone program, and a stopped run ends as if
+/// [`PlanOptions::time_limit_s`] had passed: with [`TerminationReason::TimeLimit`] and the last
+/// accepted iterate, or with [`PlanError::TimeLimit`] while it is still repairing its start.
+pub fn plan_with_stop(
+    mission: &Mission,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+    stop: &AtomicBool,
+) -> Result<PlanResult, PlanError> {
+    run_plan(mission, options, observer, Some(stop))
+}
+
+/// The body of [`plan_with_observer`] and [`plan_with_stop`].
+fn run_plan(
+    mission: &Mission,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
+) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
     options.validate()?;
-    let deadline = Deadline::after(started, options.time_limit_s);
+    let deadline = Deadline::after(started, options.time_limit_s, stop);
     precheck(mission)?;
     let start = match &options.init {
         Some(tr) => given_start(mission, options, deadline, tr)?,

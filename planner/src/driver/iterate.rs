@@ -38,7 +38,7 @@ pub(super) fn record(
 pub(super) struct Means<'s> {
     pub solver: &'s mut SocpSolver,
     pub observer: &'s mut dyn Observer,
-    pub deadline: Deadline,
+    pub deadline: Deadline<'s>,
 }
 
 /// What an iteration loop leaves: its last own objective, its histories, why it stopped, the

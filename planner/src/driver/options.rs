@@ -1,5 +1,6 @@
 //! The planner's options ([`PlanOptions`], [`Scheme`]) and the run's deadline.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
@@ -166,28 +167,38 @@ impl Default for PlanOptions {
     }
 }
 
-/// When a planning run must stop: [`PlanOptions::time_limit_s`] after it started.
+/// When a planning run must stop: [`PlanOptions::time_limit_s`] after it started, or as soon as
+/// its stop flag (if any, see [`plan_with_stop`](super::plan_with_stop)) is set.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Deadline {
+pub(super) struct Deadline<'a> {
     pub(super) at: Option<Instant>,
     /// The limit, s (for messages; infinite without one).
     pub(super) limit_s: f64,
+    /// Set from outside (another thread, a signal handler) to stop the run early.
+    pub(super) stop: Option<&'a AtomicBool>,
 }
 
-impl Deadline {
-    /// `limit_s` after `started` (a limit too large to represent is no limit).
-    pub(super) fn after(started: Instant, limit_s: Option<f64>) -> Self {
+impl<'a> Deadline<'a> {
+    /// `limit_s` after `started` (a limit too large to represent is no limit), or when `stop` is
+    /// set.
+    pub(super) fn after(
+        started: Instant,
+        limit_s: Option<f64>,
+        stop: Option<&'a AtomicBool>,
+    ) -> Self {
         let at = limit_s
             .and_then(|s| Duration::try_from_secs_f64(s).ok())
             .and_then(|d| started.checked_add(d));
         Self {
             at,
             limit_s: limit_s.unwrap_or(f64::INFINITY),
+            stop,
         }
     }
 
-    /// Whether it has passed.
+    /// Whether it has passed (or the stop flag is set).
     pub(super) fn passed(self) -> bool {
-        self.at.is_some_and(|at| Instant::now() >= at)
+        self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+            || self.at.is_some_and(|at| Instant::now() >= at)
     }
 }

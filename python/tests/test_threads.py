@@ -1,0 +1,42 @@
+"""A plan releases the GIL (other Python threads run meanwhile) and Ctrl-C interrupts it."""
+
+import _thread
+import threading
+
+import pytest
+
+import cellsar
+
+
+def long_mission():
+    # 0.1 s slots: 3000 slots, several seconds of planning in a debug build
+    return cellsar.Mission.default(30.0, slot_s=0.1)
+
+
+def test_plan_in_a_thread_while_the_main_thread_runs():
+    mission = cellsar.Mission.default(30.0)
+    result = {}
+    worker = threading.Thread(target=lambda: result.update(plan=cellsar.plan(mission)))
+    ticks = 0
+    worker.start()
+    while worker.is_alive():
+        ticks += 1  # pure Python: runs only while the plan does not hold the GIL
+    worker.join()
+    assert result["plan"].feasible
+    assert ticks > 1000
+
+
+def test_ctrl_c_interrupts_a_plan():
+    mission = long_mission()
+    calls = []
+
+    def interrupt_on_first_iteration(record):
+        calls.append(record)
+        if len(calls) == 1:
+            _thread.interrupt_main()  # as Ctrl-C: SIGINT's handler runs in the main thread
+
+    with pytest.raises(KeyboardInterrupt):
+        cellsar.plan(mission, scheme="paper", progress=interrupt_on_first_iteration)
+    # the plan stopped at the first check after the signal (within one cone program of
+    # 3000 slots), not after the tens of iterations a whole run takes
+    assert 1 <= len(calls) <= 3
