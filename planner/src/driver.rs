@@ -11,6 +11,7 @@ use crate::schemes::paper::PaperObjective;
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
+mod best_effort;
 mod coarse;
 mod error;
 mod iterate;
@@ -21,8 +22,9 @@ mod result;
 
 pub use error::PlanError;
 pub use observer::{IterationRecord, NoObserver, Observer};
-pub use options::{PlanOptions, Scheme};
-pub use result::{PlanResult, TerminationReason};
+pub use options::{PlanOptions, Scheme, DEFAULT_RESOLUTION_WEIGHT_J_PER_M};
+pub use best_effort::{best_effort_from, BestEffortBasis};
+pub use result::{BestEffort, PlanResult, TerminationReason};
 
 use coarse::{coarse_start, coarse_start_from, LevelStart};
 use iterate::{run_exact, run_paper, Means};
@@ -42,6 +44,12 @@ pub fn plan_with_observer(
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
     options.validate()?;
+    if options.scheme == Scheme::Exact
+        && options.resolution == ResolutionMode::General
+        && !options.strict_resolution
+    {
+        return best_effort::plan_best_effort(mission, options, observer);
+    }
     let deadline = Deadline::after(started, options.time_limit_s);
     precheck(mission)?;
     let start = match &options.init {
