@@ -85,11 +85,16 @@ enum Cmd {
         /// Limits on the run's IQ, checked before planning.
         #[command(flatten)]
         limits: IqLimitArgs,
-        /// The resolution requirement of the plan: `paper` (the paper's δ_r, δ_a ≤ d_min) or
-        /// `general` (the worst width of the true bistatic cell ≤ d_min in every landmark slot;
-        /// see the top-level docs/user-guide.md, "Resolution: paper or general").
-        #[arg(long, default_value = "paper", value_parser = planner::evaluate::ResolutionMode::parse)]
+        /// The resolution requirement of the plan: `general` (the default: the worst width of
+        /// the true bistatic cell ≤ d_min in every landmark slot, or the best effort where the
+        /// geometry does not allow it) or `paper` (the paper's δ_r, δ_a ≤ d_min: the
+        /// least-energy plan); see the top-level docs/user-guide.md, "Resolution".
+        #[arg(long, default_value = "general", value_parser = planner::evaluate::ResolutionMode::parse)]
         resolution: planner::evaluate::ResolutionMode,
+        /// Under `general`: refuse a mission whose cell cannot be held within d_min in every
+        /// landmark slot (exit 3) instead of planning the best effort.
+        #[arg(long)]
+        strict_resolution: bool,
     },
     /// Resolution report: measured −3 dB region of a point response vs the predicted cell at
     /// several bistatic angles (one near blind) and bandwidths → RESOLUTION.md, JSON, SVGs.
@@ -209,7 +214,7 @@ fn closed_loop(
         m.slots(),
         t.elapsed().as_secs_f64(),
         result.evaluation.energy_j,
-        result.evaluation.is_feasible_for(plan_options.resolution)
+        result.is_feasible()
     );
     let plan_dir = out.join("plan");
     pipeline::report::write_plan_dir(&plan_dir, &m, &result)
@@ -325,9 +330,11 @@ fn run_cli() -> Result<()> {
             horizon_s,
             limits,
             resolution,
+            strict_resolution,
         } => {
             let plan_options = planner::PlanOptions {
                 resolution,
+                strict_resolution,
                 ..Default::default()
             };
             if !closed_loop(

@@ -3,6 +3,7 @@
 
 pub mod plot;
 pub mod reproduce;
+pub mod tradeoff;
 
 use std::path::{Path, PathBuf};
 
