@@ -20,10 +20,10 @@ mod options;
 mod phase_one;
 mod result;
 
+pub use best_effort::{best_effort_from, BestEffortBasis};
 pub use error::PlanError;
 pub use observer::{IterationRecord, NoObserver, Observer};
 pub use options::{PlanOptions, Scheme, DEFAULT_RESOLUTION_WEIGHT_J_PER_M};
-pub use best_effort::{best_effort_from, BestEffortBasis};
 pub use result::{BestEffort, PlanResult, TerminationReason};
 
 use coarse::{coarse_start, coarse_start_from, LevelStart};

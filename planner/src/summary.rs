@@ -7,8 +7,8 @@ use std::fmt::Write as _;
 use serde::{Deserialize, Serialize};
 
 use crate::driver::{BestEffort, PlanResult, Scheme, TerminationReason};
-use crate::shortfall::ResolutionShortfall;
 use crate::power::PowerModel;
+use crate::shortfall::ResolutionShortfall;
 use crate::Mission;
 
 /// The contents of `summary.json`.

@@ -27,7 +27,10 @@ fn default_mission_best_effort_leaves_at_most_8_windows_unresolved_within_ten_pe
     assert!(ev.is_feasible(), "{:?}", ev.violations);
     assert!(best.is_feasible());
     let info = best.best_effort.as_ref().expect("a best-effort plan");
-    let refusal = info.strict_refusal.as_deref().expect("the strict plan is refused");
+    let refusal = info
+        .strict_refusal
+        .as_deref()
+        .expect("the strict plan is refused");
     assert!(refusal.contains("slot"), "{refusal}");
     assert!((info.least_energy_j - least.evaluation.energy_j).abs() < 1e-6);
     let before = ResolutionShortfall::new(&m, &least.evaluation);
@@ -43,7 +46,11 @@ fn default_mission_best_effort_leaves_at_most_8_windows_unresolved_within_ten_pe
     assert!(after.unresolved_slots < before.unresolved_slots);
     assert!(after.total_deficit_m < before.total_deficit_m);
     let extra = ev.energy_j / least.evaluation.energy_j - 1.0;
-    assert!(extra >= -1e-9 && extra <= 0.10, "{:.2} % more energy", 100.0 * extra);
+    assert!(
+        extra >= -1e-9 && extra <= 0.10,
+        "{:.2} % more energy",
+        100.0 * extra
+    );
     // a strict request is still refused
     let strict = PlanOptions {
         strict_resolution: true,

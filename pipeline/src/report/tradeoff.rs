@@ -59,12 +59,16 @@ pub fn write_tradeoff_dir(
         &format!(
             "{}: resolution against energy (least-energy plan {:.0} J)",
             mission.name(),
-            points.first().map_or(f64::NAN, |p| p.plan.evaluation.energy_j)
+            points
+                .first()
+                .map_or(f64::NAN, |p| p.plan.evaluation.energy_j)
         ),
         "extra energy over the least-energy plan / %",
         "landmark windows (slots / 20) with a cell wider than d_min",
         &[
-            series("unresolved windows", |p| p.shortfall.unresolved_windows as f64),
+            series("unresolved windows", |p| {
+                p.shortfall.unresolved_windows as f64
+            }),
             series("unresolved slots / 20", |p| {
                 p.shortfall.unresolved_slots as f64 / 20.0
             }),

@@ -117,10 +117,7 @@ pub fn best_effort_from(
         .map(|pct| least_j * (1.0 + pct / 100.0));
     let info = BestEffort {
         least_energy_j: least_j,
-        least_energy_shortfall: ResolutionShortfall::new(
-            mission,
-            &basis.least_energy.evaluation,
-        ),
+        least_energy_shortfall: ResolutionShortfall::new(mission, &basis.least_energy.evaluation),
         max_extra_energy_pct: options.max_extra_energy_pct,
         strict_refusal: basis.strict.as_ref().err().cloned(),
     };

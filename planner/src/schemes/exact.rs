@@ -555,13 +555,22 @@ fn resolution_cell_constraints(
 
 /// Σ_t δ (P₀-quadratic · w_t + P_i a_t + parasite · z_t) + N δ P₀ ≤ `cap_j`: the surrogate energy
 /// (with w_t ≥ V_t², z_t ≥ V_t³, a_t the induced auxiliary) capped.
-fn energy_cap(b: &mut ProblemBuilder, vars: &[SlotVars], model: &PowerModel, delta: f64, cap_j: f64) {
+fn energy_cap(
+    b: &mut ProblemBuilder,
+    vars: &[SlotVars],
+    model: &PowerModel,
+    delta: f64,
+    cap_j: f64,
+) {
     let constant = vars.len() as f64 * delta * model.blade_power_w;
     let mut e = Lin::constant_only(cap_j - constant);
     for sv in vars {
         if let Some([a, _s, w, z]) = sv.energy {
             e = e
-                .plus(w, -delta * model.blade_quadratic_coeff() * SPEED_UNIT_MPS.powi(2))
+                .plus(
+                    w,
+                    -delta * model.blade_quadratic_coeff() * SPEED_UNIT_MPS.powi(2),
+                )
                 .plus(a, -delta * model.induced_power_w)
                 .plus(z, -delta * model.parasite_coeff * SPEED_UNIT_MPS.powi(3));
         }
