@@ -47,7 +47,7 @@ fn default_mission_best_effort_leaves_at_most_8_windows_unresolved_within_ten_pe
     assert!(after.total_deficit_m < before.total_deficit_m);
     let extra = ev.energy_j / least.evaluation.energy_j - 1.0;
     assert!(
-        extra >= -1e-9 && extra <= 0.10,
+        (-1e-9..=0.10).contains(&extra),
         "{:.2} % more energy",
         100.0 * extra
     );
