@@ -12,6 +12,7 @@ use crate::schemes::paper::PaperObjective;
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
+mod best_effort;
 mod coarse;
 mod error;
 mod iterate;
@@ -20,10 +21,11 @@ mod options;
 mod phase_one;
 mod result;
 
+pub use best_effort::{best_effort_from, BestEffortBasis};
 pub use error::PlanError;
 pub use observer::{IterationRecord, NoObserver, Observer};
-pub use options::{PlanOptions, Scheme};
-pub use result::{PlanResult, TerminationReason};
+pub use options::{PlanOptions, Scheme, DEFAULT_RESOLUTION_WEIGHT_J_PER_M};
+pub use result::{BestEffort, PlanResult, TerminationReason};
 
 use coarse::{coarse_start, coarse_start_from, LevelStart};
 use iterate::{run_exact, run_paper, Means};
@@ -67,6 +69,13 @@ fn run_plan(
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
     options.validate()?;
+    if options.scheme == Scheme::Exact
+        && options.resolution == ResolutionMode::General
+        && !options.strict_resolution
+    {
+        // (the stop flag is not passed on: a best-effort plan stops at its time limit only)
+        return best_effort::plan_best_effort(mission, options, observer);
+    }
     let deadline = Deadline::after(started, options.time_limit_s, stop);
     precheck(mission)?;
     let start = match &options.init {

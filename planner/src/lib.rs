@@ -25,8 +25,10 @@ pub mod mission;
 pub mod params;
 pub mod power;
 pub mod schemes;
+pub mod shortfall;
 pub mod socp;
 pub mod summary;
+pub mod tradeoff;
 pub mod trajectory;
 
 pub use driver::{

@@ -4,9 +4,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::driver::{PlanResult, Scheme, TerminationReason};
+use crate::driver::{BestEffort, PlanResult, Scheme, TerminationReason};
 use crate::evaluate::SlotEval;
 use crate::power::PowerModel;
+use crate::shortfall::ResolutionShortfall;
 use crate::Mission;
 
 /// The contents of `summary.json`.
@@ -70,12 +71,24 @@ pub struct Summary {
     pub max_range_resolution_general_m: f64,
     /// Largest paper range resolution over landmark slots, m.
     pub max_range_resolution_paper_m: f64,
-    /// All constraints of (p2) hold on the exact geometry.
+    /// All constraints of (p2) hold on the exact geometry, and, for a plan made for the general
+    /// resolution that is not a best effort, the cell's worst width ≤ d_min in every landmark
+    /// slot (a best-effort plan reports its shortfall in `resolution_shortfall`).
     pub feasible: bool,
     /// Cone programs solved.
     pub cone_programs: usize,
     /// Phase-I iterations spent on the start.
     pub repair_iterations: usize,
+    /// The resolution cell per landmark window and the unresolved slots and windows, on the
+    /// exact geometry (whatever the plan was made for).
+    #[serde(default)]
+    pub resolution_shortfall: Option<ResolutionShortfall>,
+    /// A best-effort plan: the least-energy plan it is measured against and the energy cap.
+    #[serde(default)]
+    pub best_effort: Option<BestEffort>,
+    /// A best-effort plan: its energy above the least-energy plan's, %.
+    #[serde(default)]
+    pub extra_energy_pct: Option<f64>,
 }
 
 impl Summary {
@@ -124,9 +137,15 @@ impl Summary {
             max_range_resolution_paper_m: landmark_slots()
                 .map(|s| s.range_resolution_paper_m)
                 .fold(0.0, f64::max),
-            feasible: ev.is_feasible_for(result.resolution),
+            feasible: result.is_feasible(),
             cone_programs: result.cone_programs,
             repair_iterations: result.repair_iterations,
+            resolution_shortfall: Some(ResolutionShortfall::new(mission, ev)),
+            best_effort: result.best_effort.clone(),
+            extra_energy_pct: result
+                .best_effort
+                .as_ref()
+                .map(|b| 100.0 * (ev.energy_j / b.least_energy_j - 1.0)),
         }
     }
 }

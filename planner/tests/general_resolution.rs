@@ -84,10 +84,11 @@ fn first_landmark_is_seen_from_the_default_start_only_near_the_blind_arc() {
 }
 
 #[test]
-fn default_mission_under_general_resolution_is_refused_naming_an_early_slot() {
+fn default_mission_under_strict_general_resolution_is_refused_naming_an_early_slot() {
     let m = Mission::preset(Preset::Default, 30.0).unwrap();
     let options = PlanOptions {
         resolution: ResolutionMode::General,
+        strict_resolution: true,
         ..Default::default()
     };
     match plan(&m, &options) {
@@ -125,6 +126,7 @@ fn default_mission_from_the_far_end_of_the_allowed_arc_has_a_general_plan() {
         &m,
         &PlanOptions {
             resolution: ResolutionMode::General,
+            strict_resolution: true,
             ..Default::default()
         },
     )

@@ -436,10 +436,10 @@ fn sigint_while_waiting_for_the_planner_exits_130() {
     assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
 }
 
-/// `--resolution` reaches the planner: under the general cell the default mission cannot be
-/// planned from its start (docs/user-guide.md, "Resolution: paper or general": the planner stops at slot 23), so
-/// the run exits 3 naming the resolution; with the default `paper` the same mission is planned
-/// (every other test here).
+/// `--resolution` and `--strict-resolution` reach the planner: under the strict general cell
+/// the default mission cannot be planned from its start (docs/user-guide.md, "Resolution: paper
+/// or general": the planner stops at slot 23), so the run exits 3 naming the resolution; with
+/// the default best effort the same mission is planned (every other test here).
 #[test]
 fn resolution_general_reaches_the_planner() {
     let dir = tempfile::tempdir().unwrap();
@@ -452,6 +452,7 @@ fn resolution_general_reaches_the_planner() {
         dir.path().join("out").into(),
         "--horizon-s".into(),
         "30".into(),
+        "--strict-resolution".into(),
         "--resolution".into(),
         "general".into(),
     ];

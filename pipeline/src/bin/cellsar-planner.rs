@@ -63,10 +63,14 @@ enum Command {
         /// over-relaxation (for comparisons with other implementations of the same scheme).
         #[arg(long)]
         plain_sca: bool,
-        /// Resolution requirement of the exact-geometry schemes: general (the worst width of the
-        /// 2-D resolution cell ≤ d_min, away from blind geometry) or paper (δ_r, δ_a ≤ d_min).
+        /// Resolution requirement of the exact-geometry schemes: paper (the default: δ_r, δ_a ≤
+        /// d_min, the least-energy plan) or general (the worst width of the 2-D resolution cell
+        /// ≤ d_min in every landmark slot, or, where the geometry does not allow it, the plan
+        /// with the least resolution shortfall and, at that shortfall, the least energy).
         #[arg(long, default_value = "paper", value_parser = pipeline::args::enum_parser::<ResolutionMode>())]
         resolution: ResolutionMode,
+        #[command(flatten)]
+        best_effort: BestEffortArgs,
         /// Wall-time limit of the whole run, s: the iterations stop at the first check after it
         /// and the last accepted (feasible) iterate is written, with termination `time_limit`;
         /// a run still repairing its start then fails (exit 1).
@@ -76,6 +80,20 @@ enum Command {
         /// the built-in start (the default, noted as `init_replaced` in summary.json).
         #[arg(long)]
         no_init_fallback: bool,
+    },
+    /// The energy–resolution trade-off: the least-energy plan, the best-resolved plan within
+    /// each cap on the extra energy, and the best-resolved plan; writes tradeoff.csv,
+    /// tradeoff.svg and each point's plan directory (point_NN/) to --out.
+    Tradeoff {
+        /// Mission file (TOML, or JSON with a .json extension).
+        mission: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Caps on the extra energy over the least-energy plan, % (comma-separated,
+        /// ascending).
+        #[arg(long, value_delimiter = ',', default_values_t = planner::tradeoff::DEFAULT_CAPS_PCT)]
+        caps_pct: Vec<f64>,
     },
     /// Evaluate a trajectory of a mission on the exact geometry (true energy, violations).
     Evaluate {
@@ -150,6 +168,19 @@ fn check_out_dir(out: &std::path::Path) -> Result<(), Failure> {
     Ok(())
 }
 
+/// The best-effort options of `plan` under `--resolution general`.
+#[derive(clap::Args, Debug)]
+struct BestEffortArgs {
+    /// Refuse a mission whose resolution cell cannot be held within d_min in every landmark
+    /// slot (exit 3, naming the first slot) instead of planning the best effort.
+    #[arg(long, conflicts_with = "max_extra_energy_pct")]
+    strict_resolution: bool,
+    /// The best-resolved plan within this many percent more energy than the least-energy
+    /// (paper resolution) plan.
+    #[arg(long)]
+    max_extra_energy_pct: Option<f64>,
+}
+
 /// Shows iterations on a spinner (hidden when stderr is not a terminal).
 struct Progress(ProgressBar);
 
@@ -190,6 +221,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             no_coarse,
             plain_sca,
             resolution,
+            best_effort,
             time_limit_s,
             no_init_fallback,
         } => {
@@ -218,6 +250,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 },
                 time_limit_s,
                 replace_unrepairable_init: !no_init_fallback,
+                strict_resolution: best_effort.strict_resolution,
+                max_extra_energy_pct: best_effort.max_extra_energy_pct,
                 ..PlanOptions::default()
             };
             let pb = spinner();
@@ -251,6 +285,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 s.min_speed_mps,
                 s.max_speed_mps
             );
+            if let Some(line) = shortfall_line(&s) {
+                out!("{line}");
+            }
             if let Some(reason) = &result.init_replaced {
                 out!(
                     "note: the --init path could not be made feasible ({reason}); planned from the built-in start instead"
@@ -259,6 +296,35 @@ fn run(cli: Cli) -> Result<(), Failure> {
             for f in files {
                 out!("wrote {}", f.display());
             }
+            Ok(())
+        }
+        Command::Tradeoff {
+            mission,
+            out,
+            caps_pct,
+        } => {
+            let m = Mission::from_path(&mission).map_err(bad)?;
+            check_out_dir(&out)?;
+            if caps_pct.windows(2).any(|w| w[1] < w[0]) {
+                return Err(bad(anyhow::anyhow!("--caps-pct must be ascending")));
+            }
+            let options = PlanOptions::default();
+            let points = planner::tradeoff::tradeoff(&m, &options, &caps_pct)?;
+            report::tradeoff::write_tradeoff_dir(&out, &m, &points)
+                .with_context(|| format!("writing {}", out.display()))?;
+            out!("point  cap/%  energy/J  extra/%  unresolved windows  slots  excess width/m");
+            for (i, p) in points.iter().enumerate() {
+                out!(
+                    "{i:>5}  {:>5}  {:>8.1}  {:>7.2}  {:>18}  {:>5}  {:>14.0}",
+                    p.cap_pct.map_or("none".to_string(), |c| format!("{c}")),
+                    p.plan.evaluation.energy_j,
+                    p.extra_energy_pct,
+                    p.shortfall.unresolved_windows,
+                    p.shortfall.unresolved_slots,
+                    p.shortfall.total_excess_width_m
+                );
+            }
+            out!("wrote {}", out.display());
             Ok(())
         }
         Command::Evaluate {
@@ -333,6 +399,33 @@ fn run(cli: Cli) -> Result<(), Failure> {
             Ok(())
         }
     }
+}
+
+/// One line on the resolution of a plan made for the general resolution as a best effort.
+fn shortfall_line(s: &Summary) -> Option<String> {
+    let (b, r) = (s.best_effort.as_ref()?, s.resolution_shortfall.as_ref()?);
+    let unresolved: Vec<String> = r
+        .windows
+        .iter()
+        .filter(|w| w.unresolved)
+        .map(|w| format!("{} ({:.0} m)", w.landmark, w.median_worst_width_m))
+        .collect();
+    Some(format!(
+        "resolution (best effort): {} of {} windows and {} landmark slots with a cell wider than d_min = {} m{}; the least-energy plan: {} windows, {} slots at {:.1} J (this plan {:+.2}%)",
+        r.unresolved_windows,
+        r.windows.len(),
+        r.unresolved_slots,
+        r.d_min_m,
+        if unresolved.is_empty() {
+            String::new()
+        } else {
+            format!(" (landmark, median cell: {})", unresolved.join(", "))
+        },
+        b.least_energy_shortfall.unresolved_windows,
+        b.least_energy_shortfall.unresolved_slots,
+        b.least_energy_j,
+        s.extra_energy_pct.unwrap_or(f64::NAN)
+    ))
 }
 
 /// The log level when `RUST_LOG` is not set: `info` for the long-running service (it says

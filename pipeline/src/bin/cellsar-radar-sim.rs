@@ -85,11 +85,16 @@ enum Cmd {
         /// Limits on the run's IQ, checked before planning.
         #[command(flatten)]
         limits: IqLimitArgs,
-        /// The resolution requirement of the plan: `paper` (the paper's δ_r, δ_a ≤ d_min) or
-        /// `general` (the worst width of the true bistatic cell ≤ d_min in every landmark slot;
-        /// see the top-level docs/user-guide.md, "Resolution: paper or general").
+        /// The resolution requirement of the plan: `paper` (the default: the paper's δ_r, δ_a ≤
+        /// d_min, the least-energy plan) or `general` (the worst width of the true bistatic cell
+        /// ≤ d_min in every landmark slot, or the best effort where the geometry does not allow
+        /// it); see the top-level docs/user-guide.md, "Resolution".
         #[arg(long, default_value = "paper", value_parser = pipeline::args::enum_parser::<planner::evaluate::ResolutionMode>())]
         resolution: planner::evaluate::ResolutionMode,
+        /// Under `general`: refuse a mission whose cell cannot be held within d_min in every
+        /// landmark slot (exit 3) instead of planning the best effort.
+        #[arg(long)]
+        strict_resolution: bool,
     },
     /// Resolution report: measured −3 dB region of a point response vs the predicted cell at
     /// several bistatic angles (one near blind) and bandwidths → RESOLUTION.md, JSON, SVGs.
@@ -215,7 +220,7 @@ fn closed_loop(
         m.slots(),
         t.elapsed().as_secs_f64(),
         result.evaluation.energy_j,
-        result.evaluation.is_feasible_for(plan_options.resolution)
+        result.is_feasible()
     );
     let plan_dir = out.join("plan");
     pipeline::report::write_plan_dir(&plan_dir, &m, &result)
@@ -338,9 +343,11 @@ fn run_cli() -> Result<()> {
             horizon_s,
             limits,
             resolution,
+            strict_resolution,
         } => {
             let plan_options = planner::PlanOptions {
                 resolution,
+                strict_resolution,
                 ..Default::default()
             };
             if !closed_loop(

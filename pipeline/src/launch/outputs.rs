@@ -195,6 +195,21 @@ fn write_report_md(
         plan.summary.feasible,
         pipeline["plan_s"].as_f64().unwrap_or(f64::NAN)
     );
+    let best_effort = plan.result.best_effort.as_ref();
+    if let (Some(b), Some(r)) = (best_effort, plan.summary.resolution_shortfall.as_ref()) {
+        let _ = writeln!(
+            s,
+            "- resolution: general, best effort: {} of {} windows with a cell wider than d_min \
+             (the least-energy plan: {}), for {:.0} J more energy than the least-energy plan's \
+             {:.0} J ({:+.1} %)",
+            r.unresolved_windows,
+            r.windows.len(),
+            b.least_energy_shortfall.unresolved_windows,
+            plan.summary.energy_j - b.least_energy_j,
+            b.least_energy_j,
+            plan.summary.extra_energy_pct.unwrap_or(f64::NAN)
+        );
+    }
     let _ = writeln!(
         s,
         "- imaging: {n} apertures in {:.1} s; wall time {:.1} s",
@@ -220,20 +235,43 @@ fn write_report_md(
          resolution cell (general bistatic cell, erratum 12 (docs/paper-notes.md)); above d_min = {d_min} m \
          the geometry is near blind: objects d_min apart along the cell's long side fall into \
          one cell although the paper's δ_r, δ_a ≤ d_min hold (`--resolution general` plans \
-         avoid this where the mission allows it)."
+         avoid this as far as the geometry allows)."
     );
+    // the least-energy plan's cell per landmark, beside a best-effort plan's
+    let least: Option<Vec<(usize, f64)>> = best_effort.map(|b| {
+        b.least_energy_shortfall
+            .windows
+            .iter()
+            .map(|w| (w.landmark, w.median_worst_width_m))
+            .collect()
+    });
+    let least_width = |l: usize| {
+        least
+            .as_ref()
+            .and_then(|v| v.iter().find(|w| w.0 == l))
+            .map(|w| w.1)
+    };
     let _ = writeln!(
         s,
-        "\n| aperture | landmark | in view | detected | SNR/dB | cell/m |\n|---:|---:|---:|:---:|---:|---:|"
+        "\n| aperture | landmark | in view | detected | SNR/dB | cell/m |{}\n|---:|---:|---:|:---:|---:|---:|{}",
+        if least.is_some() { " least-energy plan's cell/m |" } else { "" },
+        if least.is_some() { "---:|" } else { "" }
     );
     for r in &report.rows {
         let w = r
             .landmark
             .and_then(|l| widths.get(l).copied())
             .unwrap_or(f64::NAN);
+        let beside = match (&least, r.landmark.and_then(least_width)) {
+            (Some(_), Some(lw)) => {
+                format!(" {lw:.1}{} |", if lw > d_min { " (> d_min)" } else { "" })
+            }
+            (Some(_), None) => " |".to_string(),
+            (None, _) => String::new(),
+        };
         let _ = writeln!(
             s,
-            "| {} | {} | {:.2} | {} | {:.1} | {:.1}{} |",
+            "| {} | {} | {:.2} | {} | {:.1} | {:.1}{} |{beside}",
             r.aperture,
             r.landmark.map(|l| l.to_string()).unwrap_or_default(),
             r.in_view_fraction,

@@ -42,6 +42,7 @@ impl Session<'_> {
             mission: mission.to_file_struct(),
             options: PlanRequestOptions {
                 resolution: Some(self.args().resolution),
+                strict_resolution: Some(self.args().strict_resolution),
                 ..PlanRequestOptions::default()
             },
         };

@@ -35,6 +35,12 @@ pub struct PlanRequestOptions {
     /// `paper` (default) or `general`.
     #[serde(default)]
     pub resolution: Option<ResolutionMode>,
+    /// Under `general`: refuse instead of the best effort (default false).
+    #[serde(default)]
+    pub strict_resolution: Option<bool>,
+    /// Best effort: at most this many percent more energy than the least-energy plan (≥ 0).
+    #[serde(default)]
+    pub max_extra_energy_pct: Option<f64>,
 }
 
 impl PlanRequestOptions {
@@ -62,6 +68,17 @@ impl PlanRequestOptions {
         }
         if let Some(r) = self.resolution {
             o.resolution = r;
+        }
+        if let Some(strict) = self.strict_resolution {
+            o.strict_resolution = strict;
+        }
+        if let Some(pct) = self.max_extra_energy_pct {
+            if !(pct.is_finite() && pct >= 0.0) {
+                return Err(BadRequest(format!(
+                    "options.max_extra_energy_pct: {pct} must be a finite percentage >= 0"
+                )));
+            }
+            o.max_extra_energy_pct = Some(pct);
         }
         Ok(o)
     }

@@ -4,6 +4,7 @@
 pub mod image_svg;
 pub mod plot;
 pub mod reproduce;
+pub mod tradeoff;
 
 use std::path::{Path, PathBuf};
 

@@ -5,6 +5,7 @@ use std::time::Instant;
 use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::schemes::paper::{PaperObjective, PaperState};
+use crate::shortfall::total_deficit_m;
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
@@ -80,6 +81,7 @@ pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) ->
         cone_programs,
         resolution: ResolutionMode::Paper,
         init_replaced: None,
+        best_effort: None,
     }
 }
 
@@ -98,7 +100,12 @@ pub(super) fn run_exact(
         observer,
         deadline,
     } = means;
-    let true_value = |ev: &Evaluation| objective.true_value(ev);
+    let judge = Judge {
+        mission,
+        objective,
+        tuning: base,
+    };
+    let true_value = |ev: &Evaluation| judge.value(ev);
     let mut current = start;
     let mut ev = evaluate(mission, &current);
     let mut value = true_value(&ev);
@@ -152,13 +159,12 @@ pub(super) fn run_exact(
         let mut cand_value = true_value(&cand_ev);
         // over-relaxation: SCA steps limited by the conservative centre bound tend to repeat in
         // the same direction; try longer steps along it and keep the best that stays feasible.
-        let mode = base.resolution;
-        if options.over_relaxation && cand_ev.is_feasible_for(mode) && cand_value < value {
+        if options.over_relaxation && judge.feasible(&cand_ev) && cand_value < value {
             for alpha in [2.0, 4.0] {
                 let trial = extrapolate(&current, &cand, alpha);
                 let ev = evaluate(mission, &trial);
                 let v = true_value(&ev);
-                if ev.is_feasible_for(mode) && v < cand_value {
+                if judge.feasible(&ev) && v < cand_value {
                     cand = trial;
                     cand_ev = ev;
                     cand_value = v;
@@ -168,7 +174,7 @@ pub(super) fn run_exact(
             }
         }
         let own = sub.physical_objective(sol.objective);
-        let ok = cand_ev.is_feasible_for(mode) && cand_value <= value * (1.0 + 1e-9) + 1e-9;
+        let ok = judge.feasible(&cand_ev) && cand_value <= value * (1.0 + 1e-9) + 1e-9;
         let rec = record(
             it,
             own,
@@ -188,7 +194,7 @@ pub(super) fn run_exact(
             rejects += 1;
             tracing::debug!(
                 iteration = it,
-                feasible = cand_ev.is_feasible_for(mode),
+                feasible = judge.feasible(&cand_ev),
                 value = cand_value,
                 previous = value,
                 "step rejected"
@@ -235,6 +241,39 @@ pub(super) fn run_exact(
             cone_programs: programs,
         },
     ))
+}
+
+/// How the exact loop judges an iterate on the exact geometry.
+struct Judge<'a> {
+    mission: &'a Mission,
+    objective: ExactObjective,
+    tuning: &'a ExactTuning,
+}
+
+impl Judge<'_> {
+    /// The true merit: the objective's true value, plus, in best effort, the weighted
+    /// resolution deficit.
+    fn value(&self, ev: &Evaluation) -> f64 {
+        let own = self.objective.true_value(ev);
+        match self.tuning.cell_slack_weight {
+            Some(w) => own + w * total_deficit_m(self.mission, ev),
+            None => own,
+        }
+    }
+
+    /// Feasible for the loop's requirements: every constraint, the cell ones only when they
+    /// are hard, and the energy cap.
+    fn feasible(&self, ev: &Evaluation) -> bool {
+        let constraints = match self.tuning.cell_slack_weight {
+            Some(_) => ev.is_feasible(),
+            None => ev.is_feasible_for(self.tuning.resolution),
+        };
+        constraints
+            && self
+                .tuning
+                .energy_cap_j
+                .is_none_or(|cap| ev.energy_j <= cap * (1.0 + 1e-9))
+    }
 }
 
 /// `from + alpha (to − from)`, slot by slot.

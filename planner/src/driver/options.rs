@@ -11,6 +11,11 @@ use crate::Trajectory;
 
 use super::PlanError;
 
+/// Default of [`PlanOptions::resolution_weight_j_per_m`], J/m.
+pub const DEFAULT_RESOLUTION_WEIGHT_J_PER_M: f64 = 100.0;
+
+/// Which planner to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 /// Which planner to run. Its names (`exact`, `paper`, `baseline`, `baseline-exact`) are the
 /// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).
 #[derive(
@@ -102,6 +107,18 @@ pub struct PlanOptions {
     /// [`PlanResult::init_replaced`](super::PlanResult::init_replaced)); when false, fail with
     /// phase I's error.
     pub replace_unrepairable_init: bool,
+    /// Under [`ResolutionMode::General`] with the `exact` scheme: refuse a mission whose cell
+    /// cannot be held within d_min in every landmark slot ([`PlanError::Infeasible`], naming
+    /// the first slot) instead of planning the best effort. The best effort minimises the
+    /// resolution deficit ([`crate::shortfall`]) and, at that deficit, the energy, with every
+    /// other constraint hard.
+    pub strict_resolution: bool,
+    /// Best effort only: the plan may use at most this many percent more energy than the
+    /// least-energy plan (the `paper` resolution plan); `None`: no cap (the best-resolved plan).
+    pub max_extra_energy_pct: Option<f64>,
+    /// Best effort only: the energy one metre of resolution deficit is worth, J/m. Large values
+    /// make the objective lexicographic (deficit first, then energy).
+    pub resolution_weight_j_per_m: f64,
 }
 
 impl PlanOptions {
@@ -125,6 +142,22 @@ impl PlanOptions {
                 "min_kappa_scale",
                 self.min_kappa_scale,
                 "must lie in (0, 1]",
+            );
+        }
+        if let Some(pct) = self.max_extra_energy_pct {
+            if !(pct.is_finite() && pct >= 0.0) {
+                return bad(
+                    "max_extra_energy_pct",
+                    pct,
+                    "must be a finite percentage >= 0",
+                );
+            }
+        }
+        if !(self.resolution_weight_j_per_m.is_finite() && self.resolution_weight_j_per_m > 0.0) {
+            return bad(
+                "resolution_weight_j_per_m",
+                self.resolution_weight_j_per_m,
+                "must be a finite number > 0",
             );
         }
         if let Some(limit) = self.time_limit_s {
@@ -163,6 +196,9 @@ impl Default for PlanOptions {
             resolution: ResolutionMode::Paper,
             time_limit_s: None,
             replace_unrepairable_init: true,
+            strict_resolution: false,
+            max_extra_energy_pct: None,
+            resolution_weight_j_per_m: DEFAULT_RESOLUTION_WEIGHT_J_PER_M,
         }
     }
 }

@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::evaluate::{Evaluation, ResolutionMode};
+use crate::shortfall::ResolutionShortfall;
 use crate::Trajectory;
 
 use super::{IterationRecord, Scheme};
@@ -61,4 +62,36 @@ pub struct PlanResult {
     /// feasible) and the plan starts from the built-in start instead. `None` when the given
     /// start was used or none was given.
     pub init_replaced: Option<String>,
+    /// A best-effort plan under the general resolution ([`PlanOptions::strict_resolution`]
+    /// off): the least-energy plan it was measured against. `None` for every other plan.
+    ///
+    /// [`PlanOptions::strict_resolution`]: super::PlanOptions::strict_resolution
+    #[serde(default)]
+    pub best_effort: Option<BestEffort>,
+}
+
+impl PlanResult {
+    /// Whether the plan meets what it was planned for on the exact geometry: every constraint
+    /// of (p2), and the general resolution in every landmark slot when it was planned for it
+    /// strictly (a best-effort plan reports its shortfall instead).
+    pub fn is_feasible(&self) -> bool {
+        match self.best_effort {
+            Some(_) => self.evaluation.is_feasible(),
+            None => self.evaluation.is_feasible_for(self.resolution),
+        }
+    }
+}
+
+/// What a best-effort plan was measured against.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BestEffort {
+    /// True energy of the least-energy plan (the `paper` resolution plan of the same mission), J.
+    pub least_energy_j: f64,
+    /// That plan's resolution shortfall on the exact geometry.
+    pub least_energy_shortfall: ResolutionShortfall,
+    /// The energy cap it was planned under, % above `least_energy_j` (`None`: none).
+    pub max_extra_energy_pct: Option<f64>,
+    /// Why the strict general plan was refused (`None`: it exists, but above the cap, or it is
+    /// this plan).
+    pub strict_refusal: Option<String>,
 }

@@ -81,6 +81,14 @@ pub struct ExactTuning {
     pub whole_slot_sensing: bool,
     /// Which resolution requirement to impose in landmark slots.
     pub resolution: ResolutionMode,
+    /// Best effort under [`ResolutionMode::General`]: each landmark slot's cell constraints get
+    /// a deficit slack ρ_t ≥ 0 (m, linearised
+    /// [`slot_deficit_m`](crate::shortfall::slot_deficit_m) at the previous iterate) charged at
+    /// this many objective units (J) per metre; `None` = the cell constraints are hard.
+    pub cell_slack_weight: Option<f64>,
+    /// Cap on the surrogate energy, J (it over-estimates the true energy and is tight at the
+    /// previous iterate, so an iterate that meets it has at most this true energy).
+    pub energy_cap_j: Option<f64>,
 }
 
 impl Default for ExactTuning {
@@ -92,6 +100,8 @@ impl Default for ExactTuning {
             elastic_weight: None,
             whole_slot_sensing: false,
             resolution: ResolutionMode::Paper,
+            cell_slack_weight: None,
+            energy_cap_j: None,
         }
     }
 }
@@ -112,6 +122,8 @@ struct SlotVars {
     sigma: Option<usize>,
     /// General resolution: m_t ≥ ‖q_t − q_t^(ℓ)‖ (for the position margin of the cell terms).
     shift: Option<usize>,
+    /// Best effort: the cell's deficit slack ρ_t, m.
+    rho: Option<usize>,
 }
 
 /// The linearisation data of one slot, from the previous iterate.
@@ -173,7 +185,9 @@ impl ExactSubproblem {
                 (objective != ExactObjective::Distance).then(|| [take(), take(), take(), take()]);
             let e = landmark.then(&mut take);
             let sigma = (landmark && tuning.elastic_weight.is_some()).then(&mut take);
-            let shift = (landmark && tuning.resolution == ResolutionMode::General).then(&mut take);
+            let general = landmark && tuning.resolution == ResolutionMode::General;
+            let shift = general.then(&mut take);
+            let rho = (general && tuning.cell_slack_weight.is_some()).then(&mut take);
             vars.push(SlotVars {
                 x,
                 y,
@@ -182,6 +196,7 @@ impl ExactSubproblem {
                 e,
                 sigma,
                 shift,
+                rho,
             });
         }
         let mut b = ProblemBuilder::new(next);
@@ -227,6 +242,13 @@ impl ExactSubproblem {
             if let (Some(sig), Some(w)) = (sv.sigma, tuning.elastic_weight) {
                 b.add_linear_cost(sig, w * objective_scale);
             }
+            if let (Some(rho), Some(w)) = (sv.rho, tuning.cell_slack_weight) {
+                b.add_linear_cost(rho, w * objective_scale);
+                b.nonneg(Lin::var(rho, 1.0));
+            }
+        }
+        if let Some(cap) = tuning.energy_cap_j {
+            energy_cap(&mut b, &vars, &model, delta, cap);
         }
 
         // per-slot constraints
@@ -362,6 +384,7 @@ impl ExactSubproblem {
                         y: sv.y,
                         shift: m,
                         sigma: sv.sigma,
+                        rho: sv.rho,
                     },
                     &vx,
                     &vy,
@@ -431,6 +454,8 @@ struct ResolutionSlot {
     /// m_t ≥ ‖q_t − q0‖.
     shift: usize,
     sigma: Option<usize>,
+    /// Best effort: the deficit slack ρ_t.
+    rho: Option<usize>,
 }
 
 /// Safety factor on the finite-difference Lipschitz estimates of the cell terms in q.
@@ -510,6 +535,14 @@ fn resolution_cell_constraints(
         iso = iso.plus(sig, rhs / p.d_min_m);
         head = head.plus(sig, rhs / p.d_min_m);
     }
+    if let Some(rho) = rs.rho {
+        // ρ ≥ d_min (1 − s k·v / rhs) and ρ ≥ d_min (c/(B d_min) ‖A v‖ − s k·v) / (c/(B d_min) ‖A u‖):
+        // at v = u (and q = q0) both are the deficit d_min (1 − d_min / w) of the iso-range and
+        // the cross-track width w, so the slack is tight at the previous iterate
+        let au = k_cross * (cl.doppler_map * (rs.step0 / delta)).length();
+        iso = iso.plus(rho, rhs / p.d_min_m);
+        head = head.plus(rho, au.max(1e-12) / p.d_min_m);
+    }
     b.nonneg(iso);
     let a = cl.doppler_map;
     let av = |i: usize| {
@@ -518,6 +551,31 @@ fn resolution_cell_constraints(
             .plus_lin(&vy.clone().scaled(k_cross * a[(i, 1)] / delta))
     };
     b.soc(head, &[av(0), av(1)]);
+}
+
+/// Σ_t δ (P₀-quadratic · w_t + P_i a_t + parasite · z_t) + N δ P₀ ≤ `cap_j`: the surrogate energy
+/// (with w_t ≥ V_t², z_t ≥ V_t³, a_t the induced auxiliary) capped.
+fn energy_cap(
+    b: &mut ProblemBuilder,
+    vars: &[SlotVars],
+    model: &PowerModel,
+    delta: f64,
+    cap_j: f64,
+) {
+    let constant = vars.len() as f64 * delta * model.blade_power_w;
+    let mut e = Lin::constant_only(cap_j - constant);
+    for sv in vars {
+        if let Some([a, _s, w, z]) = sv.energy {
+            e = e
+                .plus(
+                    w,
+                    -delta * model.blade_quadratic_coeff() * SPEED_UNIT_MPS.powi(2),
+                )
+                .plus(a, -delta * model.induced_power_w)
+                .plus(z, -delta * model.parasite_coeff * SPEED_UNIT_MPS.powi(3));
+        }
+    }
+    b.nonneg(e);
 }
 
 /// (x_t − x_{t−1}, y_t − y_{t−1}) as affine expressions (q_0 is a constant).

@@ -1,0 +1,63 @@
+//! The energy–resolution trade-off of a mission: from the least-energy plan to the
+//! best-resolved plan, the best-effort plan under a rising cap on the extra energy.
+
+use crate::driver::{best_effort_from, BestEffortBasis, NoObserver, PlanError, PlanOptions};
+use crate::evaluate::ResolutionMode;
+use crate::shortfall::ResolutionShortfall;
+use crate::{Mission, PlanResult};
+
+/// The caps of the default trade-off curve, % of extra energy over the least-energy plan; the
+/// curve adds the least-energy plan (0 %) before and the uncapped best effort after them.
+pub const DEFAULT_CAPS_PCT: [f64; 6] = [1.0, 2.0, 4.0, 7.0, 10.0, 15.0];
+
+/// One point of the curve.
+#[derive(Debug, Clone)]
+pub struct TradeoffPoint {
+    /// Its cap, % (`Some(0.0)` for the least-energy plan, `None` for the uncapped best effort).
+    pub cap_pct: Option<f64>,
+    /// The plan.
+    pub plan: PlanResult,
+    /// Its shortfall on the exact geometry.
+    pub shortfall: ResolutionShortfall,
+    /// Its energy above the least-energy plan's, %.
+    pub extra_energy_pct: f64,
+}
+
+/// The curve for `caps_pct` (ascending, each ≥ 0): the least-energy plan, the best effort
+/// under each cap, and the uncapped best effort. Each capped plan starts from the previous
+/// point's, which meets the larger cap, so the shortfall never rises along the curve.
+pub fn tradeoff(
+    mission: &Mission,
+    options: &PlanOptions,
+    caps_pct: &[f64],
+) -> Result<Vec<TradeoffPoint>, PlanError> {
+    let options = PlanOptions {
+        resolution: ResolutionMode::General,
+        strict_resolution: false,
+        max_extra_energy_pct: None,
+        ..options.clone()
+    };
+    options.validate()?;
+    let basis = BestEffortBasis::new(mission, &options, &mut NoObserver)?;
+    let least_j = basis.least_energy_j();
+    let point = |cap_pct, plan: PlanResult| TradeoffPoint {
+        cap_pct,
+        shortfall: ResolutionShortfall::new(mission, &plan.evaluation),
+        extra_energy_pct: 100.0 * (plan.evaluation.energy_j / least_j - 1.0),
+        plan,
+    };
+    let mut points = vec![point(Some(0.0), basis.least_energy.clone())];
+    let mut start = basis.least_energy.trajectory.clone();
+    let caps = caps_pct.iter().copied().map(Some).chain([None]);
+    for cap in caps {
+        let capped = PlanOptions {
+            max_extra_energy_pct: cap,
+            ..options.clone()
+        };
+        let plan = best_effort_from(mission, &capped, &basis, Some(&start), &mut NoObserver)?;
+        // the next cap starts from this plan (within the larger cap too)
+        start = plan.trajectory.clone();
+        points.push(point(cap, plan));
+    }
+    Ok(points)
+}

@@ -1,0 +1,102 @@
+//! Best effort under the general resolution (docs/user-guide.md, "Resolution"): the default
+//! mission, whose cell cannot be held within d_min everywhere from its start, gets the plan with
+//! the least resolution deficit, measured on the exact geometry; an energy cap holds; a mission
+//! with a strict general plan gets that plan.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use planner::evaluate::ResolutionMode;
+use planner::shortfall::ResolutionShortfall;
+use planner::{evaluate, plan, Mission, Params, PlanOptions, Preset};
+
+fn best_effort(max_extra_energy_pct: Option<f64>) -> PlanOptions {
+    PlanOptions {
+        resolution: ResolutionMode::General,
+        max_extra_energy_pct,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn default_mission_best_effort_leaves_at_most_8_windows_unresolved_within_ten_percent() {
+    let m = Mission::preset(Preset::Default, 30.0).unwrap();
+    let least = plan(&m, &PlanOptions::default()).unwrap();
+    let best = plan(&m, &best_effort(None)).unwrap();
+    // judged again on the exact geometry, independently of the planner's own evaluation
+    let ev = evaluate(&m, &best.trajectory);
+    assert!(ev.is_feasible(), "{:?}", ev.violations);
+    assert!(best.is_feasible());
+    let info = best.best_effort.as_ref().expect("a best-effort plan");
+    let refusal = info
+        .strict_refusal
+        .as_deref()
+        .expect("the strict plan is refused");
+    assert!(refusal.contains("slot"), "{refusal}");
+    assert!((info.least_energy_j - least.evaluation.energy_j).abs() < 1e-6);
+    let before = ResolutionShortfall::new(&m, &least.evaluation);
+    let after = ResolutionShortfall::new(&m, &ev);
+    assert_eq!(info.least_energy_shortfall, before);
+    // the target: at most 8 of the 30 windows (the least-energy plan leaves 14 here)
+    assert!(
+        after.unresolved_windows <= 8 && after.unresolved_windows < before.unresolved_windows,
+        "{} unresolved windows, least-energy plan {}",
+        after.unresolved_windows,
+        before.unresolved_windows
+    );
+    assert!(after.unresolved_slots < before.unresolved_slots);
+    assert!(after.total_deficit_m < before.total_deficit_m);
+    let extra = ev.energy_j / least.evaluation.energy_j - 1.0;
+    assert!(
+        (-1e-9..=0.10).contains(&extra),
+        "{:.2} % more energy",
+        100.0 * extra
+    );
+    // a strict request is still refused
+    let strict = PlanOptions {
+        strict_resolution: true,
+        ..best_effort(None)
+    };
+    assert!(matches!(
+        plan(&m, &strict),
+        Err(planner::PlanError::Infeasible(_))
+    ));
+}
+
+#[test]
+fn an_energy_cap_holds_on_the_exact_geometry() {
+    let m = Mission::preset(Preset::Default, 30.0).unwrap();
+    let capped = plan(&m, &best_effort(Some(1.0))).unwrap();
+    let info = capped.best_effort.as_ref().unwrap();
+    let ev = evaluate(&m, &capped.trajectory);
+    assert!(ev.is_feasible());
+    assert!(
+        ev.energy_j <= info.least_energy_j * 1.01 + 1e-6,
+        "{} J against a cap of {} J",
+        ev.energy_j,
+        info.least_energy_j * 1.01
+    );
+    let after = ResolutionShortfall::new(&m, &ev);
+    assert!(after.total_deficit_m < info.least_energy_shortfall.total_deficit_m);
+    assert!(plan(&m, &best_effort(Some(-1.0))).is_err());
+}
+
+#[test]
+fn a_mission_with_a_strict_general_plan_gets_it() {
+    let mut p = Params::default();
+    p.start_m = [342.0, 940.0];
+    let spec = planner::LandmarksSpec {
+        preset: Some(Preset::Default),
+        spacing_m: Some(30.0),
+        ..Default::default()
+    };
+    let m = Mission::new("default 30 m from (342, 940)", p, &spec).unwrap();
+    let best = plan(&m, &best_effort(None)).unwrap();
+    let ev = evaluate(&m, &best.trajectory);
+    assert!(ev.is_feasible_for(ResolutionMode::General));
+    let s = ResolutionShortfall::new(&m, &ev);
+    assert_eq!((s.unresolved_slots, s.unresolved_windows), (0, 0));
+    assert_eq!(s.first_unresolved_slot, None);
+    let info = best.best_effort.as_ref().unwrap();
+    assert_eq!(info.strict_refusal, None);
+    assert!(ev.energy_j >= info.least_energy_j);
+}
