@@ -73,8 +73,7 @@ fn run_plan(
         && options.resolution == ResolutionMode::General
         && !options.strict_resolution
     {
-        // (the stop flag is not passed on: a best-effort plan stops at its time limit only)
-        return best_effort::plan_best_effort(mission, options, observer);
+        return best_effort::plan_best_effort(mission, options, observer, stop);
     }
     let deadline = Deadline::after(started, options.time_limit_s, stop);
     precheck(mission)?;

@@ -309,7 +309,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 return Err(bad(anyhow::anyhow!("--caps-pct must be ascending")));
             }
             let options = PlanOptions::default();
-            let points = planner::tradeoff::tradeoff(&m, &options, &caps_pct)?;
+            let points =
+                planner::tradeoff::tradeoff(&m, &options, &caps_pct).map_err(plan_failure)?;
             report::tradeoff::write_tradeoff_dir(&out, &m, &points)
                 .with_context(|| format!("writing {}", out.display()))?;
             out!("point  cap/%  energy/J  extra/%  unresolved windows  slots  excess width/m");

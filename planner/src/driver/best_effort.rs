@@ -9,6 +9,7 @@
 //! least-energy plan it starts from. An energy cap ([`PlanOptions::max_extra_energy_pct`]) is a
 //! constraint on the surrogate energy, which over-estimates the true one.
 
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use crate::evaluate::ResolutionMode;
@@ -42,7 +43,17 @@ impl BestEffortBasis {
         options: &PlanOptions,
         observer: &mut dyn Observer,
     ) -> Result<Self, PlanError> {
-        let least_energy = super::plan_with_observer(
+        Self::new_until(mission, options, observer, None)
+    }
+
+    /// [`BestEffortBasis::new`], stopping early once `stop` is set.
+    fn new_until(
+        mission: &Mission,
+        options: &PlanOptions,
+        observer: &mut dyn Observer,
+        stop: Option<&AtomicBool>,
+    ) -> Result<Self, PlanError> {
+        let least_energy = super::run_plan(
             mission,
             &PlanOptions {
                 resolution: ResolutionMode::Paper,
@@ -50,6 +61,7 @@ impl BestEffortBasis {
                 ..options.clone()
             },
             observer,
+            stop,
         )?;
         let general = ResolutionMode::General;
         let strict = if least_energy.evaluation.is_feasible_for(general) {
@@ -60,7 +72,7 @@ impl BestEffortBasis {
                 strict_resolution: true,
                 ..options.clone()
             };
-            match super::plan_with_observer(mission, &strict_options, observer) {
+            match super::run_plan(mission, &strict_options, observer, stop) {
                 Ok(plan) => Ok(plan),
                 Err(PlanError::Infeasible(why)) => Err(why.to_string()),
                 Err(e) => return Err(e),
@@ -84,10 +96,11 @@ pub(super) fn plan_best_effort(
     mission: &Mission,
     options: &PlanOptions,
     observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
-    let basis = BestEffortBasis::new(mission, options, observer)?;
-    let mut out = best_effort_from(mission, options, &basis, None, observer)?;
+    let basis = BestEffortBasis::new_until(mission, options, observer, stop)?;
+    let mut out = best_effort_until(mission, options, &basis, None, observer, stop)?;
     out.solve_seconds = started.elapsed().as_secs_f64();
     Ok(out)
 }
@@ -108,9 +121,21 @@ pub fn best_effort_from(
     start: Option<&Trajectory>,
     observer: &mut dyn Observer,
 ) -> Result<PlanResult, PlanError> {
+    best_effort_until(mission, options, basis, start, observer, None)
+}
+
+/// [`best_effort_from`], stopping early once `stop` is set.
+fn best_effort_until(
+    mission: &Mission,
+    options: &PlanOptions,
+    basis: &BestEffortBasis,
+    start: Option<&Trajectory>,
+    observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
+) -> Result<PlanResult, PlanError> {
     options.validate()?;
     let started = Instant::now();
-    let deadline = Deadline::after(started, options.time_limit_s);
+    let deadline = Deadline::after(started, options.time_limit_s, stop);
     let least_j = basis.least_energy_j();
     let cap_j = options
         .max_extra_energy_pct

@@ -14,8 +14,6 @@ use super::PlanError;
 /// Default of [`PlanOptions::resolution_weight_j_per_m`], J/m.
 pub const DEFAULT_RESOLUTION_WEIGHT_J_PER_M: f64 = 100.0;
 
-/// Which planner to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 /// Which planner to run. Its names (`exact`, `paper`, `baseline`, `baseline-exact`) are the
 /// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).
 #[derive(

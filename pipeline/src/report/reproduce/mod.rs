@@ -443,9 +443,11 @@ fn headline(report: &mut String, results: &Results, model: &PowerModel) {
             (Some(x), Some((_, Ok(gen)))) => {
                 let _ = writeln!(
                 report,
-                "- {g}: `exact` with the paper's resolution leaves {} of its landmark slots unresolved ({} blind) under the general cell; with `--resolution general` none, at {:.0} J ({:+.1}% energy).",
+                "- {g}: `exact` with the paper's resolution leaves {} of its landmark slots unresolved ({} blind) under the general cell; with `--resolution general` {} ({} blind), at {:.0} J ({:+.1}% energy).",
                 x.evaluation.slots_unresolved,
                 x.evaluation.slots_blind,
+                gen.evaluation.slots_unresolved,
+                gen.evaluation.slots_blind,
                 gen.evaluation.energy_j,
                 100.0 * (gen.evaluation.energy_j / x.evaluation.energy_j - 1.0)
             );

@@ -237,13 +237,7 @@ mod tests {
         let (res_tx, res_rx) = mpsc::channel::<Out>();
         job_tx.send(7).unwrap();
         drop(job_tx);
-        run_jobs(
-            job_rx,
-            res_tx,
-            |j| j.to_string(),
-            Out::Done,
-            Out::Panicked,
-        );
+        run_jobs(job_rx, res_tx, |j| j.to_string(), Out::Done, Out::Panicked);
         assert_eq!(res_rx.try_iter().collect::<Vec<_>>(), vec![Out::Done(7)]);
     }
 }
