@@ -32,13 +32,13 @@ create_exception!(
 /// A `planner::MissionError` as `cellsar.MissionError` (its message names the file, field or
 /// slot).
 pub fn mission_error(e: &planner::MissionError) -> PyErr {
-    MissionError::new_err(planner::error_chain(e))
+    MissionError::new_err(cellsar_error::error_chain(e))
 }
 
 /// A `planner::PlanError` as the matching Python exception: `InfeasibleMission` (with `slot`,
 /// `t_s` and `reason`), `ValueError` for a bad option or start, `PlanError` otherwise.
 pub fn plan_error(py: Python<'_>, e: &planner::PlanError) -> PyErr {
-    let message = planner::error_chain(e);
+    let message = cellsar_error::error_chain(e);
     match e {
         planner::PlanError::Infeasible(inf) => {
             let err = InfeasibleMission::new_err(message);

@@ -97,7 +97,8 @@ impl PyPlan {
 
     /// Writes `trajectory.csv` (byte for byte what `cellsar-planner plan` writes), atomically.
     fn to_csv(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        let text = planner::summary::trajectory_csv(&self.result);
+        let text = planner::summary::trajectory_csv(&self.result)
+            .map_err(|e| crate::errors::PlanError::new_err(format!("writing trajectory.csv: {e}")))?;
         py.detach(|| crate::files::write_atomic(&path, text.as_bytes()))
     }
 
@@ -233,7 +234,7 @@ fn init_trajectory(mission: &planner::Mission, init: &Bound<'_, PyAny>) -> PyRes
     if let Ok(path) = init.extract::<PathBuf>() {
         let p = mission.params();
         return Trajectory::from_csv_path(&path, p.slot_s, mission.slots(), p.start_m)
-            .map_err(|e| PyValueError::new_err(planner::error_chain(&e)));
+            .map_err(|e| PyValueError::new_err(cellsar_error::error_chain(&e)));
     }
     if let Ok(pair) = init.cast::<PyTuple>() {
         if pair.len() == 2 {

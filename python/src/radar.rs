@@ -25,7 +25,7 @@ use crate::plan::PyPlan;
 const FRAME_PULSES: usize = 64;
 
 fn radar_err(e: &radar_sim::RadarError) -> PyErr {
-    RadarError::new_err(planner::error_chain(e))
+    RadarError::new_err(cellsar_error::error_chain(e))
 }
 
 /// A scene: `None` (the defaults), a path to a scene file (TOML), or a dict with its structure.
