@@ -97,8 +97,9 @@ impl PyPlan {
 
     /// Writes `trajectory.csv` (byte for byte what `cellsar-planner plan` writes), atomically.
     fn to_csv(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        let text = planner::summary::trajectory_csv(&self.result)
-            .map_err(|e| crate::errors::PlanError::new_err(format!("writing trajectory.csv: {e}")))?;
+        let text = planner::summary::trajectory_csv(&self.result).map_err(|e| {
+            crate::errors::PlanError::new_err(format!("writing trajectory.csv: {e}"))
+        })?;
         py.detach(|| crate::files::write_atomic(&path, text.as_bytes()))
     }
 
