@@ -5,9 +5,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use planner::evaluate::ResolutionMode;
 use planner::shortfall::ResolutionShortfall;
-use planner::{evaluate, plan, Mission, Params, PlanOptions, Preset};
+use planner::{evaluate, plan, Mission, PlanOptions, Preset};
 
 fn best_effort(max_extra_energy_pct: Option<f64>) -> PlanOptions {
     PlanOptions {
@@ -82,14 +84,7 @@ fn an_energy_cap_holds_on_the_exact_geometry() {
 
 #[test]
 fn a_mission_with_a_strict_general_plan_gets_it() {
-    let mut p = Params::default();
-    p.start_m = [342.0, 940.0];
-    let spec = planner::LandmarksSpec {
-        preset: Some(Preset::Default),
-        spacing_m: Some(30.0),
-        ..Default::default()
-    };
-    let m = Mission::new("default 30 m from (342, 940)", p, &spec).unwrap();
+    let m = common::far_start_mission();
     let best = plan(&m, &best_effort(None)).unwrap();
     let ev = evaluate(&m, &best.trajectory);
     assert!(ev.is_feasible_for(ResolutionMode::General));

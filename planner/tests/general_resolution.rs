@@ -4,6 +4,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use planner::evaluate::ResolutionMode;
 use planner::geometry::{heading_unit, Point2, ResolutionCell, RIGHT_TURN};
 use planner::{plan, Mission, Params, PlanError, PlanOptions, Preset};
@@ -114,14 +116,7 @@ fn default_mission_from_the_far_end_of_the_allowed_arc_has_a_general_plan() {
     // the general cell, at about 8 % more energy than the paper's resolution needs from the same
     // start (which reaches the floor). (Earlier versions of README.md said this start failed at
     // t = 196.5 s.)
-    let mut p = Params::default();
-    p.start_m = [342.0, 940.0];
-    let spec = planner::LandmarksSpec {
-        preset: Some(Preset::Default),
-        spacing_m: Some(30.0),
-        ..Default::default()
-    };
-    let m = Mission::new("default 30 m from (342, 940)", p, &spec).unwrap();
+    let m = common::far_start_mission();
     let general = plan(
         &m,
         &PlanOptions {
