@@ -12,6 +12,7 @@ mod mission;
 mod plan;
 mod radar;
 mod run;
+mod workers;
 
 use pyo3::prelude::*;
 

@@ -40,3 +40,25 @@ def test_ctrl_c_interrupts_a_plan():
     # the plan stopped at the first check after the signal (within one cone program of
     # 3000 slots), not after the tens of iterations a whole run takes
     assert 1 <= len(calls) <= 3
+
+
+def test_plans_from_several_threads_run_side_by_side_and_match():
+    # planning threads are kept between plans; several callers at once each get their own,
+    # and every plan equals the one planned alone
+    missions = [cellsar.Mission.default(30.0), cellsar.Mission.default(30.0, uav_mass_kg=3.0)]
+    alone = [cellsar.plan(m).summary["energy_j"] for m in missions]
+    results = [None] * (2 * len(missions))
+
+    def run(k):
+        results[k] = cellsar.plan(missions[k % len(missions)]).summary["energy_j"]
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(len(results))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=600)
+    assert not any(t.is_alive() for t in threads)
+    for k, energy_j in enumerate(results):
+        assert energy_j == pytest.approx(alone[k % len(missions)], rel=1e-12)
+    # and the kept threads serve the next plan as before
+    assert cellsar.plan(missions[0]).summary["energy_j"] == pytest.approx(alone[0], rel=1e-12)
