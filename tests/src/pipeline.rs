@@ -331,6 +331,11 @@ impl Launch {
         }
     }
 
+    /// The launcher's whole stderr.
+    pub fn stderr_text(&self) -> String {
+        std::fs::read_to_string(&self.stderr).unwrap_or_default()
+    }
+
     pub fn stderr_tail(&self) -> String {
         let s = std::fs::read_to_string(&self.stderr).unwrap_or_default();
         let l: Vec<&str> = s.lines().collect();

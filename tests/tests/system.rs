@@ -224,7 +224,8 @@ fn a_child_that_keeps_failing_stops_the_run() {
     let mut l = Launch::start(dir.path(), H, &["--max-restarts", "2"]);
     let st = l.finish(Duration::from_secs(120));
     assert_eq!(st.code(), Some(1));
-    let err = l.stderr_tail();
+    // the whole stderr, not its tail: the message is what counts, wherever it is
+    let err = l.stderr_text();
     assert!(
         err.contains("failed 3 times") && err.contains("giving up"),
         "{err}"
