@@ -95,7 +95,10 @@ mod tests {
         ] {
             assert_eq!(scouting(&parse(args).unwrap()), "false", "{args:?}");
         }
-        for args in [&["--multicast-scouting"][..], &["-m", "client", "--multicast-scouting"]] {
+        for args in [
+            &["--multicast-scouting"][..],
+            &["-m", "client", "--multicast-scouting"],
+        ] {
             let a = parse(args).unwrap();
             assert_eq!(scouting(&a), "true", "{args:?}");
             // passed on to a child as given
@@ -136,7 +139,10 @@ mod tests {
             "on.yaml",
             "mode: peer\nscouting:\n  multicast:\n    enabled: true\n",
         );
-        let off = file("off.json", r#"{ "scouting": { "multicast": { "enabled": false } } }"#);
+        let off = file(
+            "off.json",
+            r#"{ "scouting": { "multicast": { "enabled": false } } }"#,
+        );
         let unset = file(
             "unset.json5",
             "{ mode: 'peer', scouting: { multicast: { address: '224.0.0.224:17446' } } }",
@@ -150,9 +156,18 @@ mod tests {
         assert_eq!(scouting(&with(&unset, true, false)), "true");
         // the deployment's configurations set it off themselves
         let deploy = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../pipeline/deploy");
-        for f in ["router.json5", "client.json5", "tls/router.json5", "tls/echo.json5"] {
+        for f in [
+            "router.json5",
+            "client.json5",
+            "tls/router.json5",
+            "tls/echo.json5",
+        ] {
             assert!(file_sets_scouting(&deploy.join(f)).unwrap(), "{f}");
-            assert_eq!(scouting(&with(&deploy.join(f), false, false)), "false", "{f}");
+            assert_eq!(
+                scouting(&with(&deploy.join(f), false, false)),
+                "false",
+                "{f}"
+            );
         }
     }
 }

@@ -510,7 +510,10 @@ mod tests {
         let e = network(false, &flags(&[], &[], Some(Mode::Client)), 17000)
             .err()
             .unwrap();
-        assert!(e.contains("-m client") && e.contains("--multicast-scouting"), "{e}");
+        assert!(
+            e.contains("-m client") && e.contains("--multicast-scouting"),
+            "{e}"
+        );
         // ... and accepted when it may find its router by multicast scouting, which the
         // children get too
         let user = ZenohArgs {
@@ -520,7 +523,11 @@ mod tests {
         let n = network(false, &user, 17000).unwrap();
         assert!(n.launcher.multicast_scouting && n.child.multicast_scouting);
         assert_eq!(
-            n.child.to_config().unwrap().get_json(zconfig::MULTICAST_SCOUTING_KEY).unwrap(),
+            n.child
+                .to_config()
+                .unwrap()
+                .get_json(zconfig::MULTICAST_SCOUTING_KEY)
+                .unwrap(),
             "true"
         );
     }
