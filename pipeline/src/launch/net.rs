@@ -53,10 +53,10 @@ fn user_gave_zenoh(z: &ZenohArgs) -> bool {
 ///   `hub_port` of loopback; every child is a peer that connects to those endpoints (an
 ///   unspecified address becomes loopback) and to the launcher's own connect endpoints, and
 ///   listens on a free loopback port of its own so that the children find each other
-///   (gossip) without multicast scouting. A listen
-///   endpoint with port 0 is refused (its port cannot be told to the children: Zenoh reports
-///   the ports it bound only for non-loopback addresses, in an unstable API). A `-c` file
-///   is passed on, so the children keep its other settings.
+///   (gossip) without multicast scouting. A listen endpoint with port 0 is refused (its port
+///   cannot be told to the children: Zenoh reports the ports it bound only for non-loopback
+///   addresses, in an unstable API). A `-c` file is passed on, so the children keep its
+///   other settings.
 pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Result<Net, String> {
     let hub = format!("tcp/127.0.0.1:{hub_port}");
     if router {
