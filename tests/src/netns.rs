@@ -1,9 +1,10 @@
-//! Hosts emulated with Linux network namespaces (two namespaces joined by a veth pair), and
-//! the deployment configurations of `pipeline/deploy/` adapted to them.
+//! Hosts emulated with Linux network namespaces (two namespaces joined by a veth pair, or one
+//! with multicast on its loopback for the tests of multicast scouting), and the deployment
+//! configurations of `pipeline/deploy/` adapted to them.
 //!
 //! Needs `ip` (iproute2) and the right to create network namespaces (root or CAP_NET_ADMIN):
-//! [`two_namespaces`] gives `None`, saying why, only when `ip netns add` is refused for lack
-//! of permission.
+//! [`two_namespaces`] and [`multicast_host`] give `None`, saying why, only when `ip netns add`
+//! is refused for lack of permission.
 
 use std::path::Path;
 use std::process::Command;
