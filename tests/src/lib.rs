@@ -11,6 +11,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
+pub mod memory;
 pub mod netns;
 pub mod pipeline;
 pub mod transport;

@@ -1,9 +1,10 @@
-//! Hosts emulated with Linux network namespaces (two namespaces joined by a veth pair), and
-//! the deployment configurations of `pipeline/deploy/` adapted to them.
+//! Hosts emulated with Linux network namespaces (two namespaces joined by a veth pair, or one
+//! with multicast on its loopback for the tests of multicast scouting), and the deployment
+//! configurations of `pipeline/deploy/` adapted to them.
 //!
 //! Needs `ip` (iproute2) and the right to create network namespaces (root or CAP_NET_ADMIN):
-//! [`two_namespaces`] gives `None`, saying why, only when `ip netns add` is refused for lack
-//! of permission.
+//! [`two_namespaces`] and [`multicast_host`] give `None`, saying why, only when `ip netns add`
+//! is refused for lack of permission.
 
 use std::path::Path;
 use std::process::Command;
@@ -61,15 +62,10 @@ pub fn ip(args: &[&str]) {
     );
 }
 
-/// Two namespaces joined by veth, addresses 10.X.Y.1 (A) and 10.X.Y.2 (B); None (with the
-/// reason printed) when namespaces may not be created here. Names are unique per process and
-/// call, so tests of one binary may run in parallel.
-pub fn two_namespaces() -> Option<TwoHosts> {
-    static NEXT: AtomicU32 = AtomicU32::new(0);
-    let pid = std::process::id();
-    let n = NEXT.fetch_add(1, Ordering::Relaxed);
-    let (a, b) = (format!("csa{pid}x{n}"), format!("csb{pid}x{n}"));
-    let o = match Command::new("ip").args(["netns", "add", &a]).output() {
+/// `ip netns add NAME`; `None`, saying why, when namespaces may not be created here (no `ip`,
+/// or no permission); any other failure panics.
+fn add_namespace(name: &str) -> Option<()> {
+    let o = match Command::new("ip").args(["netns", "add", name]).output() {
         Ok(o) => o,
         Err(e) => {
             eprintln!("SKIPPED: cannot run `ip` ({e}); install iproute2");
@@ -85,8 +81,20 @@ pub fn two_namespaces() -> Option<TwoHosts> {
             );
             return None;
         }
-        panic!("ip netns add {a}: {err}");
+        panic!("ip netns add {name}: {err}");
     }
+    Some(())
+}
+
+/// Two namespaces joined by veth, addresses 10.X.Y.1 (A) and 10.X.Y.2 (B); None (with the
+/// reason printed) when namespaces may not be created here. Names are unique per process and
+/// call, so tests of one binary may run in parallel.
+pub fn two_namespaces() -> Option<TwoHosts> {
+    static NEXT: AtomicU32 = AtomicU32::new(0);
+    let pid = std::process::id();
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    let (a, b) = (format!("csa{pid}x{n}"), format!("csb{pid}x{n}"));
+    add_namespace(&a)?;
     let guard = Netns {
         names: vec![a.clone(), b.clone()],
     };
@@ -111,6 +119,24 @@ pub fn two_namespaces() -> Option<TwoHosts> {
         ip_a,
         ip_b,
     })
+}
+
+/// One namespace whose only interface is its loopback, with multicast on it (a route for
+/// 224.0.0.0/4), so that Zenoh's multicast scouting works inside it and reaches nothing
+/// outside: a host of its own for the tests of scouting. `None` (with the reason printed) as
+/// [`two_namespaces`].
+pub fn multicast_host() -> Option<(Netns, String)> {
+    static NEXT: AtomicU32 = AtomicU32::new(0);
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    let name = format!("csm{}x{n}", std::process::id());
+    add_namespace(&name)?;
+    let guard = Netns {
+        names: vec![name.clone()],
+    };
+    ip(&["-n", &name, "link", "set", "lo", "up"]);
+    ip(&["-n", &name, "link", "set", "lo", "multicast", "on"]);
+    ip(&["-n", &name, "route", "add", "224.0.0.0/4", "dev", "lo"]);
+    Some((guard, name))
 }
 
 /// The example router address of the configurations in `pipeline/deploy/`.

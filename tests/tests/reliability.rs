@@ -1,17 +1,21 @@
 //! Reliability with the real processes: kill -9 of each process mid-mission, a frozen
-//! subscriber, 10,000 malformed or oversized payloads on every subscribed key. Each run must
-//! end with exactly the outputs of the closed loop (no aperture lost or duplicated).
+//! subscriber, 10,000 malformed or oversized payloads on every subscribed key and messages
+//! above Zenoh's reassembly limit, with the flooded processes' peak resident memory bounded.
+//! Each run must end with exactly the outputs of the closed loop (no aperture lost or
+//! duplicated).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::time::{Duration, Instant};
 
 use bridge::net::QueryOptions;
-use bridge::zenoh::bytes::Encoding;
+use bridge::zconfig::DEFAULT_MAX_MESSAGE_BYTES;
+use bridge::zenoh::bytes::{Encoding, ZBytes};
 use bridge::zenoh::qos::CongestionControl;
 use bridge::zenoh::query::QueryTarget;
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohArgs, ZenohNode};
+use harness::memory::Baseline;
 use harness::pipeline::*;
 use pipeline::protocol::keys as pkeys;
 use pipeline::protocol::{ApertureRequest, RequestAck};
@@ -325,6 +329,40 @@ fn flood_put(node: &ZenohNode, key: &str, kind: u16) {
     }
 }
 
+/// Size of the messages of [`flood_huge`]: far above Zenoh's reassembly limit
+/// (`--zenoh-max-message-bytes`, by default [`DEFAULT_MAX_MESSAGE_BYTES`], 64 MiB + 64 KiB).
+const HUGE_BYTES: usize = 512 << 20;
+
+/// Two messages of [`HUGE_BYTES`] on `key`: Zenoh drops each once its fragments pass the
+/// reassembly limit, so a receiver holds at most that limit of it. Under Zenoh's own limit
+/// (1 GiB) each would be reassembled whole (512 MiB) and, before cellsar's length check,
+/// copied once more.
+fn flood_huge(node: &ZenohNode, key: &str) {
+    let p = node
+        .session()
+        .declare_publisher(key.to_string())
+        .congestion_control(CongestionControl::Block)
+        .wait()
+        .unwrap();
+    let huge = ZBytes::from(vec![7u8; HUGE_BYTES]);
+    for _ in 0..2 {
+        p.put(huge.clone())
+            .encoding(Encoding::APPLICATION_OCTET_STREAM)
+            .wait()
+            .unwrap();
+    }
+}
+
+/// How much more a flooded process may hold at its peak than before the flood: two messages
+/// being reassembled up to Zenoh's limit (its own, and one it passes on: the launcher is the
+/// hub of its children's mesh), plus three of the flood's oversized payloads (16 MiB + 4 KiB
+/// each: whole in Zenoh's buffers, refused by their length before cellsar copies them, and
+/// kept by the allocator a while after). Measured: +31 MiB (planner), +112 MiB (processor),
+/// +121 MiB (launcher); without the huge messages +32, +48 and +22 MiB. Well under what one
+/// of [`flood_huge`]'s messages alone would cost without the limit.
+const FLOOD_PEAK_BOUND: u64 = 2 * DEFAULT_MAX_MESSAGE_BYTES as u64 + 3 * ((16 << 20) + 4096);
+const _: () = assert!(FLOOD_PEAK_BOUND < HUGE_BYTES as u64 / 2);
+
 fn flood_get(node: &ZenohNode, key: &str, kind: u16) {
     let mut pending = Vec::new();
     for i in 0..FLOOD {
@@ -368,6 +406,12 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     for role in ["planner", "processor", "launcher"] {
         wait_sees(&node, role, &l);
     }
+    // resident memory before the flood: the peak after it must stay within FLOOD_PEAK_BOUND
+    let before: Vec<(&str, Baseline)> = vec![
+        ("planner", Baseline::take(l.pid("planner"))),
+        ("processor", Baseline::take(l.pid("processor"))),
+        ("launcher", Baseline::take(l.child.id())),
+    ];
     flood_get(&node, pkeys::PLAN, 0x0101);
     flood_put(&node, &pkeys::plan(m).unwrap(), 0x0102);
     flood_get(&node, &pkeys::plan(m).unwrap(), 0x0103);
@@ -377,6 +421,15 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     flood_put(&node, &pkeys::image(m, 0).unwrap(), 0x0305);
     flood_put(&node, &pkeys::metrics(m).unwrap(), 0x0306);
     flood_put(&node, &pkeys::status(m, "processor").unwrap(), 0x0110);
+    // messages above Zenoh's reassembly limit, to the processor and to the launcher
+    flood_huge(&node, &pkeys::echo(m).unwrap());
+    flood_huge(&node, &pkeys::detections(m).unwrap());
+    for (role, b) in &before {
+        b.assert_peak_within(
+            FLOOD_PEAK_BOUND,
+            &format!("the {role} flooded with malformed, oversized and huge messages"),
+        );
+    }
     // now the echo, flooded as soon as it is up (while the mission runs)
     let net = l.event("network", Duration::from_secs(1));
     let mut ea: Vec<String> = vec![

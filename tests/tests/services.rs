@@ -12,6 +12,7 @@ use bridge::net::{QueryOptions, SubscribeOptions, WireFormat};
 use bridge::zenoh::bytes::Encoding;
 use bridge::zenoh::Wait;
 use bridge::{DecodeLimits, ZenohArgs, ZenohNode};
+use harness::memory::{Baseline, MIB};
 use harness::pipeline::*;
 use pipeline::collect::Collector;
 use pipeline::protocol::keys::{self as pkeys, PLAN as PLAN_KEY};
@@ -330,6 +331,13 @@ fn wait_log_lines(s: &Service, marker: &str, n: usize) {
     }
 }
 
+/// How much more the processor may hold at its peak during
+/// [`plan_and_request_floods_are_bounded`] than before it: its session's buffers, the two
+/// missions it keeps (waiting for their echo, each holds little: measured +20 MiB in all, and
+/// +21 MiB with five missions held) and one request of 100 000 apertures with its answer. A
+/// regression that keeps requests, answers or refused missions without bound exceeds it.
+const FLOOD_PEAK_BOUND: u64 = 64 * MIB;
+
 /// A peer that makes the planner publish plan after plan cannot make the processor or the echo
 /// hold more than `--max-missions` missions; a result request cannot make the processor answer
 /// or publish more than the mission has.
@@ -341,6 +349,7 @@ fn plan_and_request_floods_are_bounded() {
     let mut p = w.start_with("processor", &["--max-missions", "2"]);
     c.wait_alive("planner");
     c.wait_alive("processor");
+    let memory = Baseline::take(p.child.id());
     let plans: Vec<Plan> = (0..5)
         .map(|i| c.plan_named(Some(&format!("flood-{i}"))))
         .collect();
@@ -377,6 +386,12 @@ fn plan_and_request_floods_are_bounded() {
         ack.missing.len(),
         4096,
         "an unknown mission's answer is capped"
+    );
+    // what the flood made the processor hold at its peak: the two missions it keeps, and one
+    // request of 100 000 apertures (400 kB) with its answer
+    memory.assert_peak_within(
+        FLOOD_PEAK_BOUND,
+        "the processor after five plans and two requests of 100 000 apertures",
     );
 
     assert!(

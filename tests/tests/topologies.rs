@@ -3,7 +3,11 @@
 //! configuration file, a router launcher; the combinations that cannot form one are refused
 //! before anything starts; a launcher or service that waits for a peer says what it waits for
 //! and on which endpoints, and the launcher gives up after `--peer-timeout-s`; a processor that
-//! joins 10 s after the plan was published gets it, on the same host and across a router.
+//! joins 10 s after the plan was published gets it, on the same host and across a router; a
+//! peer launcher given `-e` without `-l`; multicast scouting, off unless asked for: a
+//! standalone service without endpoints is found (and finds a router) only with
+//! `--multicast-scouting`, and a client launcher without `-e` finds its router by scouting (in
+//! a network namespace of the test's own, so that the multicast reaches nothing else).
 //! (The launcher's own mesh and `-l` with scouting off: `system.rs`; `--router` with a
 //! `kill -9` of the processor: `reliability.rs`.)
 
@@ -14,6 +18,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+use harness::netns::multicast_host;
 use harness::pipeline::*;
 
 /// 3 apertures of the small scene.
@@ -154,6 +159,15 @@ fn combinations_that_cannot_form_a_mesh_are_refused() {
             vec!["-m client", "-e ROUTER"],
         ),
         (vec!["-c", lonely], vec![lonely, "-e ROUTER"]),
+        // multicast scouting is off unless asked for: a client without -e has no router
+        (
+            vec!["-m", "client"],
+            vec!["-m client", "--multicast-scouting"],
+        ),
+        (
+            vec!["--router", "--multicast-scouting"],
+            vec!["--router with --multicast-scouting"],
+        ),
     ] {
         let o = Command::new(exe())
             .args(run_args(dir.path(), &flags))
@@ -387,4 +401,154 @@ fn a_processor_joining_10_s_after_the_plan_across_a_router() {
         &processor,
         &["--transport", "zenoh"],
     );
+}
+
+/// A peer launcher given `-e` and no `-l`: it listens on a free loopback port and every child
+/// connects to it and to the `-e` endpoint, here a planner started by hand
+/// (`--external planner`), which the launcher and its children reach only through `-e`
+/// (multicast scouting is off).
+#[test]
+fn a_peer_launcher_given_a_connect_endpoint_and_no_listen_endpoint() {
+    let dir = tempfile::tempdir().unwrap();
+    let ep = format!("tcp/127.0.0.1:{}", free_port());
+    let planner = Service::start(
+        "planner",
+        dir.path(),
+        &["planner".into(), "-l".into(), ep.clone()],
+    );
+    wait_for_log(
+        &planner,
+        "waiting for a plan request",
+        Duration::from_secs(30),
+    );
+    let mut l = Launch::start(dir.path(), H, &["-e", &ep, "--external", "planner"]);
+    let children = children_flags(&mut l);
+    assert!(
+        has_pair(&children, "--mode", "peer")
+            && has_pair(&children, "--connect", &ep)
+            && children
+                .windows(2)
+                .any(|w| w[0] == "--connect" && w[1] != ep && w[1].starts_with("tcp/127.0.0.1:"))
+            && !children.contains(&"--multicast-scouting".to_string()),
+        "{children:?}"
+    );
+    finish_as_reference(&mut l);
+    assert!(
+        !l.named("child_started")
+            .iter()
+            .any(|e| e["role"] == "planner"),
+        "the planner was external"
+    );
+}
+
+/// A `cellsar router` that answers multicast scouting (`--multicast-scouting`), in `ns`; its
+/// endpoint (given to no one: it is found by scouting).
+fn scouting_router(ns: &[&str], dir: &Path) -> Service {
+    let ep = format!("tcp/127.0.0.1:{}", free_port());
+    let r = Service::start_in(
+        ns,
+        "router",
+        dir,
+        &[
+            "router".into(),
+            "--multicast-scouting".into(),
+            "-l".into(),
+            ep,
+        ],
+    );
+    wait_for_log(&r, "router running", Duration::from_secs(30));
+    r
+}
+
+/// A standalone service started without endpoints and without `--multicast-scouting` (here
+/// the planner) finds no one and is found by no one on the same host, even by a router and a
+/// launcher that scout: the launcher gives up on the planner after `--plan-timeout-s`. With
+/// `--multicast-scouting` the same planner finds the router, and the launcher gets its plan.
+#[test]
+fn a_standalone_service_scouts_only_when_asked() {
+    let Some((_guard, ns)) = multicast_host() else {
+        return;
+    };
+    let ns = ["ip", "netns", "exec", ns.as_str()];
+    let dir = tempfile::tempdir().unwrap();
+    let _router = scouting_router(&ns, dir.path());
+    let launcher = [
+        "-m",
+        "client",
+        "--multicast-scouting",
+        "--external",
+        "planner",
+    ];
+
+    let mut quiet = Service::start_in(&ns, "planner-default", dir.path(), &["planner".into()]);
+    wait_for_log(
+        &quiet,
+        "waiting for a plan request",
+        Duration::from_secs(30),
+    );
+    let first = dir.path().join("without");
+    std::fs::create_dir_all(&first).unwrap();
+    let mut l = Launch::start_in(
+        &ns,
+        &first,
+        H,
+        &[&launcher[..], &["--plan-timeout-s", "8"]].concat(),
+    );
+    let st = l.finish(Duration::from_secs(120));
+    assert_eq!(st.code(), Some(1), "{}", l.stderr_tail());
+    assert!(
+        l.stderr_tail()
+            .contains("no plan within --plan-timeout-s 8 s"),
+        "{}",
+        l.stderr_tail()
+    );
+    let log = quiet.log_text();
+    assert!(
+        log.contains("routers=0 peers=0") && !log.contains("multicast scouting on"),
+        "{log}"
+    );
+    assert!(quiet.stop(Duration::from_secs(20)).success(), "{log}");
+
+    let scouting = Service::start_in(
+        &ns,
+        "planner-scouting",
+        dir.path(),
+        &["planner".into(), "--multicast-scouting".into()],
+    );
+    let second = dir.path().join("with");
+    std::fs::create_dir_all(&second).unwrap();
+    let mut l = Launch::start_in(&ns, &second, H, &launcher);
+    l.event("planned", Duration::from_secs(120));
+    assert!(
+        scouting.log_text().contains("multicast scouting on"),
+        "{}",
+        scouting.log_text()
+    );
+}
+
+/// A `cellsar router` with multicast scouting and `cellsar run -m client --multicast-scouting`
+/// without `-e`: the launcher and every child (clients with the same flags) find the router by
+/// scouting, and the run ends with the closed loop's outputs.
+#[test]
+fn a_client_launcher_finds_its_router_by_multicast_scouting() {
+    let Some((_guard, ns)) = multicast_host() else {
+        return;
+    };
+    let ns = ["ip", "netns", "exec", ns.as_str()];
+    let dir = tempfile::tempdir().unwrap();
+    let _router = scouting_router(&ns, dir.path());
+    let mut l = Launch::start_in(
+        &ns,
+        dir.path(),
+        H,
+        &["-m", "client", "--multicast-scouting"],
+    );
+    let children = children_flags(&mut l);
+    assert!(
+        has_pair(&children, "--mode", "client")
+            && children.contains(&"--multicast-scouting".to_string())
+            && !children.contains(&"--connect".to_string()),
+        "{children:?}"
+    );
+    finish_as_reference(&mut l);
 }

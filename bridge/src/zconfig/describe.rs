@@ -19,13 +19,21 @@ pub fn waiting_client_json5(endpoint: &str) -> String {
 /// A one-line description of the session `config` opens, for messages and logs: its mode and
 /// the endpoints it connects to and listens on as Zenoh will use them (those of a `--config`
 /// file included; a mode-dependent list resolved for the mode), e.g. `mode client, connect
-/// [tcp/192.168.1.10:7447], listen []`.
+/// [tcp/192.168.1.10:7447], listen []`; `, multicast scouting on` is added when the session
+/// also finds (and is found by) peers and routers by multicast (off is the default: nothing
+/// added).
 pub fn describe(config: &Config) -> String {
     let mode = effective_mode(config);
+    let scouting = config.get_json(super::MULTICAST_SCOUTING_KEY).ok();
     format!(
-        "mode {mode}, connect [{}], listen [{}]",
+        "mode {mode}, connect [{}], listen [{}]{}",
         effective_endpoints(config, "connect", &mode).join(", "),
-        effective_endpoints(config, "listen", &mode).join(", ")
+        effective_endpoints(config, "listen", &mode).join(", "),
+        if scouting.as_deref() == Some("true") {
+            ", multicast scouting on"
+        } else {
+            ""
+        }
     )
 }
 
@@ -102,6 +110,15 @@ mod tests {
         assert_eq!(
             describe(&ZenohArgs::default().to_config().unwrap()),
             "mode peer, connect [], listen [tcp/127.0.0.1:0]"
+        );
+        let scouting = ZenohArgs {
+            mode: Some(Mode::Client),
+            multicast_scouting: true,
+            ..Default::default()
+        };
+        assert_eq!(
+            describe(&scouting.to_config().unwrap()),
+            "mode client, connect [], listen [], multicast scouting on"
         );
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("r.json5");

@@ -7,7 +7,8 @@
 //! -e, --connect <ENDPOINT>          endpoints to connect to (repeatable)
 //! -l, --listen <ENDPOINT>           endpoints to listen on (repeatable)
 //! -c, --config <FILE>               a Zenoh configuration file (JSON5)
-//!     --no-multicast-scouting       disable multicast scouting
+//!     --multicast-scouting          find and be found by peers on the local network
+//!     --no-multicast-scouting       no multicast scouting (the default; overrides a file)
 //!     --zenoh-max-message-bytes <BYTES>
 //!                                   largest message Zenoh reassembles [default: 64 MiB + 64 KiB]
 //! ```
@@ -15,6 +16,10 @@
 //! Without `--config`, the session is an embedded peer that listens on the loopback interface
 //! only (`tcp/127.0.0.1:0`) and needs no router. With `--config`, the file is the base and the
 //! flags given on the command line override it.
+//!
+//! Multicast scouting is off unless `--multicast-scouting` is given or a `--config` file sets
+//! `scouting.multicast.enabled` itself (Zenoh's own default is on): a process joins only the
+//! peers and routers it is told about ([`scouting`] module).
 //!
 //! Every configuration built here bounds what a peer can make this process allocate: Zenoh
 //! reassembles a fragmented message in memory before anyone sees it, up to
@@ -32,9 +37,11 @@ use crate::zenoh_error::ZenohError;
 
 mod describe;
 mod error;
+mod scouting;
 
 pub use describe::{describe, effective_endpoints, effective_mode, waiting_client_json5};
 pub use error::ConfigError;
+pub use scouting::MULTICAST_SCOUTING_KEY;
 
 /// The Zenoh session mode.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -109,7 +116,15 @@ pub struct ZenohArgs {
         value_name = "ENDPOINT"
     )]
     pub listen: Vec<String>,
-    /// Disable the multicast-based scouting mechanism.
+    /// Find and be found by Zenoh peers and routers on the local network by multicast
+    /// scouting, and connect to them [default: off, unless the --config file turns it on].
+    #[arg(
+        id = "zenoh_multicast_scouting",
+        long = "multicast-scouting",
+        conflicts_with = "zenoh_no_multicast_scouting"
+    )]
+    pub multicast_scouting: bool,
+    /// No multicast scouting (the default), also where the --config file turns it on.
     #[arg(id = "zenoh_no_multicast_scouting", long = "no-multicast-scouting")]
     pub no_multicast_scouting: bool,
     /// Largest message Zenoh reassembles from its fragments, in bytes; larger ones are
@@ -132,6 +147,7 @@ impl ZenohArgs {
             mode: Some(Mode::Peer),
             connect: connect.to_vec(),
             listen: listen.to_vec(),
+            multicast_scouting: false,
             no_multicast_scouting: true,
             max_message_bytes: None,
         }
@@ -167,6 +183,9 @@ impl ZenohArgs {
         for l in &self.listen {
             v.push("--listen".to_string());
             v.push(l.clone());
+        }
+        if self.multicast_scouting {
+            v.push("--multicast-scouting".to_string());
         }
         if self.no_multicast_scouting {
             v.push("--no-multicast-scouting".to_string());
@@ -220,13 +239,12 @@ impl ZenohArgs {
                 "default listen endpoint",
             )?;
         }
-        if self.no_multicast_scouting {
-            insert(
-                &mut config,
-                "scouting/multicast/enabled",
-                "false",
-                "--no-multicast-scouting",
-            )?;
+        if let Some((value, what)) = scouting::setting(
+            self.multicast_scouting,
+            self.no_multicast_scouting,
+            self.config.as_deref(),
+        )? {
+            insert(&mut config, MULTICAST_SCOUTING_KEY, value, what)?;
         }
         if let Some(n) = self.max_message_size(&config)? {
             insert(

@@ -3,7 +3,7 @@
 //! ```text
 //! cellsar-bridge --instance b1 --service cellsar/0123456789abcdef/echo \
 //!     [--service NAME=KEY@out ...] [-m peer|client|router] [-e ENDPOINT] [-l ENDPOINT] \
-//!     [-c zenoh.json5] [--no-multicast-scouting] [--iox-root DIR] [--iox-prefix P]
+//!     [-c zenoh.json5] [--multicast-scouting] [--iox-root DIR] [--iox-prefix P]
 //! ```
 //!
 //! Logs its counters every `--stats-interval-s` and on exit, publishes them as JSON on

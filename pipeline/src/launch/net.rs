@@ -23,11 +23,15 @@ pub(super) fn free_port() -> Result<u16> {
     Ok(l.local_addr().context("finding a free port")?.port())
 }
 
-/// Whether the user gave the launcher a Zenoh network of their own (a mode, an endpoint or a
-/// configuration file; `--no-multicast-scouting` and `--zenoh-max-message-bytes` alone keep
-/// the isolated mesh, which has no multicast anyway).
+/// Whether the user gave the launcher a Zenoh network of their own (a mode, an endpoint, a
+/// configuration file or `--multicast-scouting`; `--no-multicast-scouting` and
+/// `--zenoh-max-message-bytes` alone keep the isolated mesh, which has no multicast anyway).
 fn user_gave_zenoh(z: &ZenohArgs) -> bool {
-    z.config.is_some() || z.mode.is_some() || !z.connect.is_empty() || !z.listen.is_empty()
+    z.config.is_some()
+        || z.mode.is_some()
+        || !z.connect.is_empty()
+        || !z.listen.is_empty()
+        || z.multicast_scouting
 }
 
 /// The Zenoh network of a run, from `--router` and the Zenoh flags; `hub_port` is a free
@@ -37,19 +41,22 @@ fn user_gave_zenoh(z: &ZenohArgs) -> bool {
 ///
 /// - no Zenoh flag: an isolated mesh on loopback, the launcher its hub;
 /// - `--router`: a router child on `hub_port`, the launcher and every child its clients
-///   (refused together with `-m`, `-e`, `-l` or `-c`, which it would not use);
+///   (refused together with `-m`, `-e`, `-l`, `-c` or `--multicast-scouting`, which it
+///   would not use);
 /// - a client launcher (`-m client`, or a `-c` file in client mode): every child gets the
 ///   same flags and is a client of the same routers; refused when it has no router to
-///   connect to (no `-e`, no connect endpoint in the file) and multicast scouting is off,
-///   and with `-l` (a client cannot listen);
-/// - a peer or router launcher: it is the children's hub. It listens where `-l` (or the
-///   `-c` file) says, or, when neither says, on `hub_port` of loopback; every child is a
-///   peer that connects to those endpoints (an unspecified address becomes loopback) and to
-///   the launcher's own connect endpoints, and listens on a free loopback port of its own
-///   so that the children find each other (gossip) without multicast scouting. A listen
-///   endpoint with port 0 is refused (its port cannot be told to the children: Zenoh reports
-///   the ports it bound only for non-loopback addresses, in an unstable API). A `-c` file
-///   is passed on, so the children keep its other settings.
+///   connect to (no `-e`, no connect endpoint in the file) and multicast scouting is off
+///   (the default: without `--multicast-scouting` or a file that turns it on), and with `-l`
+///   (a client cannot listen);
+/// - a peer or router launcher (also `--multicast-scouting` alone): it is the children's
+///   hub. It listens where `-l` (or the `-c` file) says, or, when neither says, on
+///   `hub_port` of loopback; every child is a peer that connects to those endpoints (an
+///   unspecified address becomes loopback) and to the launcher's own connect endpoints, and
+///   listens on a free loopback port of its own so that the children find each other
+///   (gossip) without multicast scouting. A listen endpoint with port 0 is refused (its port
+///   cannot be told to the children: Zenoh reports the ports it bound only for non-loopback
+///   addresses, in an unstable API). A `-c` file is passed on, so the children keep its
+///   other settings.
 pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Result<Net, String> {
     let hub = format!("tcp/127.0.0.1:{hub_port}");
     if router {
@@ -95,12 +102,12 @@ pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Re
                 "--listen {l}: a client (-m client) cannot listen; give the router with -e instead"
             ));
         }
-        let scouting = config.get_json("scouting/multicast/enabled").ok();
-        if connect.is_empty() && scouting.as_deref() == Some("false") {
+        let scouting = config.get_json(zconfig::MULTICAST_SCOUTING_KEY).ok();
+        if connect.is_empty() && scouting.as_deref() != Some("true") {
             return Err(format!(
-                "{}: a client with no router to connect to and multicast scouting off never \
-                 joins a network; give the router with -e ROUTER (or connect endpoints in the \
-                 -c file)",
+                "{}: a client with no router to connect to and multicast scouting off (the \
+                 default) never joins a network; give the router with -e ROUTER (or connect \
+                 endpoints in the -c file), or find it with --multicast-scouting",
                 client_source(user)
             ));
         }
@@ -149,7 +156,7 @@ pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Re
     })
 }
 
-/// The first of `-c`, `-m`, `-e`, `-l` given, as the user wrote it.
+/// The first of `-c`, `-m`, `-e`, `-l`, `--multicast-scouting` given, as the user wrote it.
 fn zenoh_flag_given(z: &ZenohArgs) -> Option<String> {
     if let Some(c) = &z.config {
         Some(format!("-c {}", c.display()))
@@ -157,8 +164,11 @@ fn zenoh_flag_given(z: &ZenohArgs) -> Option<String> {
         Some(format!("-m {}", m.as_str()))
     } else if let Some(e) = z.connect.first() {
         Some(format!("-e {e}"))
+    } else if let Some(l) = z.listen.first() {
+        Some(format!("-l {l}"))
     } else {
-        z.listen.first().map(|l| format!("-l {l}"))
+        z.multicast_scouting
+            .then(|| "--multicast-scouting".to_string())
     }
 }
 
@@ -459,6 +469,14 @@ mod tests {
             (true, from_file, vec!["--router with -c".into()]),
             (
                 true,
+                ZenohArgs {
+                    multicast_scouting: true,
+                    ..ZenohArgs::default()
+                },
+                vec!["--router with --multicast-scouting".into()],
+            ),
+            (
+                true,
                 flags(&["tcp/127.0.0.1:7447"], &[], None),
                 vec!["--router with -e tcp/127.0.0.1:7447".into()],
             ),
@@ -488,7 +506,29 @@ mod tests {
                 assert!(e.contains(&n), "{n:?} in {e}");
             }
         }
-        // a client that may find its router by multicast scouting is accepted
-        assert!(network(false, &flags(&[], &[], Some(Mode::Client)), 17000).is_ok());
+        // a client without a router: refused, since multicast scouting is off by default ...
+        let e = network(false, &flags(&[], &[], Some(Mode::Client)), 17000)
+            .err()
+            .unwrap();
+        assert!(
+            e.contains("-m client") && e.contains("--multicast-scouting"),
+            "{e}"
+        );
+        // ... and accepted when it may find its router by multicast scouting, which the
+        // children get too
+        let user = ZenohArgs {
+            multicast_scouting: true,
+            ..flags(&[], &[], Some(Mode::Client))
+        };
+        let n = network(false, &user, 17000).unwrap();
+        assert!(n.launcher.multicast_scouting && n.child.multicast_scouting);
+        assert_eq!(
+            n.child
+                .to_config()
+                .unwrap()
+                .get_json(zconfig::MULTICAST_SCOUTING_KEY)
+                .unwrap(),
+            "true"
+        );
     }
 }
