@@ -96,13 +96,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let s = t0.elapsed().as_secs_f64();
         for pt in &points {
             println!(
-                "cap {:?}: {:.1} J (+{:.2} %), {} / {} windows / slots, excess {:.0} m",
+                "cap {:?}: {:.1} J (+{:.2} %), {} / {} windows / slots, excess {:.0} m, {} iterations, {:.2} s",
                 pt.cap_pct,
                 pt.plan.evaluation.energy_j,
                 pt.extra_energy_pct,
                 pt.shortfall.unresolved_windows,
                 pt.shortfall.unresolved_slots,
-                pt.shortfall.total_excess_width_m
+                pt.shortfall.total_excess_width_m,
+                pt.plan.iterations,
+                pt.plan.solve_seconds
             );
         }
         println!("trade-off: {} points in {s:.1} s", points.len());
