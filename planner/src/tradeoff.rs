@@ -8,7 +8,12 @@ use crate::{Mission, PlanResult};
 
 /// The caps of the default trade-off curve, % of extra energy over the least-energy plan; the
 /// curve adds the least-energy plan (0 %) before and the uncapped best effort after them.
-pub const DEFAULT_CAPS_PCT: [f64; 6] = [1.0, 2.0, 4.0, 7.0, 10.0, 15.0];
+pub const DEFAULT_CAPS_PCT: [f64; 5] = [0.5, 1.0, 2.0, 3.0, 5.0];
+
+/// A point whose plan stays this far (% of the least energy) below its cap did not use the
+/// cap: the best effort stopped on its own, and every larger cap gets the same plan (each
+/// would only repeat the stopping rule's last steps from it).
+pub const UNUSED_CAP_PCT: f64 = 0.5;
 
 /// One point of the curve.
 #[derive(Debug, Clone)]
@@ -25,7 +30,8 @@ pub struct TradeoffPoint {
 
 /// The curve for `caps_pct` (ascending, each ≥ 0): the least-energy plan, the best effort
 /// under each cap, and the uncapped best effort. Each capped plan starts from the previous
-/// point's, which meets the larger cap, so the shortfall never rises along the curve.
+/// point's, which meets the larger cap, so the shortfall never rises along the curve; once a
+/// cap is not reached (by [`UNUSED_CAP_PCT`]), the larger caps repeat its plan.
 pub fn tradeoff(
     mission: &Mission,
     options: &PlanOptions,
@@ -49,7 +55,19 @@ pub fn tradeoff(
     let mut points = vec![point(Some(0.0), basis.least_energy.clone())];
     let mut start = basis.least_energy.trajectory.clone();
     let caps = caps_pct.iter().copied().map(Some).chain([None]);
+    let mut slack_pct = 0.0;
     for cap in caps {
+        if slack_pct > UNUSED_CAP_PCT {
+            // the previous cap was not reached: its plan is the best effort under this one
+            if let Some(last) = points.last() {
+                let mut plan = last.plan.clone();
+                if let Some(info) = plan.best_effort.as_mut() {
+                    info.max_extra_energy_pct = cap;
+                }
+                points.push(point(cap, plan));
+                continue;
+            }
+        }
         let capped = PlanOptions {
             max_extra_energy_pct: cap,
             ..options.clone()
@@ -57,7 +75,9 @@ pub fn tradeoff(
         let plan = best_effort_from(mission, &capped, &basis, Some(&start), &mut NoObserver)?;
         // the next cap starts from this plan (within the larger cap too)
         start = plan.trajectory.clone();
-        points.push(point(cap, plan));
+        let p = point(cap, plan);
+        slack_pct = cap.map_or(0.0, |c| c - p.extra_energy_pct);
+        points.push(p);
     }
     Ok(points)
 }

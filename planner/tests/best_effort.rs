@@ -95,3 +95,47 @@ fn a_mission_with_a_strict_general_plan_gets_it() {
     assert_eq!(info.strict_refusal, None);
     assert!(ev.energy_j >= info.least_energy_j);
 }
+
+#[test]
+fn the_tradeoff_curve_meets_its_caps_and_never_loses_resolution() {
+    use planner::tradeoff::{tradeoff, UNUSED_CAP_PCT};
+    let m = Mission::preset(Preset::Default, 30.0).unwrap();
+    let caps = [1.0, 5.0];
+    let points = tradeoff(&m, &PlanOptions::default(), &caps).unwrap();
+    assert_eq!(points.len(), caps.len() + 2);
+    assert_eq!(points[0].cap_pct, Some(0.0));
+    assert_eq!(points[0].extra_energy_pct, 0.0);
+    assert_eq!(points.last().unwrap().cap_pct, None);
+    let least_j = points[0].plan.evaluation.energy_j;
+    let mut deficit = f64::INFINITY;
+    for (i, p) in points.iter().enumerate() {
+        // judged again on the exact geometry
+        let ev = evaluate(&m, &p.plan.trajectory);
+        assert!(ev.is_feasible(), "point {i}: {:?}", ev.violations);
+        if let Some(cap) = p.cap_pct {
+            assert!(
+                ev.energy_j <= least_j * (1.0 + cap / 100.0) * (1.0 + 1e-9),
+                "point {i}: {} J over its cap of {cap} %",
+                ev.energy_j
+            );
+        }
+        let s = ResolutionShortfall::new(&m, &ev);
+        assert_eq!(s, p.shortfall);
+        assert!(
+            s.total_deficit_m <= deficit * (1.0 + 1e-9),
+            "point {i}: deficit {} after {deficit}",
+            s.total_deficit_m
+        );
+        deficit = s.total_deficit_m;
+    }
+    // the best effort resolves more than the least-energy plan within 1 %
+    assert!(points[1].shortfall.total_deficit_m < points[0].shortfall.total_deficit_m);
+    // a cap that a point stays well below is not used: the larger caps repeat its plan
+    for w in points.windows(2).skip(1) {
+        if let Some(cap) = w[0].cap_pct {
+            if cap - w[0].extra_energy_pct > UNUSED_CAP_PCT {
+                assert_eq!(w[1].plan.trajectory.pos_m, w[0].plan.trajectory.pos_m);
+            }
+        }
+    }
+}

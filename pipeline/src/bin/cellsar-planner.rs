@@ -3,7 +3,7 @@
 //! Exit codes: 0 success, 1 internal failure (I/O, solver), 2 bad input (names the field, slot
 //! or file), 3 the mission cannot be flown (names the first slot and the reason).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use pipeline::exit::{plan_failure, Failure};
@@ -17,8 +17,8 @@ use planner::dmin::{expected_dmin_m, expected_dmin_monte_carlo_m, CdfForm};
 use planner::evaluate::ResolutionMode;
 use planner::Summary;
 use planner::{
-    evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanOptions, Scheme,
-    Trajectory,
+    evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanOptions, PlanResult,
+    Scheme, Trajectory,
 };
 
 #[derive(Parser, Debug)]
@@ -260,74 +260,14 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let result = result.map_err(plan_failure)?;
             let files = report::write_plan_dir(&out, &m, &result)
                 .with_context(|| format!("writing {}", out.display()))?;
-            let s = Summary::new(&m, &result);
-            out!(
-                "{}: scheme {}, true energy {:.1} J ({:+.2}% vs floor {:.1} J), own objective {}, {} iterations ({:?}), {:.3} s",
-                m.name(),
-                s.scheme,
-                s.energy_j,
-                100.0 * s.energy_over_floor,
-                s.floor_energy_j,
-                s.objective_j
-                    .map(|v| format!("{v:.1} J"))
-                    .or(s.objective_m.map(|v| format!("{v:.1} m")))
-                    .unwrap_or_default(),
-                s.iterations,
-                s.termination,
-                s.solve_seconds
-            );
-            out!(
-                "exact geometry: feasible {}, sensing violation {:.3} m ({} slots out of view), azimuth speed shortfall {:.3} m/s, speeds {:.2}..{:.2} m/s",
-                s.feasible,
-                s.max_sensing_violation_m,
-                s.slots_out_of_view,
-                s.max_azimuth_speed_violation_mps,
-                s.min_speed_mps,
-                s.max_speed_mps
-            );
-            if let Some(line) = shortfall_line(&s) {
-                out!("{line}");
-            }
-            if let Some(reason) = &result.init_replaced {
-                out!(
-                    "note: the --init path could not be made feasible ({reason}); planned from the built-in start instead"
-                );
-            }
-            for f in files {
-                out!("wrote {}", f.display());
-            }
+            print_plan(&m, &result, &files);
             Ok(())
         }
         Command::Tradeoff {
             mission,
             out,
             caps_pct,
-        } => {
-            let m = Mission::from_path(&mission).map_err(bad)?;
-            check_out_dir(&out)?;
-            if caps_pct.windows(2).any(|w| w[1] < w[0]) {
-                return Err(bad(anyhow::anyhow!("--caps-pct must be ascending")));
-            }
-            let options = PlanOptions::default();
-            let points =
-                planner::tradeoff::tradeoff(&m, &options, &caps_pct).map_err(plan_failure)?;
-            report::tradeoff::write_tradeoff_dir(&out, &m, &points)
-                .with_context(|| format!("writing {}", out.display()))?;
-            out!("point  cap/%  energy/J  extra/%  unresolved windows  slots  excess width/m");
-            for (i, p) in points.iter().enumerate() {
-                out!(
-                    "{i:>5}  {:>5}  {:>8.1}  {:>7.2}  {:>18}  {:>5}  {:>14.0}",
-                    p.cap_pct.map_or("none".to_string(), |c| format!("{c}")),
-                    p.plan.evaluation.energy_j,
-                    p.extra_energy_pct,
-                    p.shortfall.unresolved_windows,
-                    p.shortfall.unresolved_slots,
-                    p.shortfall.total_excess_width_m
-                );
-            }
-            out!("wrote {}", out.display());
-            Ok(())
-        }
+        } => tradeoff_command(&mission, &out, &caps_pct),
         Command::Evaluate {
             mission,
             trajectory,
@@ -374,32 +314,101 @@ fn run(cli: Cli) -> Result<(), Failure> {
             objects,
             trials,
             seed,
-        } => {
-            let correct = expected_dmin_m(radius_m, objects, CdfForm::Correct).map_err(bad)?;
-            // the as-printed formula may not converge for very large N: say so, do not fail
-            let printed = match expected_dmin_m(radius_m, objects, CdfForm::AsPrinted) {
-                Ok(v) => Ok(v),
-                Err(e @ planner::dmin::DminError::Quadrature { .. }) => Err(e),
-                Err(e) => return Err(bad(e)),
-            };
-            let (mc, se) =
-                expected_dmin_monte_carlo_m(radius_m, objects, trials, seed).map_err(bad)?;
-            out!("R = {radius_m} m, N = {objects}");
-            out!("E[d_min] correct formula : {correct:.3} m");
-            match printed {
-                Ok(v) => {
-                    out!("E[d_min] as printed      : {v:.3} m  (the paper's eq. lacks a factor l)")
-                }
-                Err(e) => out!("E[d_min] as printed      : not computed ({e})"),
-            }
-            if trials > 1 {
-                out!("E[d_min] Monte Carlo     : {mc:.3} ± {se:.3} m  ({trials} trials)");
-            } else {
-                out!("E[d_min] Monte Carlo     : {mc:.3} m  (1 trial: no standard error)");
-            }
-            Ok(())
-        }
+        } => dmin_command(radius_m, objects, trials, seed),
     }
+}
+
+/// Prints a plan's summary lines and the files written.
+fn print_plan(m: &Mission, result: &PlanResult, files: &[PathBuf]) {
+    let s = Summary::new(m, result);
+    out!(
+        "{}: scheme {}, true energy {:.1} J ({:+.2}% vs floor {:.1} J), own objective {}, {} iterations ({:?}), {:.3} s",
+        m.name(),
+        s.scheme,
+        s.energy_j,
+        100.0 * s.energy_over_floor,
+        s.floor_energy_j,
+        s.objective_j
+            .map(|v| format!("{v:.1} J"))
+            .or(s.objective_m.map(|v| format!("{v:.1} m")))
+            .unwrap_or_default(),
+        s.iterations,
+        s.termination,
+        s.solve_seconds
+    );
+    out!(
+        "exact geometry: feasible {}, sensing violation {:.3} m ({} slots out of view), azimuth speed shortfall {:.3} m/s, speeds {:.2}..{:.2} m/s",
+        s.feasible,
+        s.max_sensing_violation_m,
+        s.slots_out_of_view,
+        s.max_azimuth_speed_violation_mps,
+        s.min_speed_mps,
+        s.max_speed_mps
+    );
+    if let Some(line) = shortfall_line(&s) {
+        out!("{line}");
+    }
+    if let Some(reason) = &result.init_replaced {
+        out!(
+            "note: the --init path could not be made feasible ({reason}); planned from the built-in start instead"
+        );
+    }
+    for f in files {
+        out!("wrote {}", f.display());
+    }
+}
+
+/// `cellsar-planner tradeoff`.
+fn tradeoff_command(mission: &Path, out: &Path, caps_pct: &[f64]) -> Result<(), Failure> {
+    let m = Mission::from_path(mission).map_err(bad)?;
+    check_out_dir(out)?;
+    if caps_pct.windows(2).any(|w| w[1] < w[0]) {
+        return Err(bad(anyhow::anyhow!("--caps-pct must be ascending")));
+    }
+    let options = PlanOptions::default();
+    let points = planner::tradeoff::tradeoff(&m, &options, caps_pct).map_err(plan_failure)?;
+    report::tradeoff::write_tradeoff_dir(out, &m, &points)
+        .with_context(|| format!("writing {}", out.display()))?;
+    out!("point  cap/%  energy/J  extra/%  unresolved windows  slots  excess width/m");
+    for (i, p) in points.iter().enumerate() {
+        out!(
+            "{i:>5}  {:>5}  {:>8.1}  {:>7.2}  {:>18}  {:>5}  {:>14.0}",
+            p.cap_pct.map_or("none".to_string(), |c| format!("{c}")),
+            p.plan.evaluation.energy_j,
+            p.extra_energy_pct,
+            p.shortfall.unresolved_windows,
+            p.shortfall.unresolved_slots,
+            p.shortfall.total_excess_width_m
+        );
+    }
+    out!("wrote {}", out.display());
+    Ok(())
+}
+
+/// `cellsar-planner dmin`.
+fn dmin_command(radius_m: f64, objects: u64, trials: u32, seed: u64) -> Result<(), Failure> {
+    let correct = expected_dmin_m(radius_m, objects, CdfForm::Correct).map_err(bad)?;
+    // the as-printed formula may not converge for very large N: say so, do not fail
+    let printed = match expected_dmin_m(radius_m, objects, CdfForm::AsPrinted) {
+        Ok(v) => Ok(v),
+        Err(e @ planner::dmin::DminError::Quadrature { .. }) => Err(e),
+        Err(e) => return Err(bad(e)),
+    };
+    let (mc, se) = expected_dmin_monte_carlo_m(radius_m, objects, trials, seed).map_err(bad)?;
+    out!("R = {radius_m} m, N = {objects}");
+    out!("E[d_min] correct formula : {correct:.3} m");
+    match printed {
+        Ok(v) => {
+            out!("E[d_min] as printed      : {v:.3} m  (the paper's eq. lacks a factor l)")
+        }
+        Err(e) => out!("E[d_min] as printed      : not computed ({e})"),
+    }
+    if trials > 1 {
+        out!("E[d_min] Monte Carlo     : {mc:.3} ± {se:.3} m  ({trials} trials)");
+    } else {
+        out!("E[d_min] Monte Carlo     : {mc:.3} m  (1 trial: no standard error)");
+    }
+    Ok(())
 }
 
 /// One line on the resolution of a plan made for the general resolution as a best effort.

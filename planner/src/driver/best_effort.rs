@@ -12,32 +12,58 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use crate::evaluate::ResolutionMode;
+use crate::evaluate::{evaluate, ResolutionMode};
 use crate::schemes::exact::{ExactObjective, ExactTuning};
-use crate::shortfall::ResolutionShortfall;
+use crate::shortfall::{total_deficit_m, ResolutionShortfall};
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
+use super::coarse::coarse_start;
 use super::iterate::{run_exact, Means};
 use super::options::Deadline;
 use super::{BestEffort, Observer, PlanError, PlanOptions, PlanResult, Scheme};
 
-/// What every best-effort plan of a mission starts from: the least-energy plan and, when it
-/// exists, the strict general plan (each computed once; the trade-off reuses them).
+/// What every best-effort plan of a mission starts from (each computed once; the trade-off
+/// reuses them): the least-energy plan and the best effort solved on the coarse levels.
 #[derive(Debug, Clone)]
 pub struct BestEffortBasis {
     /// The least-energy plan (`paper` resolution).
     pub least_energy: PlanResult,
-    /// The strict general plan, or why it was refused. The best effort from the least-energy
-    /// plan is a local method: on the far-start mission it stops at 2 unresolved windows,
-    /// while the strict plan resolves every slot.
-    pub strict: Result<PlanResult, String>,
+    /// The best effort solved on the coarse levels (20, 10, 5 and 2.5 s slots, like the
+    /// least-energy plan's start) and interpolated to the mission's slots, when that track meets
+    /// every constraint but the resolution on them. The best effort from the least-energy plan
+    /// is a local method (on the far-start mission it stops at 2 unresolved windows); from the
+    /// guidance law the coarse levels find the track that resolves every slot there, in a
+    /// fraction of the time of fine iterations. A mission too short for the coarse levels gets
+    /// the strict general plan here instead, when one exists (cheap on so few slots).
+    pub coarse: Option<Trajectory>,
+}
+
+/// The strict general plan's track, `None` when it is refused or fails (it is only a start).
+fn strict_plan(
+    mission: &Mission,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
+) -> Option<Trajectory> {
+    let strict_options = PlanOptions {
+        resolution: ResolutionMode::General,
+        strict_resolution: true,
+        max_extra_energy_pct: None,
+        ..options.clone()
+    };
+    match super::run_plan(mission, &strict_options, observer, stop) {
+        Ok(plan) => Some(plan.trajectory),
+        Err(e) => {
+            tracing::debug!(error = %e, "no strict general plan");
+            None
+        }
+    }
 }
 
 impl BestEffortBasis {
     /// Plans the least-energy plan and, unless that one already meets the general resolution
-    /// everywhere, the strict general plan (a refusal is kept as its message; any other error
-    /// is returned).
+    /// everywhere, the coarse best effort.
     pub fn new(
         mission: &Mission,
         options: &PlanOptions,
@@ -53,6 +79,7 @@ impl BestEffortBasis {
         observer: &mut dyn Observer,
         stop: Option<&AtomicBool>,
     ) -> Result<Self, PlanError> {
+        let started = Instant::now();
         let least_energy = super::run_plan(
             mission,
             &PlanOptions {
@@ -63,24 +90,33 @@ impl BestEffortBasis {
             observer,
             stop,
         )?;
-        let general = ResolutionMode::General;
-        let strict = if least_energy.evaluation.is_feasible_for(general) {
-            Ok(least_energy.clone())
+        let coarse = if least_energy
+            .evaluation
+            .is_feasible_for(ResolutionMode::General)
+            || !options.coarse
+        {
+            None
         } else {
-            let strict_options = PlanOptions {
-                resolution: general,
-                strict_resolution: true,
+            let coarse_options = PlanOptions {
+                resolution: ResolutionMode::General,
+                strict_resolution: false,
+                init: None,
                 ..options.clone()
             };
-            match super::run_plan(mission, &strict_options, observer, stop) {
-                Ok(plan) => Ok(plan),
-                Err(PlanError::Infeasible(why)) => Err(why.to_string()),
-                Err(e) => return Err(e),
-            }
+            let deadline = Deadline::after(started, options.time_limit_s, stop);
+            coarse_start(
+                mission,
+                ExactObjective::Energy,
+                true,
+                &coarse_options,
+                deadline,
+            )
+            .filter(|t| evaluate(mission, t).is_feasible())
+            .or_else(|| strict_plan(mission, options, observer, stop))
         };
         Ok(Self {
             least_energy,
-            strict,
+            coarse,
         })
     }
 
@@ -106,14 +142,14 @@ pub(super) fn plan_best_effort(
 }
 
 /// The best-effort plan of `mission` from an already planned `basis`, under
-/// `options.max_extra_energy_pct`, its iterations started from `start` (default: the
-/// least-energy plan; a given start must meet every constraint but the resolution, and the
-/// energy cap). Its `solve_seconds` counts only this step.
+/// `options.max_extra_energy_pct`, its iterations started from `start` (default: the better
+/// in merit of the least-energy plan and the coarse best effort within the cap; a given start
+/// must meet every constraint but the resolution, and the energy cap). Its `solve_seconds`
+/// counts only this step.
 ///
-/// The strict general plan, when there is one within the cap, is the answer (no shortfall,
-/// least energy). Otherwise the best effort runs; when it resolves every slot, the strict
-/// general SCA continues from it with the cell constraints hard, lowering the energy.
-/// `strict_refusal` says why the strict plan was refused (`None`: it exists, beyond the cap).
+/// When the least-energy plan resolves every slot it is the answer. Otherwise the best effort
+/// runs; when it resolves every slot, the strict general SCA continues from it with the cell
+/// constraints hard, lowering the energy.
 pub fn best_effort_from(
     mission: &Mission,
     options: &PlanOptions,
@@ -140,38 +176,57 @@ fn best_effort_until(
     let cap_j = options
         .max_extra_energy_pct
         .map(|pct| least_j * (1.0 + pct / 100.0));
-    let info = BestEffort {
+    let general = ResolutionMode::General;
+    let mut info = BestEffort {
         least_energy_j: least_j,
         least_energy_shortfall: ResolutionShortfall::new(mission, &basis.least_energy.evaluation),
         max_extra_energy_pct: options.max_extra_energy_pct,
-        strict_refusal: basis.strict.as_ref().err().cloned(),
+        strict_refusal: None,
     };
-    let general = ResolutionMode::General;
-    let finish = |mut out: PlanResult, programs: usize| {
+    let finish = |mut out: PlanResult, programs: usize, info: BestEffort| {
         out.scheme = Scheme::Exact;
         out.resolution = general;
         out.start_energy_j = least_j;
         out.cone_programs += programs;
-        out.best_effort = Some(info.clone());
+        out.best_effort = Some(info);
         out.solve_seconds = started.elapsed().as_secs_f64();
         out
     };
-    if let Ok(plan) = &basis.strict {
-        if cap_j.is_none_or(|cap| plan.evaluation.energy_j <= cap) {
-            return Ok(finish(plan.clone(), 0));
-        }
+    if basis.least_energy.evaluation.is_feasible_for(general) {
+        return Ok(finish(basis.least_energy.clone(), 0, info));
     }
     observer.on_phase("best effort");
+    let weight = options.resolution_weight_j_per_m;
+    let merit = |t: &Trajectory| {
+        let ev = evaluate(mission, t);
+        let within_cap = cap_j.is_none_or(|cap| ev.energy_j <= cap);
+        (ev.is_feasible() && within_cap)
+            .then(|| ev.energy_j + weight * total_deficit_m(mission, &ev))
+    };
+    let start = match start {
+        Some(t) => t.clone(),
+        None => [basis.coarse.as_ref()]
+            .into_iter()
+            .flatten()
+            .filter_map(|t| merit(t).map(|m| (m, t)))
+            .filter(|(m, _)| {
+                *m < basis.least_energy.evaluation.energy_j
+                    + weight * info.least_energy_shortfall.total_deficit_m
+            })
+            .map(|(_, t)| t.clone())
+            .next()
+            .unwrap_or_else(|| basis.least_energy.trajectory.clone()),
+    };
     let tuning = ExactTuning {
         resolution: general,
-        cell_slack_weight: Some(options.resolution_weight_j_per_m),
+        cell_slack_weight: Some(weight),
         energy_cap_j: cap_j,
         ..ExactTuning::default()
     };
     let mut solver = SocpSolver::new(options.exact_socp);
     let out = run_exact(
         mission,
-        start.unwrap_or(&basis.least_energy.trajectory).clone(),
+        start,
         ExactObjective::Energy,
         &tuning,
         options,
@@ -181,8 +236,13 @@ fn best_effort_until(
             deadline,
         },
     )?;
-    if !out.evaluation.is_feasible_for(general) {
-        return Ok(finish(out, 0));
+    if let Some(slot) = ResolutionShortfall::new(mission, &out.evaluation).first_unresolved_slot {
+        info.strict_refusal = Some(format!(
+            "the best effort leaves landmark slot {slot} (t = {:.1} s) with a cell wider than \
+             d_min",
+            slot as f64 * mission.params().slot_s
+        ));
+        return Ok(finish(out, 0, info));
     }
     // every slot resolved: the least energy with the cell constraints hard, from here
     let strict = ExactTuning {
@@ -202,5 +262,5 @@ fn best_effort_until(
             deadline,
         },
     )?;
-    Ok(finish(polished, programs))
+    Ok(finish(polished, programs, info))
 }

@@ -1,7 +1,9 @@
 //! Coarse-to-fine levels: the start solved on coarser slot grids first.
 
+use crate::evaluate::ResolutionMode;
 use crate::init::guidance_start;
 use crate::schemes::exact::{ExactObjective, ExactTuning};
+use crate::shortfall::total_deficit_m;
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
@@ -109,12 +111,28 @@ pub(super) fn coarse_start_from(
     let target = coarse_levels(options, optimise).get(level)?;
     let factor = coarse_factor(n, delta, *target)?;
     let coarse = mission.coarsened(factor)?;
+    let exact_rules = optimise && options.scheme == Scheme::Exact;
+    // best effort: phase I repairs all but the cell, the solve minimises its deficit too
+    let best_effort =
+        exact_rules && options.resolution == ResolutionMode::General && !options.strict_resolution;
     let tuning = ExactTuning {
         whole_slot_sensing: true,
-        resolution: options.resolution,
+        resolution: if best_effort {
+            ResolutionMode::Paper
+        } else {
+            options.resolution
+        },
         ..ExactTuning::default()
     };
-    let exact_rules = optimise && options.scheme == Scheme::Exact;
+    let solve_tuning = if best_effort {
+        ExactTuning {
+            resolution: ResolutionMode::General,
+            cell_slack_weight: Some(options.resolution_weight_j_per_m),
+            ..tuning
+        }
+    } else {
+        tuning
+    };
     let starts: Vec<Trajectory> = match warm {
         Some(w) => vec![Trajectory {
             slot_s: coarse.params().slot_s,
@@ -172,7 +190,7 @@ pub(super) fn coarse_start_from(
                 &coarse,
                 start,
                 objective,
-                &tuning,
+                &solve_tuning,
                 &sub_options,
                 Means {
                     solver: &mut solver,
@@ -192,7 +210,15 @@ pub(super) fn coarse_start_from(
                 energy_j = solved.evaluation.energy_j,
                 "coarse solve"
             );
-            (objective.true_value(&solved.evaluation), solved.trajectory)
+            let deficit_j = if best_effort {
+                options.resolution_weight_j_per_m * total_deficit_m(&coarse, &solved.evaluation)
+            } else {
+                0.0
+            };
+            (
+                objective.true_value(&solved.evaluation) + deficit_j,
+                solved.trajectory,
+            )
         } else {
             // not optimised: the comparison schemes, which always have one start (two starts
             // come only after a stalled level, which needs the exact scheme's optimisation)

@@ -185,6 +185,16 @@ pub(super) fn make_feasible(
             }
         }
     }
+    let error = stalled_error(mission, &ev, mode);
+    Err(PhaseOneFailure {
+        error,
+        stalled: Some(current),
+    })
+}
+
+/// The refusal of a phase I that stalled at `ev`: the first slot that is out of view, too slow
+/// or (under the general resolution) wider than d_min.
+fn stalled_error(mission: &Mission, ev: &Evaluation, mode: ResolutionMode) -> PlanError {
     let p = mission.params();
     let first = ev
         .slots
@@ -197,7 +207,7 @@ pub(super) fn make_feasible(
         })
         .map(|s| s.t)
         .unwrap_or(1);
-    let error = PlanError::Infeasible(Infeasibility {
+    PlanError::Infeasible(Infeasibility {
         slot: first,
         t_s: first as f64 * p.slot_s,
         reason: format!(
@@ -209,10 +219,6 @@ pub(super) fn make_feasible(
             ev.violations.min_speed_mps,
             ev.violations.worst_width_m
         ),
-    });
-    Err(PhaseOneFailure {
-        error,
-        stalled: Some(current),
     })
 }
 

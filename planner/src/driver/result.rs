@@ -91,7 +91,8 @@ pub struct BestEffort {
     pub least_energy_shortfall: ResolutionShortfall,
     /// The energy cap it was planned under, % above `least_energy_j` (`None`: none).
     pub max_extra_energy_pct: Option<f64>,
-    /// Why the strict general plan was refused (`None`: it exists, but above the cap, or it is
-    /// this plan).
+    /// Why this plan is not a strict general one: the first landmark slot it leaves with a
+    /// cell wider than d_min (`None`: it resolves every slot). The best effort makes no strict
+    /// attempt of its own (`PlanOptions::strict_resolution` does).
     pub strict_refusal: Option<String>,
 }

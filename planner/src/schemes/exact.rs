@@ -169,84 +169,12 @@ impl ExactSubproblem {
         let keepout = p.range_keepout_m();
         let v0 = p.induced_velocity_mps;
 
-        // variable layout
-        let mut vars = Vec::with_capacity(n);
-        let mut next = 0usize;
-        let mut take = || {
-            next += 1;
-            next - 1
-        };
-        for t in 1..=n {
-            let landmark = mission.target_m(t).is_some();
-            let x = take();
-            let y = take();
-            let v = take();
-            let energy =
-                (objective != ExactObjective::Distance).then(|| [take(), take(), take(), take()]);
-            let e = landmark.then(&mut take);
-            let sigma = (landmark && tuning.elastic_weight.is_some()).then(&mut take);
-            let general = landmark && tuning.resolution == ResolutionMode::General;
-            let shift = general.then(&mut take);
-            let rho = (general && tuning.cell_slack_weight.is_some()).then(&mut take);
-            vars.push(SlotVars {
-                x,
-                y,
-                v,
-                energy,
-                e,
-                sigma,
-                shift,
-                rho,
-            });
-        }
+        let (vars, next) = layout(mission, objective, tuning);
         let mut b = ProblemBuilder::new(next);
 
-        // linearisation data
-        let headings = prev.headings_rad();
-        let lin: Vec<SlotLin> = (1..=n)
-            .map(|t| {
-                let step = Vector2::from(prev.step_m(t));
-                let dir = step
-                    .direction()
-                    .unwrap_or_else(|| heading_unit(headings[t - 1]));
-                SlotLin {
-                    step_m: step,
-                    dir,
-                    aux: model.induced_factor(step.length() / delta),
-                    centre_m: Point2::from(prev.q(t)) + RIGHT_TURN * dir * offset,
-                }
-            })
-            .collect();
+        let lin = linearise(mission, prev, &model);
 
-        // objective, scaled to a mean power (W) or a mean step (m) for conditioning
-        let objective_scale = match objective {
-            ExactObjective::Distance => 1.0 / n as f64,
-            ExactObjective::Energy => 1.0 / (n as f64 * delta),
-        };
-        for sv in &vars {
-            match (objective, sv.energy) {
-                (ExactObjective::Distance, _) => {
-                    b.add_linear_cost(sv.v, SPEED_UNIT_MPS * delta * objective_scale)
-                }
-                (_, Some([a, _s, _w, z])) => {
-                    let c = delta * objective_scale;
-                    b.add_square_cost(
-                        sv.v,
-                        c * model.blade_quadratic_coeff() * SPEED_UNIT_MPS.powi(2),
-                    );
-                    b.add_linear_cost(a, c * model.induced_power_w);
-                    b.add_linear_cost(z, c * model.parasite_coeff * SPEED_UNIT_MPS.powi(3));
-                }
-                _ => {}
-            }
-            if let (Some(sig), Some(w)) = (sv.sigma, tuning.elastic_weight) {
-                b.add_linear_cost(sig, w * objective_scale);
-            }
-            if let (Some(rho), Some(w)) = (sv.rho, tuning.cell_slack_weight) {
-                b.add_linear_cost(rho, w * objective_scale);
-                b.nonneg(Lin::var(rho, 1.0));
-            }
-        }
+        let objective_scale = objective_terms(&mut b, &vars, objective, &model, tuning, delta);
         if let Some(cap) = tuning.energy_cap_j {
             energy_cap(&mut b, &vars, &model, delta, cap);
         }
@@ -264,28 +192,15 @@ impl ExactSubproblem {
             );
             b.nonneg(Lin::var(sv.v, -SPEED_UNIT_MPS).plus_const(v_max));
 
-            if let Some([a, s, w, z]) = sv.energy {
-                // L = 2 a0 a − a0² + (2 u·v − ‖u‖²)/(δ² v0²)  (tangent of a² + ‖v‖²/(δ² v0²))
-                let k = 1.0 / (delta * delta * v0 * v0);
-                let u = l.step_m;
-                let lexpr = Lin::var(a, 2.0 * l.aux)
-                    .plus_const(-l.aux * l.aux - k * u.norm_squared())
-                    .plus_lin(&vx.clone().scaled(2.0 * k * u.x))
-                    .plus_lin(&vy.clone().scaled(2.0 * k * u.y));
-                // s a ≥ 1 ; s² ≤ L
-                b.rotated_soc(
-                    Lin::var(s, 1.0),
-                    Lin::var(a, 1.0),
-                    &[Lin::constant_only(1.0)],
+            if let Some(energy) = sv.energy {
+                energy_cones(
+                    &mut b,
+                    energy,
+                    sv.v,
+                    &l,
+                    (&vx, &vy),
+                    delta * delta * v0 * v0,
                 );
-                b.rotated_soc(lexpr, Lin::constant_only(1.0), &[Lin::var(s, 1.0)]);
-                // V² ≤ w ; w² ≤ z V
-                b.rotated_soc(
-                    Lin::var(w, 1.0),
-                    Lin::constant_only(1.0),
-                    &[Lin::var(sv.v, 1.0)],
-                );
-                b.rotated_soc(Lin::var(z, 1.0), Lin::var(sv.v, 1.0), &[Lin::var(w, 1.0)]);
             }
 
             let (Some(g), Some(e)) = (mission.target_m(t), sv.e) else {
@@ -308,25 +223,7 @@ impl ExactSubproblem {
             };
             b.nonneg(along.plus_const(-s_min));
 
-            // linearised centre: c̃ = q_t + D J ĥ + (D/‖u‖) J P v, P = I − ĥĥᵀ
-            let scale = if u_norm > 0.0 { offset / u_norm } else { 0.0 };
-            let pm = Matrix2::identity() - h * h.transpose();
-            // J P v = ((P v)_y, −(P v)_x)
-            let pvx = vx
-                .clone()
-                .scaled(pm[(0, 0)])
-                .plus_lin(&vy.clone().scaled(pm[(0, 1)]));
-            let pvy = vx
-                .clone()
-                .scaled(pm[(1, 0)])
-                .plus_lin(&vy.clone().scaled(pm[(1, 1)]));
-            let jh = RIGHT_TURN * h;
-            let cx = Lin::var(sv.x, 1.0)
-                .plus_const(offset * jh.x)
-                .plus_lin(&pvy.clone().scaled(scale));
-            let cy = Lin::var(sv.y, 1.0)
-                .plus_const(offset * jh.y)
-                .plus_lin(&pvx.clone().scaled(-scale));
+            let (cx, cy) = linear_centre(sv, (&vx, &vy), h, u_norm, offset);
             let mut head = Lin::var(e, -1.0).plus_const(radius);
             if let Some(sig) = sv.sigma {
                 head = head.plus(sig, 1.0);
@@ -438,6 +335,175 @@ impl ExactSubproblem {
             .filter_map(|sv| sv.sigma.and_then(|s| x.get(s).copied()))
             .fold(0.0, f64::max)
     }
+}
+
+/// The objective of the subproblem, scaled to a mean power (W) or a mean step (m) for
+/// conditioning: the energy (or distance) terms, the elastic and deficit slacks' costs. Returns
+/// the scale.
+fn objective_terms(
+    b: &mut ProblemBuilder,
+    vars: &[SlotVars],
+    objective: ExactObjective,
+    model: &PowerModel,
+    tuning: &ExactTuning,
+    delta: f64,
+) -> f64 {
+    let n = vars.len();
+    let objective_scale = match objective {
+        ExactObjective::Distance => 1.0 / n as f64,
+        ExactObjective::Energy => 1.0 / (n as f64 * delta),
+    };
+    for sv in vars {
+        match (objective, sv.energy) {
+            (ExactObjective::Distance, _) => {
+                b.add_linear_cost(sv.v, SPEED_UNIT_MPS * delta * objective_scale)
+            }
+            (_, Some([a, _s, _w, z])) => {
+                let c = delta * objective_scale;
+                b.add_square_cost(
+                    sv.v,
+                    c * model.blade_quadratic_coeff() * SPEED_UNIT_MPS.powi(2),
+                );
+                b.add_linear_cost(a, c * model.induced_power_w);
+                b.add_linear_cost(z, c * model.parasite_coeff * SPEED_UNIT_MPS.powi(3));
+            }
+            _ => {}
+        }
+        if let (Some(sig), Some(w)) = (sv.sigma, tuning.elastic_weight) {
+            b.add_linear_cost(sig, w * objective_scale);
+        }
+        if let (Some(rho), Some(w)) = (sv.rho, tuning.cell_slack_weight) {
+            b.add_linear_cost(rho, w * objective_scale);
+            b.nonneg(Lin::var(rho, 1.0));
+        }
+    }
+    objective_scale
+}
+
+/// The first-order expansion of the sensing centre of a slot with variables `sv` and step
+/// `(vx, vy)` around a previous step of length `u_norm` and heading `h`:
+/// c̃ = q_t + D J ĥ + (D/‖u‖) J P v, P = I − ĥĥᵀ (D = `offset`).
+fn linear_centre(
+    sv: SlotVars,
+    (vx, vy): (&Lin, &Lin),
+    h: Vector2<f64>,
+    u_norm: f64,
+    offset: f64,
+) -> (Lin, Lin) {
+    let scale = if u_norm > 0.0 { offset / u_norm } else { 0.0 };
+    let pm = Matrix2::identity() - h * h.transpose();
+    // J P v = ((P v)_y, −(P v)_x)
+    let pvx = vx
+        .clone()
+        .scaled(pm[(0, 0)])
+        .plus_lin(&vy.clone().scaled(pm[(0, 1)]));
+    let pvy = vx
+        .clone()
+        .scaled(pm[(1, 0)])
+        .plus_lin(&vy.clone().scaled(pm[(1, 1)]));
+    let jh = RIGHT_TURN * h;
+    let cx = Lin::var(sv.x, 1.0)
+        .plus_const(offset * jh.x)
+        .plus_lin(&pvy.clone().scaled(scale));
+    let cy = Lin::var(sv.y, 1.0)
+        .plus_const(offset * jh.y)
+        .plus_lin(&pvx.clone().scaled(-scale));
+    (cx, cy)
+}
+
+/// The variable layout of the subproblem: each slot's variables, and their number.
+fn layout(
+    mission: &Mission,
+    objective: ExactObjective,
+    tuning: &ExactTuning,
+) -> (Vec<SlotVars>, usize) {
+    let n = mission.slots();
+    let mut vars = Vec::with_capacity(n);
+    let mut next = 0usize;
+    let mut take = || {
+        next += 1;
+        next - 1
+    };
+    for t in 1..=n {
+        let landmark = mission.target_m(t).is_some();
+        let x = take();
+        let y = take();
+        let v = take();
+        let energy =
+            (objective != ExactObjective::Distance).then(|| [take(), take(), take(), take()]);
+        let e = landmark.then(&mut take);
+        let sigma = (landmark && tuning.elastic_weight.is_some()).then(&mut take);
+        let general = landmark && tuning.resolution == ResolutionMode::General;
+        let shift = general.then(&mut take);
+        let rho = (general && tuning.cell_slack_weight.is_some()).then(&mut take);
+        vars.push(SlotVars {
+            x,
+            y,
+            v,
+            energy,
+            e,
+            sigma,
+            shift,
+            rho,
+        });
+    }
+    (vars, next)
+}
+
+/// The linearisation data of every slot around the iterate `prev`.
+fn linearise(mission: &Mission, prev: &Trajectory, model: &PowerModel) -> Vec<SlotLin> {
+    let p = mission.params();
+    let delta = p.slot_s;
+    let offset = p.centre_offset_m();
+    let headings = prev.headings_rad();
+    (1..=mission.slots())
+        .map(|t| {
+            let step = Vector2::from(prev.step_m(t));
+            let dir = step
+                .direction()
+                .unwrap_or_else(|| heading_unit(headings[t - 1]));
+            SlotLin {
+                step_m: step,
+                dir,
+                aux: model.induced_factor(step.length() / delta),
+                centre_m: Point2::from(prev.q(t)) + RIGHT_TURN * dir * offset,
+            }
+        })
+        .collect()
+}
+
+/// The energy cones of one slot: the induced auxiliary `a` (with its helper `s`) against the
+/// tangent at the previous step, and w ≥ V², z ≥ V³ for the speed epigraph `v`; `step` is the
+/// slot's (v_x, v_y), `delta2_v02` is δ² v0².
+fn energy_cones(
+    b: &mut ProblemBuilder,
+    [a, s, w, z]: [usize; 4],
+    v: usize,
+    l: &SlotLin,
+    (vx, vy): (&Lin, &Lin),
+    delta2_v02: f64,
+) {
+    // L = 2 a0 a − a0² + (2 u·v − ‖u‖²)/(δ² v0²)  (tangent of a² + ‖v‖²/(δ² v0²))
+    let k = 1.0 / delta2_v02;
+    let u = l.step_m;
+    let lexpr = Lin::var(a, 2.0 * l.aux)
+        .plus_const(-l.aux * l.aux - k * u.norm_squared())
+        .plus_lin(&vx.clone().scaled(2.0 * k * u.x))
+        .plus_lin(&vy.clone().scaled(2.0 * k * u.y));
+    // s a ≥ 1 ; s² ≤ L
+    b.rotated_soc(
+        Lin::var(s, 1.0),
+        Lin::var(a, 1.0),
+        &[Lin::constant_only(1.0)],
+    );
+    b.rotated_soc(lexpr, Lin::constant_only(1.0), &[Lin::var(s, 1.0)]);
+    // V² ≤ w ; w² ≤ z V
+    b.rotated_soc(
+        Lin::var(w, 1.0),
+        Lin::constant_only(1.0),
+        &[Lin::var(v, 1.0)],
+    );
+    b.rotated_soc(Lin::var(z, 1.0), Lin::var(v, 1.0), &[Lin::var(w, 1.0)]);
 }
 
 /// Where the resolution-cell constraints of one landmark slot are expanded.
