@@ -60,7 +60,8 @@ pub fn plan_with_stop(
     run_plan(mission, options, observer, Some(stop))
 }
 
-/// The body of [`plan_with_observer`] and [`plan_with_stop`].
+/// The body of [`plan_with_observer`] and [`plan_with_stop`]. `solve_seconds` is read here,
+/// after the run's workspaces are freed (about 0.4 ms of the default mission's plan).
 fn run_plan(
     mission: &Mission,
     options: &PlanOptions,
@@ -68,6 +69,19 @@ fn run_plan(
     stop: Option<&AtomicBool>,
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
+    let mut out = run_plan_from(started, mission, options, observer, stop)?;
+    out.solve_seconds = started.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+/// [`run_plan`] with its clock started at `started`.
+fn run_plan_from(
+    started: Instant,
+    mission: &Mission,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
+) -> Result<PlanResult, PlanError> {
     options.validate()?;
     if options.scheme == Scheme::Exact
         && options.resolution == ResolutionMode::General
@@ -205,7 +219,6 @@ fn run_plan(
     out.repair_iterations = repair_iterations;
     out.init_replaced = init_replaced;
     out.cone_programs += repair_solver.builds.max(repair_iterations);
-    out.solve_seconds = started.elapsed().as_secs_f64();
     Ok(out)
 }
 
