@@ -3,6 +3,14 @@
 
 use super::*;
 
+/// The modes in which values can be read.
+const GET_MODES: &[Mode] = &[
+    Mode::Initialization,
+    Mode::Step,
+    Mode::Terminated,
+    Mode::Error,
+];
+
 impl Instance {
     fn lookup(&self, func: &str, vr: u32) -> Result<(&'static Var, usize), FmuError> {
         table::lookup(self.core.info().vars, vr, self.version == FmiVersion::Fmi2).ok_or_else(
@@ -16,15 +24,7 @@ impl Instance {
     }
 
     fn check_get(&mut self, func: &str, var: &Var, ty: VarType) -> Result<(), FmuError> {
-        self.require(
-            func,
-            &[
-                Mode::Initialization,
-                Mode::Step,
-                Mode::Terminated,
-                Mode::Error,
-            ],
-        )?;
+        self.require(func, GET_MODES)?;
         if var.ty != ty {
             return Err(FmuError::error(format!(
                 "{func}: variable `{}` (value reference {}) is a {}",
@@ -87,15 +87,7 @@ impl Instance {
         let len = out.len();
         for &vr in vrs {
             if vr == 0 && self.version == FmiVersion::Fmi3 {
-                self.require(
-                    func,
-                    &[
-                        Mode::Initialization,
-                        Mode::Step,
-                        Mode::Terminated,
-                        Mode::Error,
-                    ],
-                )?;
+                self.require(func, GET_MODES)?;
                 *out.get_mut(k).ok_or_else(|| too_few(func, len))? = self.time;
                 k += 1;
                 continue;
