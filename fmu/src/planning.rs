@@ -177,6 +177,7 @@ pub fn sensing_excess_m(mission: &Mission, traj: &Trajectory) -> f64 {
 
 /// Why a re-plan produced no new trajectory.
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub enum ReplanError {
     /// The moved landmark makes the mission invalid (e.g. a non-finite coordinate).
     Mission(String),
