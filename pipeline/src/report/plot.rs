@@ -1,9 +1,11 @@
 //! SVG plots: trajectories with landmarks, BS and sensing circles; line plots (energy per slot,
 //! convergence, power vs speed, E\[d_min\] vs R, ...).
 
+use std::ops::Range;
 use std::path::Path;
 
 use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{write_file, ReportError};
@@ -144,20 +146,7 @@ pub fn line_plot(
     {
         let root = SVGBackend::with_string(&mut text, (900, 560)).into_drawing_area();
         root.fill(&WHITE).map_err(&e)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 22))
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(&e)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(y_label)
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()
-            .map_err(&e)?;
+        let mut chart = chart_on(&root, title, (x0..x1, y0..y1), (x_label, y_label), path)?;
         for (i, s) in series.iter().enumerate() {
             let color = PALETTE[s.colour.unwrap_or(i) % PALETTE.len()];
             let pts: Vec<(f64, f64)> = s
@@ -192,16 +181,55 @@ pub fn line_plot(
             .flat_map(|s| s.points.iter().copied())
             .map(|(x, y)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0)))
             .collect();
-        chart
-            .configure_series_labels()
-            .position(emptiest_corner(&all, series.len()))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(&e)?;
-        root.present().map_err(&e)?;
+        finish(&mut chart, &root, emptiest_corner(&all, series.len()), path)?;
     }
     write_file(path, &text)
+}
+
+/// The chart of a plot on `root`: the caption `title`, axes over `ranges` (x, y) described by
+/// `labels` (x, y), and a light grid.
+fn chart_on<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    title: &str,
+    ranges: (Range<f64>, Range<f64>),
+    labels: (&str, &str),
+    path: &Path,
+) -> Result<GroundChart<'a, 'b>, ReportError> {
+    let e = err(path);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(ranges.0, ranges.1)
+        .map_err(&e)?;
+    chart
+        .configure_mesh()
+        .x_desc(labels.0)
+        .y_desc(labels.1)
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(&e)?;
+    Ok(chart)
+}
+
+/// Draws the legend of `chart` at `position` (on a white, framed background) and finishes the
+/// drawing.
+fn finish<'a, 'b: 'a>(
+    chart: &mut GroundChart<'a, 'b>,
+    root: &DrawingArea<SVGBackend<'b>, Shift>,
+    position: SeriesLabelPosition,
+    path: &Path,
+) -> Result<(), ReportError> {
+    let e = err(path);
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(&e)?;
+    root.present().map_err(&e)
 }
 
 /// One trajectory of a trajectory plot.
@@ -217,7 +245,7 @@ pub struct TrackStyle<'a> {
     pub dashed: bool,
 }
 
-/// The chart every trajectory plot draws on: ground x, y in metres.
+/// The chart every plot draws on (a trajectory plot's: ground x, y in metres).
 type GroundChart<'a, 'b> =
     ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
@@ -236,32 +264,13 @@ pub fn trajectory_plot(
     {
         let root = SVGBackend::with_string(&mut text, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(&e)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 22))
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(70)
-            .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
-            .map_err(&e)?;
-        chart
-            .configure_mesh()
-            .x_desc("x (m)")
-            .y_desc("y (m)")
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()
-            .map_err(&e)?;
+        let view = (cx - half..cx + half, cy - half..cy + half);
+        let mut chart = chart_on(&root, title, view, ("x (m)", "y (m)"), path)?;
         for (i, tr) in tracks.iter().enumerate() {
             draw_track(&mut chart, path, mission, tr, PALETTE[i % PALETTE.len()])?;
         }
         draw_mission_marks(&mut chart, path, mission, tracks)?;
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(&e)?;
-        root.present().map_err(&e)?;
+        finish(&mut chart, &root, SeriesLabelPosition::UpperLeft, path)?;
     }
     write_file(path, &text)
 }
