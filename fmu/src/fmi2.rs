@@ -283,11 +283,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
         let vrs = unsafe { slice(vr, nvr, "vr") }?;
         // SAFETY: FMI contract.
         let out = unsafe { slice_mut(value, nvr, "value") }?;
-        let mut b = vec![false; nvr];
-        inst.get_bool("fmi2GetBoolean", vrs, &mut b)?;
-        for (o, v) in out.iter_mut().zip(b) {
-            *o = Fmi2Boolean::from(v);
-        }
+        inst.get_bool("fmi2GetBoolean", vrs, out)?;
         Ok(Status::Ok)
     })
 }
@@ -359,8 +355,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
         let vrs = unsafe { slice(vr, nvr, "vr") }?;
         // SAFETY: FMI contract.
         let values = unsafe { slice(value, nvr, "value") }?;
-        let b: Vec<bool> = values.iter().map(|&v| v != 0).collect();
-        inst.set_bool("fmi2SetBoolean", vrs, &b)?;
+        inst.set_bool("fmi2SetBoolean", vrs, values)?;
         Ok(Status::Ok)
     })
 }

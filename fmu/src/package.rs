@@ -44,22 +44,22 @@ pub fn entries(
     e
 }
 
-/// An error while writing an FMU archive, naming the archive entry it concerns.
+/// An error while writing an FMU archive, naming the archive entry it concerns (the zip
+/// writer's error is in the message, not also a `source()`).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum PackageError {
     /// Adding an entry (header or data) to the archive failed.
-    #[error("adding {name} to the FMU archive: {source}")]
+    #[error("adding {name} to the FMU archive: {error}")]
     Entry {
         /// The entry's path inside the archive.
         name: String,
-        /// The zip writer's error.
-        #[source]
-        source: zip::result::ZipError,
+        /// The zip writer's error (in the message).
+        error: zip::result::ZipError,
     },
     /// Writing the central directory failed.
     #[error("finishing the FMU archive (central directory): {0}")]
-    Finish(#[source] zip::result::ZipError),
+    Finish(zip::result::ZipError),
 }
 
 /// The `.fmu` archive of a model.
@@ -93,9 +93,9 @@ impl Default for ZipWriter {
 impl ZipWriter {
     /// Adds a file; errors name it.
     pub fn add(&mut self, name: &str, data: &[u8], executable: bool) -> Result<(), PackageError> {
-        let entry_err = |source| PackageError::Entry {
+        let entry_err = |error| PackageError::Entry {
             name: name.to_string(),
-            source,
+            error,
         };
         let options = SimpleFileOptions::default()
             .compression_method(CompressionMethod::Deflated)

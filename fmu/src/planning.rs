@@ -177,6 +177,7 @@ pub fn sensing_excess_m(mission: &Mission, traj: &Trajectory) -> f64 {
 
 /// Why a re-plan produced no new trajectory.
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub enum ReplanError {
     /// The moved landmark makes the mission invalid (e.g. a non-finite coordinate).
     Mission(String),
@@ -243,10 +244,8 @@ pub fn replan(
     };
     let started = Instant::now();
     let moved = moved_mission(mission, window, moved_m).map_err(ReplanError::Mission)?;
-    let p = mission.params().clone();
-    let slot_s = p.slot_s;
-    let n = mission.slots();
-    if from_slot >= n {
+    let slot_s = mission.params().slot_s;
+    if from_slot >= mission.slots() {
         return Ok(Replanned {
             mission: moved,
             trajectory: current.clone(),
@@ -259,6 +258,122 @@ pub fn replan(
             summary: "the horizon is over: nothing to re-plan".into(),
         });
     }
+    let rest = remainder(&moved, current, from_slot, window);
+    let (plans, reach_note) = window_plans(&rest.sub_params, moved_m, rest.moved_slots);
+    let mut attempts: Vec<Attempt> = Vec::new();
+    let mut last_error = String::new();
+    for plan in plans {
+        let call_started = Instant::now();
+        let points = sub_windows(&rest.future, window, plan, slot_s);
+        let sub = match Mission::new(
+            format!(
+                "{} (re-plan from t = {} s)",
+                mission.name(),
+                Num(rest.shift_s)
+            ),
+            rest.sub_params.clone(),
+            &LandmarksSpec {
+                points: Some(points),
+                ..Default::default()
+            },
+        ) {
+            Ok(m) => m,
+            Err(e) => {
+                last_error = e.to_string();
+                attempts.push(Attempt {
+                    window: plan,
+                    solve_s: call_started.elapsed().as_secs_f64(),
+                    error: Some(last_error.clone()),
+                });
+                continue;
+            }
+        };
+        let excess = sensing_excess_m(&sub, &rest.init);
+        let warm = match options.warm_start {
+            WarmStart::Always => true,
+            WarmStart::Never => false,
+            WarmStart::IfFeasible => planner::evaluate(&sub, &rest.init).is_feasible(),
+        };
+        match plan_with(&sub, warm.then(|| rest.init.clone()), &plan_options) {
+            Ok(planned) => {
+                attempts.push(Attempt {
+                    window: plan,
+                    solve_s: call_started.elapsed().as_secs_f64(),
+                    error: None,
+                });
+                let mut pos_m = current.pos_m.get(..from_slot).unwrap_or(&[]).to_vec();
+                pos_m.extend_from_slice(&planned.trajectory.pos_m);
+                let solve_s = started.elapsed().as_secs_f64();
+                let (transition_slots, window_dropped) = transition(plan, rest.moved_slots);
+                let outcome = if window_dropped {
+                    format!("landmark {window}'s window left out")
+                } else {
+                    format!("{transition_slots} transition slot(s)")
+                };
+                return Ok(Replanned {
+                    mission: moved,
+                    trajectory: Trajectory {
+                        slot_s,
+                        start_m: current.start_m,
+                        pos_m,
+                    },
+                    transition_slots,
+                    window_dropped,
+                    solve_s,
+                    summary: format!(
+                        "{} slots from t = {} s in {solve_s:.3} s, {} start (sensing excess {excess:.1} m){reach_note}, {} planner call(s) ({}), {outcome}, {}",
+                        rest.remaining,
+                        Num(rest.shift_s),
+                        if warm { "warm" } else { "cold" },
+                        attempts.len(),
+                        describe_attempts(&attempts),
+                        planned.summary
+                    ),
+                    attempts,
+                    start_excess_m: excess,
+                    warm,
+                });
+            }
+            Err(e) => {
+                attempts.push(Attempt {
+                    window: plan,
+                    solve_s: call_started.elapsed().as_secs_f64(),
+                    error: Some(e.clone()),
+                });
+                last_error = e;
+            }
+        }
+    }
+    Err(ReplanError::Planner {
+        mission: Box::new(moved),
+        message: last_error,
+        attempts,
+        solve_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The part of the horizon a re-plan from `from_slot` covers (see [`replan`]).
+struct Remainder {
+    /// Time of `from_slot`, s: the sub-mission's clock starts there.
+    shift_s: f64,
+    /// Slots left after `from_slot`.
+    remaining: usize,
+    /// The windows still (partly) ahead, with their index in the mission, shifted by `shift_s`.
+    future: Vec<(usize, LandmarkWindow)>,
+    /// The sub-mission's parameters: starting at q_{from_slot}, over the remaining slots.
+    sub_params: planner::Params,
+    /// The rest of the current plan, as the sub-mission's warm start.
+    init: Trajectory,
+    /// The moved window's first and last slot in the sub-mission (1-based), when it has any left.
+    moved_slots: Option<(usize, usize)>,
+}
+
+/// The remainder of `moved` (the mission with window `window` moved) after `from_slot`
+/// (`from_slot < moved.slots()`), flown so far along `current`.
+fn remainder(moved: &Mission, current: &Trajectory, from_slot: usize, window: usize) -> Remainder {
+    let p = moved.params();
+    let slot_s = p.slot_s;
+    let n = moved.slots();
     let shift_s = from_slot as f64 * slot_s;
     let remaining = n - from_slot;
     let sched = moved.schedule();
@@ -294,92 +409,14 @@ pub fn replan(
         .position(|l| *l == Some(window))
         .zip(later.iter().rposition(|l| *l == Some(window)))
         .map(|(a, b)| (a + 1, b + 1));
-    let (plans, reach_note) = window_plans(&sub_params, moved_m, moved_slots);
-    let mut attempts: Vec<Attempt> = Vec::new();
-    let mut last_error = String::new();
-    for plan in plans {
-        let call_started = Instant::now();
-        let points = sub_windows(&future, window, plan, slot_s);
-        let sub = match Mission::new(
-            format!("{} (re-plan from t = {} s)", mission.name(), Num(shift_s)),
-            sub_params.clone(),
-            &LandmarksSpec {
-                points: Some(points),
-                ..Default::default()
-            },
-        ) {
-            Ok(m) => m,
-            Err(e) => {
-                last_error = e.to_string();
-                attempts.push(Attempt {
-                    window: plan,
-                    solve_s: call_started.elapsed().as_secs_f64(),
-                    error: Some(last_error.clone()),
-                });
-                continue;
-            }
-        };
-        let excess = sensing_excess_m(&sub, &init);
-        let warm = match options.warm_start {
-            WarmStart::Always => true,
-            WarmStart::Never => false,
-            WarmStart::IfFeasible => planner::evaluate(&sub, &init).is_feasible(),
-        };
-        match plan_with(&sub, warm.then(|| init.clone()), &plan_options) {
-            Ok(planned) => {
-                attempts.push(Attempt {
-                    window: plan,
-                    solve_s: call_started.elapsed().as_secs_f64(),
-                    error: None,
-                });
-                let mut pos_m = current.pos_m.get(..from_slot).unwrap_or(&[]).to_vec();
-                pos_m.extend_from_slice(&planned.trajectory.pos_m);
-                let solve_s = started.elapsed().as_secs_f64();
-                let (transition_slots, window_dropped) = transition(plan, moved_slots);
-                let outcome = if window_dropped {
-                    format!("landmark {window}'s window left out")
-                } else {
-                    format!("{transition_slots} transition slot(s)")
-                };
-                return Ok(Replanned {
-                    mission: moved,
-                    trajectory: Trajectory {
-                        slot_s,
-                        start_m: current.start_m,
-                        pos_m,
-                    },
-                    transition_slots,
-                    window_dropped,
-                    solve_s,
-                    summary: format!(
-                        "{remaining} slots from t = {} s in {solve_s:.3} s, {} start (sensing excess {excess:.1} m){reach_note}, {} planner call(s) ({}), {outcome}, {}",
-                        Num(shift_s),
-                        if warm { "warm" } else { "cold" },
-                        attempts.len(),
-                        describe_attempts(&attempts),
-                        planned.summary
-                    ),
-                    attempts,
-                    start_excess_m: excess,
-                    warm,
-                });
-            }
-            Err(e) => {
-                attempts.push(Attempt {
-                    window: plan,
-                    solve_s: call_started.elapsed().as_secs_f64(),
-                    error: Some(e.clone()),
-                });
-                last_error = e;
-            }
-        }
+    Remainder {
+        shift_s,
+        remaining,
+        future,
+        sub_params,
+        init,
+        moved_slots,
     }
-    Err(ReplanError::Planner {
-        mission: Box::new(moved),
-        message: last_error,
-        attempts,
-        solve_s: started.elapsed().as_secs_f64(),
-    })
 }
 
 /// The window plans to try after a move, in order (the moved window delayed by d0, d0 + 1, d0 + 2,

@@ -59,8 +59,10 @@ pub struct CertsArgs {
     pub force: bool,
 }
 
-/// Why `cellsar certs` made nothing.
+/// Why `cellsar certs` made nothing. A variant whose message includes its cause does not also
+/// return it from `source()` (each cause is printed once).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum CertsError {
     /// A flag out of range or malformed; names the flag.
     #[error("{flag} {value:?}: {reason}")]
@@ -76,27 +78,27 @@ pub enum CertsError {
     #[error("{0} exists; give --force to replace the certificates in its directory")]
     Exists(PathBuf),
     /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
+    #[error("{}: {error}", path.display())]
     Io {
         /// The file or directory.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (in the message).
+        error: std::io::Error,
     },
     /// Making a key or a certificate failed.
-    #[error("making the {what}: {source}")]
+    #[error("making the {what}: {error}")]
     Cert {
         /// Which certificate.
         what: String,
-        /// The cause.
-        source: rcgen::Error,
+        /// The cause (in the message).
+        error: rcgen::Error,
     },
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> CertsError + '_ {
-    move |source| CertsError::Io {
+    move |error| CertsError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     }
 }
 
@@ -161,7 +163,7 @@ fn make_all(args: &CertsArgs) -> Result<Vec<Output>, CertsError> {
     };
     let cert_err = |what: &str| {
         let what = what.to_string();
-        move |source| CertsError::Cert { what, source }
+        move |error| CertsError::Cert { what, error }
     };
     let ca_key = KeyPair::generate().map_err(cert_err("CA key"))?;
     let mut ca = CertificateParams::default();

@@ -35,28 +35,28 @@ pub fn exit_with_launcher(stop: &std::sync::Arc<std::sync::atomic::AtomicBool>) 
         });
 }
 
-/// Errors of the supervisor.
+/// Errors of the supervisor. A variant whose message includes its cause does not also return
+/// it from `source()` (each cause is printed once).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SuperviseError {
     /// A child could not be started.
-    #[error("starting {role} ({exe}): {source}")]
+    #[error("starting {role} ({exe}): {error}")]
     Spawn {
         /// Role of the child.
         role: String,
         /// Executable.
         exe: String,
-        /// The OS error.
-        #[source]
-        source: std::io::Error,
+        /// The OS error (in the message).
+        error: std::io::Error,
     },
     /// The log file of a child could not be opened.
-    #[error("log file {path}: {source}")]
+    #[error("log file {path}: {error}")]
     Log {
         /// The file.
         path: PathBuf,
-        /// The OS error.
-        #[source]
-        source: std::io::Error,
+        /// The OS error (in the message).
+        error: std::io::Error,
     },
     /// A child kept failing.
     #[error("{role} failed {failures} times (last: {last}); giving up (see {log})")]
@@ -139,9 +139,9 @@ impl Supervised {
 
     fn spawn(&mut self, events: &Events) -> Result<u32, SuperviseError> {
         let log = open_log(&self.spec.log)?;
-        let log2 = log.try_clone().map_err(|source| SuperviseError::Log {
+        let log2 = log.try_clone().map_err(|error| SuperviseError::Log {
             path: self.spec.log.clone(),
-            source,
+            error,
         })?;
         let mut cmd = Command::new(&self.spec.exe);
         cmd.args(&self.spec.args)
@@ -152,10 +152,10 @@ impl Supervised {
             cmd.env("RUST_LOG", l);
         }
         cmd.env(PARENT_ENV, std::process::id().to_string());
-        let child = cmd.spawn().map_err(|source| SuperviseError::Spawn {
+        let child = cmd.spawn().map_err(|error| SuperviseError::Spawn {
             role: self.spec.role.clone(),
             exe: self.spec.exe.display().to_string(),
-            source,
+            error,
         })?;
         let pid = child.id();
         events.emit(
@@ -302,9 +302,9 @@ fn open_log(path: &Path) -> Result<std::fs::File, SuperviseError> {
         .create(true)
         .append(true)
         .open(path)
-        .map_err(|source| SuperviseError::Log {
+        .map_err(|error| SuperviseError::Log {
             path: path.to_path_buf(),
-            source,
+            error,
         })
 }
 

@@ -165,14 +165,15 @@ fn summary_value(
     Ok(value)
 }
 
-/// Parses one of a closed set of names; the error lists them.
-fn parse_named<T: Copy>(
+/// Parses one of a closed set of names with the enum's own `FromStr` (the planner's strum
+/// names); the error lists the names.
+fn parse_named<T: Copy + std::str::FromStr>(
     s: &str,
     all: &[T],
     name: fn(T) -> &'static str,
     what: &str,
 ) -> PyResult<T> {
-    all.iter().copied().find(|&v| name(v) == s).ok_or_else(|| {
+    s.parse::<T>().map_err(|_| {
         let names: Vec<&str> = all.iter().map(|&v| name(v)).collect();
         PyValueError::new_err(format!(
             "unknown {what} `{s}`; expected one of: {}",

@@ -1,6 +1,7 @@
 //! Typed errors of the radar library. Each names the field, file, pulse or aperture at fault.
 
-/// Everything that can go wrong in the radar library.
+/// Everything that can go wrong in the radar library. A variant whose message includes its
+/// cause does not also return it from `source()` (each cause is printed once).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RadarError {
@@ -34,22 +35,20 @@ pub enum RadarError {
         found: String,
     },
     /// An input file could not be read (missing, unreadable, truncated).
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Read {
         /// The file.
         path: String,
-        /// The OS error.
-        #[source]
-        source: std::io::Error,
+        /// The OS error (in the message, so not also a `source()`).
+        error: std::io::Error,
     },
     /// An output file could not be written (or a directory created).
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: String,
-        /// The OS error.
-        #[source]
-        source: std::io::Error,
+        /// The OS error (in the message, so not also a `source()`).
+        error: std::io::Error,
     },
     /// A file has bad content; `location` names the line, field or header entry.
     #[error("{path}, {location}: {reason}")]
@@ -89,7 +88,7 @@ impl RadarError {
     pub fn io(path: &std::path::Path, source: std::io::Error) -> Self {
         Self::Io {
             path: path.display().to_string(),
-            source,
+            error: source,
         }
     }
 
@@ -97,7 +96,7 @@ impl RadarError {
     pub fn read(path: &std::path::Path, source: std::io::Error) -> Self {
         Self::Read {
             path: path.display().to_string(),
-            source,
+            error: source,
         }
     }
 

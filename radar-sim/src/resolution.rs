@@ -310,20 +310,24 @@ impl CellReport {
         ]
     }
 
-    /// An SVG drawing of the measured −3 dB region (filled) and the predicted −3 dB
-    /// parallelogram (outline) in local coordinates around the peak, with g and the track.
-    pub fn svg(&self, title: &str) -> String {
+    /// The measured −3 dB region's boundary in local coordinates around the peak, m, ordered
+    /// by angle (a closed polygon when joined end to start).
+    pub fn local_boundary_m(&self) -> Vec<[f64; 2]> {
         let c = self.region.centre_m;
-        let pts: Vec<[f64; 2]> = self
+        let mut pts: Vec<[f64; 2]> = self
             .region
             .boundary_m()
             .iter()
             .map(|p| [p[0] - c[0], p[1] - c[1]])
             .collect();
-        // order the boundary by angle
-        let mut pts = pts;
         pts.sort_by(|a, b| a[1].atan2(a[0]).total_cmp(&b[1].atan2(b[0])));
-        // predicted parallelogram: |ĝ·x| ≤ R/2, |d̂·x| ≤ A/2
+        pts
+    }
+
+    /// The predicted −3 dB cell in local coordinates around the peak: the corners of the
+    /// parallelogram |ĝ·x| ≤ R/2, |d̂·x| ≤ A/2 (R, A: the predicted range and along-track
+    /// widths), m, in order around it.
+    pub fn predicted_cell_m(&self) -> [[f64; 2]; 4] {
         let [g, d] = self.axes;
         let (r, a) = (
             self.range_width_pred_m / 2.0,
@@ -335,63 +339,12 @@ impl CellReport {
             let (b1, b2) = (sr * r, sa * a);
             [(b1 * d[1] - b2 * g[1]) / det, (g[0] * b2 - d[0] * b1) / det]
         };
-        let para = [
+        [
             corner(1.0, 1.0),
             corner(-1.0, 1.0),
             corner(-1.0, -1.0),
             corner(1.0, -1.0),
-        ];
-        let ext = pts
-            .iter()
-            .chain(para.iter())
-            .map(|p| p[0].abs().max(p[1].abs()))
-            .fold(1.0f64, f64::max)
-            * 1.15;
-        let size = 480.0;
-        let map = |p: [f64; 2]| -> (f64, f64) {
-            (
-                size / 2.0 + p[0] / ext * size / 2.0,
-                size / 2.0 - p[1] / ext * size / 2.0,
-            )
-        };
-        let poly = |ps: &[[f64; 2]]| -> String {
-            ps.iter()
-                .map(|p| {
-                    let (x, y) = map(*p);
-                    format!("{x:.2},{y:.2}")
-                })
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
-        let arrow = |v: [f64; 2], colour: &str, label: &str| -> String {
-            let (x0, y0) = map([0.0, 0.0]);
-            let (x1, y1) = map([v[0] * ext * 0.8, v[1] * ext * 0.8]);
-            format!(
-                "<line x1=\"{x0:.1}\" y1=\"{y0:.1}\" x2=\"{x1:.1}\" y2=\"{y1:.1}\" stroke=\"{colour}\" stroke-dasharray=\"4 3\"/><text x=\"{x1:.1}\" y=\"{y1:.1}\" fill=\"{colour}\" font-size=\"12\">{label}</text>"
-            )
-        };
-        format!(
-            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\">\
-<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\
-<text x=\"8\" y=\"16\" font-size=\"13\">{title}</text>\
-<text x=\"8\" y=\"32\" font-size=\"11\">β = {beta:.1}°, ψ = {psi:.1}°; half-width of the view {ext:.1} m</text>\
-<g transform=\"translate(0,40)\">\
-<polygon points=\"{region}\" fill=\"#4c72b0\" fill-opacity=\"0.45\" stroke=\"#4c72b0\"/>\
-<polygon points=\"{para}\" fill=\"none\" stroke=\"#c44e52\" stroke-width=\"1.5\"/>\
-{ga}{da}\
-</g>\
-<text x=\"8\" y=\"{ly}\" font-size=\"11\">filled: measured −3 dB region; red: predicted cell (× main-lobe factor)</text>\
-</svg>\n",
-            w = size,
-            h = size + 60.0,
-            ly = size + 54.0,
-            beta = self.bistatic_angle_deg,
-            psi = self.psi_deg,
-            region = poly(&pts),
-            para = poly(&para),
-            ga = arrow(g, "#2a7f2a", "g"),
-            da = arrow(d, "#7f2a7f", "track"),
-        )
+        ]
     }
 }
 
@@ -459,5 +412,63 @@ mod tests {
         // a response that never falls by 3 dB within the search: None
         let flat = |_: [f64; 2]| 1.0;
         assert!(PsfRegion::measure(&flat, [0.0, 0.0], 8, &[], 0.1, 100.0).is_none());
+    }
+
+    /// The predicted cell's corners lie on the lines ĝ·x = ±R/2 and d̂·x = ±A/2, and the local
+    /// boundary is the region's boundary moved to the peak, ordered by angle.
+    #[test]
+    fn predicted_cell_and_local_boundary() {
+        let c = [5.0, -7.0];
+        let disc = move |p: [f64; 2]| {
+            if (p[0] - c[0]).hypot(p[1] - c[1]) < 3.0 {
+                1.0
+            } else {
+                0.0
+            }
+        };
+        let region = PsfRegion::measure(&disc, c, 24, &[], 0.1, 100.0).unwrap();
+        let (s, co) = 0.4f64.sin_cos();
+        let g = [co, s];
+        let d = [(1.0f64).cos(), (1.0f64).sin()];
+        let cell = CellReport {
+            bandwidth_hz: 1e8,
+            bistatic_angle_deg: 0.0,
+            psi_deg: 0.0,
+            range_width_m: 0.0,
+            range_width_pred_m: 4.0,
+            along_track_width_m: 0.0,
+            along_track_width_pred_m: 10.0,
+            cross_track_width_m: 0.0,
+            cross_track_width_pred_m: 0.0,
+            iso_range_width_m: 0.0,
+            iso_range_width_pred_m: 0.0,
+            worst_width_m: 0.0,
+            worst_width_pred_m: 0.0,
+            longest_chord_m: 0.0,
+            longest_chord_deg: 0.0,
+            chord_along_g_m: 0.0,
+            paper_range_m: 0.0,
+            paper_azimuth_m: 0.0,
+            planner_worst_width_m: 0.0,
+            mainlobe_factors: [1.0, 1.0],
+            region,
+            axes: [g, d],
+        };
+        let dot = |a: [f64; 2], b: [f64; 2]| a[0] * b[0] + a[1] * b[1];
+        for (p, (sr, sa)) in
+            cell.predicted_cell_m()
+                .iter()
+                .zip([(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)])
+        {
+            assert!((dot(g, *p) - sr * 2.0).abs() < 1e-12, "{p:?}");
+            assert!((dot(d, *p) - sa * 5.0).abs() < 1e-12, "{p:?}");
+        }
+        let b = cell.local_boundary_m();
+        assert_eq!(b.len(), 48);
+        for p in &b {
+            assert!((p[0].hypot(p[1]) - 3.0).abs() < 1e-5, "{p:?}");
+        }
+        let angles: Vec<f64> = b.iter().map(|p| p[1].atan2(p[0])).collect();
+        assert!(angles.windows(2).all(|w| w[0] <= w[1]));
     }
 }

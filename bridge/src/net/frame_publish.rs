@@ -6,8 +6,8 @@ use std::sync::{Arc, Mutex};
 use zenoh::bytes::{Encoding, ZBytes};
 use zenoh::qos::{CongestionControl, Priority};
 use zenoh::sample::Locality;
-use zenoh::Wait;
 
+use super::sender::{Sender, SenderOptions};
 use super::{NetError, ZenohNode};
 use crate::counters::Counters;
 use crate::frame::{self, FrameHeader, WIRE_PREFIX_LEN};
@@ -20,19 +20,18 @@ impl ZenohNode {
         congestion_control: CongestionControl,
         allowed_destination: Locality,
     ) -> Result<ZenohFramePublisher, NetError> {
-        let publisher = self
-            .session()
-            .declare_publisher(key.to_string())
-            .encoding(Encoding::APPLICATION_OCTET_STREAM.with_schema("cellsar/frame/v1"))
-            .congestion_control(congestion_control)
-            .priority(Priority::DataLow)
-            .allowed_destination(allowed_destination)
-            .wait()
-            .map_err(|e| NetError::zenoh("declare publisher", key, e))?;
+        let sender = Sender::declare(
+            self,
+            key,
+            SenderOptions {
+                encoding: Encoding::APPLICATION_OCTET_STREAM.with_schema("cellsar/frame/v1"),
+                congestion_control,
+                priority: Priority::DataLow,
+                allowed_destination,
+            },
+        )?;
         Ok(ZenohFramePublisher {
-            publisher,
-            key: key.to_string(),
-            counters: Arc::new(Counters::default()),
+            sender,
             pool: BufPool::default(),
         })
     }
@@ -85,9 +84,7 @@ impl Drop for PooledBuf {
 
 /// A publisher of raw frames on Zenoh.
 pub struct ZenohFramePublisher {
-    publisher: zenoh::pubsub::Publisher<'static>,
-    key: String,
-    counters: Arc<Counters>,
+    sender: Sender,
     pool: BufPool,
 }
 
@@ -96,7 +93,7 @@ impl ZenohFramePublisher {
     pub fn put(&self, header: &FrameHeader, payload: &[u8]) -> Result<(), NetError> {
         header
             .validate(payload.len(), frame::MAX_FRAME_HARD_LIMIT)
-            .map_err(|e| NetError::codec(&self.key, e))?;
+            .map_err(|e| NetError::codec(self.sender.key(), e))?;
         let mut buf = self.pool.take(WIRE_PREFIX_LEN + payload.len());
         buf.extend_from_slice(&header.to_wire_prefix());
         buf.extend_from_slice(payload);
@@ -105,16 +102,7 @@ impl ZenohFramePublisher {
             buf,
             pool: self.pool.clone(),
         });
-        match self.publisher.put(ZBytes::from(bytes)).wait() {
-            Ok(()) => {
-                self.counters.on_sent(len);
-                Ok(())
-            }
-            Err(e) => {
-                self.counters.on_send_error();
-                Err(NetError::zenoh("put", &self.key, e))
-            }
-        }
+        self.sender.send(ZBytes::from(bytes), len)
     }
 
     /// Publishes a frame whose payload is owned by `owner` (e.g. an iceoryx2
@@ -127,51 +115,29 @@ impl ZenohFramePublisher {
         let payload_len = owner.as_ref().len();
         header
             .validate(payload_len, frame::MAX_FRAME_HARD_LIMIT)
-            .map_err(|e| NetError::codec(&self.key, e))?;
+            .map_err(|e| NetError::codec(self.sender.key(), e))?;
         let mut writer = ZBytes::writer();
         writer.append(ZBytes::from(header.to_wire_prefix().to_vec()));
         writer.append(ZBytes::from(bytes::Bytes::from_owner(owner)));
         let len = WIRE_PREFIX_LEN + payload_len;
-        match self.publisher.put(writer.finish()).wait() {
-            Ok(()) => {
-                self.counters.on_sent(len);
-                Ok(())
-            }
-            Err(e) => {
-                self.counters.on_send_error();
-                Err(NetError::zenoh("put", &self.key, e))
-            }
-        }
+        self.sender.send(writer.finish(), len)
     }
 
     /// Whether a subscriber this publisher may deliver to currently matches its key (with
     /// `Locality::Remote`: a subscriber of another session).
     pub fn has_remote_subscribers(&self) -> bool {
-        self.publisher
-            .matching_status()
-            .wait()
-            .map(|m| m.matching())
-            .unwrap_or(true)
+        self.sender.matching().unwrap_or(true)
     }
 
     /// Publishes an already encoded payload as is (also used to inject malformed payloads in
     /// tests).
     pub fn put_raw(&self, bytes: Vec<u8>) -> Result<(), NetError> {
         let len = bytes.len();
-        match self.publisher.put(ZBytes::from(bytes)).wait() {
-            Ok(()) => {
-                self.counters.on_sent(len);
-                Ok(())
-            }
-            Err(e) => {
-                self.counters.on_send_error();
-                Err(NetError::zenoh("put", &self.key, e))
-            }
-        }
+        self.sender.send(ZBytes::from(bytes), len)
     }
 
     /// Counters of this publisher.
     pub fn counters(&self) -> &Counters {
-        &self.counters
+        self.sender.counters()
     }
 }

@@ -11,6 +11,7 @@
 //! One job per module: [`ZenohNode`] opens and closes the session (`node`); typed publishers
 //! (`publish`), subscribers (`subscribe`), queryables (`queryable`) and queries (`query`);
 //! liveliness (`liveliness`); raw frames out (`frame_publish`) and in (`frame_subscribe`); the
+//! publish core both kinds of publisher share (`sender`); the
 //! options of all of them (`options`), the wire format of messages (`format`) and the errors
 //! (`error`).
 
@@ -24,6 +25,7 @@ mod options;
 mod publish;
 mod query;
 mod queryable;
+mod sender;
 mod subscribe;
 
 pub use error::NetError;

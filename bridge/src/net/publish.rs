@@ -2,12 +2,11 @@
 
 use std::marker::PhantomData;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
 use std::time::Duration;
 
 use zenoh::bytes::ZBytes;
-use zenoh::Wait;
 
+use super::sender::{Sender, SenderOptions};
 use super::{NetError, PublishOptions, WireFormat, ZenohNode};
 use crate::counters::Counters;
 use crate::envelope::{Message, Meta, MissionId};
@@ -19,22 +18,21 @@ impl ZenohNode {
         key: &str,
         opts: PublishOptions,
     ) -> Result<TypedPublisher<M>, NetError> {
-        let publisher = self
-            .session()
-            .declare_publisher(key.to_string())
-            .encoding(opts.format.encoding::<M>())
-            .congestion_control(opts.congestion_control)
-            .priority(opts.priority)
-            .allowed_destination(opts.allowed_destination)
-            .wait()
-            .map_err(|e| NetError::zenoh("declare publisher", key, e))?;
+        let sender = Sender::declare(
+            self,
+            key,
+            SenderOptions {
+                encoding: opts.format.encoding::<M>(),
+                congestion_control: opts.congestion_control,
+                priority: opts.priority,
+                allowed_destination: opts.allowed_destination,
+            },
+        )?;
         Ok(TypedPublisher {
-            publisher,
-            key: key.to_string(),
+            sender,
             format: opts.format,
             mission_id: opts.mission_id,
             next_seq: AtomicU64::new(opts.first_seq),
-            counters: Arc::new(Counters::default()),
             _m: PhantomData,
         })
     }
@@ -42,12 +40,10 @@ impl ZenohNode {
 
 /// A publisher of `M` with an automatic sequence number.
 pub struct TypedPublisher<M> {
-    publisher: zenoh::pubsub::Publisher<'static>,
-    key: String,
+    sender: Sender,
     format: WireFormat,
     mission_id: MissionId,
     next_seq: AtomicU64,
-    counters: Arc<Counters>,
     _m: PhantomData<fn(&M)>,
 }
 
@@ -72,27 +68,14 @@ impl<M: Message> TypedPublisher<M> {
         let bytes = self
             .format
             .encode(msg, meta)
-            .map_err(|e| NetError::codec(&self.key, e))?;
+            .map_err(|e| NetError::codec(self.sender.key(), e))?;
         let len = bytes.len();
-        match self.publisher.put(ZBytes::from(bytes)).wait() {
-            Ok(()) => {
-                self.counters.on_sent(len);
-                Ok(())
-            }
-            Err(e) => {
-                self.counters.on_send_error();
-                Err(NetError::zenoh("put", &self.key, e))
-            }
-        }
+        self.sender.send(ZBytes::from(bytes), len)
     }
 
     /// Whether a subscriber that this publisher may deliver to matches its key now.
     pub fn has_subscribers(&self) -> bool {
-        self.publisher
-            .matching_status()
-            .wait()
-            .map(|m| m.matching())
-            .unwrap_or(false)
+        self.sender.matching().unwrap_or(false)
     }
 
     /// Waits up to `timeout` for a matching subscriber; returns whether one appeared.
@@ -109,11 +92,11 @@ impl<M: Message> TypedPublisher<M> {
 
     /// Counters of this publisher.
     pub fn counters(&self) -> &Counters {
-        &self.counters
+        self.sender.counters()
     }
 
     /// The key it publishes on.
     pub fn key(&self) -> &str {
-        &self.key
+        self.sender.key()
     }
 }

@@ -155,11 +155,7 @@ pub unsafe extern "C" fn fmi3GetBoolean(
         let vrs = unsafe { slice(vr, nvr, "valueReferences") }?;
         // SAFETY: FMI contract.
         let out = unsafe { slice_mut(values, n_values, "values") }?;
-        let mut b = vec![false; n_values];
-        inst.get_bool("fmi3GetBoolean", vrs, &mut b)?;
-        for (o, v) in out.iter_mut().zip(b) {
-            *o = u8::from(v);
-        }
+        inst.get_bool("fmi3GetBoolean", vrs, out)?;
         Ok(Status::Ok)
     })
 }
@@ -178,8 +174,7 @@ pub unsafe extern "C" fn fmi3SetBoolean(
         let vrs = unsafe { slice(vr, nvr, "valueReferences") }?;
         // SAFETY: FMI contract.
         let v = unsafe { slice(values, n_values, "values") }?;
-        let b: Vec<bool> = v.iter().map(|&x| x != 0).collect();
-        inst.set_bool("fmi3SetBoolean", vrs, &b)?;
+        inst.set_bool("fmi3SetBoolean", vrs, v)?;
         Ok(Status::Ok)
     })
 }

@@ -3,6 +3,14 @@
 
 use super::*;
 
+/// The modes in which values can be read.
+const GET_MODES: &[Mode] = &[
+    Mode::Initialization,
+    Mode::Step,
+    Mode::Terminated,
+    Mode::Error,
+];
+
 impl Instance {
     fn lookup(&self, func: &str, vr: u32) -> Result<(&'static Var, usize), FmuError> {
         table::lookup(self.core.info().vars, vr, self.version == FmiVersion::Fmi2).ok_or_else(
@@ -16,15 +24,7 @@ impl Instance {
     }
 
     fn check_get(&mut self, func: &str, var: &Var, ty: VarType) -> Result<(), FmuError> {
-        self.require(
-            func,
-            &[
-                Mode::Initialization,
-                Mode::Step,
-                Mode::Terminated,
-                Mode::Error,
-            ],
-        )?;
+        self.require(func, GET_MODES)?;
         if var.ty != ty {
             return Err(FmuError::error(format!(
                 "{func}: variable `{}` (value reference {}) is a {}",
@@ -87,15 +87,7 @@ impl Instance {
         let len = out.len();
         for &vr in vrs {
             if vr == 0 && self.version == FmiVersion::Fmi3 {
-                self.require(
-                    func,
-                    &[
-                        Mode::Initialization,
-                        Mode::Step,
-                        Mode::Terminated,
-                        Mode::Error,
-                    ],
-                )?;
+                self.require(func, GET_MODES)?;
                 *out.get_mut(k).ok_or_else(|| too_few(func, len))? = self.time;
                 k += 1;
                 continue;
@@ -157,15 +149,30 @@ impl Instance {
         Ok(())
     }
 
-    /// Reads Integer values.
-    pub fn get_int(&mut self, func: &str, vrs: &[u32], out: &mut [i32]) -> Result<(), FmuError> {
+    /// Reads one scalar of type `ty` per value reference with `read`: the lookup and the
+    /// mode and type checks that every typed Get of a scalar makes.
+    fn get_scalars<T>(
+        &mut self,
+        func: &str,
+        vrs: &[u32],
+        out: &mut [T],
+        ty: VarType,
+        read: impl Fn(&mut Self, &'static Var) -> Result<T, FmuError>,
+    ) -> Result<(), FmuError> {
         same_len(func, vrs.len(), out.len())?;
         for (&vr, o) in vrs.iter().zip(out.iter_mut()) {
             let (var, _) = self.lookup(func, vr)?;
-            self.check_get(func, var, VarType::Integer)?;
-            *o = self.core.get_int(var)?;
+            self.check_get(func, var, ty)?;
+            *o = read(self, var)?;
         }
         Ok(())
+    }
+
+    /// Reads Integer values.
+    pub fn get_int(&mut self, func: &str, vrs: &[u32], out: &mut [i32]) -> Result<(), FmuError> {
+        self.get_scalars(func, vrs, out, VarType::Integer, |inst, var| {
+            inst.core.get_int(var)
+        })
     }
 
     /// Sets Integer values (also the hidden test variable), all or nothing.
@@ -188,19 +195,22 @@ impl Instance {
         Ok(())
     }
 
-    /// Reads Boolean values.
-    pub fn get_bool(&mut self, func: &str, vrs: &[u32], out: &mut [bool]) -> Result<(), FmuError> {
-        same_len(func, vrs.len(), out.len())?;
-        for (&vr, o) in vrs.iter().zip(out.iter_mut()) {
-            let (var, _) = self.lookup(func, vr)?;
-            self.check_get(func, var, VarType::Boolean)?;
-            *o = self.core.get_bool(var, self.tau())?;
-        }
-        Ok(())
+    /// Reads Boolean values into the C type of the FMI version (`bool` converts into either).
+    pub fn get_bool<B: From<bool>>(
+        &mut self,
+        func: &str,
+        vrs: &[u32],
+        out: &mut [B],
+    ) -> Result<(), FmuError> {
+        self.get_scalars(func, vrs, out, VarType::Boolean, |inst, var| {
+            let tau = inst.tau();
+            inst.core.get_bool(var, tau).map(B::from)
+        })
     }
 
-    /// Sets Boolean values (no Boolean variable is settable).
-    pub fn set_bool(&mut self, func: &str, vrs: &[u32], values: &[bool]) -> Result<(), FmuError> {
+    /// Sets Boolean values given in the C type of the FMI version (no Boolean variable is
+    /// settable: every call is refused, naming the variable).
+    pub fn set_bool<B>(&mut self, func: &str, vrs: &[u32], values: &[B]) -> Result<(), FmuError> {
         same_len(func, vrs.len(), values.len())?;
         for &vr in vrs {
             let (var, _) = self.lookup(func, vr)?;

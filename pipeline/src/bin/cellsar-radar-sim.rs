@@ -275,7 +275,10 @@ fn resolution(out: &Path, bandwidths_mhz: &[f64]) -> Result<()> {
     let cases = radar_sim::psf::default_cases();
     let b = bar((bandwidths_mhz.len() * cases.len()) as u64, "resolution");
     let hz: Vec<f64> = bandwidths_mhz.iter().map(|m| m * 1e6).collect();
-    let rows = radar_sim::psf::write_report(out, &hz, &cases, &mut |d, _| b.set_position(d))
+    let rows =
+        pipeline::report::resolution::write_resolution_report(out, &hz, &cases, &mut |d, _| {
+            b.set_position(d)
+        })
         .map_err(radar_failure)?;
     b.finish();
     for r in &rows {

@@ -4,26 +4,29 @@
 pub mod image_svg;
 pub mod plot;
 pub mod reproduce;
+pub mod resolution;
 pub mod tradeoff;
 
 use std::path::{Path, PathBuf};
 
+use crate::services::os::write_file_atomic;
 use planner::driver::{PlanResult, Scheme};
 use planner::summary::{trajectory_csv, Summary};
 use planner::{Mission, MissionError, Trajectory, TrajectoryError};
 use plot::{line_plot, trajectory_plot, Series, TrackStyle};
 
-/// Writing or reading report files failed.
+/// Writing or reading report files failed. A variant whose message includes its cause does
+/// not also return it from `source()` (each cause is printed once).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReportError {
     /// File system error, with the path.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file or directory.
         path: String,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
+        /// The I/O error (in the message).
+        error: std::io::Error,
     },
     /// A plot could not be drawn.
     #[error("plot {path}: {message}")]
@@ -49,19 +52,20 @@ pub enum ReportError {
     Trajectory(#[from] TrajectoryError),
 }
 
-/// Writes `text` to `path`, naming the path on error.
+/// Writes `text` to `path` atomically ([`write_file_atomic`]: a reader never sees a part of
+/// it), naming the path on error.
 pub fn write_file(path: &Path, text: &str) -> Result<(), ReportError> {
-    std::fs::write(path, text).map_err(|source| ReportError::Io {
-        path: path.display().to_string(),
-        source,
+    write_file_atomic(path, text.as_bytes()).map_err(|e| ReportError::Io {
+        path: e.path.display().to_string(),
+        error: e.error,
     })
 }
 
 /// Creates a directory (and parents).
 pub fn create_dir(dir: &Path) -> Result<(), ReportError> {
-    std::fs::create_dir_all(dir).map_err(|source| ReportError::Io {
+    std::fs::create_dir_all(dir).map_err(|error| ReportError::Io {
         path: dir.display().to_string(),
-        source,
+        error,
     })
 }
 
@@ -206,4 +210,34 @@ pub fn read_plan_dir(dir: &Path) -> Result<(Mission, Trajectory), ReportError> {
         p.start_m,
     )?;
     Ok((mission, traj))
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn report_files_are_replaced_whole_and_a_failed_write_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("RESULTS.md");
+        write_file(&path, "first, longer").unwrap();
+        write_file(&path, "second").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "second");
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["RESULTS.md"]);
+        let missing = dir.path().join("missing").join("plot.svg");
+        let e = write_file(&missing, "x").unwrap_err();
+        assert!(matches!(e, ReportError::Io { .. }), "{e:?}");
+        assert!(
+            e.to_string().starts_with(&missing.display().to_string()),
+            "{e}"
+        );
+        // a plot is written the same way
+        let e = plot::line_plot(&missing, "t", "x", "y", &[]).unwrap_err();
+        assert!(e.to_string().contains("plot.svg"), "{e}");
+    }
 }

@@ -1,11 +1,14 @@
 //! SVG plots: trajectories with landmarks, BS and sensing circles; line plots (energy per slot,
 //! convergence, power vs speed, E\[d_min\] vs R, ...).
 
+use std::ops::Range;
 use std::path::Path;
 
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::ReportError;
+use super::{write_file, ReportError};
 use planner::geometry::sensing_centre_m;
 use planner::Mission;
 use planner::Trajectory;
@@ -139,65 +142,94 @@ pub fn line_plot(
     let (x0, x1, y0, y1) = finite_bounds(all).unwrap_or((0.0, 1.0, 0.0, 1.0));
     let (x0, x1) = pad(x0, x1, 0.02);
     let (y0, y1) = pad(y0, y1, 0.05);
-    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(&e)?;
-    let mut chart = ChartBuilder::on(&root)
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, (900, 560)).into_drawing_area();
+        root.fill(&WHITE).map_err(&e)?;
+        let mut chart = chart_on(&root, title, (x0..x1, y0..y1), (x_label, y_label), path)?;
+        for (i, s) in series.iter().enumerate() {
+            let color = PALETTE[s.colour.unwrap_or(i) % PALETTE.len()];
+            let pts: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
+                .collect();
+            // a lone point has no line to show: mark it
+            let markers = s.markers || pts.len() < 2;
+            let style = ShapeStyle::from(&color).stroke_width(2);
+            let anno = if s.dashed {
+                chart
+                    .draw_series(DashedLineSeries::new(pts.clone(), 6, 4, style))
+                    .map_err(&e)?
+            } else {
+                chart
+                    .draw_series(LineSeries::new(pts.clone(), style))
+                    .map_err(&e)?
+            };
+            let dashed = s.dashed;
+            anno.label(s.name.clone())
+                .legend(move |(x, y)| legend_sample(x, y, color, dashed, markers));
+            if markers {
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                    .map_err(&e)?;
+            }
+        }
+        let all: Vec<(f64, f64)> = series
+            .iter()
+            .flat_map(|s| s.points.iter().copied())
+            .map(|(x, y)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0)))
+            .collect();
+        finish(&mut chart, &root, emptiest_corner(&all, series.len()), path)?;
+    }
+    write_file(path, &text)
+}
+
+/// The chart of a plot on `root`: the caption `title`, axes over `ranges` (x, y) described by
+/// `labels` (x, y), and a light grid.
+fn chart_on<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    title: &str,
+    ranges: (Range<f64>, Range<f64>),
+    labels: (&str, &str),
+    path: &Path,
+) -> Result<GroundChart<'a, 'b>, ReportError> {
+    let e = err(path);
+    let mut chart = ChartBuilder::on(root)
         .caption(title, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(70)
-        .build_cartesian_2d(x0..x1, y0..y1)
+        .build_cartesian_2d(ranges.0, ranges.1)
         .map_err(&e)?;
     chart
         .configure_mesh()
-        .x_desc(x_label)
-        .y_desc(y_label)
+        .x_desc(labels.0)
+        .y_desc(labels.1)
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(&e)?;
-    for (i, s) in series.iter().enumerate() {
-        let color = PALETTE[s.colour.unwrap_or(i) % PALETTE.len()];
-        let pts: Vec<(f64, f64)> = s
-            .points
-            .iter()
-            .copied()
-            .filter(|(x, y)| x.is_finite() && y.is_finite())
-            .collect();
-        // a lone point has no line to show: mark it
-        let markers = s.markers || pts.len() < 2;
-        let style = ShapeStyle::from(&color).stroke_width(2);
-        let anno = if s.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(pts.clone(), 6, 4, style))
-                .map_err(&e)?
-        } else {
-            chart
-                .draw_series(LineSeries::new(pts.clone(), style))
-                .map_err(&e)?
-        };
-        let dashed = s.dashed;
-        anno.label(s.name.clone())
-            .legend(move |(x, y)| legend_sample(x, y, color, dashed, markers));
-        if markers {
-            chart
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                .map_err(&e)?;
-        }
-    }
-    let all: Vec<(f64, f64)> = series
-        .iter()
-        .flat_map(|s| s.points.iter().copied())
-        .map(|(x, y)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0)))
-        .collect();
+    Ok(chart)
+}
+
+/// Draws the legend of `chart` at `position` (on a white, framed background) and finishes the
+/// drawing.
+fn finish<'a, 'b: 'a>(
+    chart: &mut GroundChart<'a, 'b>,
+    root: &DrawingArea<SVGBackend<'b>, Shift>,
+    position: SeriesLabelPosition,
+    path: &Path,
+) -> Result<(), ReportError> {
+    let e = err(path);
     chart
         .configure_series_labels()
-        .position(emptiest_corner(&all, series.len()))
+        .position(position)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()
         .map_err(&e)?;
-    root.present().map_err(&e)?;
-    Ok(())
+    root.present().map_err(&e)
 }
 
 /// One trajectory of a trajectory plot.
@@ -213,6 +245,10 @@ pub struct TrackStyle<'a> {
     pub dashed: bool,
 }
 
+/// The chart every plot draws on (a trajectory plot's: ground x, y in metres).
+type GroundChart<'a, 'b> =
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 /// Trajectories with landmarks (dots), the BS (triangle), the start (square), the true sensing
 /// centre track, and sensing circles at chosen slots; equal axis scales.
 pub fn trajectory_plot(
@@ -222,16 +258,35 @@ pub fn trajectory_plot(
     tracks: &[TrackStyle<'_>],
 ) -> Result<(), ReportError> {
     let e = err(path);
+    let (cx, cy, half) = ground_view(mission, tracks);
+    let (w, h) = (900u32, 900u32);
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(&e)?;
+        let view = (cx - half..cx + half, cy - half..cy + half);
+        let mut chart = chart_on(&root, title, view, ("x (m)", "y (m)"), path)?;
+        for (i, tr) in tracks.iter().enumerate() {
+            draw_track(&mut chart, path, mission, tr, PALETTE[i % PALETTE.len()])?;
+        }
+        draw_mission_marks(&mut chart, path, mission, tracks)?;
+        finish(&mut chart, &root, SeriesLabelPosition::UpperLeft, path)?;
+    }
+    write_file(path, &text)
+}
+
+/// The square view of a trajectory plot, (centre x, centre y, half side) in m: everything
+/// drawn (landmarks, BS, start, tracks, the sensing centres ~1 km to their side) and a sensing
+/// radius more, equal scales (the shorter side extended).
+fn ground_view(mission: &Mission, tracks: &[TrackStyle<'_>]) -> (f64, f64, f64) {
     let p = mission.params();
     let offset = p.centre_offset_m();
-    let r = p.sensing_radius_m;
-    let landmarks: Vec<(f64, f64)> = mission
+    let mut pts: Vec<(f64, f64)> = mission
         .schedule()
         .landmarks
         .iter()
         .map(|l| (l.x_m, l.y_m))
         .collect();
-    let mut pts: Vec<(f64, f64)> = landmarks.clone();
     pts.push((p.bs_m[0], p.bs_m[1]));
     pts.push((p.start_m[0], p.start_m[1]));
     for tr in tracks {
@@ -244,26 +299,25 @@ pub fn trajectory_plot(
         }));
     }
     let (x0, x1, y0, y1) = finite_bounds(pts.into_iter()).unwrap_or((0.0, 1.0, 0.0, 1.0));
-    // equal scales: extend the shorter side
     let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let half = 0.5 * (x1 - x0).max(y1 - y0) * 1.08 + r;
-    let (w, h) = (900u32, 900u32);
-    let root = SVGBackend::new(path, (w, h)).into_drawing_area();
-    root.fill(&WHITE).map_err(&e)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
-        .map_err(&e)?;
-    chart
-        .configure_mesh()
-        .x_desc("x (m)")
-        .y_desc("y (m)")
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(&e)?;
+    let half = 0.5 * (x1 - x0).max(y1 - y0) * 1.08 + p.sensing_radius_m;
+    (cx, cy, half)
+}
+
+/// One track of a trajectory plot in `color`: its line (with the legend entry), every 4th
+/// true sensing centre, and at its chosen slots the UAV, its sensing circle and the line
+/// between them.
+fn draw_track<'a, 'b: 'a>(
+    chart: &mut GroundChart<'a, 'b>,
+    path: &Path,
+    mission: &Mission,
+    tr: &TrackStyle<'_>,
+    color: RGBColor,
+) -> Result<(), ReportError> {
+    let e = err(path);
+    let p = mission.params();
+    let offset = p.centre_offset_m();
+    let r = p.sensing_radius_m;
     // sensing circles (as polylines, so they stay circles in data units)
     let circle = |c: [f64; 2]| -> Vec<(f64, f64)> {
         (0..=72)
@@ -273,64 +327,80 @@ pub fn trajectory_plot(
             })
             .collect()
     };
-    for (i, tr) in tracks.iter().enumerate() {
-        let color = PALETTE[i % PALETTE.len()];
-        let style = ShapeStyle::from(&color).stroke_width(2);
-        let line: Vec<(f64, f64)> = std::iter::once(tr.traj.start_m)
-            .chain(tr.traj.pos_m.iter().copied())
-            .map(|q| (q[0], q[1]))
-            .collect();
-        let anno = if tr.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(line, 8, 5, style))
-                .map_err(&e)?
-        } else {
-            chart
-                .draw_series(LineSeries::new(line, style))
-                .map_err(&e)?
-        };
-        anno.label(tr.name.to_string()).legend(move |(x, y)| {
-            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-        });
-        let headings = tr.traj.headings_rad();
-        let centres: Vec<(f64, f64)> = (1..=tr.traj.slots())
-            .map(|t| {
-                let c = sensing_centre_m(tr.traj.q(t), headings[t - 1], offset);
-                (c[0], c[1])
-            })
-            .collect();
+    let style = ShapeStyle::from(&color).stroke_width(2);
+    let line: Vec<(f64, f64)> = std::iter::once(tr.traj.start_m)
+        .chain(tr.traj.pos_m.iter().copied())
+        .map(|q| (q[0], q[1]))
+        .collect();
+    let anno = if tr.dashed {
         chart
-            .draw_series(
-                centres
-                    .iter()
-                    .step_by(4)
-                    .map(|&c| Circle::new(c, 1, color.mix(0.5).filled())),
-            )
-            .map_err(&e)?;
-        for &t in tr.circle_slots {
-            if t == 0 || t > tr.traj.slots() {
-                continue;
-            }
+            .draw_series(DashedLineSeries::new(line, 8, 5, style))
+            .map_err(&e)?
+    } else {
+        chart
+            .draw_series(LineSeries::new(line, style))
+            .map_err(&e)?
+    };
+    anno.label(tr.name.to_string())
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    let headings = tr.traj.headings_rad();
+    let centres: Vec<(f64, f64)> = (1..=tr.traj.slots())
+        .map(|t| {
             let c = sensing_centre_m(tr.traj.q(t), headings[t - 1], offset);
-            chart
-                .draw_series(LineSeries::new(circle(c), color.mix(0.7).stroke_width(1)))
-                .map_err(&e)?;
-            let q = tr.traj.q(t);
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    vec![(q[0], q[1]), (c[0], c[1])],
-                    color.mix(0.4).stroke_width(1),
-                )))
-                .map_err(&e)?;
-            chart
-                .draw_series(std::iter::once(TriangleMarker::new(
-                    (q[0], q[1]),
-                    5,
-                    color.filled(),
-                )))
-                .map_err(&e)?;
+            (c[0], c[1])
+        })
+        .collect();
+    chart
+        .draw_series(
+            centres
+                .iter()
+                .step_by(4)
+                .map(|&c| Circle::new(c, 1, color.mix(0.5).filled())),
+        )
+        .map_err(&e)?;
+    for &t in tr.circle_slots {
+        if t == 0 || t > tr.traj.slots() {
+            continue;
         }
+        let c = sensing_centre_m(tr.traj.q(t), headings[t - 1], offset);
+        chart
+            .draw_series(LineSeries::new(circle(c), color.mix(0.7).stroke_width(1)))
+            .map_err(&e)?;
+        let q = tr.traj.q(t);
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(q[0], q[1]), (c[0], c[1])],
+                color.mix(0.4).stroke_width(1),
+            )))
+            .map_err(&e)?;
+        chart
+            .draw_series(std::iter::once(TriangleMarker::new(
+                (q[0], q[1]),
+                5,
+                color.filled(),
+            )))
+            .map_err(&e)?;
     }
+    Ok(())
+}
+
+/// The marks of the mission itself, each with its legend entry: landmarks, the base station,
+/// what the per-track marks mean, and the start.
+fn draw_mission_marks<'a, 'b: 'a>(
+    chart: &mut GroundChart<'a, 'b>,
+    path: &Path,
+    mission: &Mission,
+    tracks: &[TrackStyle<'_>],
+) -> Result<(), ReportError> {
+    let e = err(path);
+    let p = mission.params();
+    let r = p.sensing_radius_m;
+    let landmarks: Vec<(f64, f64)> = mission
+        .schedule()
+        .landmarks
+        .iter()
+        .map(|l| (l.x_m, l.y_m))
+        .collect();
     chart
         .draw_series(landmarks.iter().map(|&l| Circle::new(l, 3, BLACK.filled())))
         .map_err(&e)?
@@ -376,14 +446,6 @@ pub fn trajectory_plot(
         .map_err(&e)?
         .label("start")
         .legend(|(x, y)| Rectangle::new([(x + 5, y - 5), (x + 15, y + 5)], BLACK.stroke_width(2)));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(&e)?;
-    root.present().map_err(&e)?;
     Ok(())
 }
 

@@ -1,12 +1,12 @@
 //! What every service needs from the operating system: stopping on SIGINT/SIGTERM
-//! ([`stop_on_signals`]) and replacing a state file without ever leaving a torn one
-//! ([`write_atomic`]).
+//! ([`stop_on_signals`]) and replacing a state or output file without ever leaving a torn one
+//! ([`write_file_atomic`], [`write_atomic`]).
 
 use std::ffi::OsString;
 use std::fs::{File, Permissions};
 use std::io::Write;
 use std::os::unix::fs::PermissionsExt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -31,7 +31,7 @@ pub fn stop_on_signals() -> Result<Arc<AtomicBool>, ServiceError> {
 /// directory synced (so that the rename survives a crash). The file gets the mode a plain
 /// `std::fs::write` gives a new file (`0o666` less the umask). On failure, no temporary file is
 /// left behind and the error names `path` (or its directory, when syncing that failed).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ServiceError> {
+pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -46,16 +46,41 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ServiceError> {
         .suffix(".tmp")
         .permissions(Permissions::from_mode(0o666))
         .tempfile_in(dir)
-        .map_err(|e| ServiceError::io(path, e))?;
+        .map_err(|e| WriteError::new(path, e))?;
     tmp.write_all(bytes)
         .and_then(|()| tmp.as_file().sync_all())
-        .map_err(|e| ServiceError::io(path, e))?;
+        .map_err(|e| WriteError::new(path, e))?;
     // on failure, the temporary file is removed when the error drops it
     tmp.persist(path)
-        .map_err(|e| ServiceError::io(path, e.error))?;
+        .map_err(|e| WriteError::new(path, e.error))?;
     File::open(dir)
         .and_then(|d| d.sync_all())
-        .map_err(|e| ServiceError::io(dir, e))
+        .map_err(|e| WriteError::new(dir, e))
+}
+
+/// [`write_file_atomic`] for the services, whose state files fail with a [`ServiceError`].
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ServiceError> {
+    write_file_atomic(path, bytes).map_err(|e| ServiceError::io(&e.path, e.error))
+}
+
+/// An atomic write failed: the file (or its directory, when syncing that failed) and the I/O
+/// error (in the message, so not also a `source()`).
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {error}", path.display())]
+pub struct WriteError {
+    /// The file, or its directory.
+    pub path: PathBuf,
+    /// The I/O error.
+    pub error: std::io::Error,
+}
+
+impl WriteError {
+    fn new(path: &Path, error: std::io::Error) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            error,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -346,7 +346,7 @@ impl NpyReader {
         let path = self.path.clone();
         let io = |e| RadarError::Read {
             path: path.clone(),
-            source: e,
+            error: e,
         };
         self.file
             .seek(SeekFrom::Start(self.data_offset))
