@@ -21,13 +21,12 @@ use crate::params::{ParamError, Params, ParamsOverride};
 #[non_exhaustive]
 pub enum MissionError {
     /// The file could not be read.
-    #[error("cannot read mission file {path}: {source}")]
+    #[error("cannot read mission file {path}: {error}")]
     Io {
         /// The file.
         path: String,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
+        /// The I/O error (in the message).
+        error: std::io::Error,
     },
     /// The file is not valid TOML/JSON or has unknown or mistyped fields.
     #[error("mission file {path}: {message}")]
@@ -125,9 +124,9 @@ impl Mission {
     /// Reads a mission file: `.json` as JSON, anything else as TOML.
     pub fn from_path(path: &Path) -> Result<Self, MissionError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| MissionError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| MissionError::Io {
             path: shown.clone(),
-            source,
+            error,
         })?;
         let is_json = path
             .extension()

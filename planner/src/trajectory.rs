@@ -12,13 +12,12 @@ use crate::geometry::{heading_rad, Length, Point2, Vector2};
 #[non_exhaustive]
 pub enum TrajectoryError {
     /// The file could not be read.
-    #[error("cannot read trajectory {path}: {source}")]
+    #[error("cannot read trajectory {path}: {error}")]
     Io {
         /// The file.
         path: String,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
+        /// The I/O error (in the message).
+        error: std::io::Error,
     },
     /// A malformed CSV file; names the line and column.
     #[error("trajectory {path}, {location}: {reason}")]
@@ -145,9 +144,9 @@ impl Trajectory {
         start_m: [f64; 2],
     ) -> Result<Self, TrajectoryError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| TrajectoryError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| TrajectoryError::Io {
             path: shown.clone(),
-            source,
+            error,
         })?;
         Self::from_csv_str(&text, &shown, slot_s, slots, start_m)
     }

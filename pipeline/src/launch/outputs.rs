@@ -4,13 +4,14 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, Result};
 use serde_json::{json, Value};
 
 use super::imaging::Collected;
 use super::session::Session;
 use super::Outcome;
 use crate::protocol::Plan;
+use crate::services::os::write_file_atomic;
 use crate::services::process::MissionContext;
 
 /// What the run knows once the plan came.
@@ -37,11 +38,10 @@ impl Session<'_> {
         radar_sim::io::write_json(&out.join("report.json"), &report)?;
         let wall_s = self.setup.wall.elapsed().as_secs_f64();
         let pipeline = self.pipeline_json(planned, c, wall_s);
-        std::fs::write(
-            out.join("pipeline.json"),
-            serde_json::to_string_pretty(&pipeline)?,
-        )
-        .with_context(|| format!("writing {}", out.join("pipeline.json").display()))?;
+        write_file_atomic(
+            &out.join("pipeline.json"),
+            serde_json::to_string_pretty(&pipeline)?.as_bytes(),
+        )?;
         let widths = window_worst_widths_m(resolved, &plan.result.evaluation);
         let n = planned.ctx.apertures.len();
         write_report_md(out, resolved, plan, &report, &widths, &pipeline, n)?;
@@ -286,6 +286,5 @@ fn write_report_md(
         );
     }
     let _ = writeln!(s, "\nFiles: plan/, images/aperture_NNN.{{npy,png}}, detections.csv, detections.json, metrics.json, report.json, pipeline.json (timings, counters, events), logs/.");
-    std::fs::write(out.join("report.md"), s)
-        .with_context(|| format!("writing {}", out.join("report.md").display()))
+    Ok(write_file_atomic(&out.join("report.md"), s.as_bytes())?)
 }
