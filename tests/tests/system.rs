@@ -470,6 +470,49 @@ fn resolution_general_reaches_the_planner() {
     assert!(e.stderr.contains("--resolution"), "{}", e.stderr);
 }
 
+/// A best-effort run (`--resolution general` without `--strict-resolution`) plans, images and
+/// says in report.md what resolution it reached: the unresolved windows and slots and the
+/// first slot of its plan and of the least-energy plan, and the extra energy, as in
+/// plan/summary.json.
+#[test]
+fn a_best_effort_run_reports_the_resolution_it_reached() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut l = Launch::start(dir.path(), H, &["--resolution", "general"]);
+    let st = l.finish(Duration::from_secs(300));
+    assert_eq!(st.code(), Some(0), "{}", l.stderr_tail());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(l.out.join("plan/summary.json")).unwrap())
+            .unwrap();
+    let r = &summary["resolution_shortfall"];
+    let b = &summary["best_effort"];
+    let least = &b["least_energy_shortfall"];
+    let first = match r["first_unresolved_slot"].as_u64() {
+        Some(k) => format!("slot {k}"),
+        None => "none".to_string(),
+    };
+    let windows = r["windows"].as_array().unwrap().len();
+    let expected = format!(
+        "- resolution: general, best effort: {} of {windows} windows with a cell wider than \
+         d_min (the least-energy plan: {}), {} unresolved slots (the least-energy plan: {}; \
+         the first: {first}), for {:.0} J more energy than the least-energy plan's {:.0} J",
+        r["unresolved_windows"],
+        least["unresolved_windows"],
+        r["unresolved_slots"],
+        least["unresolved_slots"],
+        summary["energy_j"].as_f64().unwrap() - b["least_energy_j"].as_f64().unwrap(),
+        b["least_energy_j"].as_f64().unwrap(),
+    );
+    let report = std::fs::read_to_string(l.out.join("report.md")).unwrap();
+    assert!(report.contains(&expected), "{expected}\nnot in\n{report}");
+    // the best effort resolves more than the least-energy plan on this mission
+    assert!(
+        r["unresolved_slots"].as_u64().unwrap() < least["unresolved_slots"].as_u64().unwrap(),
+        "{summary}"
+    );
+    // the report's table puts the least-energy plan's cell beside the plan's
+    assert!(report.contains("least-energy plan's cell/m"), "{report}");
+}
+
 /// A Zenoh client configuration file in `dir`, as `deploy/client.json5` (waits for its router:
 /// `connect.timeout_ms: -1`), whose router, at an unused loopback port, never comes.
 fn client_without_router(dir: &std::path::Path) -> std::path::PathBuf {

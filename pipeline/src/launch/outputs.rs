@@ -200,11 +200,15 @@ fn write_report_md(
         let _ = writeln!(
             s,
             "- resolution: general, best effort: {} of {} windows with a cell wider than d_min \
-             (the least-energy plan: {}), for {:.0} J more energy than the least-energy plan's \
-             {:.0} J ({:+.1} %)",
+             (the least-energy plan: {}), {} unresolved slots (the least-energy plan: {}; the \
+             first: {}), for {:.0} J more energy than the least-energy plan's {:.0} J ({:+.1} %)",
             r.unresolved_windows,
             r.windows.len(),
             b.least_energy_shortfall.unresolved_windows,
+            r.unresolved_slots,
+            b.least_energy_shortfall.unresolved_slots,
+            r.first_unresolved_slot
+                .map_or_else(|| "none".to_string(), |k| format!("slot {k}")),
             plan.summary.energy_j - b.least_energy_j,
             b.least_energy_j,
             plan.summary.extra_energy_pct.unwrap_or(f64::NAN)
