@@ -15,16 +15,14 @@
 use std::path::Path;
 
 use planner::evaluate::ResolutionMode;
-use planner::geometry::{self as pg, Length, Vector2, RIGHT_TURN};
-use radar_sim::config::{CancellerKind, SceneFile};
-use radar_sim::pipeline::{Processor, RadarSetup};
+use planner::geometry as pg;
+use radar_sim::config::SceneFile;
+use radar_sim::pipeline::RadarSetup;
 use radar_sim::scene::SceneObject;
-use radar_sim::scoring::{score, TruthInImage};
-use radar_sim::synth::Components;
-use radar_sim::track::PlannedTrack;
-use rustfft::num_complex::{Complex32, Complex64};
 
-const PHASES: usize = 8;
+#[path = "common/pair.rs"]
+mod pair;
+use pair::PHASES;
 
 fn mission() -> planner::Mission {
     planner::Mission::from_path(
@@ -57,9 +55,7 @@ fn cell_facts(m: &planner::Mission, traj: &planner::Trajectory) -> (f64, f64, [f
         .map(|t| cell(*t).worst_width_m)
         .fold(0.0, f64::max);
     let mid = slots[slots.len() / 2];
-    let g = pg::bistatic_range_gradient(p, traj.q(mid), lm);
-    let g = Vector2::from(g);
-    let e = (RIGHT_TURN.inverse() * g * (1.0 / g.length())).into();
+    let e = pair::iso_range_direction(m, traj, mid, lm);
     (worst, cell(mid).worst_width_m, e)
 }
 
@@ -70,94 +66,11 @@ fn detections(
     traj: &planner::Trajectory,
     objects: &[SceneObject],
 ) -> (Vec<(usize, usize)>, (usize, usize)) {
-    let mut scene = SceneFile::default(); // unweighted: main lobes as the cell predicts
-    scene.radar.direct_path = false;
-    scene.processing.canceller = CancellerKind::None;
-    scene.processing.grid_half_m = 40.0;
+    // unweighted: main lobes as the cell predicts
+    let scene = pair::linear(SceneFile::default());
     let setup = RadarSetup::new(m.params(), &scene).unwrap();
-    let aps = setup.apertures(m).unwrap();
-    assert_eq!(aps.len(), 1);
-    let ap = &aps[0];
-    let track = PlannedTrack::new(traj.clone(), m.params().altitude_m);
-    let pulses = setup.pulses(&track, ap);
-    let proc = Processor::new(setup.clone()).unwrap();
-    let grid = setup.grid(ap);
-    let ppl = ap.pulses_per_look;
-    // look images of each object alone and of the noise alone
-    let parts: Vec<Vec<Vec<Complex32>>> = [Some(0), Some(1), None]
-        .iter()
-        .map(|which| {
-            let (objs, comps) = match which {
-                Some(i) => (
-                    vec![objects[*i]],
-                    Components {
-                        direct: false,
-                        echoes: true,
-                        noise: false,
-                    },
-                ),
-                None => (
-                    Vec::new(),
-                    Components {
-                        direct: false,
-                        echoes: false,
-                        noise: true,
-                    },
-                ),
-            };
-            let iq = setup
-                .synthesizer(objs)
-                .unwrap()
-                .synthesize_frame(&pulses, comps)
-                .unwrap();
-            let c = proc
-                .compress(&grid, &pulses, &iq, ppl, None, false)
-                .unwrap();
-            (0..ap.looks)
-                .map(|l| proc.image_look(&grid, &c, l * ppl..(l + 1) * ppl).unwrap())
-                .collect()
-        })
-        .collect();
-    let scale = (1.0 / (proc.look_noise_var(ppl) * ap.looks as f64)) as f32;
-    let truth: Vec<TruthInImage> = objects
-        .iter()
-        .map(|o| TruthInImage {
-            id: o.id,
-            pos_m: o.pos_m(),
-            expected_snr_db: 30.0,
-            landmark: None,
-        })
-        .collect();
-    let gate = m.params().d_min_m / 2.0;
-    let count = |ml: &[f32]| -> (usize, usize) {
-        let d = proc.detect(ap, &pulses, ml).unwrap().detections;
-        let near: Vec<_> = d
-            .into_iter()
-            .filter(|x| x.x_m.hypot(x.y_m) < 30.0)
-            .collect();
-        let s = score(&truth, &near, gate);
-        (
-            near.len(),
-            s.outcomes.iter().filter(|o| o.detection.is_some()).count(),
-        )
-    };
-    let mut mean = vec![0f32; grid.pixels()];
-    let mut per_phase = Vec::new();
-    for k in 0..PHASES {
-        let rot = Complex64::from_polar(1.0, std::f64::consts::TAU * k as f64 / PHASES as f64);
-        let rot = Complex32::new(rot.re as f32, rot.im as f32);
-        let mut ml = vec![0f32; grid.pixels()];
-        for ((a, b), n) in parts[0].iter().zip(&parts[1]).zip(&parts[2]) {
-            for (i, o) in ml.iter_mut().enumerate() {
-                *o += (a[i] + rot * b[i] + n[i]).norm_sqr() * scale;
-            }
-        }
-        per_phase.push(count(&ml));
-        for (a, b) in mean.iter_mut().zip(&ml) {
-            *a += b / PHASES as f32;
-        }
-    }
-    (per_phase, count(&mean))
+    assert_eq!(setup.apertures(m).unwrap().len(), 1);
+    pair::pair_detections(m, traj, &scene, 0, objects)
 }
 
 #[test]
@@ -180,19 +93,7 @@ fn paper_plan_merges_general_plan_resolves() {
         "the general plan violates its bound: {gw}"
     );
     // the pair: d_min apart along the iso-range line of the paper plan's middle slot
-    let h = d_min / 2.0;
-    let objects: Vec<SceneObject> = [-h, h]
-        .iter()
-        .enumerate()
-        .map(|(id, &s)| SceneObject {
-            id,
-            x_m: s * e[0],
-            y_m: s * e[1],
-            rcs_m2: 10.0,
-            phase_rad: 0.0,
-            landmark: None,
-        })
-        .collect();
+    let objects = pair::pair_along([0.0, 0.0], e, d_min);
     let (pp, pm) = detections(&m, &paper, &objects);
     let (gp, gm) = detections(&m, &general, &objects);
     println!("relative phase: (detections near the pair, objects matched) paper | general");

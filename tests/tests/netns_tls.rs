@@ -132,6 +132,16 @@ fn pipeline_over_mutual_tls_with_access_control() {
             role("echo"),
         ],
     );
+    // on the mesh before the run plans, so that it learns the mission
+    let ready_by = std::time::Instant::now() + Duration::from_secs(60);
+    while !forger.log_text().contains("READY") {
+        assert!(
+            std::time::Instant::now() < ready_by,
+            "the forger did not get ready:\n{}",
+            forger.log_text()
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
     let child_config = |r: &str| format!("{r}={}", role(r));
     let (planner, echo, bridge) = (
         child_config("planner"),

@@ -18,7 +18,8 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let hub = format!("tcp/127.0.0.1:{}", harness::free_port());
-    let mut l = Launch::start(d, H, &["-l", &hub, "--no-multicast-scouting"]);
+    // the forger listens first and the launcher connects to it, so that the forger is on the
+    // mesh before the run plans (a run of this length is over in about 2 s)
     let forger = Service::start_exe_in(
         &[],
         &harness::bin("cellsar-bridge-bench"),
@@ -32,13 +33,21 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
             "5".into(),
             "-m".into(),
             "peer".into(),
-            "-e".into(),
-            hub,
             "-l".into(),
-            "tcp/127.0.0.1:0".into(),
+            hub.clone(),
             "--no-multicast-scouting".into(),
         ],
     );
+    let ready_by = std::time::Instant::now() + Duration::from_secs(60);
+    while !forger.log_text().contains("READY") {
+        assert!(
+            std::time::Instant::now() < ready_by,
+            "the forger did not get ready:\n{}",
+            forger.log_text()
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let mut l = Launch::start(d, H, &["-e", &hub, "--no-multicast-scouting"]);
     let st = l.finish(Duration::from_secs(240));
     assert!(
         st.success(),
