@@ -20,8 +20,14 @@ fn energy_is_at_the_floor_at_80_m_and_rises_from_120_m() {
     let e70 = energy_j(70.0);
     let e80 = energy_j(80.0);
     let e90 = energy_j(90.0);
-    assert!((e80 - e70).abs() < 1e-4 * e70, "80 m: {e80} J, 70 m: {e70} J");
-    assert!((e90 - e70).abs() < 1e-4 * e70, "90 m: {e90} J, 70 m: {e70} J");
+    assert!(
+        (e80 - e70).abs() < 1e-4 * e70,
+        "80 m: {e80} J, 70 m: {e70} J"
+    );
+    assert!(
+        (e90 - e70).abs() < 1e-4 * e70,
+        "90 m: {e90} J, 70 m: {e70} J"
+    );
     let e120 = energy_j(120.0);
     let e130 = energy_j(130.0);
     let e140 = energy_j(140.0);
