@@ -34,14 +34,7 @@ fn make_certs(dir: &Path, name: &str, host: &str) -> PathBuf {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for role in [
-        "router",
-        "planner",
-        "echo",
-        "processor",
-        "bridge",
-        "launcher",
-    ] {
+    for role in pipeline::certs::DEFAULT_ROLES {
         assert!(out.join(format!("{role}.pem")).is_file(), "{role}");
     }
     out
@@ -133,15 +126,7 @@ fn pipeline_over_mutual_tls_with_access_control() {
         ],
     );
     // on the mesh before the run plans, so that it learns the mission
-    let ready_by = std::time::Instant::now() + Duration::from_secs(60);
-    while !forger.log_text().contains("READY") {
-        assert!(
-            std::time::Instant::now() < ready_by,
-            "the forger did not get ready:\n{}",
-            forger.log_text()
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    forger.wait_for_log("READY", Duration::from_secs(60));
     let child_config = |r: &str| format!("{r}={}", role(r));
     let (planner, echo, bridge) = (
         child_config("planner"),

@@ -316,13 +316,17 @@ fn bad_payload(i: usize, kind: u16) -> (Vec<u8>, Encoding) {
     }
 }
 
-fn flood_put(node: &ZenohNode, key: &str, kind: u16) {
-    let p = node
-        .session()
+/// A raw Zenoh publisher on `key` that waits rather than drops when the network is full.
+fn blocking_publisher<'a>(node: &'a ZenohNode, key: &str) -> bridge::zenoh::pubsub::Publisher<'a> {
+    node.session()
         .declare_publisher(key.to_string())
         .congestion_control(CongestionControl::Block)
         .wait()
-        .unwrap();
+        .unwrap()
+}
+
+fn flood_put(node: &ZenohNode, key: &str, kind: u16) {
+    let p = blocking_publisher(node, key);
     for i in 0..FLOOD {
         let (b, enc) = bad_payload(i, kind);
         p.put(b).encoding(enc).wait().unwrap();
@@ -338,12 +342,7 @@ const HUGE_BYTES: usize = 512 << 20;
 /// (1 GiB) each would be reassembled whole (512 MiB) and, before cellsar's length check,
 /// copied once more.
 fn flood_huge(node: &ZenohNode, key: &str) {
-    let p = node
-        .session()
-        .declare_publisher(key.to_string())
-        .congestion_control(CongestionControl::Block)
-        .wait()
-        .unwrap();
+    let p = blocking_publisher(node, key);
     let huge = ZBytes::from(vec![7u8; HUGE_BYTES]);
     for _ in 0..2 {
         p.put(huge.clone())

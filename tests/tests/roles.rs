@@ -38,15 +38,7 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
             "--no-multicast-scouting".into(),
         ],
     );
-    let ready_by = std::time::Instant::now() + Duration::from_secs(60);
-    while !forger.log_text().contains("READY") {
-        assert!(
-            std::time::Instant::now() < ready_by,
-            "the forger did not get ready:\n{}",
-            forger.log_text()
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    forger.wait_for_log("READY", Duration::from_secs(60));
     let mut l = Launch::start(d, H, &["-e", &hub, "--no-multicast-scouting"]);
     let st = l.finish(Duration::from_secs(240));
     assert!(

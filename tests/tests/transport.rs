@@ -565,16 +565,11 @@ fn query_one_returns_at_the_first_good_reply() {
         "query_one waited {:?} for the silent queryable",
         t.elapsed()
     );
-    // the silent queryable's callback may run just after the good reply came back: wait for it
-    // (bounded) rather than read the count at once
-    let seen_by = Instant::now() + T;
-    let held_now = loop {
-        let n = held.lock().unwrap().len();
-        if n >= 2 || Instant::now() >= seen_by {
-            break n;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    // the silent queryable's callback may run just after the good reply came back
+    wait_until("the silent queryable's second query", T, || {
+        held.lock().unwrap().len() >= 2
+    });
+    let held_now = held.lock().unwrap().len();
     assert!(held_now >= 2, "the silent queryable saw {held_now} queries");
     server.join().unwrap();
     held.lock().unwrap().clear();
@@ -796,6 +791,17 @@ fn full_queue_drops_and_counts() {
     let p = a
         .publisher::<PlanSummary>(key, PublishOptions::default())
         .unwrap();
+    let c = fifty_more(&p, &sub);
+    assert_eq!(c.delivered, 3, "queue of 3, never drained");
+    assert_eq!(c.dropped, c.received - 3);
+}
+
+/// Once `sub` receives from `p`, 50 more messages, counted; the counters after a pause for
+/// any late delivery.
+fn fifty_more(
+    p: &bridge::net::TypedPublisher<PlanSummary>,
+    sub: &bridge::net::TypedSubscriber<PlanSummary>,
+) -> bridge::CounterSnapshot {
     wait_until("first message", T, || {
         p.put(&summary(0)).unwrap();
         sub.counters().snapshot().received > 0
@@ -808,9 +814,7 @@ fn full_queue_drops_and_counts() {
         sub.counters().snapshot().received >= before + 50
     });
     std::thread::sleep(Duration::from_millis(100));
-    let c = sub.counters().snapshot();
-    assert_eq!(c.delivered, 3, "queue of 3, never drained");
-    assert_eq!(c.dropped, c.received - 3);
+    sub.counters().snapshot()
 }
 
 /// A queue is bounded by wire bytes as well as by count: with room for 1000 messages but a
@@ -845,19 +849,7 @@ fn queue_byte_budget_drops_and_counts() {
             },
         )
         .unwrap();
-    wait_until("first message", T, || {
-        p.put(&summary(0)).unwrap();
-        sub.counters().snapshot().received > 0
-    });
-    let before = sub.counters().snapshot().received;
-    for i in 0..50 {
-        p.put(&summary(i)).unwrap();
-    }
-    wait_until("all counted", T, || {
-        sub.counters().snapshot().received >= before + 50
-    });
-    std::thread::sleep(Duration::from_millis(100));
-    let c = sub.counters().snapshot();
+    let c = fifty_more(&p, &sub);
     assert_eq!(c.delivered, 3, "budget of three messages, never drained");
     assert_eq!(c.dropped, c.received - 3);
     assert_eq!(sub.queued_bytes(), 3 * one);
