@@ -1,7 +1,11 @@
 //! Times the least-energy plan, the best-effort plan and the trade-off curve of a mission, one
 //! after the other in the same run (BENCHMARKS.md, "Best-effort resolution").
 //!
-//! `cargo run --release -p planner --example best_effort_timing -- MISSION.toml [--tradeoff]`
+//! `cargo run --release -p planner --example best_effort_timing -- MISSION.toml [--tradeoff]
+//! [--cap PCT] [--phases]`
+//!
+//! `--cap PCT` plans the best effort within PCT % more energy than the least-energy plan;
+//! `--phases` prints each phase's time (and each iteration with `TRACE_ITER` set).
 
 use std::path::Path;
 use std::time::Instant;
@@ -57,10 +61,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: best_effort_timing MISSION.toml [--tradeoff]")?;
     let mission = Mission::from_path(Path::new(path))?;
     let with_curve = args.iter().any(|a| a == "--tradeoff");
+    let cap_pct = match args.iter().position(|a| a == "--cap") {
+        Some(i) => Some(
+            args.get(i + 1)
+                .ok_or("--cap needs a percentage")?
+                .parse::<f64>()
+                .map_err(|e| format!("--cap: {e}"))?,
+        ),
+        None => None,
+    };
     let mut least_s = f64::NAN;
     for resolution in [ResolutionMode::Paper, ResolutionMode::General] {
         let options = PlanOptions {
             resolution,
+            max_extra_energy_pct: cap_pct.filter(|_| resolution == ResolutionMode::General),
             ..PlanOptions::default()
         };
         let t0 = Instant::now();

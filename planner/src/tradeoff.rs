@@ -8,7 +8,7 @@ use crate::{Mission, PlanResult};
 
 /// The caps of the default trade-off curve, % of extra energy over the least-energy plan; the
 /// curve adds the least-energy plan (0 %) before and the uncapped best effort after them.
-pub const DEFAULT_CAPS_PCT: [f64; 5] = [0.5, 1.0, 2.0, 3.0, 5.0];
+pub const DEFAULT_CAPS_PCT: [f64; 5] = [1.0, 2.0, 5.0, 10.0, 20.0];
 
 /// A point whose plan stays this far (% of the least energy) below its cap did not use the
 /// cap: the best effort stopped on its own, and every larger cap gets the same plan (each
