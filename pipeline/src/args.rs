@@ -32,6 +32,14 @@ impl IqLimitArgs {
     }
 }
 
+/// The resolution requirement that `cellsar run`, `cellsar-radar-sim closed-loop` and
+/// `cellsar-planner plan` (with the `exact` scheme) plan with unless `--resolution` says
+/// otherwise: the general bistatic cell, as a best effort where the geometry does not allow it
+/// everywhere (docs/user-guide.md, "Resolution"). The library's `PlanOptions::default()`, the
+/// FMU and the Python package keep `paper` (the least-energy plan, the paper's criterion).
+pub const DEFAULT_RESOLUTION: planner::evaluate::ResolutionMode =
+    planner::evaluate::ResolutionMode::General;
+
 /// The clap value parser of a string-valued enum of the maths crates (which do not depend on
 /// clap): the enum's own names (strum's `VARIANTS`) become clap's possible values, so a bad
 /// value is refused with the flag's name and the list of valid values, and `--help` lists them.

@@ -61,7 +61,9 @@ def plan(
         mission: the mission.
         scheme: ``"exact"`` (the default: SCA on the exact geometry, every iterate feasible),
             ``"paper"`` (Algorithm 1 as printed), ``"baseline"`` or ``"baseline-exact"``.
-        resolution: ``"paper"`` (the default) or ``"general"`` (the 2-D resolution cell).
+        resolution: ``"paper"`` (the default: the least-energy plan, as ``cellsar-planner plan
+            --resolution paper``) or ``"general"`` (the 2-D resolution cell, as a best effort:
+            the default of the command-line tools).
         init: a start: a :class:`Plan`, a trajectory CSV path (as ``cellsar-planner plan
             --init``) or a pair ``(x_m, y_m)`` of arrays (``slots`` or ``slots + 1`` points).
         max_iterations: largest number of SCA/BCD iterations (200).

@@ -48,10 +48,15 @@ pub fn reference(horizon_s: f64) -> PathBuf {
 }
 
 /// `cellsar-radar-sim closed-loop` of `mission` with `scene` into `out`, in this process (the
-/// same library calls): `out/{plan,recording,processed}/`, `out/report.json`.
+/// same library calls, the binaries' default resolution): `out/{plan,recording,processed}/`,
+/// `out/report.json`.
 pub fn closed_loop(mission: &planner::Mission, scene: &Path, out: &Path) {
     let scene = radar_sim::config::SceneFile::from_path(scene).unwrap();
-    let result = planner::plan(mission, &planner::PlanOptions::default()).unwrap();
+    let options = planner::PlanOptions {
+        resolution: pipeline::args::DEFAULT_RESOLUTION,
+        ..planner::PlanOptions::default()
+    };
+    let result = planner::plan(mission, &options).unwrap();
     pipeline::report::write_plan_dir(&out.join("plan"), mission, &result).unwrap();
     let (m2, traj) = pipeline::report::read_plan_dir(&out.join("plan")).unwrap();
     radar_sim::run::simulate(&m2, &traj, &scene, &out.join("recording"), &mut |_, _| {}).unwrap();

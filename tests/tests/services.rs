@@ -141,9 +141,13 @@ impl Client {
         if let Some(n) = name {
             file.name = Some(n.to_string());
         }
+        // the launcher's default resolution, as the reference closed loop plans
         let req = PlanRequest {
             mission: file,
-            options: Default::default(),
+            options: pipeline::protocol::PlanRequestOptions {
+                resolution: Some(pipeline::args::DEFAULT_RESOLUTION),
+                ..Default::default()
+            },
         };
         self.node
             .query_one::<PlanRequest, Plan>(

@@ -49,18 +49,24 @@ fn run_over_iceoryx2_matches_closed_loop() {
     assert!(std::fs::read_to_string(l.out.join("report.md"))
         .unwrap()
         .contains("every landmark in view detected: yes"));
-    // the per-window resolution cell of the plan is reported beside each detection
+    // the per-window resolution cell of the plan (the default best effort) is reported beside
+    // each detection, and beside it the least-energy plan's
     let md = std::fs::read_to_string(l.out.join("report.md")).unwrap();
-    assert!(md.contains("| cell/m |"), "{md}");
+    assert!(
+        md.contains("| cell/m | least-energy plan's cell/m |"),
+        "{md}"
+    );
     for ap in 0..3 {
         let row = md
             .lines()
             .find(|r| r.starts_with(&format!("| {ap} | ")))
             .unwrap_or_else(|| panic!("no row for aperture {ap}:\n{md}"));
         let cells: Vec<&str> = row.split('|').map(str::trim).collect();
-        assert_eq!(cells.len(), 8, "{row}");
-        let width: f64 = cells[6].split(' ').next().unwrap().parse().unwrap();
-        assert!(width > 0.0 && width.is_finite(), "{row}");
+        assert_eq!(cells.len(), 9, "{row}");
+        for k in [6, 7] {
+            let width: f64 = cells[k].split(' ').next().unwrap().parse().unwrap();
+            assert!(width > 0.0 && width.is_finite(), "{row}");
+        }
     }
     // the state directory is removed after a complete run
     assert!(!l.out.join(".state").exists());

@@ -63,12 +63,13 @@ enum Command {
         /// over-relaxation (for comparisons with other implementations of the same scheme).
         #[arg(long)]
         plain_sca: bool,
-        /// Resolution requirement of the exact-geometry schemes: paper (the default: δ_r, δ_a ≤
-        /// d_min, the least-energy plan) or general (the worst width of the 2-D resolution cell
-        /// ≤ d_min in every landmark slot, or, where the geometry does not allow it, the plan
-        /// with the least resolution shortfall and, at that shortfall, the least energy).
-        #[arg(long, default_value = "paper", value_parser = pipeline::args::enum_parser::<ResolutionMode>())]
-        resolution: ResolutionMode,
+        /// Resolution requirement of the exact-geometry schemes: general (the default for
+        /// `exact`: the worst width of the 2-D resolution cell ≤ d_min in every landmark slot,
+        /// or, where the geometry does not allow it, the plan with the least resolution
+        /// shortfall and, at that shortfall, the least energy) or paper (the default for the
+        /// comparison schemes: δ_r, δ_a ≤ d_min, the least-energy plan).
+        #[arg(long, value_parser = pipeline::args::enum_parser::<ResolutionMode>())]
+        resolution: Option<ResolutionMode>,
         #[command(flatten)]
         best_effort: BestEffortArgs,
         /// Wall-time limit of the whole run, s: the iterations stop at the first check after it
@@ -242,7 +243,12 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 init,
                 coarse: !no_coarse,
                 over_relaxation: !plain_sca,
-                resolution,
+                resolution: resolution.unwrap_or(match scheme {
+                    Scheme::Exact => pipeline::args::DEFAULT_RESOLUTION,
+                    Scheme::Paper | Scheme::Baseline | Scheme::BaselineExact => {
+                        ResolutionMode::Paper
+                    }
+                }),
                 min_kappa_scale: if plain_sca {
                     1.0
                 } else {

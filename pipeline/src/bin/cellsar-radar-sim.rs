@@ -85,11 +85,11 @@ enum Cmd {
         /// Limits on the run's IQ, checked before planning.
         #[command(flatten)]
         limits: IqLimitArgs,
-        /// The resolution requirement of the plan: `paper` (the default: the paper's δ_r, δ_a ≤
-        /// d_min, the least-energy plan) or `general` (the worst width of the true bistatic cell
-        /// ≤ d_min in every landmark slot, or the best effort where the geometry does not allow
-        /// it); see the top-level docs/user-guide.md, "Resolution".
-        #[arg(long, default_value = "paper", value_parser = pipeline::args::enum_parser::<planner::evaluate::ResolutionMode>())]
+        /// The resolution requirement of the plan: `general` (the default: the worst width of
+        /// the true bistatic cell ≤ d_min in every landmark slot, or the best effort where the
+        /// geometry does not allow it) or `paper` (the paper's δ_r, δ_a ≤ d_min, the
+        /// least-energy plan); see the top-level docs/user-guide.md, "Resolution".
+        #[arg(long, default_value_t = pipeline::args::DEFAULT_RESOLUTION, value_parser = pipeline::args::enum_parser::<planner::evaluate::ResolutionMode>())]
         resolution: planner::evaluate::ResolutionMode,
         /// Under `general`: refuse a mission whose cell cannot be held within d_min in every
         /// landmark slot (exit 3) instead of planning the best effort.

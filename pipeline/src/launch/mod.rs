@@ -84,12 +84,12 @@ pub struct RunArgs {
     /// Keep only the landmark windows that end within this horizon, s.
     #[arg(long, value_parser = flags::parse_seconds)]
     pub horizon_s: Option<Seconds>,
-    /// The plan's resolution requirement: `paper` (the default: the paper's δ_r, δ_a ≤ d_min,
-    /// the least-energy plan) or `general` (the worst width of the true bistatic cell ≤ d_min in
-    /// every landmark slot, or the best effort where the geometry does not allow it); top-level
-    /// docs/user-guide.md, "Resolution". Sent with the plan request; `cellsar-radar-sim
-    /// closed-loop --resolution` gives the same results.
-    #[arg(long, default_value = "paper", value_parser = crate::args::enum_parser::<planner::evaluate::ResolutionMode>())]
+    /// The plan's resolution requirement: `general` (the default: the worst width of the true
+    /// bistatic cell ≤ d_min in every landmark slot, or the best effort where the geometry
+    /// does not allow it) or `paper` (the paper's δ_r, δ_a ≤ d_min, the least-energy plan);
+    /// top-level docs/user-guide.md, "Resolution". Sent with the plan request;
+    /// `cellsar-radar-sim closed-loop --resolution` gives the same results.
+    #[arg(long, default_value_t = crate::args::DEFAULT_RESOLUTION, value_parser = crate::args::enum_parser::<planner::evaluate::ResolutionMode>())]
     pub resolution: planner::evaluate::ResolutionMode,
     /// Under `general`: refuse a mission whose cell cannot be held within d_min in every
     /// landmark slot (the planner's refusal, exit 3) instead of planning the best effort.

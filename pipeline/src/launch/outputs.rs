@@ -238,8 +238,9 @@ fn write_report_md(
         "\n\"cell\" is the median over the window's slots of the worst width of the plan's \
          resolution cell (general bistatic cell, erratum 12 (docs/paper-notes.md)); above d_min = {d_min} m \
          the geometry is near blind: objects d_min apart along the cell's long side fall into \
-         one cell although the paper's δ_r, δ_a ≤ d_min hold (`--resolution general` plans \
-         avoid this as far as the geometry allows)."
+         one cell although the paper's δ_r, δ_a ≤ d_min hold (the default `--resolution general` \
+         avoids this as far as the geometry allows; `--resolution paper` plans the least-energy \
+         plan)."
     );
     // the least-energy plan's cell per landmark, beside a best-effort plan's
     let least: Option<Vec<(usize, f64)>> = best_effort.map(|b| {

@@ -32,7 +32,8 @@ pub struct PlanRequestOptions {
     /// Relative objective change that stops the iterations (finite, > 0).
     #[serde(default)]
     pub tolerance: Option<f64>,
-    /// `paper` (default) or `general`.
+    /// `paper` (default: the least-energy plan, the library's default) or `general` (the best
+    /// effort, which the launcher sends unless told otherwise).
     #[serde(default)]
     pub resolution: Option<ResolutionMode>,
     /// Under `general`: refuse instead of the best effort (default false).

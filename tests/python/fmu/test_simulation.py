@@ -34,8 +34,11 @@ def planner_bin():
 
 
 def reference_plan(mission, outdir):
-    """Runs `cellsar-planner plan MISSION --out DIR`; returns {t_s: (x_m, y_m)} at slot times."""
-    subprocess.run([str(planner_bin()), "plan", str(mission), "--out", str(outdir)],
+    """Runs `cellsar-planner plan MISSION --resolution paper --out DIR` (the FMU plans the
+    least-energy plan, the library's default; the CLI's default is the best effort); returns
+    {t_s: (x_m, y_m)} at slot times."""
+    subprocess.run([str(planner_bin()), "plan", str(mission), "--resolution", "paper",
+                    "--out", str(outdir)],
                    check=True, capture_output=True, timeout=600)
     rows = {}
     with open(outdir / "trajectory.csv", newline="") as f:
