@@ -286,7 +286,9 @@ fn late_echo_and_a_json_client() {
     // a client without Rust: the request as JSON, the reply as JSON
     let m = planner::Mission::from_path(&mission()).unwrap();
     let m = radar_sim::run::shorten(&m, H).unwrap();
-    let body = serde_json::json!({"mission": m.to_file_struct()});
+    // the options of the Rust client's request below, so that both ask for the same plan
+    let body = serde_json::json!({"mission": m.to_file_struct(),
+        "options": {"resolution": pipeline::args::DEFAULT_RESOLUTION}});
     let req = serde_json::json!({"kind": 0x0101, "schema_version": 1, "mission_id": "0000000000000000",
         "seq": 0, "time_unix_ns": 0, "body": body});
     let replies = c

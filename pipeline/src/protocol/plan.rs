@@ -216,10 +216,17 @@ impl Message for PlanSummary {
     const SCHEMA_VERSION: u16 = 1;
 }
 
-/// The mission id of a (resolved) mission file: FNV-1a of its JSON form, so equal missions get
-/// equal ids in every process and a changed mission gets a new one.
-pub fn mission_id(file: &MissionFile) -> MissionId {
-    let text =
+/// The mission id of a plan of a (resolved) mission file with request `options`: FNV-1a of the
+/// file's JSON form, followed by the options' JSON form unless they are the defaults. Equal
+/// requests get equal ids in every process; a changed mission, or the same mission planned with
+/// other options (another resolution, say), gets a new one, so that two plans of one mission do
+/// not replace each other in the caches and processors. Default options keep the mission's own
+/// id (and the ids of plans kept in a state directory).
+pub fn mission_id(file: &MissionFile, options: &PlanRequestOptions) -> MissionId {
+    let mut text =
         serde_json::to_string(file).unwrap_or_else(|_| file.name.clone().unwrap_or_default());
+    if *options != PlanRequestOptions::default() {
+        text.push_str(&serde_json::to_string(options).unwrap_or_default());
+    }
     MissionId::from_name(&text)
 }

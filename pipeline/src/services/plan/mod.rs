@@ -141,7 +141,7 @@ pub fn plan_request_within(
         })?;
     let file = mission.to_file_struct();
     Ok(Plan {
-        mission_id: mission_id(&file),
+        mission_id: mission_id(&file, &req.options),
         summary: Summary::new(&mission, &result),
         mission: file,
         options: req.options.clone(),
@@ -201,7 +201,7 @@ fn serve_on(
         let req = q.request.clone();
         let cached = Mission::from_file_struct(&req.mission)
             .ok()
-            .map(|m| mission_id(&m.to_file_struct()))
+            .map(|m| mission_id(&m.to_file_struct(), &req.options))
             .and_then(|id| cache.get(id))
             .filter(|p| p.options == req.options);
         let plan = match cached {
@@ -328,7 +328,7 @@ fn plan_in_thread(
     stop: &AtomicBool,
 ) -> Result<Plan, ServiceError> {
     let provisional = Mission::from_file_struct(&req.mission)
-        .map(|m| mission_id(&m.to_file_struct()))
+        .map(|m| mission_id(&m.to_file_struct(), &req.options))
         .unwrap_or_default();
     let (progress_tx, progress_rx) = std::sync::mpsc::channel::<String>();
     let (done_tx, done_rx) = std::sync::mpsc::channel();
@@ -504,7 +504,7 @@ mod tests {
             options: PlanRequestOptions::default(),
         };
         let plan = plan_request(&req, "t", &mut NoObserver).unwrap();
-        assert_eq!(plan.mission_id, mission_id(&plan.mission));
+        assert_eq!(plan.mission_id, mission_id(&plan.mission, &req.options));
         let meta = Meta::default();
         let limits = DecodeLimits {
             max_body_bytes: MAX_PLAN_BYTES,
@@ -531,7 +531,20 @@ mod tests {
         );
         // the resolved mission plans to the same mission id
         let again = Mission::from_file_struct(&plan.mission).unwrap();
-        assert_eq!(mission_id(&again.to_file_struct()), plan.mission_id);
+        assert_eq!(
+            mission_id(&again.to_file_struct(), &req.options),
+            plan.mission_id
+        );
+        // other options, another plan: another id (the default options keep the mission's)
+        let general = PlanRequestOptions {
+            resolution: Some(planner::evaluate::ResolutionMode::General),
+            ..PlanRequestOptions::default()
+        };
+        assert_ne!(mission_id(&plan.mission, &general), plan.mission_id);
+        assert_eq!(
+            mission_id(&plan.mission, &general),
+            mission_id(&again.to_file_struct(), &general)
+        );
     }
 
     #[test]
