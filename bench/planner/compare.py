@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Rust planner vs a CVXPY + Clarabel implementation of the same exact scheme, in one run.
 
-For each mission:
+For each mission (every `plan` with `--resolution paper`, the problem the CVXPY side solves):
   1. `cellsar-planner plan M --no-coarse --plain-sca --max-iterations 0 --out D0` writes a
      feasible start (D0/trajectory.csv) and the resolved mission (D0/mission.toml);
   2. `cellsar-planner plan M --no-coarse --plain-sca --init D0/trajectory.csv --out D1` runs the
@@ -44,7 +44,9 @@ def sh(cmd: list[str], **kw) -> subprocess.CompletedProcess:
 
 
 def rust_plan(binary: Path, mission: Path, out: Path, *extra: str) -> dict:
-    sh([str(binary), "plan", str(mission), "--out", str(out), *extra])
+    # the paper's resolution: the problem the CVXPY side implements (the CLI's default for
+    # `exact` is the best effort under the general resolution)
+    sh([str(binary), "plan", str(mission), "--resolution", "paper", "--out", str(out), *extra])
     return json.loads((out / "summary.json").read_text())
 
 

@@ -16,7 +16,7 @@ windows) and `PLAN/trajectory.csv` (for `--start plan`). Only the paper's resolu
 a vacuous range constraint is handled (the defaults); anything else is refused.
 
     VENV=/tmp/venv-cvx bench/planner/compare.sh --help   # creates the venv with SciPy (via CVXPY)
-    cellsar-planner plan missions/default-200m.toml --out /tmp/p200
+    cellsar-planner plan missions/default-200m.toml --resolution paper --out /tmp/p200
     /tmp/venv-cvx/bin/python bench/planner/nlp_check.py /tmp/p200 --knot-s 5 --start turn
 
 Starts: `plan` (the planner's own trajectory, sampled at the knots), `turn` (a constant-rate

@@ -49,7 +49,9 @@ def sweep_cli(cli, files, workdir):
     outs = []
     for k, path in enumerate(files):
         out = os.path.join(workdir, f"out{k}")
-        subprocess.run([cli, "plan", path, "--out", out], check=True, capture_output=True)
+        # the package's default resolution (the CLI's default for `exact` is `general`)
+        subprocess.run([cli, "plan", path, "--resolution", "paper", "--out", out], check=True,
+                       capture_output=True)
         outs.append(out)
     wall = time.perf_counter() - start
     solve = 0.0
