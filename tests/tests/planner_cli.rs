@@ -76,6 +76,9 @@ fn plan_writes_the_plan_directory() {
     }
     assert_eq!(summary["scheme"], "exact");
     assert_eq!(summary["feasible"], true);
+    // the default of `exact` is the general resolution (the best effort, with its shortfall)
+    assert_eq!(summary["resolution"], "general");
+    assert!(summary["resolution_shortfall"].is_object(), "{summary}");
     // the plan directory reads back, and its trajectory re-plans as --init
     let (m, tr) = pipeline::report::read_plan_dir(&out).unwrap();
     assert_eq!(tr.slots(), m.slots());
@@ -90,6 +93,10 @@ fn plan_writes_the_plan_directory() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // the comparison schemes keep the paper's resolution by default
+    let summary2: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out2.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary2["resolution"], "paper");
 }
 
 #[test]
