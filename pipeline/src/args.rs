@@ -40,6 +40,33 @@ impl IqLimitArgs {
 pub const DEFAULT_RESOLUTION: planner::evaluate::ResolutionMode =
     planner::evaluate::ResolutionMode::General;
 
+/// Refuses the best-effort flags (`--strict-resolution`, `--max-extra-energy-pct`) with
+/// `--resolution paper`, which would ignore them; the message names the flags.
+pub fn check_best_effort_flags(
+    resolution: planner::evaluate::ResolutionMode,
+    strict_resolution: bool,
+    max_extra_energy_pct: Option<f64>,
+) -> Result<(), String> {
+    if resolution == planner::evaluate::ResolutionMode::General {
+        return Ok(());
+    }
+    let mut given = Vec::new();
+    if strict_resolution {
+        given.push("--strict-resolution");
+    }
+    if max_extra_energy_pct.is_some() {
+        given.push("--max-extra-energy-pct");
+    }
+    if given.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} applies to --resolution general only, not to {resolution}",
+            given.join(" and ")
+        ))
+    }
+}
+
 /// The clap value parser of a string-valued enum of the maths crates (which do not depend on
 /// clap): the enum's own names (strum's `VARIANTS`) become clap's possible values, so a bad
 /// value is refused with the flag's name and the list of valid values, and `--help` lists them.
@@ -95,5 +122,20 @@ mod tests {
             e.contains("--resolution") && e.contains("paper, general"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn best_effort_flags_are_refused_with_the_paper_resolution() {
+        use planner::evaluate::ResolutionMode::{General, Paper};
+        assert_eq!(check_best_effort_flags(General, true, None), Ok(()));
+        assert_eq!(check_best_effort_flags(General, false, Some(5.0)), Ok(()));
+        assert_eq!(check_best_effort_flags(Paper, false, None), Ok(()));
+        let e = check_best_effort_flags(Paper, true, Some(5.0)).unwrap_err();
+        assert!(
+            e.contains("--strict-resolution and --max-extra-energy-pct") && e.contains("paper"),
+            "{e}"
+        );
+        let e = check_best_effort_flags(Paper, false, Some(5.0)).unwrap_err();
+        assert!(e.starts_with("--max-extra-energy-pct applies"), "{e}");
     }
 }

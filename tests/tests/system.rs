@@ -474,6 +474,19 @@ fn resolution_general_reaches_the_planner() {
     let e = cellsar_bounded(&bad, dir.path(), Duration::from_secs(30), |_| {});
     assert_eq!(e.code, Some(2), "{}", e.stderr);
     assert!(e.stderr.contains("--resolution"), "{}", e.stderr);
+    // so is --strict-resolution with the paper's resolution, which would ignore it
+    let mut paper = args.clone();
+    if let Some(last) = paper.last_mut() {
+        *last = "paper".into();
+    }
+    let e = cellsar_bounded(&paper, dir.path(), Duration::from_secs(30), |_| {});
+    assert_eq!(e.code, Some(2), "{}", e.stderr);
+    assert!(
+        e.stderr
+            .contains("--strict-resolution applies to --resolution general only"),
+        "{}",
+        e.stderr
+    );
 }
 
 /// A best-effort run (`--resolution general` without `--strict-resolution`) plans, images and

@@ -236,6 +236,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 ),
                 None => None,
             };
+            let resolution = resolution.unwrap_or(match scheme {
+                Scheme::Exact => pipeline::args::DEFAULT_RESOLUTION,
+                Scheme::Paper | Scheme::Baseline | Scheme::BaselineExact => ResolutionMode::Paper,
+            });
+            pipeline::args::check_best_effort_flags(
+                resolution,
+                best_effort.strict_resolution,
+                best_effort.max_extra_energy_pct,
+            )
+            .map_err(|e| bad(anyhow::anyhow!(e)))?;
             let options = PlanOptions {
                 scheme,
                 max_iterations,
@@ -243,12 +253,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 init,
                 coarse: !no_coarse,
                 over_relaxation: !plain_sca,
-                resolution: resolution.unwrap_or(match scheme {
-                    Scheme::Exact => pipeline::args::DEFAULT_RESOLUTION,
-                    Scheme::Paper | Scheme::Baseline | Scheme::BaselineExact => {
-                        ResolutionMode::Paper
-                    }
-                }),
+                resolution,
                 min_kappa_scale: if plain_sca {
                     1.0
                 } else {

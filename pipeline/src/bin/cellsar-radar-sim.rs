@@ -348,6 +348,8 @@ fn run_cli() -> Result<()> {
             resolution,
             strict_resolution,
         } => {
+            pipeline::args::check_best_effort_flags(resolution, strict_resolution, None)
+                .map_err(|e| bad(anyhow::anyhow!(e)))?;
             let plan_options = planner::PlanOptions {
                 resolution,
                 strict_resolution,
