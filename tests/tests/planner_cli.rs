@@ -173,41 +173,24 @@ fn infeasible_mission_exits_3_and_names_the_slot() {
 #[test]
 fn best_effort_flags_with_the_paper_resolution_exit_2_and_name_the_flag() {
     let out = tmp("paper-cap");
-    let o = bin()
-        .arg("plan")
-        .arg(repo().join("missions/explicit.toml"))
-        .args([
-            "--resolution",
-            "paper",
-            "--max-extra-energy-pct",
-            "5",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("--max-extra-energy-pct applies to --resolution general only"),
-        "{err}"
-    );
-    assert!(!out.join("summary.json").exists());
-    // a comparison scheme plans the paper's resolution by default: the cap is refused too
-    let o = bin()
-        .arg("plan")
-        .arg(repo().join("missions/explicit.toml"))
-        .args([
-            "--scheme",
-            "baseline",
-            "--max-extra-energy-pct",
-            "5",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(2));
+    // the paper's resolution asked for, and a comparison scheme's default
+    for paper in [["--resolution", "paper"], ["--scheme", "baseline"]] {
+        let o = bin()
+            .arg("plan")
+            .arg(repo().join("missions/explicit.toml"))
+            .args(paper)
+            .args(["--max-extra-energy-pct", "5", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{paper:?}: {err}");
+        assert!(
+            err.contains("--max-extra-energy-pct applies to --resolution general only"),
+            "{paper:?}: {err}"
+        );
+        assert!(!out.join("summary.json").exists());
+    }
 }
 
 #[test]
