@@ -46,7 +46,7 @@ pub fn check_best_effort_flags(
     resolution: planner::evaluate::ResolutionMode,
     strict_resolution: bool,
     max_extra_energy_pct: Option<f64>,
-) -> Result<(), String> {
+) -> anyhow::Result<()> {
     if resolution == planner::evaluate::ResolutionMode::General {
         return Ok(());
     }
@@ -60,7 +60,7 @@ pub fn check_best_effort_flags(
     if given.is_empty() {
         Ok(())
     } else {
-        Err(format!(
+        Err(anyhow::anyhow!(
             "{} applies to --resolution general only, not to {resolution}",
             given.join(" and ")
         ))
@@ -127,15 +127,19 @@ mod tests {
     #[test]
     fn best_effort_flags_are_refused_with_the_paper_resolution() {
         use planner::evaluate::ResolutionMode::{General, Paper};
-        assert_eq!(check_best_effort_flags(General, true, None), Ok(()));
-        assert_eq!(check_best_effort_flags(General, false, Some(5.0)), Ok(()));
-        assert_eq!(check_best_effort_flags(Paper, false, None), Ok(()));
-        let e = check_best_effort_flags(Paper, true, Some(5.0)).unwrap_err();
+        assert!(check_best_effort_flags(General, true, None).is_ok());
+        assert!(check_best_effort_flags(General, false, Some(5.0)).is_ok());
+        assert!(check_best_effort_flags(Paper, false, None).is_ok());
+        let e = check_best_effort_flags(Paper, true, Some(5.0))
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("--strict-resolution and --max-extra-energy-pct") && e.contains("paper"),
             "{e}"
         );
-        let e = check_best_effort_flags(Paper, false, Some(5.0)).unwrap_err();
+        let e = check_best_effort_flags(Paper, false, Some(5.0))
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("--max-extra-energy-pct applies"), "{e}");
     }
 }

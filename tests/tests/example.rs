@@ -52,13 +52,13 @@ fn close_csv_field(a: &str, b: &str) -> bool {
     }
 }
 
-/// The differences of `got` from `want` but for timings, numbers to the tolerance, each naming
+/// The differences of `got` from `want` but for timings, numbers compared by `near`, each naming
 /// its place (`path` and below), all of them so that a failure shows the whole change.
 fn json_differences(
     path: &str,
     want: &Value,
     got: &Value,
-    close: fn(f64, f64) -> bool,
+    near: fn(f64, f64) -> bool,
     out: &mut Vec<String>,
 ) {
     match (want, got) {
@@ -68,7 +68,7 @@ fn json_differences(
                     continue;
                 }
                 match g.get(k) {
-                    Some(gv) => json_differences(&format!("{path}.{k}"), wv, gv, close, out),
+                    Some(gv) => json_differences(&format!("{path}.{k}"), wv, gv, near, out),
                     None => out.push(format!("{path}.{k}: missing in the fresh run")),
                 }
             }
@@ -80,7 +80,7 @@ fn json_differences(
         }
         (Value::Array(w), Value::Array(g)) if w.len() == g.len() => {
             for (i, (wv, gv)) in w.iter().zip(g).enumerate() {
-                json_differences(&format!("{path}[{i}]"), wv, gv, close, out);
+                json_differences(&format!("{path}[{i}]"), wv, gv, near, out);
             }
         }
         (Value::Array(w), Value::Array(g)) => {
@@ -92,7 +92,7 @@ fn json_differences(
         }
         (Value::Number(w), Value::Number(g)) => {
             let (w, g) = (w.as_f64().unwrap(), g.as_f64().unwrap());
-            if !close(w, g) {
+            if !near(w, g) {
                 out.push(format!("{path}: committed {w}, fresh {g}"));
             }
         }
@@ -118,7 +118,7 @@ fn the_main_job_example_is_current() {
         &out,
     );
     let mut differences = Vec::new();
-    for (committed, fresh, close) in [
+    for (committed, fresh, near) in [
         (
             "report.json",
             "report.json",
@@ -131,7 +131,7 @@ fn the_main_job_example_is_current() {
             committed,
             &json(&example.join(committed)),
             &json(&out.join(fresh)),
-            close,
+            near,
             &mut differences,
         );
     }

@@ -245,7 +245,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 best_effort.strict_resolution,
                 best_effort.max_extra_energy_pct,
             )
-            .map_err(|e| bad(anyhow::anyhow!(e)))?;
+            .map_err(bad)?;
             let options = PlanOptions {
                 scheme,
                 max_iterations,

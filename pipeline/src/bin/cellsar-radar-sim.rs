@@ -349,7 +349,7 @@ fn run_cli() -> Result<()> {
             strict_resolution,
         } => {
             pipeline::args::check_best_effort_flags(resolution, strict_resolution, None)
-                .map_err(|e| bad(anyhow::anyhow!(e)))?;
+                .map_err(bad)?;
             let plan_options = planner::PlanOptions {
                 resolution,
                 strict_resolution,

@@ -216,7 +216,7 @@ impl PlanRefused {
 pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     // the seconds flags were checked when parsed (bridge::flags::Seconds)
     crate::args::check_best_effort_flags(args.resolution, args.strict_resolution, None)
-        .map_err(|e| Failure::bad_input(anyhow!(e)))?;
+        .map_err(Failure::bad_input)?;
     if args.window == 0 {
         return Err(Failure::bad_input(anyhow!(
             "--window 0: must be at least 1 (apertures the processor asks for at once)"

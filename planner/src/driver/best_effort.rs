@@ -30,12 +30,15 @@ pub struct BestEffortBasis {
     /// The least-energy plan (`paper` resolution).
     pub least_energy: PlanResult,
     /// The best effort solved on the coarse levels (20, 10, 5 and 2.5 s slots, like the
-    /// least-energy plan's start) and interpolated to the mission's slots, when that track meets
-    /// every constraint but the resolution on them. It is the start only where it resolves every
-    /// slot: the best effort from the least-energy plan is a local method (on the far-start
-    /// mission it stops at 4 unresolved slots), and from the guidance law the coarse levels find
-    /// the track that resolves every slot there. A mission too short for the coarse levels gets
-    /// the strict general plan here instead, when one exists (cheap on so few slots).
+    /// least-energy plan's start) and interpolated to the mission's slots, kept only when that
+    /// track meets every constraint on them, the resolution in every slot included: then it
+    /// starts the best effort. The best effort from the least-energy plan is a local method (on
+    /// the far-start mission it stops at 4 unresolved slots), and from the guidance law the
+    /// coarse levels find the track that resolves every slot there; elsewhere the least-energy
+    /// plan is the better start (default 30 m mission: 0 of 30 windows unresolved from it, 1
+    /// from a coarse track that leaves some slots unresolved). A mission too short for the
+    /// coarse levels gets the strict general plan here instead, when one exists (cheap on so
+    /// few slots).
     pub coarse: Option<Trajectory>,
 }
 
@@ -113,6 +116,7 @@ impl BestEffortBasis {
             )
             .filter(|t| evaluate(mission, t).is_feasible())
             .or_else(|| strict_plan(mission, options, observer, stop))
+            .filter(|t| evaluate(mission, t).is_feasible_for(ResolutionMode::General))
         };
         Ok(Self {
             least_energy,
@@ -142,8 +146,8 @@ pub(super) fn plan_best_effort(
 }
 
 /// The best-effort plan of `mission` from an already planned `basis`, under
-/// `options.max_extra_energy_pct`, its iterations started from `start` (default: the coarse
-/// best effort where it resolves every slot within the cap, else the least-energy plan; a given
+/// `options.max_extra_energy_pct`, its iterations started from `start` (default: the basis's
+/// coarse track where it has one within the cap, else the least-energy plan; a given
 /// start must meet every constraint but the resolution, and the energy cap). Its
 /// `solve_seconds` counts only this step.
 ///
@@ -197,18 +201,12 @@ fn best_effort_until(
     }
     observer.on_phase("best effort");
     let weight = options.resolution_weight_j_per_m;
-    // the coarse best effort only where it resolves every slot: elsewhere the least-energy plan
-    // is the better start (default 30 m mission: 0 of 30 windows unresolved from it, 1 from the
-    // coarse best effort, whose merit is the lower one at the start)
     let start = match start {
         Some(t) => t.clone(),
         None => basis
             .coarse
             .as_ref()
-            .filter(|t| {
-                let ev = evaluate(mission, t);
-                ev.is_feasible_for(general) && cap_j.is_none_or(|cap| ev.energy_j <= cap)
-            })
+            .filter(|t| cap_j.is_none_or(|cap| evaluate(mission, t).energy_j <= cap))
             .cloned()
             .unwrap_or_else(|| basis.least_energy.trajectory.clone()),
     };

@@ -203,6 +203,7 @@ fn serve_on(
             .ok()
             .map(|m| mission_id(&m.to_file_struct(), &req.options))
             .and_then(|id| cache.get(id))
+            // the id covers the options already; this guards against a collision of the hash
             .filter(|p| p.options == req.options);
         let plan = match cached {
             Some(p) => {
