@@ -78,7 +78,14 @@ impl Session<'_> {
             let Some(answer) = self.ask_once(request, clock, spinner)? else {
                 return Ok(None);
             };
-            let retries_left = attempt < 1 + self.args().max_restarts;
+            // a local planner that is gone (no reply) is bounded by its supervisor
+            // (--max-restarts), whose verdict names the cause: counting its deaths here too
+            // raced it (the third start of a planner that dies at start could fail the query
+            // before its exit was seen). Every other failure, and an external planner's, is
+            // bounded by these attempts; all by --plan-timeout-s.
+            let supervised =
+                self.local("planner") && matches!(answer, Err(NetError::NoReply { .. }));
+            let retries_left = supervised || attempt < 1 + self.args().max_restarts;
             match answer {
                 Ok(plan) => return Ok(Some(plan)),
                 // a busy planner (its request queue full) is asked again, as one that did not
