@@ -197,10 +197,12 @@ const MAX_PROFILE: usize = 1 << 22;
 /// Which inner kernel [`backproject_with`] uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Kernel {
-    /// The fastest the CPU supports (AVX-512 when present, else the portable kernel).
+    /// The fastest the CPU supports (AVX-512 when present, else the portable kernel), unless
+    /// the portable kernel set is selected for the process ([`crate::kernels`]).
     #[default]
     Auto,
-    /// The portable kernel (auto-vectorised; an AVX2+FMA copy is chosen at run time).
+    /// The portable kernel (auto-vectorised; an AVX2+FMA copy is chosen at run time with the
+    /// native kernel set).
     Portable,
 }
 
@@ -249,16 +251,10 @@ pub fn backproject(
     )
 }
 
-/// Whether the AVX-512 kernel can run on this CPU.
+/// Whether [`Kernel::Auto`] runs the AVX-512 kernel: the CPU has AVX-512F and the native
+/// kernel set is selected ([`crate::kernels`]).
 pub fn avx512_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    crate::kernels::avx512()
 }
 
 /// [`backproject`] with explicit options.

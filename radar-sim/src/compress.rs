@@ -9,7 +9,7 @@
 use std::sync::Arc;
 
 use rustfft::num_complex::{Complex32, Complex64};
-use rustfft::{Fft, FftPlanner};
+use rustfft::Fft;
 
 use crate::cancel::SymbolWindow;
 use crate::config::{RangeFilter, Weighting};
@@ -41,7 +41,7 @@ impl RangeCompressor {
         weighting: Weighting,
         upsample: usize,
     ) -> Self {
-        let ifft_up = FftPlanner::new().plan_fft_inverse(num.fft_size * upsample.max(1));
+        let ifft_up = crate::kernels::FftMaker::new().inverse(num.fft_size * upsample.max(1));
         Self {
             num: num.clone(),
             filter,

@@ -114,13 +114,11 @@ pub(crate) fn int_lag_sums_many<const V: usize>(
         let acc = 'run: {
             #[cfg(target_arch = "x86_64")]
             {
-                if std::arch::is_x86_feature_detected!("avx512f") {
+                if crate::kernels::avx512() {
                     // SAFETY: the CPU supports AVX-512F (checked just above).
                     break 'run unsafe { k512(xs, ph_re, ph_im, st_re, st_im) };
                 }
-                if std::arch::is_x86_feature_detected!("avx2")
-                    && std::arch::is_x86_feature_detected!("fma")
-                {
+                if crate::kernels::avx2_fma() {
                     // SAFETY: the CPU supports AVX2 and FMA (checked just above).
                     break 'run unsafe { k256(xs, ph_re, ph_im, st_re, st_im) };
                 }
@@ -297,12 +295,11 @@ pub(crate) fn lane_sums(
         ) -> ([f64; LANES], [f64; LANES]) {
             kernel(z, a, b, c, d)
         }
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if crate::kernels::avx512() {
             // SAFETY: the CPU supports AVX-512F (checked just above).
             return unsafe { k512(z, ph_re, ph_im, st_re, st_im) };
         }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if crate::kernels::avx2_fma() {
             // SAFETY: the CPU supports AVX2 and FMA (checked just above).
             return unsafe { k256(z, ph_re, ph_im, st_re, st_im) };
         }

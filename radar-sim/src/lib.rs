@@ -22,6 +22,7 @@ pub mod cputime;
 mod dsp;
 pub mod error;
 pub mod io;
+pub mod kernels;
 pub mod limits;
 pub mod linalg;
 pub mod pipeline;

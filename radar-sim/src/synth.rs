@@ -33,7 +33,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use rustfft::num_complex::{Complex32, Complex64};
-use rustfft::{Fft, FftPlanner};
+use rustfft::Fft;
 
 use crate::antenna::Antenna;
 use crate::config::{MotionModel, RadarConfig};
@@ -128,7 +128,7 @@ impl Synthesizer {
                 "numerology and radar config disagree",
             ));
         }
-        let ifft = FftPlanner::new().plan_fft_inverse(num.fft_size);
+        let ifft = crate::kernels::FftMaker::new().inverse(num.fft_size);
         Ok(Self {
             motion: radar.motion,
             antenna,

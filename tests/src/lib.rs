@@ -15,6 +15,7 @@ pub mod memory;
 pub mod netns;
 pub mod pipeline;
 pub mod transport;
+pub mod trials;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

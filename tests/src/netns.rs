@@ -3,8 +3,8 @@
 //! configurations of `pipeline/deploy/` adapted to them.
 //!
 //! Needs `ip` (iproute2) and the right to create network namespaces (root or CAP_NET_ADMIN):
-//! [`two_namespaces`] and [`multicast_host`] give `None`, saying why, only when `ip netns add`
-//! is refused for lack of permission.
+//! [`unavailable`] says why they cannot be made; the tests that need them are run by
+//! [`crate::trials`], which shows them as ignored there.
 
 use std::path::Path;
 use std::process::Command;
@@ -62,39 +62,35 @@ pub fn ip(args: &[&str]) {
     );
 }
 
-/// `ip netns add NAME`; `None`, saying why, when namespaces may not be created here (no `ip`,
-/// or no permission); any other failure panics.
-fn add_namespace(name: &str) -> Option<()> {
-    let o = match Command::new("ip").args(["netns", "add", name]).output() {
+/// Why network namespaces cannot be made here (no `ip`, or no permission to run
+/// `ip netns add`), found by making and deleting one; `None` where they can. Any other failure
+/// of the probe is left to the tests, which then fail saying why.
+pub fn unavailable() -> Option<String> {
+    let name = format!("csprobe{}", std::process::id());
+    let o = match Command::new("ip").args(["netns", "add", &name]).output() {
         Ok(o) => o,
-        Err(e) => {
-            eprintln!("SKIPPED: cannot run `ip` ({e}); install iproute2");
-            return None;
-        }
+        Err(e) => return Some(format!("cannot run `ip` ({e}); install iproute2")),
     };
-    if !o.status.success() {
-        let err = String::from_utf8_lossy(&o.stderr).to_string();
-        if err.contains("Permission denied") || err.contains("Operation not permitted") {
-            eprintln!(
-                "SKIPPED: `ip netns add` is not permitted here ({})",
-                err.trim()
-            );
-            return None;
-        }
-        panic!("ip netns add {name}: {err}");
+    if o.status.success() {
+        let _ = Command::new("ip").args(["netns", "del", &name]).status();
+        return None;
     }
-    Some(())
+    let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
+    (err.contains("Permission denied") || err.contains("Operation not permitted")).then(|| {
+        format!("`ip netns add` is not permitted here ({err}); run as root or with CAP_NET_ADMIN")
+    })
 }
 
-/// Two namespaces joined by veth, addresses 10.X.Y.1 (A) and 10.X.Y.2 (B); None (with the
-/// reason printed) when namespaces may not be created here. Names are unique per process and
-/// call, so tests of one binary may run in parallel.
-pub fn two_namespaces() -> Option<TwoHosts> {
+/// Two namespaces joined by veth, addresses 10.X.Y.1 (A) and 10.X.Y.2 (B); panics where
+/// namespaces cannot be made (the tests that call it are [`crate::trials::Needs::Netns`],
+/// ignored there). Names are unique per process and call, so tests of one binary may run in
+/// parallel.
+pub fn two_namespaces() -> TwoHosts {
     static NEXT: AtomicU32 = AtomicU32::new(0);
     let pid = std::process::id();
     let n = NEXT.fetch_add(1, Ordering::Relaxed);
     let (a, b) = (format!("csa{pid}x{n}"), format!("csb{pid}x{n}"));
-    add_namespace(&a)?;
+    ip(&["netns", "add", &a]);
     let guard = Netns {
         names: vec![a.clone(), b.clone()],
     };
@@ -112,31 +108,30 @@ pub fn two_namespaces() -> Option<TwoHosts> {
         ip(&["-n", ns, "link", "set", v, "up"]);
         ip(&["-n", ns, "link", "set", "lo", "up"]);
     }
-    Some(TwoHosts {
+    TwoHosts {
         guard,
         a,
         b,
         ip_a,
         ip_b,
-    })
+    }
 }
 
 /// One namespace whose only interface is its loopback, with multicast on it (a route for
 /// 224.0.0.0/4), so that Zenoh's multicast scouting works inside it and reaches nothing
-/// outside: a host of its own for the tests of scouting. `None` (with the reason printed) as
-/// [`two_namespaces`].
-pub fn multicast_host() -> Option<(Netns, String)> {
+/// outside: a host of its own for the tests of scouting. Panics as [`two_namespaces`].
+pub fn multicast_host() -> (Netns, String) {
     static NEXT: AtomicU32 = AtomicU32::new(0);
     let n = NEXT.fetch_add(1, Ordering::Relaxed);
     let name = format!("csm{}x{n}", std::process::id());
-    add_namespace(&name)?;
+    ip(&["netns", "add", &name]);
     let guard = Netns {
         names: vec![name.clone()],
     };
     ip(&["-n", &name, "link", "set", "lo", "up"]);
     ip(&["-n", &name, "link", "set", "lo", "multicast", "on"]);
     ip(&["-n", &name, "route", "add", "224.0.0.0/4", "dev", "lo"]);
-    Some((guard, name))
+    (guard, name)
 }
 
 /// The example router address of the configurations in `pipeline/deploy/`.

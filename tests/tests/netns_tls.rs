@@ -13,7 +13,7 @@
 //!   deployment can (so the refusals are the certificates', not a broken set-up).
 //!
 //! Needs `ip` (iproute2) and the right to create network namespaces (root or CAP_NET_ADMIN);
-//! skipped, saying why, only when `ip netns add` is refused for lack of permission.
+//! where they cannot be made the tests show as ignored, saying why (`harness::trials`).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -23,6 +23,7 @@ use std::time::{Duration, Instant};
 
 use harness::netns::{config, two_namespaces, TwoHosts};
 use harness::pipeline::*;
+use harness::trials::Test;
 
 /// `cellsar certs --out DIR --host HOST` (every default role); the directory.
 fn make_certs(dir: &Path, name: &str, host: &str) -> PathBuf {
@@ -83,11 +84,8 @@ fn wait_for_log(s: &mut Service, text: &str, timeout: Duration) {
     }
 }
 
-#[test]
 fn pipeline_over_mutual_tls_with_access_control() {
-    let Some(hosts) = two_namespaces() else {
-        return;
-    };
+    let hosts = two_namespaces();
     const H: f64 = 30.0;
     let reference = reference(H);
     let dir = tempfile::tempdir().unwrap();
@@ -254,11 +252,8 @@ fn exit_within(s: &mut Service, timeout: Duration) -> std::process::ExitStatus {
     }
 }
 
-#[test]
 fn strangers_cannot_open_a_session_with_the_tls_router() {
-    let Some(hosts) = two_namespaces() else {
-        return;
-    };
+    let hosts = two_namespaces();
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let certs = make_certs(d, "certs", &hosts.ip_a);
@@ -301,4 +296,17 @@ fn strangers_cannot_open_a_session_with_the_tls_router() {
     ] {
         assert!(log.contains(why), "{why}:\n{log}");
     }
+}
+
+fn main() {
+    harness::trials::main(&[
+        Test::netns(
+            "pipeline_over_mutual_tls_with_access_control",
+            pipeline_over_mutual_tls_with_access_control,
+        ),
+        Test::netns(
+            "strangers_cannot_open_a_session_with_the_tls_router",
+            strangers_cannot_open_a_session_with_the_tls_router,
+        ),
+    ]);
 }

@@ -20,6 +20,7 @@ use std::time::{Duration, Instant};
 
 use harness::netns::multicast_host;
 use harness::pipeline::*;
+use harness::trials::Test;
 
 /// 3 apertures of the small scene.
 const H: f64 = 30.0;
@@ -73,7 +74,6 @@ fn finish_as_reference(l: &mut Launch) {
 
 /// A `cellsar router` started first, and `cellsar run -m client -e ROUTER`: the launcher and
 /// every child are clients of that router.
-#[test]
 fn clients_of_a_router_started_first() {
     let dir = tempfile::tempdir().unwrap();
     let (_router, ep) = router(dir.path());
@@ -88,7 +88,6 @@ fn clients_of_a_router_started_first() {
 
 /// `-c FILE` with a listen endpoint and scouting off: the launcher listens there, the
 /// children get the same file with that endpoint as one to connect to.
-#[test]
 fn a_configuration_file_with_a_listen_endpoint() {
     let dir = tempfile::tempdir().unwrap();
     let port = free_port();
@@ -113,7 +112,6 @@ fn a_configuration_file_with_a_listen_endpoint() {
 
 /// A router launcher (`-m router`, no endpoint given): it listens on a free loopback port
 /// and every child, a peer, connects to it; no multicast needed.
-#[test]
 fn a_router_launcher_is_the_hub_of_its_children() {
     let dir = tempfile::tempdir().unwrap();
     let mut l = Launch::start(dir.path(), H, &["-m", "router", "--no-multicast-scouting"]);
@@ -130,7 +128,6 @@ fn a_router_launcher_is_the_hub_of_its_children() {
 
 /// Combinations that cannot form a mesh are refused before anything starts: exit 2, the
 /// flag (or the file) named, no output directory.
-#[test]
 fn combinations_that_cannot_form_a_mesh_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let port0 = dir.path().join("port0.json5");
@@ -184,7 +181,6 @@ fn combinations_that_cannot_form_a_mesh_are_refused() {
 
 /// A client launcher whose router is not there says within 5 s what it waits for, naming the
 /// endpoint, and gives up after `--peer-timeout-s` (exit 1), nothing left behind.
-#[test]
 fn a_launcher_without_its_router_gives_up_after_the_peer_timeout() {
     let dir = tempfile::tempdir().unwrap();
     let ep = format!("tcp/127.0.0.1:{}", free_port());
@@ -215,7 +211,6 @@ fn a_launcher_without_its_router_gives_up_after_the_peer_timeout() {
 
 /// A launcher whose `--external processor` never comes gives up waiting for it after
 /// `--peer-timeout-s` (exit 1), naming the role and the session's endpoints.
-#[test]
 fn a_launcher_gives_up_on_a_processor_that_never_comes() {
     let dir = tempfile::tempdir().unwrap();
     let e = cellsar_bounded(
@@ -241,7 +236,6 @@ fn a_launcher_gives_up_on_a_processor_that_never_comes() {
 
 /// The planner, echo, processor and bridge, started with nobody to talk to, each say within
 /// 5 s what they wait for and on which endpoints, and that they wait until stopped.
-#[test]
 fn services_say_what_they_wait_for_within_5_s() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene().display().to_string();
@@ -377,7 +371,6 @@ fn late_processor(launcher_zenoh: &[&str], processor_zenoh: &[String], extra: &[
     }
 }
 
-#[test]
 fn a_processor_joining_10_s_after_the_plan_on_the_same_host() {
     let hub = format!("tcp/127.0.0.1:{}", free_port());
     let processor = [
@@ -391,7 +384,6 @@ fn a_processor_joining_10_s_after_the_plan_on_the_same_host() {
     late_processor(&["-l", &hub, "--no-multicast-scouting"], &processor, &[]);
 }
 
-#[test]
 fn a_processor_joining_10_s_after_the_plan_across_a_router() {
     let dir = tempfile::tempdir().unwrap();
     let (_router, ep) = router(dir.path());
@@ -407,7 +399,6 @@ fn a_processor_joining_10_s_after_the_plan_across_a_router() {
 /// connects to it and to the `-e` endpoint, here a planner started by hand
 /// (`--external planner`), which the launcher and its children reach only through `-e`
 /// (multicast scouting is off).
-#[test]
 fn a_peer_launcher_given_a_connect_endpoint_and_no_listen_endpoint() {
     let dir = tempfile::tempdir().unwrap();
     let ep = format!("tcp/127.0.0.1:{}", free_port());
@@ -464,11 +455,8 @@ fn scouting_router(ns: &[&str], dir: &Path) -> Service {
 /// the planner) finds no one and is found by no one on the same host, even by a router and a
 /// launcher that scout: the launcher gives up on the planner after `--plan-timeout-s`. With
 /// `--multicast-scouting` the same planner finds the router, and the launcher gets its plan.
-#[test]
 fn a_standalone_service_scouts_only_when_asked() {
-    let Some((_guard, ns)) = multicast_host() else {
-        return;
-    };
+    let (_guard, ns) = multicast_host();
     let ns = ["ip", "netns", "exec", ns.as_str()];
     let dir = tempfile::tempdir().unwrap();
     let _router = scouting_router(&ns, dir.path());
@@ -529,11 +517,8 @@ fn a_standalone_service_scouts_only_when_asked() {
 /// A `cellsar router` with multicast scouting and `cellsar run -m client --multicast-scouting`
 /// without `-e`: the launcher and every child (clients with the same flags) find the router by
 /// scouting, and the run ends with the closed loop's outputs.
-#[test]
 fn a_client_launcher_finds_its_router_by_multicast_scouting() {
-    let Some((_guard, ns)) = multicast_host() else {
-        return;
-    };
+    let (_guard, ns) = multicast_host();
     let ns = ["ip", "netns", "exec", ns.as_str()];
     let dir = tempfile::tempdir().unwrap();
     let _router = scouting_router(&ns, dir.path());
@@ -551,4 +536,57 @@ fn a_client_launcher_finds_its_router_by_multicast_scouting() {
         "{children:?}"
     );
     finish_as_reference(&mut l);
+}
+
+fn main() {
+    harness::trials::main(&[
+        Test::plain(
+            "clients_of_a_router_started_first",
+            clients_of_a_router_started_first,
+        ),
+        Test::plain(
+            "a_configuration_file_with_a_listen_endpoint",
+            a_configuration_file_with_a_listen_endpoint,
+        ),
+        Test::plain(
+            "a_router_launcher_is_the_hub_of_its_children",
+            a_router_launcher_is_the_hub_of_its_children,
+        ),
+        Test::plain(
+            "combinations_that_cannot_form_a_mesh_are_refused",
+            combinations_that_cannot_form_a_mesh_are_refused,
+        ),
+        Test::plain(
+            "a_launcher_without_its_router_gives_up_after_the_peer_timeout",
+            a_launcher_without_its_router_gives_up_after_the_peer_timeout,
+        ),
+        Test::plain(
+            "a_launcher_gives_up_on_a_processor_that_never_comes",
+            a_launcher_gives_up_on_a_processor_that_never_comes,
+        ),
+        Test::plain(
+            "services_say_what_they_wait_for_within_5_s",
+            services_say_what_they_wait_for_within_5_s,
+        ),
+        Test::plain(
+            "a_processor_joining_10_s_after_the_plan_on_the_same_host",
+            a_processor_joining_10_s_after_the_plan_on_the_same_host,
+        ),
+        Test::plain(
+            "a_processor_joining_10_s_after_the_plan_across_a_router",
+            a_processor_joining_10_s_after_the_plan_across_a_router,
+        ),
+        Test::plain(
+            "a_peer_launcher_given_a_connect_endpoint_and_no_listen_endpoint",
+            a_peer_launcher_given_a_connect_endpoint_and_no_listen_endpoint,
+        ),
+        Test::netns(
+            "a_standalone_service_scouts_only_when_asked",
+            a_standalone_service_scouts_only_when_asked,
+        ),
+        Test::netns(
+            "a_client_launcher_finds_its_router_by_multicast_scouting",
+            a_client_launcher_finds_its_router_by_multicast_scouting,
+        ),
+    ]);
 }

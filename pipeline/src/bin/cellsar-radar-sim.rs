@@ -317,6 +317,8 @@ fn run_cli() -> Result<()> {
     let cli = Cli::parse();
     cellsar_error::init_logging(default_log_filter(&cli.cmd));
     bridge::iox::init_iceoryx_logging();
+    radar_sim::kernels::KernelSet::from_env()
+        .map_err(|e| Failure::bad_input(anyhow::anyhow!(e)))?;
     match cli.cmd {
         Cmd::Simulate {
             plan,

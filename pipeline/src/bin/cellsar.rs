@@ -95,6 +95,9 @@ fn main() -> ExitCode {
         Command::Run(_) => cellsar_error::COMMAND_LOG_FILTER,
         _ => cellsar_error::SERVICE_LOG_FILTER,
     });
+    if let Err(e) = radar_sim::kernels::KernelSet::from_env() {
+        return Failure::bad_input(anyhow::anyhow!(e)).report();
+    }
     let stop = match pipeline::services::plan::stop_on_signals() {
         Ok(s) => s,
         Err(e) => return Failure::runtime(e).report(),

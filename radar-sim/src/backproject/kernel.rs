@@ -169,8 +169,7 @@ pub(super) fn tile_kernel_avx2(sh: &Shared<'_>, job: &TileJob, out: &mut [Comple
 pub(super) fn run_tile(sh: &Shared<'_>, job: &TileJob, out: &mut [Complex32]) {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if crate::kernels::avx2_fma() {
             // SAFETY: the CPU supports AVX2 and FMA (checked just above).
             unsafe { tile_kernel_avx2(sh, job, out) };
             return;

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use rustfft::{Fft, FftPlanner};
+use rustfft::Fft;
 
 use crate::cancel::Canceller;
 use crate::compress::RangeCompressor;
@@ -49,9 +49,9 @@ impl Processor {
         let canceller = Canceller::new(pc, &setup.num)?;
         let compressor =
             RangeCompressor::new(&setup.num, pc.range_filter, pc.range_weighting, pc.upsample);
-        let mut planner = FftPlanner::new();
-        let fft = planner.plan_fft_forward(setup.num.fft_size);
-        let ifft = planner.plan_fft_inverse(setup.num.fft_size);
+        let mut planner = crate::kernels::FftMaker::new();
+        let fft = planner.forward(setup.num.fft_size);
+        let ifft = planner.inverse(setup.num.fft_size);
         let link = setup.synthesizer(Vec::new())?;
         Ok(Self {
             setup,

@@ -58,13 +58,12 @@ pub(crate) fn path_sums(
     };
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if crate::kernels::avx512() {
             // SAFETY: the CPU supports AVX-512F (checked just above).
             unsafe { super::avx512::path_sums(&mut k) };
             return acc;
         }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if crate::kernels::avx2_fma() {
             // SAFETY: the CPU supports AVX2 and FMA (checked just above).
             unsafe { path_sums_avx2(&mut k) };
             return acc;
