@@ -25,8 +25,9 @@ dst=docs/example/reproduce
 rm -rf "$dst"
 mkdir -p "$dst"
 cp "$out"/reproduce/{REPORT.md,plans.json} "$dst/"
-for f in fig4a/dmin.svg fig4c/power.svg fig5/energy-30m.svg fig6/trajectory-proposed.svg \
-    fig7/trajectory-proposed.svg table3/table3.csv; do
+# every figure REPORT.md names on its `Figures:` line (tests/tests/docs.rs checks they are here)
+figures=$(sed -n 's/^Figures: //p' "$out/reproduce/REPORT.md" | tr -d '`,')
+for f in $figures; do
     mkdir -p "$dst/$(dirname "$f")"
     cp "$out/reproduce/$f" "$dst/$f"
 done

@@ -425,6 +425,28 @@ fn every_relative_link_and_anchor_resolves() {
     );
 }
 
+/// The committed `reproduce` report names its figures in code, not as links: each must be
+/// committed beside it (`docs/example/regenerate.sh` copies what that line names).
+#[test]
+fn the_reproduce_example_holds_every_figure_its_report_names() {
+    let dir = harness::root().join("docs/example/reproduce");
+    let report = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    let line = report
+        .lines()
+        .find_map(|l| l.strip_prefix("Figures: "))
+        .expect("REPORT.md has a `Figures:` line");
+    let files = repository_files();
+    let missing: Vec<&str> = line
+        .split(',')
+        .map(|f| f.trim().trim_matches('`'))
+        .filter(|f| !files.contains(&Path::new("docs/example/reproduce").join(f)))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "docs/example/reproduce/REPORT.md names figures that are not there: {missing:?}"
+    );
+}
+
 #[test]
 fn the_link_scanner_reads_what_github_renders() {
     assert_eq!(
