@@ -18,10 +18,31 @@ pub struct Planned {
     pub summary: String,
 }
 
-/// Plans `mission` with the planner's default (exact) scheme, warm-started from `init` if given.
-/// The error is the planner's message.
+/// Plans `mission` with the planner's defaults ([`planner::PlanOptions::default`]: the `exact`
+/// scheme for the general resolution cell as a best effort, the same plan as `cellsar-planner
+/// plan`, `cellsar run`, the Python package and a plan request on the wire), warm-started from
+/// `init` if given. The error is the planner's message.
 pub fn plan(mission: &Mission, init: Option<Trajectory>) -> Result<Planned, String> {
     plan_with(mission, init, &planner::PlanOptions::default())
+}
+
+/// The resolution requirement of the receding-horizon re-plans ([`replan`]): the paper's, the
+/// least-energy plan, not the library's default (the general cell as a best effort) that the
+/// initial plan uses. The best effort plans the least-energy plan first and then its own, about
+/// 13 times as long on the default mission (4.35 s against 0.32 s for the whole horizon, debug
+/// build: `cellsar-planner plan missions/default-30m.toml --resolution general|paper`), too
+/// long for a re-plan inside a co-simulation step. The output `plan_resolution` says which plan
+/// is flown.
+pub const REPLAN_RESOLUTION: planner::evaluate::ResolutionMode =
+    planner::evaluate::ResolutionMode::Paper;
+
+/// The value of the output `plan_resolution` for a plan made for `mode`: 1 for the general cell
+/// (the best effort of the initial plan), 0 for the paper's (every re-plan).
+pub fn resolution_code(mode: planner::evaluate::ResolutionMode) -> i32 {
+    match mode {
+        planner::evaluate::ResolutionMode::Paper => 0,
+        planner::evaluate::ResolutionMode::General => 1,
+    }
 }
 
 /// Where a re-plan starts.
@@ -82,7 +103,7 @@ pub fn plan_with(
     let result = planner::plan(mission, &options).map_err(|e| e.to_string())?;
     let solve_s = started.elapsed().as_secs_f64();
     let summary = format!(
-        "true energy {:.3} J, {} iterations, {:?}, {:.3} s",
+        "true energy {:.3} J, {} iterations, {}, {:.3} s",
         result.evaluation.energy_j, result.iterations, result.termination, solve_s
     );
     Ok(Planned {
@@ -218,8 +239,8 @@ pub fn moved_mission(
     Mission::new(mission.name(), mission.params().clone(), &spec).map_err(|e| e.to_string())
 }
 
-/// Moves landmark window `window` of `mission` to `moved_m` and re-plans the slots after
-/// `from_slot` (the slots up to `from_slot` are already flown or committed: the UAV is on its way
+/// Moves landmark window `window` of `mission` to `moved_m` and re-plans, for the paper's
+/// resolution ([`REPLAN_RESOLUTION`]), the slots after `from_slot` (the slots up to `from_slot` are already flown or committed: the UAV is on its way
 /// to q_{from_slot}). The sub-mission starts at q_{from_slot} with the remaining windows shifted
 /// by `from_slot` slots.
 ///
@@ -240,6 +261,7 @@ pub fn replan(
         max_iterations: options.max_iterations,
         tolerance: options.tolerance,
         coarse: options.coarse,
+        resolution: REPLAN_RESOLUTION,
         ..Default::default()
     };
     let started = Instant::now();

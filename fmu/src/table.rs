@@ -317,6 +317,8 @@ pub mod planner_vr {
     pub const REPLAN_COUNT: u32 = 316;
     /// `slots_out_of_view`.
     pub const SLOTS_OUT_OF_VIEW: u32 = 317;
+    /// `plan_resolution`.
+    pub const PLAN_RESOLUTION: u32 = 318;
     /// `plan_solve_time_s` (local).
     pub const SOLVE_TIME: u32 = 400;
     /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests, settable only in
@@ -443,7 +445,7 @@ pub const PLANNER_VARS: &[Var] = &[
         variability: Variability::Continuous,
         len: 1,
         unit: Some("m"),
-        description: "Landmark of the current window, x: the window of slot ceil(t/slot_s), whose landmark landmark_x_m reports at the same time (NaN: the plan's own). A finite value (with landmark_y_in_m finite too) that differs from the plan's landmark moves it and re-plans the rest of the horizon. Infinite values are refused.",
+        description: "Landmark of the current window, x: the window of slot ceil(t/slot_s), whose landmark landmark_x_m reports at the same time (NaN: the plan's own). A finite value (with landmark_y_in_m finite too) that differs from the plan's landmark moves it and re-plans the rest of the horizon, for the paper's resolution (output plan_resolution = 0). Infinite values are refused.",
     },
     Var {
         name: "landmark_y_in_m",
@@ -473,6 +475,7 @@ pub const PLANNER_VARS: &[Var] = &[
     output("worst_cell_width_m", pv::WORST_WIDTH, VarType::Real, Some("m"), "Worst width of the resolution cell at the sensed point (erratum 12 (docs/paper-notes.md))"),
     output("replan_count", pv::REPLAN_COUNT, VarType::Integer, None, "Receding-horizon re-plans so far"),
     output("slots_out_of_view", pv::SLOTS_OUT_OF_VIEW, VarType::Integer, None, "Slots of the plan (whole horizon, flown ones included) whose landmark is not within r_s of the sensing centre at the slot end, against the landmarks in effect (moved ones included); 0 for a plan that keeps every landmark in view"),
+    output("plan_resolution", pv::PLAN_RESOLUTION, VarType::Integer, None, "Resolution requirement of the plan flown now: 1 = general (the initial plan: the general cell as a best effort, the default of cellsar-planner plan, cellsar run and the Python package), 0 = paper (the least-energy plan: every re-plan after a landmark move, which plans for the paper's resolution to stay fast)"),
     Var {
         name: "plan_solve_time_s",
         vr: pv::SOLVE_TIME,

@@ -32,39 +32,13 @@ impl IqLimitArgs {
     }
 }
 
-/// The resolution requirement that `cellsar run`, `cellsar-radar-sim closed-loop` and
-/// `cellsar-planner plan` (with the `exact` scheme) plan with unless `--resolution` says
-/// otherwise: the general bistatic cell, as a best effort where the geometry does not allow it
-/// everywhere (docs/user-guide.md, "Resolution"). The library's `PlanOptions::default()`, the
-/// FMU and the Python package keep `paper` (the least-energy plan, the paper's criterion).
-pub const DEFAULT_RESOLUTION: planner::evaluate::ResolutionMode =
-    planner::evaluate::ResolutionMode::General;
-
-/// Refuses the best-effort flags (`--strict-resolution`, `--max-extra-energy-pct`) with
-/// `--resolution paper`, which would ignore them; the message names the flags.
-pub fn check_best_effort_flags(
-    resolution: planner::evaluate::ResolutionMode,
-    strict_resolution: bool,
-    max_extra_energy_pct: Option<f64>,
-) -> anyhow::Result<()> {
-    if resolution == planner::evaluate::ResolutionMode::General {
-        return Ok(());
-    }
-    let mut given = Vec::new();
-    if strict_resolution {
-        given.push("--strict-resolution");
-    }
-    if max_extra_energy_pct.is_some() {
-        given.push("--max-extra-energy-pct");
-    }
-    if given.is_empty() {
-        Ok(())
-    } else {
-        Err(anyhow::anyhow!(
-            "{} applies to --resolution general only, not to {resolution}",
-            given.join(" and ")
-        ))
-    }
+/// Refuses best-effort options that the plan would ignore (the library's rule,
+/// [`planner::PlanOptions::check_best_effort`]), naming them by their command-line flags:
+/// "--strict-resolution applies to --resolution general only, not to paper".
+pub fn check_best_effort_flags(options: &planner::PlanOptions) -> anyhow::Result<()> {
+    options
+        .check_best_effort()
+        .map_err(|e| anyhow::anyhow!(e.describe(planner::OptionName::flag)))
 }
 
 /// The clap value parser of a string-valued enum of the maths crates (which do not depend on
@@ -127,19 +101,23 @@ mod tests {
     #[test]
     fn best_effort_flags_are_refused_with_the_paper_resolution() {
         use planner::evaluate::ResolutionMode::{General, Paper};
-        assert!(check_best_effort_flags(General, true, None).is_ok());
-        assert!(check_best_effort_flags(General, false, Some(5.0)).is_ok());
-        assert!(check_best_effort_flags(Paper, false, None).is_ok());
-        let e = check_best_effort_flags(Paper, true, Some(5.0))
-            .unwrap_err()
-            .to_string();
+        let check = |resolution, strict_resolution, max_extra_energy_pct| {
+            check_best_effort_flags(&planner::PlanOptions {
+                resolution,
+                strict_resolution,
+                max_extra_energy_pct,
+                ..Default::default()
+            })
+        };
+        assert!(check(General, true, None).is_ok());
+        assert!(check(General, false, Some(5.0)).is_ok());
+        assert!(check(Paper, false, None).is_ok());
+        let e = check(Paper, true, Some(5.0)).unwrap_err().to_string();
         assert!(
             e.contains("--strict-resolution and --max-extra-energy-pct") && e.contains("paper"),
             "{e}"
         );
-        let e = check_best_effort_flags(Paper, false, Some(5.0))
-            .unwrap_err()
-            .to_string();
+        let e = check(Paper, false, Some(5.0)).unwrap_err().to_string();
         assert!(e.starts_with("--max-extra-energy-pct applies"), "{e}");
     }
 }

@@ -20,7 +20,9 @@ use radar_sim::RadarError;
 pub fn plan_failure(e: PlanError) -> Failure {
     let kind = match &e {
         PlanError::Infeasible(_) => FailureKind::Infeasible,
-        PlanError::InvalidInit(_) | PlanError::InvalidOption { .. } => FailureKind::BadInput,
+        PlanError::InvalidInit(_)
+        | PlanError::InvalidOption { .. }
+        | PlanError::OptionConflict(_) => FailureKind::BadInput,
         PlanError::Solver { .. } | PlanError::TimeLimit { .. } => FailureKind::Runtime,
         _ => FailureKind::Runtime,
     };

@@ -24,7 +24,10 @@ mod result;
 pub use best_effort::{best_effort_from, BestEffortBasis};
 pub use error::PlanError;
 pub use observer::{IterationRecord, NoObserver, Observer};
-pub use options::{PlanOptions, Scheme, DEFAULT_RESOLUTION_WEIGHT_J_PER_M};
+pub use options::{
+    OptionConflict, OptionName, PlanOptions, Scheme, DEFAULT_RESOLUTION,
+    DEFAULT_RESOLUTION_WEIGHT_J_PER_M,
+};
 pub use result::{BestEffort, PlanResult, TerminationReason};
 
 use coarse::{coarse_start, coarse_start_from, LevelStart};

@@ -32,8 +32,9 @@ pub mod tradeoff;
 pub mod trajectory;
 
 pub use driver::{
-    plan, plan_with_observer, plan_with_stop, IterationRecord, NoObserver, Observer, PlanError,
-    PlanOptions, PlanResult, Scheme, TerminationReason,
+    plan, plan_with_observer, plan_with_stop, IterationRecord, NoObserver, Observer,
+    OptionConflict, OptionName, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason,
+    DEFAULT_RESOLUTION,
 };
 pub use evaluate::{evaluate, Evaluation, SlotEval, Violations};
 pub use landmarks::{LandmarkWindow, LandmarksSpec, Preset, Schedule};

@@ -365,6 +365,20 @@ mod tests {
         assert!((p.centre_offset_m() - 1000.0).abs() < 1e-9);
         // r_s from W_a = 0.5 m is the 200 m default.
         assert!((p.sensing_radius_from_antenna_m(0.5) - 200.0).abs() < 1e-9);
+        // r_s is a parameter of its own (paper-notes erratum 5): another altitude keeps it, the
+        // antenna's formula gives the value a mission sets for it, and an explicit one wins
+        let mut low = p.clone();
+        low.apply(&ParamsOverride {
+            altitude_m: Some(800.0),
+            ..Default::default()
+        });
+        assert_eq!(low.sensing_radius_m, 200.0);
+        assert!((low.sensing_radius_from_antenna_m(0.5) - 160.0).abs() < 1e-9);
+        low.apply(&ParamsOverride {
+            sensing_radius_m: Some(160.0),
+            ..Default::default()
+        });
+        assert_eq!((low.altitude_m, low.sensing_radius_m), (800.0, 160.0));
         // c/(B d_min) − sin η < 0 with the defaults: the range constraint is vacuous.
         assert!(p.range_sin_threshold() < 0.0);
         assert_eq!(p.range_keepout_m(), None);

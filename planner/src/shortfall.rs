@@ -67,11 +67,16 @@ pub struct ResolutionShortfall {
     pub unresolved_windows: usize,
     /// The first unresolved landmark slot (1-based), if any.
     pub first_unresolved_slot: Option<usize>,
-    /// Σ over landmark slots of (worst width − d_min)⁺, m (finite widths only; blind slots are
-    /// counted in `blind_slots`).
+    /// Σ over landmark slots of (worst width − d_min)⁺, m (finite widths only; the slots of
+    /// infinite width are counted in `infinite_width_slots`).
     pub total_excess_width_m: f64,
-    /// Landmark slots with an infinite or undefined worst width (exactly blind).
-    pub blind_slots: usize,
+    /// Landmark slots whose cell is unbounded: an infinite or undefined worst width (the range
+    /// gradient along the track exactly, ψ = 0, or vanishing). A subset of `unresolved_slots`,
+    /// and not the same count as `summary.json`'s `slots_blind`, the landmark slots with
+    /// ψ < 5° (whose worst width is finite, only large). Read from `blind_slots` in summaries
+    /// written before it was renamed.
+    #[serde(alias = "blind_slots")]
+    pub infinite_width_slots: usize,
     /// Σ over landmark slots of [`slot_deficit_m`], m.
     pub total_deficit_m: f64,
     /// Per landmark window, in landmark order (windows without slots are left out).
@@ -109,7 +114,7 @@ impl ResolutionShortfall {
                 .map(|s| s.worst_width_m - d_min)
                 .filter(|x| x.is_finite() && *x > 0.0)
                 .fold(0.0, |a, b| a + b),
-            blind_slots: landmark_slots()
+            infinite_width_slots: landmark_slots()
                 .filter(|s| !s.worst_width_m.is_finite())
                 .count(),
             total_deficit_m: total_deficit_m(mission, ev),

@@ -21,7 +21,13 @@ pub struct Summary {
     pub slots: usize,
     /// True propulsion energy on the exact geometry, J.
     pub energy_j: f64,
-    /// The optimiser's own final objective for energy schemes (Σ P̃_t δ), J; null for distance schemes.
+    /// The optimiser's own final objective for energy schemes, J; null for distance schemes.
+    /// For a plan that is not a best effort it is the energy of the model the last cone program
+    /// solved (Σ P̃_t δ, the surrogate of P(V), near `energy_j`). For a best-effort plan
+    /// (`best_effort` set) it adds the penalty on the resolution deficit,
+    /// `PlanOptions::resolution_weight_j_per_m` (100 J/m by default) × the cell slack of that
+    /// program (near `resolution_shortfall.total_deficit_m`), so it exceeds `energy_j` by
+    /// about that penalty: it is the quantity minimised, not an energy.
     pub objective_j: Option<f64>,
     /// The optimiser's own final objective for distance schemes, m; null for energy schemes.
     pub objective_m: Option<f64>,
@@ -61,7 +67,9 @@ pub struct Summary {
     pub slots_out_of_view: usize,
     /// Landmark slots whose general resolution cell is wider than d_min (erratum 12 (docs/paper-notes.md)).
     pub slots_unresolved_general: usize,
-    /// Landmark slots in blind geometry (ψ < 5°).
+    /// Landmark slots in blind geometry: ψ < 5° ([`crate::evaluate::BLIND_PSI_RAD`]), resolved
+    /// or not (the cell's cross-track extent is then more than 11 times its range width). Not
+    /// `resolution_shortfall.infinite_width_slots`, the slots whose cell is unbounded.
     pub slots_blind: usize,
     /// Largest worst width of the resolution cell over landmark slots, m.
     pub max_worst_width_m: f64,
@@ -309,5 +317,26 @@ mod tests {
         let start =
             "-12.5,3,nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,nan,nan";
         assert_eq!(text, format!("{TRAJECTORY_COLUMNS}\n0,{start}\n"));
+    }
+
+    #[test]
+    fn termination_prints_with_its_summary_name() {
+        use crate::TerminationReason as T;
+        for t in [
+            T::Converged,
+            T::MaxIterations,
+            T::SubproblemFailed("numerical error".into()),
+            T::NoProgress,
+            T::TimeLimit,
+        ] {
+            let json = serde_json::to_value(&t).unwrap();
+            assert_eq!(json["reason"], t.name());
+            assert!(t.to_string().starts_with(t.name()), "{t}");
+        }
+        assert_eq!(T::NoProgress.to_string(), "no_progress");
+        assert_eq!(
+            T::SubproblemFailed("numerical error".into()).to_string(),
+            "subproblem_failed (numerical error)"
+        );
     }
 }

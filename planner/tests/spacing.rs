@@ -6,11 +6,19 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use planner::evaluate::ResolutionMode;
 use planner::{plan, Mission, PlanOptions, Preset};
 
 fn energy_j(spacing_m: f64) -> f64 {
     let m = Mission::preset(Preset::Default, spacing_m).unwrap();
-    let r = plan(&m, &PlanOptions::default()).unwrap();
+    let r = plan(
+        &m,
+        &PlanOptions {
+            resolution: ResolutionMode::Paper,
+            ..PlanOptions::default()
+        },
+    )
+    .unwrap();
     assert!(r.evaluation.is_feasible(), "{spacing_m} m: infeasible");
     r.evaluation.energy_j
 }

@@ -48,7 +48,9 @@ __version__ = "0.1.0"
 def plan(
     mission: Mission,
     scheme: str = "exact",
-    resolution: str = "paper",
+    resolution: Optional[str] = None,
+    strict_resolution: bool = False,
+    max_extra_energy_pct: Optional[float] = None,
     init: Optional[Union[Plan, str, "os.PathLike[str]", tuple]] = None,
     max_iterations: Optional[int] = None,
     time_limit_s: Optional[float] = None,
@@ -61,9 +63,17 @@ def plan(
         mission: the mission.
         scheme: ``"exact"`` (the default: SCA on the exact geometry, every iterate feasible),
             ``"paper"`` (Algorithm 1 as printed), ``"baseline"`` or ``"baseline-exact"``.
-        resolution: ``"paper"`` (the default: the least-energy plan, as ``cellsar-planner plan
-            --resolution paper``) or ``"general"`` (the 2-D resolution cell, as a best effort:
-            the default of the command-line tools).
+        resolution: ``"general"`` (the 2-D resolution cell, as a best effort where the
+            geometry does not allow it in every landmark slot) or ``"paper"`` (the paper's
+            criterion: the least-energy plan). ``None`` (the default) takes the scheme's
+            default, the same as ``cellsar-planner plan``, ``cellsar run`` and a plan request
+            on the wire: ``"general"`` for ``"exact"``, ``"paper"`` for the comparison schemes.
+            :attr:`Plan.resolution` names the one planned for.
+        strict_resolution: under ``"general"`` with ``"exact"``: raise
+            :class:`InfeasibleMission` where the cell cannot be held within d_min in every
+            landmark slot, instead of planning the best effort.
+        max_extra_energy_pct: best effort only: the best-resolved plan within this many
+            percent more energy than the least-energy (``"paper"``) plan.
         init: a start: a :class:`Plan`, a trajectory CSV path (as ``cellsar-planner plan
             --init``) or a pair ``(x_m, y_m)`` of arrays (``slots`` or ``slots + 1`` points).
         max_iterations: largest number of SCA/BCD iterations (200).
@@ -76,7 +86,9 @@ def plan(
     Raises:
         InfeasibleMission: the mission cannot be flown (``slot``, ``t_s``, ``reason``).
         PlanError: the solver failed, or the time limit passed before a feasible start.
-        ValueError: a bad option or start.
+        ValueError: a bad option or start; ``strict_resolution`` or ``max_extra_energy_pct``
+            with the ``"paper"`` resolution or a comparison scheme, which would ignore them
+            (the message is the library's, as the CLI's with its flags' names).
         KeyboardInterrupt: Ctrl-C while planning.
 
     The planner runs with the GIL released, so other Python threads run meanwhile.
@@ -88,6 +100,8 @@ def plan(
         {
             "scheme": scheme,
             "resolution": resolution,
+            "strict_resolution": strict_resolution,
+            "max_extra_energy_pct": max_extra_energy_pct,
             "init": init,
             "max_iterations": max_iterations,
             "time_limit_s": time_limit_s,

@@ -52,7 +52,9 @@ pub fn plan_error(py: Python<'_>, e: &planner::PlanError) -> PyErr {
                 Err(e) => e,
             }
         }
-        planner::PlanError::InvalidInit(_) | planner::PlanError::InvalidOption { .. } => {
+        planner::PlanError::InvalidInit(_)
+        | planner::PlanError::InvalidOption { .. }
+        | planner::PlanError::OptionConflict(_) => {
             PyValueError::new_err(message)
         }
         _ => PlanError::new_err(message),

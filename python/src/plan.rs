@@ -80,6 +80,14 @@ impl PyPlan {
         self.result.scheme.name()
     }
 
+    /// The resolution requirement the plan was made for: `"general"` (the general cell, a best
+    /// effort unless `strict_resolution`) or `"paper"` (the least-energy plan)
+    /// (`summary["resolution"]`).
+    #[getter]
+    fn resolution(&self) -> &'static str {
+        self.result.resolution.name()
+    }
+
     /// `summary.json` as a dict (the same keys, `init_replaced` included when a given start
     /// was replaced).
     #[getter]
@@ -258,7 +266,9 @@ fn init_trajectory(mission: &planner::Mission, init: &Bound<'_, PyAny>) -> PyRes
 #[pyo3(from_item_all)]
 pub struct PlanArgs<'py> {
     scheme: String,
-    resolution: String,
+    resolution: Option<String>,
+    strict_resolution: Option<bool>,
+    max_extra_energy_pct: Option<f64>,
     init: Option<Bound<'py, PyAny>>,
     max_iterations: Option<usize>,
     time_limit_s: Option<f64>,
@@ -270,15 +280,19 @@ pub struct PlanArgs<'py> {
 #[pyfunction]
 pub fn plan(py: Python<'_>, mission: PyRef<'_, PyMission>, args: PlanArgs<'_>) -> PyResult<PyPlan> {
     let m = mission.clone();
-    let defaults = PlanOptions::default();
+    let scheme = parse_named(&args.scheme, &Scheme::ALL, Scheme::name, "scheme")?;
+    // the library's defaults for the scheme, as the CLI and a plan request on the wire take them
+    let defaults = PlanOptions::for_scheme(scheme);
     let options = PlanOptions {
-        scheme: parse_named(&args.scheme, &Scheme::ALL, Scheme::name, "scheme")?,
-        resolution: parse_named(
-            &args.resolution,
-            &ResolutionMode::ALL,
-            ResolutionMode::name,
-            "resolution",
-        )?,
+        scheme,
+        resolution: match &args.resolution {
+            Some(name) => {
+                parse_named(name, &ResolutionMode::ALL, ResolutionMode::name, "resolution")?
+            }
+            None => defaults.resolution,
+        },
+        strict_resolution: args.strict_resolution.unwrap_or(defaults.strict_resolution),
+        max_extra_energy_pct: args.max_extra_energy_pct,
         init: args
             .init
             .as_ref()
@@ -290,6 +304,10 @@ pub fn plan(py: Python<'_>, mission: PyRef<'_, PyMission>, args: PlanArgs<'_>) -
         time_limit_s: args.time_limit_s,
         ..defaults
     };
+    // refused before the mission is planned, with the library's message (a ValueError)
+    options
+        .validate()
+        .map_err(|e| crate::errors::plan_error(py, &e))?;
     let progress = args.progress.filter(|p| !p.is_none(py));
     let result = plan_detached(py, &m.inner, &options, progress)?;
     Ok(PyPlan {

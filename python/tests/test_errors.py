@@ -74,6 +74,15 @@ def test_bad_options():
         cellsar.plan(mission, init=([0.0, 1.0], [0.0, 1.0]))
     with pytest.raises(ValueError, match="init"):
         cellsar.plan(mission, init=42)
+    # the best-effort options where the plan would ignore them: the library's rule and message
+    with pytest.raises(
+        ValueError, match="^strict_resolution applies to resolution general only, not to paper$"
+    ):
+        cellsar.plan(mission, resolution="paper", strict_resolution=True)
+    with pytest.raises(ValueError, match="max_extra_energy_pct applies to resolution general only"):
+        cellsar.plan(mission, scheme="baseline", max_extra_energy_pct=5.0)
+    with pytest.raises(ValueError, match="applies to scheme exact only, not to baseline-exact"):
+        cellsar.plan(mission, scheme="baseline-exact", resolution="general", strict_resolution=True)
 
 
 def test_progress_exception_stops_the_plan():

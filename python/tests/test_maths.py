@@ -63,7 +63,7 @@ def test_evaluate_straight_line():
 
 def test_evaluate_agrees_with_a_plan():
     mission = cellsar.Mission.default(30.0)
-    plan = cellsar.plan(mission)
+    plan = cellsar.plan(mission, resolution="paper")
     ev = cellsar.evaluate(mission, plan.x_m, plan.y_m)
     assert ev["energy_j"] == plan.summary["energy_j"]
     assert ev["feasible"]

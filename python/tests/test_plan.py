@@ -26,10 +26,10 @@ def short_mission_file(directory):
 )
 def test_plan_equals_cli(cli_plan, tmp_path, mission_file, scheme):
     path = short_mission_file(tmp_path) if mission_file == "short" else MISSIONS / mission_file
-    # the package's default is the least-energy plan; the CLI's, for `exact`, the best effort
+    # the least-energy plan asked for through both (their common default: test_defaults_agree)
     out = cli_plan(path, "--scheme", scheme, "--resolution", "paper")
     mission = cellsar.Mission.from_file(path)
-    plan = cellsar.plan(mission, scheme=scheme)
+    plan = cellsar.plan(mission, scheme=scheme, resolution="paper")
 
     cli = read_summary(out)
     ours = plan.summary
@@ -56,10 +56,26 @@ def test_plan_equals_cli(cli_plan, tmp_path, mission_file, scheme):
     assert (tmp_path / "trajectory.csv").read_bytes() == (out / "trajectory.csv").read_bytes()
 
 
+@pytest.mark.parametrize("scheme", ["exact", "baseline-exact"])
+def test_defaults_agree_with_the_cli(cli_plan, tmp_path, scheme):
+    # one request, one plan: the package, like the CLI, plans `exact` for the general cell as a
+    # best effort and the comparison schemes for the paper's resolution unless told otherwise
+    path = short_mission_file(tmp_path)
+    cli = read_summary(cli_plan(path, "--scheme", scheme))
+    plan = cellsar.plan(cellsar.Mission.from_file(path), scheme=scheme)
+    expected = "general" if scheme == "exact" else "paper"
+    assert plan.resolution == plan.summary["resolution"] == cli["resolution"] == expected
+    assert plan.summary["energy_j"] == pytest.approx(cli["energy_j"], rel=1e-9)
+    assert (plan.summary["best_effort"] is None) == (cli["best_effort"] is None)
+    ours, theirs = plan.summary["resolution_shortfall"], cli["resolution_shortfall"]
+    for key in ["unresolved_slots", "unresolved_windows", "first_unresolved_slot"]:
+        assert ours[key] == theirs[key], key
+
+
 def test_plan_columns_and_attributes():
     mission = cellsar.Mission.default(30.0)
-    plan = cellsar.plan(mission)
-    assert plan.feasible and plan.scheme == "exact"
+    plan = cellsar.plan(mission, resolution="paper")
+    assert plan.feasible and plan.scheme == "exact" and plan.resolution == "paper"
     for name in ["t_s", "x_m", "y_m", "speed_mps", "heading_rad", "xc_m", "yc_m", "power_w", "energy_j"]:
         column = getattr(plan, name)
         assert column.dtype == np.float64 and column.shape == (mission.slots + 1,)
@@ -76,19 +92,19 @@ def test_plan_columns_and_attributes():
 
 def test_plan_from_a_start_and_with_progress():
     mission = cellsar.Mission.default(30.0)
-    first = cellsar.plan(mission)
+    first = cellsar.plan(mission, resolution="paper")
     seen = []
-    again = cellsar.plan(mission, init=first, progress=seen.append)
+    again = cellsar.plan(mission, init=first, progress=seen.append, resolution="paper")
     assert again.feasible
     assert again.total_energy_j <= first.total_energy_j * (1 + 1e-6)
     assert {"phase": "solve"} in seen
-    again_xy = cellsar.plan(mission, init=(first.x_m, first.y_m), max_iterations=2)
+    again_xy = cellsar.plan(mission, init=(first.x_m, first.y_m), max_iterations=2, resolution="paper")
     assert again_xy.summary["iterations"] <= 2
 
 
 def test_to_pandas():
     pandas = pytest.importorskip("pandas")
-    plan = cellsar.plan(cellsar.Mission.default(30.0))
+    plan = cellsar.plan(cellsar.Mission.default(30.0), resolution="paper")
     frame = plan.to_pandas()
     assert isinstance(frame, pandas.DataFrame)
     assert list(frame.columns) == plan.columns

@@ -13,7 +13,7 @@ SMALL_SCENE = ROOT / "tests" / "data" / "small-scene.toml"
 @pytest.fixture(scope="module")
 def short_run():
     mission = cellsar.Mission.default(30.0, horizon_s=20.0)
-    plan = cellsar.plan(mission)
+    plan = cellsar.plan(mission, resolution="paper")
     recording = cellsar.radar.simulate(mission, plan, SMALL_SCENE)
     return mission, plan, recording, cellsar.radar.process(recording)
 

@@ -16,7 +16,7 @@ def long_mission():
 def test_plan_in_a_thread_while_the_main_thread_runs():
     mission = cellsar.Mission.default(30.0)
     result = {}
-    worker = threading.Thread(target=lambda: result.update(plan=cellsar.plan(mission)))
+    worker = threading.Thread(target=lambda: result.update(plan=cellsar.plan(mission, resolution="paper")))
     ticks = 0
     worker.start()
     while worker.is_alive():
@@ -46,11 +46,11 @@ def test_plans_from_several_threads_run_side_by_side_and_match():
     # planning threads are kept between plans; several callers at once each get their own,
     # and every plan equals the one planned alone
     missions = [cellsar.Mission.default(30.0), cellsar.Mission.default(30.0, uav_mass_kg=3.0)]
-    alone = [cellsar.plan(m).summary["energy_j"] for m in missions]
+    alone = [cellsar.plan(m, resolution="paper").summary["energy_j"] for m in missions]
     results = [None] * (2 * len(missions))
 
     def run(k):
-        results[k] = cellsar.plan(missions[k % len(missions)]).summary["energy_j"]
+        results[k] = cellsar.plan(missions[k % len(missions)], resolution="paper").summary["energy_j"]
 
     threads = [threading.Thread(target=run, args=(k,)) for k in range(len(results))]
     for t in threads:
@@ -61,4 +61,4 @@ def test_plans_from_several_threads_run_side_by_side_and_match():
     for k, energy_j in enumerate(results):
         assert energy_j == pytest.approx(alone[k % len(missions)], rel=1e-12)
     # and the kept threads serve the next plan as before
-    assert cellsar.plan(missions[0]).summary["energy_j"] == pytest.approx(alone[0], rel=1e-12)
+    assert cellsar.plan(missions[0], resolution="paper").summary["energy_j"] == pytest.approx(alone[0], rel=1e-12)

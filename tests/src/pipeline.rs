@@ -53,7 +53,7 @@ pub fn reference(horizon_s: f64) -> PathBuf {
 pub fn closed_loop(mission: &planner::Mission, scene: &Path, out: &Path) {
     let scene = radar_sim::config::SceneFile::from_path(scene).unwrap();
     let options = planner::PlanOptions {
-        resolution: pipeline::args::DEFAULT_RESOLUTION,
+        resolution: planner::DEFAULT_RESOLUTION,
         ..planner::PlanOptions::default()
     };
     let result = planner::plan(mission, &options).unwrap();

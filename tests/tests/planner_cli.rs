@@ -79,6 +79,32 @@ fn plan_writes_the_plan_directory() {
     // the default of `exact` is the general resolution (the best effort, with its shortfall)
     assert_eq!(summary["resolution"], "general");
     assert!(summary["resolution_shortfall"].is_object(), "{summary}");
+    // the library's default plans the same (one plan for one request, whichever door)
+    let m = planner::Mission::from_path(&repo().join("missions/explicit.toml")).unwrap();
+    let lib = planner::plan(&m, &planner::PlanOptions::default()).unwrap();
+    let lib_j = lib.evaluation.energy_j;
+    let cli_j = summary["energy_j"].as_f64().unwrap();
+    assert!((lib_j - cli_j).abs() <= 1e-9 * cli_j, "{lib_j} vs {cli_j}");
+    // stdout names the termination as summary.json does, and says what the best effort's own
+    // objective adds to the energy
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let reason = summary["termination"]["reason"].as_str().unwrap();
+    assert!(
+        stdout.contains(&format!("iterations ({reason})")),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("J (energy model + 100 J/m × resolution deficit)"),
+        "{stdout}"
+    );
+    // blind (ψ < 5°) and unbounded cells are counted under names that say which
+    let shortfall = &summary["resolution_shortfall"];
+    assert!(
+        shortfall.get("infinite_width_slots").is_some(),
+        "{shortfall}"
+    );
+    assert!(shortfall.get("blind_slots").is_none(), "{shortfall}");
+    assert!(summary["slots_blind"].is_u64(), "{summary}");
     // the plan directory reads back, and its trajectory re-plans as --init
     let (m, tr) = pipeline::report::read_plan_dir(&out).unwrap();
     assert_eq!(tr.slots(), m.slots());
@@ -191,6 +217,23 @@ fn best_effort_flags_with_the_paper_resolution_exit_2_and_name_the_flag() {
         );
         assert!(!out.join("summary.json").exists());
     }
+    // the general resolution asked for with a comparison scheme, which ignores the best effort:
+    // the library's rule (planner::PlanOptions::check_best_effort), in the flags' names
+    let o = bin()
+        .arg("plan")
+        .arg(repo().join("missions/explicit.toml"))
+        .args(["--scheme", "baseline-exact", "--resolution", "general"])
+        .args(["--strict-resolution", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--strict-resolution applies to --scheme exact only, not to baseline-exact"),
+        "{err}"
+    );
+    assert!(!out.join("summary.json").exists());
 }
 
 #[test]

@@ -145,7 +145,7 @@ impl Client {
         let req = PlanRequest {
             mission: file,
             options: pipeline::protocol::PlanRequestOptions {
-                resolution: Some(pipeline::args::DEFAULT_RESOLUTION),
+                resolution: Some(planner::DEFAULT_RESOLUTION),
                 ..Default::default()
             },
         };
@@ -288,7 +288,7 @@ fn late_echo_and_a_json_client() {
     let m = radar_sim::run::shorten(&m, H).unwrap();
     // the options of the Rust client's request below, so that both ask for the same plan
     let body = serde_json::json!({"mission": m.to_file_struct(),
-        "options": {"resolution": pipeline::args::DEFAULT_RESOLUTION}});
+        "options": {"resolution": planner::DEFAULT_RESOLUTION}});
     let req = serde_json::json!({"kind": 0x0101, "schema_version": 1, "mission_id": "0000000000000000",
         "seq": 0, "time_unix_ns": 0, "body": body});
     let replies = c
@@ -309,6 +309,30 @@ fn late_echo_and_a_json_client() {
     let v: serde_json::Value = serde_json::from_slice(&sample.payload().to_bytes()).unwrap();
     assert_eq!(v["kind_name"], "planner.plan");
     let id = v["body"]["mission_id"].as_str().unwrap().to_string();
+    // best-effort options that the plan would ignore are refused, with the library's message
+    // (planner::PlanOptions::check_best_effort) naming the request's field
+    let bad = serde_json::json!({"kind": 0x0101, "schema_version": 1,
+        "mission_id": "0000000000000000", "seq": 1, "time_unix_ns": 0,
+        "body": {"mission": m.to_file_struct(),
+                 "options": {"resolution": "paper", "strict_resolution": true}}});
+    let replies = c
+        .node
+        .session()
+        .get(PLAN_KEY)
+        .payload(serde_json::to_vec(&bad).unwrap())
+        .encoding(WireFormat::Json.encoding::<PlanRequest>())
+        .timeout(Duration::from_secs(60))
+        .wait()
+        .unwrap();
+    let refusal = replies.recv().unwrap();
+    let refusal = refusal.result().map(|_| ()).unwrap_err();
+    let r: serde_json::Value = serde_json::from_slice(&refusal.payload().to_bytes()).unwrap();
+    assert_eq!(r["body"]["kind"], "bad_request", "{r}");
+    assert_eq!(
+        r["body"]["message"],
+        "options.strict_resolution applies to resolution general only, not to paper",
+        "{r}"
+    );
     // the same plan in binary form for this (Rust) client
     let plan = c.plan();
     assert_eq!(plan.mission_id.to_string(), id);

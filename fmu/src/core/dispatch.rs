@@ -72,6 +72,13 @@ impl Core {
                 .run
                 .as_ref()
                 .map_or(0, |r| count(r.eval.slots_out_of_view))),
+            // the initial plan is the library's default; a re-plan is for the paper's resolution
+            (Core::Planner(c), pv::PLAN_RESOLUTION) => Ok(crate::planning::resolution_code(
+                match c.run.as_ref().map_or(0, |r| r.replans) {
+                    0 => planner::DEFAULT_RESOLUTION,
+                    _ => crate::planning::REPLAN_RESOLUTION,
+                },
+            )),
             _ => Err(unknown(var)),
         }
     }

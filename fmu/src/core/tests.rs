@@ -254,10 +254,15 @@ fn input_at_a_window_boundary_moves_the_window_that_ends_there() {
     // window 0 has no slot left: nothing re-planned, and the step says so
     assert!(report.warning.unwrap().contains("no slot left"));
     assert_eq!(core.get_int(var(PLANNER_VARS, "replan_count")).unwrap(), 0);
+    // the initial plan is the library's default (the general cell as a best effort)
+    let resolution = var(PLANNER_VARS, "plan_resolution");
+    assert_eq!(core.get_int(resolution).unwrap(), 1);
     // in the middle of window 1 the same input moves window 1 and re-plans
     core.step(10.5, 0.5, &Collect::default()).unwrap();
     assert_eq!(landmarks(&core), vec![[40.0, 0.0], [40.0, 0.0]]);
     assert_eq!(core.get_int(var(PLANNER_VARS, "replan_count")).unwrap(), 1);
+    // a re-plan is for the paper's resolution (the least-energy plan), and says so
+    assert_eq!(core.get_int(resolution).unwrap(), 0);
     assert_eq!(current_window(&short_mission(), 10.0), Some(0));
 }
 

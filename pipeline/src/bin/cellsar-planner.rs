@@ -236,16 +236,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 ),
                 None => None,
             };
-            let resolution = resolution.unwrap_or(match scheme {
-                Scheme::Exact => pipeline::args::DEFAULT_RESOLUTION,
-                Scheme::Paper | Scheme::Baseline | Scheme::BaselineExact => ResolutionMode::Paper,
-            });
-            pipeline::args::check_best_effort_flags(
-                resolution,
-                best_effort.strict_resolution,
-                best_effort.max_extra_energy_pct,
-            )
-            .map_err(bad)?;
+            let resolution = resolution.unwrap_or(scheme.default_resolution());
             let options = PlanOptions {
                 scheme,
                 max_iterations,
@@ -265,6 +256,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 max_extra_energy_pct: best_effort.max_extra_energy_pct,
                 ..PlanOptions::default()
             };
+            pipeline::args::check_best_effort_flags(&options).map_err(bad)?;
             let pb = spinner();
             let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));
             pb.finish_and_clear();
@@ -333,16 +325,13 @@ fn run(cli: Cli) -> Result<(), Failure> {
 fn print_plan(m: &Mission, result: &PlanResult, files: &[PathBuf]) {
     let s = Summary::new(m, result);
     out!(
-        "{}: scheme {}, true energy {:.1} J ({:+.2}% vs floor {:.1} J), own objective {}, {} iterations ({:?}), {:.3} s",
+        "{}: scheme {}, true energy {:.1} J ({:+.2}% vs floor {:.1} J), own objective {}, {} iterations ({}), {:.3} s",
         m.name(),
         s.scheme,
         s.energy_j,
         100.0 * s.energy_over_floor,
         s.floor_energy_j,
-        s.objective_j
-            .map(|v| format!("{v:.1} J"))
-            .or(s.objective_m.map(|v| format!("{v:.1} m")))
-            .unwrap_or_default(),
+        own_objective(&s),
         s.iterations,
         s.termination,
         s.solve_seconds
@@ -366,6 +355,21 @@ fn print_plan(m: &Mission, result: &PlanResult, files: &[PathBuf]) {
     }
     for f in files {
         out!("wrote {}", f.display());
+    }
+}
+
+/// The optimiser's own objective for the summary line: in m for a distance scheme; in J for an
+/// energy scheme, saying for a best effort that it includes the resolution penalty (which is
+/// why it exceeds the true energy; `summary.json`'s `objective_j`).
+fn own_objective(s: &Summary) -> String {
+    match (s.objective_j, s.objective_m) {
+        (Some(j), _) if s.best_effort.is_some() => format!(
+            "{j:.1} J (energy model + {} J/m × resolution deficit)",
+            planner::driver::DEFAULT_RESOLUTION_WEIGHT_J_PER_M
+        ),
+        (Some(j), _) => format!("{j:.1} J"),
+        (None, Some(m)) => format!("{m:.1} m"),
+        (None, None) => String::new(),
     }
 }
 

@@ -89,7 +89,7 @@ enum Cmd {
         /// the true bistatic cell ≤ d_min in every landmark slot, or the best effort where the
         /// geometry does not allow it) or `paper` (the paper's δ_r, δ_a ≤ d_min, the
         /// least-energy plan); see the top-level docs/user-guide.md, "Resolution".
-        #[arg(long, default_value_t = pipeline::args::DEFAULT_RESOLUTION, value_parser = pipeline::args::enum_parser::<planner::evaluate::ResolutionMode>())]
+        #[arg(long, default_value_t = planner::DEFAULT_RESOLUTION, value_parser = pipeline::args::enum_parser::<planner::evaluate::ResolutionMode>())]
         resolution: planner::evaluate::ResolutionMode,
         /// Under `general`: refuse a mission whose cell cannot be held within d_min in every
         /// landmark slot (exit 3) instead of planning the best effort.
@@ -102,8 +102,9 @@ enum Cmd {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
-        /// Bandwidths, MHz (comma-separated).
-        #[arg(long, value_delimiter = ',', default_values_t = [50.0, 100.0, 150.0])]
+        /// Bandwidths, MHz (comma-separated). At 30 MHz the range and along-track widths are
+        /// comparable: there the cell's longest chord is furthest from its parallelogram's sides.
+        #[arg(long, value_delimiter = ',', default_values_t = [30.0, 50.0, 100.0, 150.0])]
         bandwidths_mhz: Vec<f64>,
     },
     /// Service: synthesise the apertures processors ask for along each plan heard on Zenoh and
@@ -350,13 +351,12 @@ fn run_cli() -> Result<()> {
             resolution,
             strict_resolution,
         } => {
-            pipeline::args::check_best_effort_flags(resolution, strict_resolution, None)
-                .map_err(bad)?;
             let plan_options = planner::PlanOptions {
                 resolution,
                 strict_resolution,
                 ..Default::default()
             };
+            pipeline::args::check_best_effort_flags(&plan_options).map_err(bad)?;
             if !closed_loop(
                 &mission,
                 &scene,

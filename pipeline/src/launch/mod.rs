@@ -89,7 +89,7 @@ pub struct RunArgs {
     /// does not allow it) or `paper` (the paper's δ_r, δ_a ≤ d_min, the least-energy plan);
     /// top-level docs/user-guide.md, "Resolution". Sent with the plan request;
     /// `cellsar-radar-sim closed-loop --resolution` gives the same results.
-    #[arg(long, default_value_t = crate::args::DEFAULT_RESOLUTION, value_parser = crate::args::enum_parser::<planner::evaluate::ResolutionMode>())]
+    #[arg(long, default_value_t = planner::DEFAULT_RESOLUTION, value_parser = crate::args::enum_parser::<planner::evaluate::ResolutionMode>())]
     pub resolution: planner::evaluate::ResolutionMode,
     /// Under `general`: refuse a mission whose cell cannot be held within d_min in every
     /// landmark slot (the planner's refusal, exit 3) instead of planning the best effort.
@@ -215,8 +215,12 @@ impl PlanRefused {
 /// ([`FailureKind::Infeasible`]). Returns the mission to plan.
 pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     // the seconds flags were checked when parsed (bridge::flags::Seconds)
-    crate::args::check_best_effort_flags(args.resolution, args.strict_resolution, None)
-        .map_err(Failure::bad_input)?;
+    crate::args::check_best_effort_flags(&planner::PlanOptions {
+        resolution: args.resolution,
+        strict_resolution: args.strict_resolution,
+        ..Default::default()
+    })
+    .map_err(Failure::bad_input)?;
     if args.window == 0 {
         return Err(Failure::bad_input(anyhow!(
             "--window 0: must be at least 1 (apertures the processor asks for at once)"

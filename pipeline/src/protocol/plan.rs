@@ -19,7 +19,8 @@ pub const MAX_PLAN_BYTES: usize = 64 << 20;
 #[error("{0}")]
 pub struct BadRequest(pub String);
 
-/// Options of a plan request; every field optional (defaults: [`PlanOptions::default`]).
+/// Options of a plan request; every field optional (defaults: [`PlanOptions::for_scheme`] of the
+/// scheme, so the same defaults as `cellsar-planner plan`, the Python package and the library).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlanRequestOptions {
@@ -32,14 +33,16 @@ pub struct PlanRequestOptions {
     /// Relative objective change that stops the iterations (finite, > 0).
     #[serde(default)]
     pub tolerance: Option<f64>,
-    /// `paper` (default: the least-energy plan, the library's default) or `general` (the best
-    /// effort, which the launcher sends unless told otherwise).
+    /// `general` (the default for `exact`, [`planner::DEFAULT_RESOLUTION`]: the general cell as
+    /// a best effort) or `paper` (the least-energy plan; the default of the comparison schemes).
     #[serde(default)]
     pub resolution: Option<ResolutionMode>,
-    /// Under `general`: refuse instead of the best effort (default false).
+    /// Under `general` with `exact`: refuse instead of the best effort (default false); refused
+    /// with `paper` or a comparison scheme, which would ignore it.
     #[serde(default)]
     pub strict_resolution: Option<bool>,
-    /// Best effort: at most this many percent more energy than the least-energy plan (≥ 0).
+    /// Best effort: at most this many percent more energy than the least-energy plan (≥ 0);
+    /// refused where `strict_resolution` is.
     #[serde(default)]
     pub max_extra_energy_pct: Option<f64>,
 }
@@ -47,10 +50,7 @@ pub struct PlanRequestOptions {
 impl PlanRequestOptions {
     /// The planner options, checked; errors name the field (`options.tolerance`, ...).
     pub fn to_plan_options(&self) -> Result<PlanOptions, BadRequest> {
-        let mut o = PlanOptions::default();
-        if let Some(s) = self.scheme {
-            o.scheme = s;
-        }
+        let mut o = PlanOptions::for_scheme(self.scheme.unwrap_or(PlanOptions::default().scheme));
         if let Some(n) = self.max_iterations {
             if n == 0 {
                 return Err(BadRequest(
@@ -81,6 +81,8 @@ impl PlanRequestOptions {
             }
             o.max_extra_energy_pct = Some(pct);
         }
+        o.check_best_effort()
+            .map_err(|e| BadRequest(format!("options.{e}")))?;
         Ok(o)
     }
 }
@@ -229,4 +231,53 @@ pub fn mission_id(file: &MissionFile, options: &PlanRequestOptions) -> MissionId
         text.push_str(&serde_json::to_string(options).unwrap_or_default());
     }
     MissionId::from_name(&text)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// A request that names no resolution gets the library's default for its scheme, as
+    /// `cellsar-planner plan` and the Python package do; best-effort options that the plan
+    /// would ignore are refused with the library's message, the field named.
+    #[test]
+    fn request_defaults_and_refusals_are_the_librarys() {
+        let none = PlanRequestOptions::default();
+        assert_eq!(none.to_plan_options().unwrap(), PlanOptions::default());
+        assert_eq!(
+            none.to_plan_options().unwrap().resolution,
+            planner::DEFAULT_RESOLUTION
+        );
+        for scheme in Scheme::ALL {
+            let o = PlanRequestOptions {
+                scheme: Some(scheme),
+                ..Default::default()
+            };
+            assert_eq!(
+                o.to_plan_options().unwrap(),
+                PlanOptions::for_scheme(scheme)
+            );
+        }
+        let paper_strict = PlanRequestOptions {
+            resolution: Some(ResolutionMode::Paper),
+            strict_resolution: Some(true),
+            ..Default::default()
+        };
+        let e = paper_strict.to_plan_options().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "options.strict_resolution applies to resolution general only, not to paper"
+        );
+        let baseline_cap = PlanRequestOptions {
+            scheme: Some(Scheme::Baseline),
+            max_extra_energy_pct: Some(5.0),
+            ..Default::default()
+        };
+        assert!(baseline_cap
+            .to_plan_options()
+            .unwrap_err()
+            .to_string()
+            .starts_with("options.max_extra_energy_pct applies to resolution general only"));
+    }
 }

@@ -47,7 +47,10 @@ fn plan(horizon_s: f64) -> Arc<crate::protocol::Plan> {
     let m = run::shorten(&m, horizon_s).unwrap();
     let req = PlanRequest {
         mission: m.to_file_struct(),
-        options: Default::default(),
+        options: crate::protocol::PlanRequestOptions {
+            resolution: Some(planner::evaluate::ResolutionMode::Paper),
+            ..Default::default()
+        },
     };
     Arc::new(plan_request(&req, "test", &mut NoObserver).unwrap())
 }

@@ -87,6 +87,7 @@ impl BestEffortBasis {
             mission,
             &PlanOptions {
                 resolution: ResolutionMode::Paper,
+                strict_resolution: false,
                 max_extra_energy_pct: None,
                 ..options.clone()
             },

@@ -38,6 +38,10 @@ pub enum PlanError {
         /// Largest sensing violation of the last accepted repair iterate, m.
         sensing_violation_m: f64,
     },
+    /// Best-effort options given to a plan that would ignore them
+    /// ([`PlanOptions::check_best_effort`](super::PlanOptions::check_best_effort)).
+    #[error(transparent)]
+    OptionConflict(#[from] super::OptionConflict),
     /// An option is out of range.
     #[error("option `{field}` = {value}: {reason}")]
     InvalidOption {

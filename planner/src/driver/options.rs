@@ -14,6 +14,15 @@ use super::PlanError;
 /// Default of [`PlanOptions::resolution_weight_j_per_m`], J/m.
 pub const DEFAULT_RESOLUTION_WEIGHT_J_PER_M: f64 = 100.0;
 
+/// The resolution requirement of the `exact` scheme unless a request says otherwise, through
+/// every interface (the library's [`PlanOptions::default`], `cellsar-planner plan`,
+/// `cellsar run`, a plan request on the wire, the Python package, the FMU's initial plan): the
+/// general bistatic cell, as a best effort where the geometry does not allow it in every
+/// landmark slot (top-level docs/user-guide.md, "Resolution"). The comparison schemes default
+/// to [`ResolutionMode::Paper`] ([`Scheme::default_resolution`]), and `reproduce` keeps the
+/// paper's resolution, as the paper's figures do.
+pub const DEFAULT_RESOLUTION: ResolutionMode = ResolutionMode::General;
+
 /// Which planner to run. Its names (`exact`, `paper`, `baseline`, `baseline-exact`) are the
 /// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).
 #[derive(
@@ -56,6 +65,96 @@ impl Scheme {
     pub fn name(self) -> &'static str {
         self.into()
     }
+
+    /// The resolution requirement of this scheme unless a request names one:
+    /// [`DEFAULT_RESOLUTION`] for `exact`, the paper's for the comparison schemes (which
+    /// reproduce the paper; `paper` and `baseline` can only use it).
+    pub fn default_resolution(self) -> ResolutionMode {
+        match self {
+            Scheme::Exact => DEFAULT_RESOLUTION,
+            Scheme::Paper | Scheme::Baseline | Scheme::BaselineExact => ResolutionMode::Paper,
+        }
+    }
+}
+
+/// An option of a plan, for messages: each interface names it its own way ([`OptionName::field`]
+/// in the library, the Python package and on the wire; [`OptionName::flag`] on the command
+/// line).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OptionName {
+    /// [`PlanOptions::scheme`].
+    Scheme,
+    /// [`PlanOptions::resolution`].
+    Resolution,
+    /// [`PlanOptions::strict_resolution`].
+    StrictResolution,
+    /// [`PlanOptions::max_extra_energy_pct`].
+    MaxExtraEnergyPct,
+}
+
+impl OptionName {
+    /// The field's name: `strict_resolution`, ...
+    pub fn field(self) -> &'static str {
+        match self {
+            OptionName::Scheme => "scheme",
+            OptionName::Resolution => "resolution",
+            OptionName::StrictResolution => "strict_resolution",
+            OptionName::MaxExtraEnergyPct => "max_extra_energy_pct",
+        }
+    }
+
+    /// The command-line flag: `--strict-resolution`, ...
+    pub fn flag(self) -> &'static str {
+        match self {
+            OptionName::Scheme => "--scheme",
+            OptionName::Resolution => "--resolution",
+            OptionName::StrictResolution => "--strict-resolution",
+            OptionName::MaxExtraEnergyPct => "--max-extra-energy-pct",
+        }
+    }
+}
+
+/// Best-effort options ([`PlanOptions::strict_resolution`],
+/// [`PlanOptions::max_extra_energy_pct`]) given to a plan that would ignore them: one under the
+/// paper's resolution, or of a scheme other than `exact`. Its message names the options by
+/// their fields; [`OptionConflict::describe`] names them another way (the command line's
+/// flags), with the same words.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}", self.describe(OptionName::field))]
+pub struct OptionConflict {
+    /// The best-effort options given, in the order of [`PlanOptions`]'s fields.
+    pub given: Vec<OptionName>,
+    /// The plan's resolution requirement.
+    pub resolution: ResolutionMode,
+    /// The plan's scheme.
+    pub scheme: Scheme,
+}
+
+impl OptionConflict {
+    /// The message with each option named by `name`: "strict_resolution applies to resolution
+    /// general only, not to paper" ([`OptionName::field`]), "--strict-resolution applies to
+    /// --resolution general only, not to paper" ([`OptionName::flag`]).
+    pub fn describe(&self, name: impl Fn(OptionName) -> &'static str) -> String {
+        let given = self
+            .given
+            .iter()
+            .map(|&o| name(o))
+            .collect::<Vec<_>>()
+            .join(" and ");
+        if self.resolution == ResolutionMode::Paper {
+            format!(
+                "{given} applies to {} general only, not to {}",
+                name(OptionName::Resolution),
+                self.resolution
+            )
+        } else {
+            format!(
+                "{given} applies to {} exact only, not to {}",
+                name(OptionName::Scheme),
+                self.scheme
+            )
+        }
+    }
 }
 
 /// Options of a planning run.
@@ -90,7 +189,8 @@ pub struct PlanOptions {
     /// still feasible and better). Off gives the plain SCA sequence.
     pub over_relaxation: bool,
     /// Resolution requirement of the exact-geometry schemes (the paper's schemes always use the
-    /// paper's, as printed).
+    /// paper's, as printed). Default: [`DEFAULT_RESOLUTION`], the general cell as a best effort;
+    /// [`PlanOptions::for_scheme`] gives each scheme its own default.
     pub resolution: ResolutionMode,
     /// Wall-time limit of the whole run, s (`None`: none). The coarse levels are skipped once it
     /// has passed; the iterations stop at the first check after it with
@@ -120,7 +220,41 @@ pub struct PlanOptions {
 }
 
 impl PlanOptions {
-    /// Checks the numeric options; the error names the first bad one.
+    /// The default options with `scheme` and its default resolution
+    /// ([`Scheme::default_resolution`]): what a request that names only the scheme plans with.
+    pub fn for_scheme(scheme: Scheme) -> Self {
+        Self {
+            scheme,
+            resolution: scheme.default_resolution(),
+            ..Self::default()
+        }
+    }
+
+    /// Refuses the best-effort options ([`PlanOptions::strict_resolution`],
+    /// [`PlanOptions::max_extra_energy_pct`]) where the plan would ignore them: under the
+    /// paper's resolution, or with a scheme other than `exact`. Part of
+    /// [`PlanOptions::validate`]; every interface checks its options with it before planning.
+    pub fn check_best_effort(&self) -> Result<(), OptionConflict> {
+        let mut given = Vec::new();
+        if self.strict_resolution {
+            given.push(OptionName::StrictResolution);
+        }
+        if self.max_extra_energy_pct.is_some() {
+            given.push(OptionName::MaxExtraEnergyPct);
+        }
+        let applies = self.resolution == ResolutionMode::General && self.scheme == Scheme::Exact;
+        if given.is_empty() || applies {
+            return Ok(());
+        }
+        Err(OptionConflict {
+            given,
+            resolution: self.resolution,
+            scheme: self.scheme,
+        })
+    }
+
+    /// Checks the numeric options (the error names the first bad one), then the best-effort
+    /// options ([`PlanOptions::check_best_effort`]).
     pub fn validate(&self) -> Result<(), PlanError> {
         let bad = |field, value, reason| {
             Err(PlanError::InvalidOption {
@@ -167,6 +301,7 @@ impl PlanOptions {
                 );
             }
         }
+        self.check_best_effort()?;
         Ok(())
     }
 
@@ -191,7 +326,7 @@ impl Default for PlanOptions {
             min_kappa_scale: 1.0 / 16.0,
             coarse: true,
             over_relaxation: true,
-            resolution: ResolutionMode::Paper,
+            resolution: DEFAULT_RESOLUTION,
             time_limit_s: None,
             replace_unrepairable_init: true,
             strict_resolution: false,
@@ -234,5 +369,67 @@ impl<'a> Deadline<'a> {
     pub(super) fn passed(self) -> bool {
         self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
             || self.at.is_some_and(|at| Instant::now() >= at)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn the_default_is_the_general_best_effort_and_the_comparison_schemes_keep_the_paper() {
+        let o = PlanOptions::default();
+        assert_eq!(o.resolution, ResolutionMode::General);
+        assert_eq!(o.resolution, DEFAULT_RESOLUTION);
+        assert!(!o.strict_resolution && o.max_extra_energy_pct.is_none());
+        assert_eq!(PlanOptions::for_scheme(Scheme::Exact), o);
+        for s in [Scheme::Paper, Scheme::Baseline, Scheme::BaselineExact] {
+            let o = PlanOptions::for_scheme(s);
+            assert_eq!((o.scheme, o.resolution), (s, ResolutionMode::Paper));
+            assert!(o.validate().is_ok());
+        }
+    }
+
+    #[test]
+    fn best_effort_options_are_refused_where_they_would_be_ignored() {
+        let general = PlanOptions::default();
+        let strict = PlanOptions {
+            strict_resolution: true,
+            ..general.clone()
+        };
+        let capped = PlanOptions {
+            max_extra_energy_pct: Some(5.0),
+            ..general.clone()
+        };
+        assert!(strict.validate().is_ok() && capped.validate().is_ok());
+        let paper = |o: &PlanOptions| PlanOptions {
+            resolution: ResolutionMode::Paper,
+            ..o.clone()
+        };
+        assert!(paper(&general).validate().is_ok());
+        let both = PlanOptions {
+            strict_resolution: true,
+            ..paper(&capped)
+        };
+        let e = both.check_best_effort().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "strict_resolution and max_extra_energy_pct applies to resolution general only, not to paper"
+        );
+        assert_eq!(
+            e.describe(OptionName::flag),
+            "--strict-resolution and --max-extra-energy-pct applies to --resolution general only, not to paper"
+        );
+        assert_eq!(both.validate(), Err(PlanError::OptionConflict(e)));
+        // a comparison scheme ignores them under the general resolution too
+        let baseline = PlanOptions {
+            scheme: Scheme::BaselineExact,
+            ..capped
+        };
+        assert_eq!(
+            baseline.validate().unwrap_err().to_string(),
+            "max_extra_energy_pct applies to scheme exact only, not to baseline-exact"
+        );
     }
 }

@@ -25,6 +25,32 @@ pub enum TerminationReason {
     TimeLimit,
 }
 
+impl TerminationReason {
+    /// Its name in `summary.json` (`termination.reason`): `converged`, `max_iterations`,
+    /// `subproblem_failed`, `no_progress` or `time_limit`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            TerminationReason::Converged => "converged",
+            TerminationReason::MaxIterations => "max_iterations",
+            TerminationReason::SubproblemFailed(_) => "subproblem_failed",
+            TerminationReason::NoProgress => "no_progress",
+            TerminationReason::TimeLimit => "time_limit",
+        }
+    }
+}
+
+/// The name of `summary.json` ([`TerminationReason::name`]), with the detail of
+/// `subproblem_failed` in parentheses.
+impl std::fmt::Display for TerminationReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())?;
+        if let TerminationReason::SubproblemFailed(detail) = self {
+            write!(f, " ({detail})")?;
+        }
+        Ok(())
+    }
+}
+
 /// The result of a planning run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PlanResult {

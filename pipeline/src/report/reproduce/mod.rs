@@ -557,7 +557,11 @@ mod tests {
             "name = \"short\"\n[params]\nhorizon_s = 20\n[landmarks]\npreset = \"default\"\nspacing_m = 30\n",
         ).unwrap())
         .unwrap();
-        let r = planner::plan(&m, &planner::PlanOptions::default()).unwrap();
+        let options = planner::PlanOptions {
+            resolution: ResolutionMode::Paper,
+            ..Default::default()
+        };
+        let r = planner::plan(&m, &options).unwrap();
         let s = planner::Summary::new(&m, &r);
         let row = plan_row("default-30/exact", ResolutionMode::Paper, Ok(&s));
         assert_eq!(row["plan"], "default-30/exact");

@@ -84,7 +84,10 @@ impl ServiceError {
         let kind = match self {
             ServiceError::BadRequest(_)
             | ServiceError::Plan {
-                error: PlanError::InvalidInit(_) | PlanError::InvalidOption { .. },
+                error:
+                    PlanError::InvalidInit(_)
+                    | PlanError::InvalidOption { .. }
+                    | PlanError::OptionConflict(_),
                 ..
             } => RefusalKind::BadRequest,
             ServiceError::Plan {

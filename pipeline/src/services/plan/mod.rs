@@ -470,7 +470,10 @@ mod tests {
     fn plan_time_limit_reaches_the_planner() {
         let req = PlanRequest {
             mission: short_mission(),
-            options: PlanRequestOptions::default(),
+            options: PlanRequestOptions {
+                resolution: Some(planner::evaluate::ResolutionMode::Paper),
+                ..PlanRequestOptions::default()
+            },
         };
         match plan_request_within(&req, "t", Some(1e-9), &mut NoObserver) {
             Ok(plan) => {
@@ -502,7 +505,10 @@ mod tests {
     fn plans_round_trip_in_both_forms() {
         let req = PlanRequest {
             mission: short_mission(),
-            options: PlanRequestOptions::default(),
+            options: PlanRequestOptions {
+                resolution: Some(planner::evaluate::ResolutionMode::Paper),
+                ..PlanRequestOptions::default()
+            },
         };
         let plan = plan_request(&req, "t", &mut NoObserver).unwrap();
         assert_eq!(plan.mission_id, mission_id(&plan.mission, &req.options));
@@ -577,7 +583,10 @@ mod tests {
         // a landmark 50 km away 10 s after the first: no speed reaches it (a bad request is
         // `bad_request`: bad_requests_name_the_field)
         let req = PlanRequest {
-            options: PlanRequestOptions::default(),
+            options: PlanRequestOptions {
+                resolution: Some(planner::evaluate::ResolutionMode::Paper),
+                ..PlanRequestOptions::default()
+            },
             mission: MissionFile::from_toml_str(
                 "name = \"unreachable\"\n[params]\nhorizon_s = 20\nstart_m = [-1000.0, 0.0]\n\
              [landmarks]\npoints = [{ x_m = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }, \
