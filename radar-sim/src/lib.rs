@@ -6,6 +6,7 @@
 //!
 //! Layers (pure, no I/O): [`config`], [`waveform`], [`antenna`], [`scene`], [`track`],
 //! [`synth`], [`cancel`], [`compress`], [`backproject`], [`cfar`], [`scoring`], [`resolution`],
+//! [`nr`] (the 5G NR frame and reference signals of TS 38.211),
 //! [`pipeline`] (streaming API: one frame of pulses / one aperture at a time). File formats
 //! (NPY, CSV, JSON, PNG) live in [`io`]; the bounds on a run's
 //! IQ and memory, checked before simulating, in [`limits`].
@@ -25,6 +26,7 @@ pub mod io;
 pub mod kernels;
 pub mod limits;
 pub mod linalg;
+pub mod nr;
 pub mod pipeline;
 pub mod psf;
 pub mod resolution;
