@@ -34,11 +34,10 @@ def planner_bin():
 
 
 def reference_plan(mission, outdir):
-    """Runs `cellsar-planner plan MISSION --resolution paper --out DIR` (the FMU plans the
-    least-energy plan, the library's default; the CLI's default is the best effort); returns
-    {t_s: (x_m, y_m)} at slot times."""
-    subprocess.run([str(planner_bin()), "plan", str(mission), "--resolution", "paper",
-                    "--out", str(outdir)],
+    """Runs `cellsar-planner plan MISSION --out DIR` (the FMU's initial plan is the library's
+    default, the CLI's: the general cell as a best effort); returns {t_s: (x_m, y_m)} at slot
+    times."""
+    subprocess.run([str(planner_bin()), "plan", str(mission), "--out", str(outdir)],
                    check=True, capture_output=True, timeout=600)
     rows = {}
     with open(outdir / "trajectory.csv", newline="") as f:
