@@ -7,12 +7,15 @@
 //!   pattern (which symbols are downlink);
 //! - [`sequences`]: the length-31 Gold sequence c(n), the PSS/SSS m-sequences, the modulation
 //!   mapper (§5.1) and every c_init;
-//! - [`signals`]: SSB (PSS, SSS, PBCH DMRS, PBCH), TRS, PRS and PDSCH DMRS at their REs.
+//! - [`signals`]: SSB (PSS, SSS, PBCH DMRS, PBCH), TRS, PRS and PDSCH DMRS at their REs;
+//! - [`grid`]: one downlink symbol's resource grid (reference signals, data on the loaded PRBs,
+//!   nothing elsewhere) and what the UAV knows of it.
 //!
 //! Subcarrier indices `k` count from subcarrier 0 of common resource block 0, which this model
 //! puts at the carrier's lowest subcarrier (N_grid^start = 0, point A at the band's edge).
 
 pub mod frame;
+pub mod grid;
 pub mod sequences;
 pub mod signals;
 
