@@ -156,9 +156,58 @@ pub fn bistatic_angle_rad(params: &Params, uav_m: [f64; 2], point_m: [f64; 2]) -
     a.perp(&b).abs().atan2(a.dot(&b))
 }
 
-/// The 2-D resolution cell at a ground point (erratum 12 (docs/paper-notes.md)): a parallelogram whose sides
-/// are the iso-range lines (⊥ range gradient g) and the iso-Doppler lines (⊥ Doppler gradient,
-/// i.e. ⊥ the track at broadside).
+/// Full axes (major, minor) of the resolution ellipse, m (erratum 12 (docs/paper-notes.md)):
+/// the ground points x with xᵀ J x ≤ 1/4, J = a aᵀ + b bᵀ, where a is the range gradient over
+/// c/B (‖a‖ = 1/`range_width_m`), b the Doppler gradient times T_d (‖b‖ =
+/// 1/`along_track_width_m`) and ψ the angle between them. That is the −3 dB region of the
+/// separable range–Doppler response with its two widths as given (times the weightings'
+/// main-lobe factors for the image's response); its major axis 1/√λ_min(J) is the longest
+/// chord of the cell, which the parallelogram of the iso-range and iso-Doppler lines bounds.
+/// With λ± = (tr J ± √((‖a‖² − ‖b‖²)² + 4 (a·b)²))/2 and λ₋ = det J / λ₊ (no cancellation);
+/// ∞ where the cell is unbounded (ψ = 0 or a width infinite).
+pub fn cell_ellipse_axes_m(
+    range_width_m: f64,
+    along_track_width_m: f64,
+    sin_psi: f64,
+) -> (f64, f64) {
+    let (a2, b2) = (range_width_m.powi(-2), along_track_width_m.powi(-2));
+    let sin2 = sin_psi.clamp(0.0, 1.0).powi(2);
+    let det = a2 * b2 * sin2;
+    let lambda_max = 0.5 * (a2 + b2 + ((a2 - b2).powi(2) + 4.0 * a2 * b2 * (1.0 - sin2)).sqrt());
+    let minor = 1.0 / lambda_max.sqrt();
+    let major = if det > 0.0 && det.is_finite() {
+        (lambda_max / det).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    (major, minor)
+}
+
+/// The direction of the worst width: the unit major axis of the ellipse of widths `range_m`
+/// along the unit vector `range_dir` and `along_m` along the unit vector `along_dir`
+/// ([`cell_ellipse_axes_m`]): the eigenvector of J = r̂r̂ᵀ/range² + d̂d̂ᵀ/along² with the smaller
+/// eigenvalue (perpendicular to `range_dir` where J is degenerate).
+pub fn cell_ellipse_major_direction(
+    range_dir: [f64; 2],
+    range_m: f64,
+    along_dir: [f64; 2],
+    along_m: f64,
+) -> [f64; 2] {
+    let (g, d) = (Vector2::from(range_dir), Vector2::from(along_dir));
+    let j = g * g.transpose() * range_m.powi(-2) + d * d.transpose() * along_m.powi(-2);
+    let eig = nalgebra::SymmetricEigen::new(j);
+    let k = usize::from(eig.eigenvalues[0] > eig.eigenvalues[1]);
+    let u: Vector2<f64> = eig.eigenvectors.column(k).into_owned();
+    match u.direction() {
+        Some(u) if j.iter().all(|x| x.is_finite()) => u.into(),
+        _ => [-range_dir[1], range_dir[0]],
+    }
+}
+
+/// The 2-D resolution cell at a ground point (erratum 12 (docs/paper-notes.md)): the ellipse
+/// [`cell_ellipse_axes_m`] of the range and Doppler widths, inscribed in the parallelogram whose
+/// sides are the iso-range lines (⊥ range gradient g) and the iso-Doppler lines (⊥ Doppler
+/// gradient, i.e. ⊥ the track at broadside).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ResolutionCell {
     /// ‖g‖, the norm of the bistatic range gradient (between |sin θ_t − sin θ_r| and their sum).
@@ -173,9 +222,16 @@ pub struct ResolutionCell {
     pub cross_track_width_m: f64,
     /// Width along an iso-range line: δ_a / |sin ψ|, m.
     pub iso_range_width_m: f64,
-    /// The worse of the two principal chords, max(cross-track, iso-range), m. Two objects this
-    /// far apart along the worst direction still fall in one cell. ∞ in blind geometry (ψ = 0).
+    /// The cell's worst width: its longest chord, the major axis of the ellipse
+    /// ([`cell_ellipse_axes_m`]; the paper's convention, without a weighting's main-lobe
+    /// factor), m. Two objects this far apart along the worst direction still fall in one cell.
+    /// At least the parallelogram's longer side max(cross-track, iso-range) (the ellipse's
+    /// chords along those lines), √(1 + cos ψ) (up to √2) times it where the range and
+    /// along-track widths are equal, and at most the parallelogram's long diagonal; ∞ in blind
+    /// geometry (ψ = 0).
     pub worst_width_m: f64,
+    /// The ellipse's minor axis, the cell's narrowest width, m.
+    pub minor_width_m: f64,
 }
 
 impl ResolutionCell {
@@ -200,6 +256,8 @@ impl ResolutionCell {
         let psi_rad = sin_psi.asin();
         let cross_track_width_m = range_width_m / sin_psi;
         let iso_range_width_m = along_track_width_m / sin_psi;
+        let (worst_width_m, minor_width_m) =
+            cell_ellipse_axes_m(range_width_m, along_track_width_m, sin_psi);
         Self {
             grad_norm: gn,
             psi_rad,
@@ -207,15 +265,17 @@ impl ResolutionCell {
             along_track_width_m,
             cross_track_width_m,
             iso_range_width_m,
-            worst_width_m: cross_track_width_m.max(iso_range_width_m),
+            worst_width_m,
+            minor_width_m,
         }
     }
 }
 
 /// The resolution-cell quantities that are linear in the UAV velocity, at a fixed UAV position:
 /// the range gradient g, the map A with Doppler gradient d = A v, and the vector k with
-/// g × (A v) = k · v. With them the worst-width requirement splits into
-/// |k·v| ≥ ‖g‖/(T_d d_min) (iso-range width) and |k·v| ≥ c/(B d_min) ‖A v‖ (cross-track width).
+/// g × (A v) = k · v. With them the worst width (the ellipse's major axis, [`ResolutionCell`])
+/// is at most d where det(J − I/d²) ≥ 0 and ‖g‖ B/c ≥ 1/d, that is the second-order cone
+/// |k·v| ≥ c/(B d) ‖(A v, h)‖ with h = √((B‖g‖/c)² − 1/d²) / T_d ([`CellLinear::ellipse_h`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CellLinear {
     /// Bistatic range gradient g at the point.
@@ -256,6 +316,14 @@ impl CellLinear {
     /// A v.
     pub fn doppler_gradient(&self, velocity_mps: Vector2<f64>) -> Vector2<f64> {
         self.doppler_map * velocity_mps
+    }
+
+    /// h = √((B‖g‖/c)² − 1/d²) / T_d of the worst-width cone for width `d_m` (see the type's
+    /// docs), 1/(m s); 0 where the range width c/(B‖g‖) alone exceeds d (no velocity resolves
+    /// the point then, and with h = 0 the cone still asks at least for the cross-track width).
+    pub fn ellipse_h(&self, params: &Params, d_m: f64) -> f64 {
+        let a = params.bandwidth_hz * self.grad.length() / SPEED_OF_LIGHT_MPS;
+        (a * a - d_m.powi(-2)).max(0.0).sqrt() / params.integration_time_s
     }
 }
 
@@ -369,7 +437,96 @@ mod tests {
         assert!((beta - 135.0).abs() < 0.01, "beta = {beta}");
     }
 
+    /// Equal range and Doppler widths w: the ellipse's major axis is w / √(1 − cos ψ), the
+    /// parallelogram's side w / sin ψ: the major axis is √(1 + cos ψ) times longer (√2 as
+    /// ψ → 0).
+    #[test]
+    fn equal_widths_give_the_ratio_of_the_rhombus() {
+        for psi_deg in [90.0f64, 63.0, 51.0, 30.0, 5.0] {
+            let (w, s) = (19.0, psi_deg.to_radians().sin());
+            let (major, minor) = cell_ellipse_axes_m(w, w, s);
+            let c = psi_deg.to_radians().cos();
+            assert!(
+                (major - w / (1.0 - c).sqrt()).abs() <= 1e-12 * major,
+                "{psi_deg}"
+            );
+            assert!(
+                (minor - w / (1.0 + c).sqrt()).abs() <= 1e-12 * minor,
+                "{psi_deg}"
+            );
+            assert!(
+                (major / (w / s) - (1.0 + c).sqrt()).abs() <= 1e-12,
+                "{psi_deg}"
+            );
+        }
+        assert_eq!(cell_ellipse_axes_m(10.0, 20.0, 0.0).0, f64::INFINITY);
+        assert_eq!(
+            cell_ellipse_axes_m(f64::INFINITY, 20.0, 0.5).0,
+            f64::INFINITY
+        );
+    }
+
     proptest! {
+        /// The worst width is the longest chord of the −3 dB ellipse, measured in 7200
+        /// directions on J = a aᵀ + b bᵀ itself (chord 1/√(uᵀJu) along u), and lies between the
+        /// parallelogram's longer side and its long diagonal.
+        #[test]
+        fn worst_width_is_the_longest_chord(
+            r in 0.5f64..50.0, s in 0.5f64..50.0, psi in 0.02f64..1.57,
+            turn in 0.0f64..6.3,
+        ) {
+            let a = Vector2::new(turn.cos(), turn.sin()) / r;
+            let b = Vector2::new((turn + psi).cos(), (turn + psi).sin()) / s;
+            let j = a * a.transpose() + b * b.transpose();
+            let (mut longest, mut shortest) = (0.0f64, f64::INFINITY);
+            for k in 0..7200 {
+                let t = k as f64 * std::f64::consts::PI / 7200.0;
+                let u = Vector2::new(t.cos(), t.sin());
+                let chord = 1.0 / (u.transpose() * j * u)[(0, 0)].sqrt();
+                longest = longest.max(chord);
+                shortest = shortest.min(chord);
+            }
+            let (major, minor) = cell_ellipse_axes_m(r, s, psi.sin());
+            // the sampled maximum is within (π/7200)²/2 of the axis at the ellipse's flattest
+            // (relative 1e-7 · (major/minor)²)
+            let sampling = 1e-7 * (major / minor).powi(2) + 1e-12;
+            prop_assert!(major >= longest * (1.0 - 1e-12), "{major} < {longest}");
+            prop_assert!(major <= longest * (1.0 + sampling), "{major} > {longest}");
+            prop_assert!((minor - shortest).abs() <= 1e-9 * minor + 1e-7 * shortest);
+            let (cross, iso) = (r / psi.sin(), s / psi.sin());
+            let diagonal = (cross * cross + iso * iso + 2.0 * cross * iso * psi.cos()).sqrt();
+            prop_assert!(major >= cross.max(iso) * (1.0 - 1e-12), "{major} < side");
+            prop_assert!(major <= diagonal * (1.0 + 1e-12), "{major} > diagonal {diagonal}");
+            // the chord along the major direction is the major axis
+            let u = Vector2::from(cell_ellipse_major_direction(
+                [turn.cos(), turn.sin()], r, [(turn + psi).cos(), (turn + psi).sin()], s,
+            ));
+            let chord = 1.0 / (u.transpose() * j * u)[(0, 0)].sqrt();
+            prop_assert!((chord / major - 1.0).abs() <= 1e-9, "{chord} along the major direction, {major}");
+        }
+
+        /// The worst-width cone of CellLinear holds exactly where the ellipse's major axis is
+        /// within d (away from the boundary, and where the range width alone is within d).
+        #[test]
+        fn the_cone_is_the_worst_width_condition(
+            ux in -3000.0f64..3000.0, uy in -3000.0f64..3000.0,
+            px in -3000.0f64..3000.0, py in -3000.0f64..3000.0,
+            vx in -40.0f64..40.0, vy in -40.0f64..40.0, d in 5.0f64..60.0,
+        ) {
+            let p = Params::default();
+            let (uav, point, vel) = ([ux, uy], [px, py], Vector2::new(vx, vy));
+            prop_assume!(vel.norm() > 1.0);
+            let cl = CellLinear::new(&p, uav.into(), point.into());
+            let cell = ResolutionCell::new(&p, uav, vel.into(), point);
+            prop_assume!(cell.range_width_m < d);
+            prop_assume!((cell.worst_width_m / d - 1.0).abs() > 1e-6);
+            let av = cl.doppler_gradient(vel);
+            let h = cl.ellipse_h(&p, d);
+            let k = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * d);
+            let cone = cl.cross.dot(&vel).abs() >= k * (av.norm_squared() + h * h).sqrt();
+            prop_assert_eq!(cone, cell.worst_width_m <= d, "worst {} d {}", cell.worst_width_m, d);
+        }
+
         /// CellLinear reproduces ResolutionCell: g × d = k·v, and the two width conditions.
         #[test]
         fn cell_linear_matches_cell(

@@ -274,10 +274,14 @@ pub struct CellReport {
     pub iso_range_width_m: f64,
     /// Predicted: main-lobe factor × δ_a/sin ψ, m.
     pub iso_range_width_pred_m: f64,
-    /// The worse of the two measured chords (cross-track, iso-range), m.
+    /// The measured worst width: the longest −3 dB chord in any measured direction (the
+    /// same as `longest_chord_m`), m.
     pub worst_width_m: f64,
-    /// Predicted worst width × main-lobe factor, m.
+    /// Predicted worst width: the major axis of the −3 dB ellipse of the range and Doppler
+    /// widths with their main-lobe factors ([`planner::geometry::cell_ellipse_axes_m`]), m.
     pub worst_width_pred_m: f64,
+    /// Predicted narrowest width: that ellipse's minor axis, m.
+    pub minor_width_pred_m: f64,
     /// The longest −3 dB chord in any measured direction, m, and its direction, deg.
     pub longest_chord_m: f64,
     /// Direction of the longest chord, deg from +x.
@@ -299,6 +303,12 @@ pub struct CellReport {
 }
 
 impl CellReport {
+    /// Relative error of the measured worst width (the longest chord) against the predicted
+    /// one (the ellipse's major axis).
+    pub fn worst_width_error(&self) -> f64 {
+        self.worst_width_m / self.worst_width_pred_m - 1.0
+    }
+
     /// Relative errors (measured / predicted − 1) of range, along-track, cross-track and
     /// iso-range widths.
     pub fn errors(&self) -> [f64; 4] {
@@ -444,6 +454,7 @@ mod tests {
             iso_range_width_pred_m: 0.0,
             worst_width_m: 0.0,
             worst_width_pred_m: 0.0,
+            minor_width_pred_m: 0.0,
             longest_chord_m: 0.0,
             longest_chord_deg: 0.0,
             chord_along_g_m: 0.0,

@@ -16,7 +16,10 @@ const HEADER: &str = "# Resolution report: measured point response vs the predic
 Measured: the −3 dB region of one noise-free look (T_d = 1 s, 20 m/s, unweighted) traced in 40 \
 directions through the peak. *range* and *along-track* are the region's extents along the range \
 gradient g and along the Doppler gradient (the track); *cross-track* and *iso-range* are its \
-chords along the iso-Doppler and iso-range lines (erratum 12 (docs/paper-notes.md)). Every width in the \
+chords along the iso-Doppler and iso-range lines (the sides of the parallelogram cell); *worst* \
+is the longest chord in any measured direction (the predicted major axis among them), against \
+the major axis of the −3 dB ellipse of the predicted range and along-track widths, which the \
+parallelogram bounds (erratum 12 (docs/paper-notes.md)). Every width in the \
 table is a −3 dB width, one definition for every pair: the predictions are the planner's \
 `ResolutionCell` widths × 0.886 (the main-lobe factor of the unweighted response), and the \
 paper's δ_r, δ_a are shown × 0.886 too. The last column is the planner's worst width without \
@@ -28,7 +31,8 @@ measured/predicted − 1.\n\n\
 
 /// The note under the table.
 const FOOTER: &str =
-    "\nAway from blind geometry the four principal widths agree with the predictions; near \
+    "\nAway from blind geometry the four principal widths and the worst width agree with the \
+predictions; near \
 blind (small ψ) the cell is long along the iso-range and iso-Doppler lines, and the gradients \
 change over its length, so the linear prediction is only approximate there.\n";
 
@@ -91,7 +95,11 @@ pub fn write_resolution_report(
 
 /// One line of the table for `cell`, measured at bandwidth `b` Hz.
 fn table_row(b: f64, case: &PsfCase, cell: &CellReport) -> String {
-    let max_err = cell.errors().iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let max_err = cell
+        .errors()
+        .iter()
+        .chain([cell.worst_width_error()].iter())
+        .fold(0.0f64, |m, x| m.max(x.abs()));
     format!(
         "| {:.0} | {} | {:.1} | {:.1} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.1} ({:.1}) | {:.1}% | {:.2}, {:.2} | {:.1} |\n",
         b / 1e6,
@@ -229,6 +237,7 @@ mod tests {
             psi_deg: 90.0,
             range_width_m: 4.0,
             range_width_pred_m: 4.0,
+            minor_width_pred_m: 3.0,
             along_track_width_m: 4.0,
             along_track_width_pred_m: 6.0,
             cross_track_width_m: 4.0,

@@ -529,32 +529,31 @@ struct ResolutionSlot {
 /// Safety factor on the finite-difference Lipschitz estimates of the cell terms in q.
 const CELL_MARGIN_FACTOR: f64 = 3.0;
 
-/// Position sensitivities (L_iso, L_cross) of the two cell conditions around `q0`: for speeds up to
-/// V_m, |f(q, v) − f(q0, v)| ≤ L ‖q − q0‖ for f = s k(q)·v − ‖g(q)‖/(T_d d_min) (iso-range) and
-/// f = s k(q)·v − c/(B d_min) ‖A(q) v‖ (cross-track), estimated by finite differences and
-/// multiplied by `CELL_MARGIN_FACTOR`; the property test in this module checks the bound.
-pub fn cell_margins(p: &crate::Params, q0: Point2<f64>, landmark: Point2<f64>) -> (f64, f64) {
+/// Position sensitivity L of the worst-width cone around `q0`: for speeds up to V_m,
+/// |f(q, v) − f(q0, v)| ≤ L ‖q − q0‖ for f = s k(q)·v − c/(B d_min) ‖(A(q) v, h(q))‖
+/// ([`CellLinear`], [`CellLinear::ellipse_h`]): L = (‖Δk‖ + c/(B d_min) ‖ΔA‖_F) V_m +
+/// c/(B d_min) |Δh| per metre, estimated by finite differences and multiplied by
+/// `CELL_MARGIN_FACTOR`; the property test in this module checks the bound.
+pub fn cell_margin(p: &crate::Params, q0: Point2<f64>, landmark: Point2<f64>) -> f64 {
     let cl = CellLinear::new(p, q0, landmark);
-    let iso_rhs = |c: &CellLinear| c.grad.length() / (p.integration_time_s * p.d_min_m);
     let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
-    let h = 1.0;
-    let mut l_iso: f64 = 0.0;
-    let mut l_cross: f64 = 0.0;
+    let h0 = cl.ellipse_h(p, p.d_min_m);
+    let step = 1.0;
+    let mut l: f64 = 0.0;
     for dir in [Vector2::x(), Vector2::y(), -Vector2::x(), -Vector2::y()] {
-        let c2 = CellLinear::new(p, q0 + dir * h, landmark);
-        let dk = (c2.cross - cl.cross).length() / h;
-        let dg = (iso_rhs(&c2) - iso_rhs(&cl)).abs() / h;
+        let c2 = CellLinear::new(p, q0 + dir * step, landmark);
+        let dk = (c2.cross - cl.cross).length() / step;
+        let dh = (c2.ellipse_h(p, p.d_min_m) - h0).abs() / step;
         // Frobenius norm of the change of A (summed in the order of the entries: A is symmetric)
         let da = (c2.doppler_map - cl.doppler_map)
             .iter()
             .map(|x| x * x)
             .sum::<f64>()
             .sqrt()
-            / h;
-        l_iso = l_iso.max(dk * p.max_speed_mps + dg);
-        l_cross = l_cross.max((dk + k_cross * da) * p.max_speed_mps);
+            / step;
+        l = l.max((dk + k_cross * da) * p.max_speed_mps + k_cross * dh);
     }
-    (l_iso * CELL_MARGIN_FACTOR, l_cross * CELL_MARGIN_FACTOR)
+    l * CELL_MARGIN_FACTOR
 }
 
 /// Best effort plans the cell against this fraction of d_min. Its deficit model leaves out the
@@ -567,18 +566,17 @@ pub const BEST_EFFORT_CELL_TARGET_FRACTION: f64 = 0.95;
 
 /// The worst width of the resolution cell ≤ d_min (erratum 12 (docs/paper-notes.md)), convexified.
 ///
-/// At a fixed UAV position both width conditions are convex in the velocity v (CellLinear):
-/// s k·v ≥ ‖g‖/(T_d d) (linear) and s k·v ≥ c/(B d) ‖A v‖ (a second-order cone), with s the side
-/// of the blind line the previous iterate is on and d the width required.
+/// At a fixed UAV position the worst width (the major axis of the cell's ellipse) is at most d
+/// exactly where s k·v ≥ c/(B d) ‖(A v, h)‖ (CellLinear): one second-order cone in the velocity
+/// v, with s the side of the blind line the previous iterate is on and d the width required.
 ///
 /// - Hard constraints (`rs.shift`): d = d_min, and the dependence on the position is covered by
-///   a margin L ‖q_t − q_t^(ℓ)‖ with L a (safety-factored) finite-difference bound, so the
-///   constraints are exact at the previous iterate and every solution meets them.
+///   a margin L ‖q_t − q_t^(ℓ)‖ with L a (safety-factored) finite-difference bound
+///   ([`cell_margin`]), so the constraint is exact at the previous iterate and every solution
+///   meets it.
 /// - Best effort (`rs.rho`): d = [`BEST_EFFORT_CELL_TARGET_FRACTION`] d_min, a deficit slack,
 ///   and no position margin. The model is then optimistic, and the driver checks every step on
-///   the exact geometry (the merit must fall). With the proven margin the slack SCA creeps: on
-///   the default 30 m mission it needed 52 cone programs to reach 8 unresolved windows, where
-///   this model reaches none in 27 (BENCHMARKS.md, "Best-effort resolution").
+///   the exact geometry (the merit must fall); with the proven margin the slack SCA creeps.
 fn resolution_cell_constraints(
     b: &mut ProblemBuilder,
     mission: &Mission,
@@ -599,16 +597,13 @@ fn resolution_cell_constraints(
         -1.0
     };
     let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * d_m);
+    let h = k_cross * cl.ellipse_h(p, d_m);
     // s k·v/δ, with v the step (m per slot)
-    let kv = vx
+    let mut head = vx
         .clone()
         .scaled(side * cl.cross.x / delta)
         .plus_lin(&vy.clone().scaled(side * cl.cross.y / delta));
-    let rhs = cl.grad.length() / (p.integration_time_s * d_m);
-    let mut iso = kv.clone().plus_const(-rhs);
-    let mut head = kv;
     if let Some(shift) = rs.shift {
-        let (l_iso, l_cross) = cell_margins(p, rs.q0, rs.landmark);
         // m ≥ ‖q_t − q0‖
         b.soc(
             Lin::var(shift, 1.0),
@@ -617,30 +612,26 @@ fn resolution_cell_constraints(
                 Lin::var(rs.y, 1.0).plus_const(-rs.q0.y),
             ],
         );
-        iso = iso.plus(shift, -l_iso);
-        head = head.plus(shift, -l_cross);
+        head = head.plus(shift, -cell_margin(p, rs.q0, rs.landmark));
     }
     if let Some(sig) = rs.sigma {
         // one metre of slack relaxes the width requirement by about one metre
-        iso = iso.plus(sig, rhs / d_m);
+        let rhs = cl.grad.length() / (p.integration_time_s * d_m);
         head = head.plus(sig, rhs / d_m);
     }
+    let a = cl.doppler_map;
     if let Some(rho) = rs.rho {
-        // ρ ≥ d (1 − s k·v / rhs) and ρ ≥ d (c/(B d) ‖A v‖ − s k·v) / (c/(B d) ‖A u‖): at v = u
-        // (and q = q0) both are the deficit d (1 − d / w) of the iso-range and the cross-track
-        // width w, so the slack is tight at the previous iterate
-        let au = k_cross * (cl.doppler_map * (rs.step0 / delta)).length();
-        iso = iso.plus(rho, rhs / d_m);
+        // ρ ≥ d (c/(B d) ‖(A v, h)‖ − s k·v) / (c/(B d) ‖(A u, h)‖): zero where the cone holds,
+        // d (1 − s k·u / (c/(B d) ‖(A u, h)‖)) at the previous iterate's velocity u
+        let au = (k_cross * (a * (rs.step0 / delta))).length().hypot(h);
         head = head.plus(rho, au.max(1e-12) / d_m);
     }
-    b.nonneg(iso);
-    let a = cl.doppler_map;
     let av = |i: usize| {
         vx.clone()
             .scaled(k_cross * a[(i, 0)] / delta)
             .plus_lin(&vy.clone().scaled(k_cross * a[(i, 1)] / delta))
     };
-    b.soc(head, &[av(0), av(1)]);
+    b.soc(head, &[av(0), av(1), Lin::constant_only(h)]);
 }
 
 /// Σ_t δ (P₀-quadratic · w_t + P_i a_t + parasite · z_t) + N δ P₀ ≤ `cap_j`: the surrogate energy
@@ -709,19 +700,15 @@ mod tests {
             prop_assume!(v.norm() <= p.max_speed_mps);
             let dq = Vector2::new(dqx, dqy);
             let q1 = q0 + dq;
-            let (l_iso, l_cross) = cell_margins(&p, q0, lm);
+            let l = cell_margin(&p, q0, lm);
             let k_cross = SPEED_OF_LIGHT_MPS / (p.bandwidth_hz * p.d_min_m);
-            let f_iso = |q: Point2<f64>| {
+            let f = |q: Point2<f64>| {
                 let c = CellLinear::new(&p, q, lm);
-                c.cross.dot(&v) - c.grad.norm() / (p.integration_time_s * p.d_min_m)
-            };
-            let f_cross = |q: Point2<f64>| {
-                let c = CellLinear::new(&p, q, lm);
-                c.cross.dot(&v) - k_cross * c.doppler_gradient(v).norm()
+                c.cross.dot(&v)
+                    - k_cross * c.doppler_gradient(v).norm().hypot(c.ellipse_h(&p, p.d_min_m))
             };
             let dq = dq.norm();
-            prop_assert!(f_iso(q1) >= f_iso(q0) - l_iso * dq - 1e-12);
-            prop_assert!(f_cross(q1) >= f_cross(q0) - l_cross * dq - 1e-12);
+            prop_assert!(f(q1) >= f(q0) - l * dq - 1e-12);
         }
 
         /// The expansion error of the unit-vector map is within the bound κ‖v − u‖² whenever the

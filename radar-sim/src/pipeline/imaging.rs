@@ -227,11 +227,16 @@ impl Processor {
         let power = |p: [f64; 2]| self.exact_value(c, spectra, range.clone(), p).norm_sqr() / peak;
         let smallest = (fr * cell.range_width_m).min(fa * cell.along_track_width_m);
         let max_m = (50.0 * smallest).max(3000.0);
+        // the predicted −3 dB ellipse (the weighted widths) and its major axis, measured too
+        let (range_pred, along_pred) = (fr * cell.range_width_m, fa * cell.along_track_width_m);
+        let (worst_pred, minor_pred) =
+            pg::cell_ellipse_axes_m(range_pred, along_pred, cell.psi_rad.sin());
+        let major_dir = pg::cell_ellipse_major_direction(gh, range_pred, dh, along_pred);
         let region = crate::resolution::PsfRegion::measure(
             &power,
             target_m,
             36,
-            &[gh, dh, vr, va],
+            &[gh, dh, vr, va, major_dir],
             0.05 * smallest,
             max_m,
         )
@@ -254,8 +259,9 @@ impl Processor {
             cross_track_width_pred_m: fr * cell.cross_track_width_m,
             iso_range_width_m: iso,
             iso_range_width_pred_m: fa * cell.iso_range_width_m,
-            worst_width_m: cross.max(iso),
-            worst_width_pred_m: (fr * cell.cross_track_width_m).max(fa * cell.iso_range_width_m),
+            worst_width_m: longest,
+            worst_width_pred_m: worst_pred,
+            minor_width_pred_m: minor_pred,
             longest_chord_m: longest,
             longest_chord_deg: dir.to_degrees(),
             chord_along_g_m: region.chord_m(gh),

@@ -88,10 +88,15 @@ pub struct ApertureResult {
 }
 
 impl ApertureResult {
-    /// Worst −3 dB width of the image's response at the centre: the cell's principal chords
-    /// times the weightings' main-lobe factors, max(f_r × cross-track, f_a × iso-range), m.
+    /// Worst −3 dB width of the image's response at the centre: the longest chord of the
+    /// cell's ellipse with the weightings' main-lobe factors on the range and Doppler widths
+    /// ([`pg::cell_ellipse_axes_m`]), m.
     pub fn worst_width_mainlobe_m(&self) -> f64 {
-        (self.mainlobe_factors[0] * self.cell.cross_track_width_m)
-            .max(self.mainlobe_factors[1] * self.cell.iso_range_width_m)
+        pg::cell_ellipse_axes_m(
+            self.mainlobe_factors[0] * self.cell.range_width_m,
+            self.mainlobe_factors[1] * self.cell.along_track_width_m,
+            self.cell.psi_rad.sin(),
+        )
+        .0
     }
 }
