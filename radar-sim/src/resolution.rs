@@ -356,6 +356,29 @@ impl CellReport {
             corner(1.0, -1.0),
         ]
     }
+
+    /// The predicted −3 dB ellipse in local coordinates around the peak, m: `n` points of
+    /// {x : (ĝ·x / R)² + (d̂·x / A)² = 1/4} (R, A the predicted range and along-track widths),
+    /// the ellipse inscribed in [`CellReport::predicted_cell_m`], touching the middles of its
+    /// sides: x = (R/2) cos t · u + (A/2) sin t · w with ĝ·u = 1, d̂·u = 0, ĝ·w = 0, d̂·w = 1.
+    pub fn predicted_ellipse_m(&self, n: usize) -> Vec<[f64; 2]> {
+        let [g, d] = self.axes;
+        let det = g[0] * d[1] - g[1] * d[0];
+        // u, w: the dual basis of (ĝ, d̂)
+        let u = [d[1] / det, -d[0] / det];
+        let w = [-g[1] / det, g[0] / det];
+        let (r, a) = (
+            self.range_width_pred_m / 2.0,
+            self.along_track_width_pred_m / 2.0,
+        );
+        (0..n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                let (s, c) = t.sin_cos();
+                [r * c * u[0] + a * s * w[0], r * c * u[1] + a * s * w[1]]
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]
@@ -474,6 +497,19 @@ mod tests {
             assert!((dot(g, *p) - sr * 2.0).abs() < 1e-12, "{p:?}");
             assert!((dot(d, *p) - sa * 5.0).abs() < 1e-12, "{p:?}");
         }
+        // the ellipse: on (ĝ·x/R)² + (d̂·x/A)² = 1/4, its longest chord the predicted major
+        // axis of the same widths and angle
+        let ellipse = cell.predicted_ellipse_m(3600);
+        for p in &ellipse {
+            let q = (dot(g, *p) / 4.0).powi(2) + (dot(d, *p) / 10.0).powi(2);
+            assert!((q - 0.25).abs() < 1e-12, "{p:?}: {q}");
+        }
+        let longest = ellipse
+            .iter()
+            .map(|p| 2.0 * p[0].hypot(p[1]))
+            .fold(0.0, f64::max);
+        let (major, _) = planner::geometry::cell_ellipse_axes_m(4.0, 10.0, (1.0f64 - 0.4).sin());
+        assert!((longest / major - 1.0).abs() < 1e-5, "{longest} vs {major}");
         let b = cell.local_boundary_m();
         assert_eq!(b.len(), 48);
         for p in &b {

@@ -184,7 +184,10 @@ pub fn cell_svg(cell: &CellReport, title: &str) -> Result<String, Box<dyn std::e
         chart.draw_series(LineSeries::new(closed, blue.stroke_width(1)))?;
         let mut outline = pts(&para);
         outline.extend(outline.first().copied());
-        chart.draw_series(LineSeries::new(outline, red.stroke_width(2)))?;
+        chart.draw_series(LineSeries::new(outline, red.stroke_width(1)))?;
+        let mut ellipse = pts(&cell.predicted_ellipse_m(180));
+        ellipse.extend(ellipse.first().copied());
+        chart.draw_series(LineSeries::new(ellipse, red.stroke_width(2)))?;
         for (v, colour, label) in [
             (g, RGBColor(0x2a, 0x7f, 0x2a), "g"),
             (d, RGBColor(0x7f, 0x2a, 0x7f), "track"),
@@ -203,7 +206,7 @@ pub fn cell_svg(cell: &CellReport, title: &str) -> Result<String, Box<dyn std::e
             )))?;
         }
         note.draw(&Text::new(
-            "filled: measured −3 dB region; red: predicted cell (× main-lobe factor)",
+            "filled: measured −3 dB region; red: predicted ellipse in its parallelogram (× main-lobe factor)",
             (8, 4),
             ("sans-serif", LABEL_FONT_PX).into_font(),
         ))?;
