@@ -5,12 +5,15 @@
 //! [--cap PCT] [--phases]`
 //!
 //! `--cap PCT` plans the best effort within PCT % more energy than the least-energy plan;
-//! `--phases` prints each phase's time (and each iteration with `TRACE_ITER` set).
+//! `--phases` prints each phase's time (and each iteration with `TRACE_ITER` set). Each plan is
+//! made under the paper's dynamics and the vehicle's acceleration limit, one after the other,
+//! with its peak acceleration and the slots above the limit (to 1e-6 relative) on the exact
+//! geometry.
 
 use std::path::Path;
 use std::time::Instant;
 
-use planner::evaluate::ResolutionMode;
+use planner::evaluate::{Dynamics, ResolutionMode};
 use planner::shortfall::ResolutionShortfall;
 use planner::tradeoff::{tradeoff, DEFAULT_CAPS_PCT};
 use planner::{plan_with_observer, IterationRecord, Mission, Observer, PlanOptions};
@@ -71,9 +74,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None => None,
     };
     let mut least_s = f64::NAN;
-    for resolution in [ResolutionMode::Paper, ResolutionMode::General] {
+    let runs = Dynamics::ALL
+        .into_iter()
+        .flat_map(|d| [(d, ResolutionMode::Paper), (d, ResolutionMode::General)]);
+    for (dynamics, resolution) in runs {
         let options = PlanOptions {
             resolution,
+            dynamics,
             max_extra_energy_pct: cap_pct.filter(|_| resolution == ResolutionMode::General),
             ..PlanOptions::default()
         };
@@ -91,13 +98,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             least_s = s;
         }
         let sf = ResolutionShortfall::new(&mission, &p.evaluation);
+        let limit = mission.params().max_accel_mps2;
+        let over = p
+            .evaluation
+            .slots
+            .iter()
+            .filter(|s| s.accel_mps2 > limit * (1.0 + 1e-6))
+            .count();
         println!(
-            "{resolution:?}: {:.6} J, {} / {} unresolved windows / slots, excess {:.0} m, {:.2} s \
+            "{dynamics:?} {resolution:?}: {:.6} J, {} / {} unresolved windows / slots, excess \
+             {:.0} m, peak {:.4} m/s² ({over} slots > {limit:.4}), feasible {}, {:.2} s \
              ({:.1}x least-energy), {} iterations, {} cone programs",
             p.evaluation.energy_j,
             sf.unresolved_windows,
             sf.unresolved_slots,
             sf.total_excess_width_m,
+            p.evaluation.max_accel_mps2,
+            p.is_feasible(),
             s,
             s / least_s,
             p.iterations,

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use crate::evaluate::{evaluate, ResolutionMode};
 use crate::geometry::{distance, Point2};
-use crate::init::{guidance_start, precheck};
+use crate::init::{guidance_start_with, precheck_with};
 use crate::schemes::exact::{ExactObjective, ExactTuning};
 use crate::schemes::paper::PaperObjective;
 use crate::socp::SocpSolver;
@@ -25,7 +25,7 @@ pub use best_effort::{best_effort_from, BestEffortBasis};
 pub use error::PlanError;
 pub use observer::{IterationRecord, NoObserver, Observer};
 pub use options::{
-    OptionConflict, OptionName, PlanOptions, Scheme, DEFAULT_RESOLUTION,
+    OptionConflict, OptionName, PlanOptions, Scheme, DEFAULT_DYNAMICS, DEFAULT_RESOLUTION,
     DEFAULT_RESOLUTION_WEIGHT_J_PER_M,
 };
 pub use result::{BestEffort, PlanResult, TerminationReason};
@@ -93,7 +93,7 @@ fn run_plan_from(
         return best_effort::plan_best_effort(mission, options, observer, stop);
     }
     let deadline = Deadline::after(started, options.time_limit_s, stop);
-    precheck(mission)?;
+    precheck_with(mission, options.dynamics)?;
     let start = match &options.init {
         Some(tr) => given_start(mission, options, deadline, tr)?,
         None => built_in_start(mission, options, deadline),
@@ -117,6 +117,7 @@ fn run_plan_from(
     };
     let base = ExactTuning {
         resolution,
+        dynamics: options.dynamics,
         ..ExactTuning::default()
     };
     let mut init_replaced = None;
@@ -218,6 +219,7 @@ fn run_plan_from(
     };
     out.scheme = options.scheme;
     out.resolution = resolution;
+    out.dynamics = options.dynamics;
     out.start_energy_j = start_energy_j;
     out.repair_iterations = repair_iterations;
     out.init_replaced = init_replaced;
@@ -263,7 +265,9 @@ fn given_start(
     };
     Ok(match objective {
         Some(obj)
-            if options.coarse && !evaluate(mission, tr).is_feasible_for(options.resolution) =>
+            if options.coarse
+                && !evaluate(mission, tr)
+                    .is_feasible_with(options.resolution, options.dynamics) =>
         {
             coarse_start_from(mission, obj, true, options, deadline, Some(tr), 0)
                 .and_then(LevelStart::solved)
@@ -283,5 +287,5 @@ fn built_in_start(mission: &Mission, options: &PlanOptions, deadline: Deadline) 
         Scheme::Paper | Scheme::Baseline => (ExactObjective::Energy, false),
     };
     coarse_start(mission, objective, optimise, options, deadline)
-        .unwrap_or_else(|| guidance_start(mission, options.resolution))
+        .unwrap_or_else(|| guidance_start_with(mission, options.resolution, options.dynamics))
 }

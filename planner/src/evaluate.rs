@@ -53,6 +53,55 @@ impl ResolutionMode {
     }
 }
 
+/// Which vehicle model a plan is made for.
+///
+/// Names are the same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS`.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    Default,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::Display,
+    strum::IntoStaticStr,
+    strum::VariantNames,
+)]
+#[serde(rename_all = "lowercase")]
+#[strum(serialize_all = "lowercase")]
+pub enum Dynamics {
+    /// The paper's model: any velocity in any slot, so the velocity may jump from slot to slot
+    /// (the reproduction and the comparison schemes `paper`, `baseline`).
+    #[default]
+    Paper,
+    /// A multirotor: the velocity changes by at most `max_accel_mps2` × δ from slot to slot,
+    /// from the start velocity on (`Params::max_accel_mps2`, `Params::start_velocity_mps`).
+    Vehicle,
+}
+
+impl Dynamics {
+    /// All models.
+    pub const ALL: [Dynamics; 2] = [Dynamics::Paper, Dynamics::Vehicle];
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
+}
+
+/// Relative tolerance on the acceleration limit: a slot is within it when its acceleration is at
+/// most `max_accel_mps2` × (1 + this). The planner's constraint keeps
+/// [`ACCEL_MARGIN_REL`] inside the limit.
+pub const ACCEL_TOL_REL: f64 = 1e-7;
+
+/// Relative margin inside the acceleration limit that the planner's constraint keeps (solver
+/// tolerances stay inside it).
+pub const ACCEL_MARGIN_REL: f64 = 1e-6;
+
 /// A landmark slot is called blind when the angle ψ between the range gradient and the track is
 /// below this (the cell's cross-track extent is then more than 1/sin 5° ≈ 11 times its range width).
 pub const BLIND_PSI_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
@@ -105,6 +154,9 @@ pub struct SlotEval {
     pub cross_track_width_m: f64,
     /// Worst width of the resolution cell, m (erratum 12 (docs/paper-notes.md)).
     pub worst_width_m: f64,
+    /// Acceleration into this slot, ‖v_t − v_{t−1}‖ / δ with v_0 the start velocity, m/s².
+    #[serde(default)]
+    pub accel_mps2: f64,
 }
 
 /// The largest violation of each constraint over the slots it applies to (0 = satisfied).
@@ -120,6 +172,10 @@ pub struct Violations {
     pub range_paper_m: f64,
     /// max over landmark slots of (worst cell width − d_min)⁺ (general cell, erratum 12 (docs/paper-notes.md)), m.
     pub worst_width_m: f64,
+    /// max over all slots of (‖v_t − v_{t−1}‖/δ − a_max)⁺ (the vehicle's acceleration limit;
+    /// counted in feasibility only under [`Dynamics::Vehicle`]), m/s².
+    #[serde(default)]
+    pub accel_mps2: f64,
 }
 
 impl Violations {
@@ -153,6 +209,12 @@ pub struct Evaluation {
     pub slots_unresolved: usize,
     /// Landmark slots in blind geometry (ψ < [`BLIND_PSI_RAD`]).
     pub slots_blind: usize,
+    /// Largest acceleration between consecutive slots (the first from the start velocity), m/s².
+    #[serde(default)]
+    pub max_accel_mps2: f64,
+    /// The acceleration limit the violation is measured against, m/s².
+    #[serde(default)]
+    pub accel_limit_mps2: f64,
 }
 
 impl Evaluation {
@@ -169,6 +231,25 @@ impl Evaluation {
                 ResolutionMode::Paper => true,
                 ResolutionMode::General => self.violations.worst_width_m <= FEASIBILITY_TOL,
             }
+    }
+
+    /// Within the acceleration limit in every slot, to [`ACCEL_TOL_REL`].
+    pub fn is_flyable(&self) -> bool {
+        self.violations.accel_mps2 <= ACCEL_TOL_REL * self.accel_limit_mps2
+    }
+
+    /// [`Evaluation::is_feasible_for`], plus, under [`Dynamics::Vehicle`], the acceleration
+    /// limit in every slot ([`Evaluation::is_flyable`]).
+    pub fn is_feasible_with(&self, mode: ResolutionMode, dynamics: Dynamics) -> bool {
+        self.is_feasible_for(mode) && self.meets(dynamics)
+    }
+
+    /// Whether the plan meets the vehicle model `dynamics` (always under [`Dynamics::Paper`]).
+    pub fn meets(&self, dynamics: Dynamics) -> bool {
+        match dynamics {
+            Dynamics::Paper => true,
+            Dynamics::Vehicle => self.is_flyable(),
+        }
     }
 }
 
@@ -187,9 +268,14 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
     let mut out_of_view = 0;
     let mut unresolved = 0;
     let mut blind = 0;
+    let mut max_accel: f64 = 0.0;
+    let mut prev_vel = mission.start_velocity_mps();
     for t in 1..=traj.slots() {
         let pos = traj.q(t);
         let vel = traj.velocity_mps(t);
+        let accel = (Vector2::from(vel) - Vector2::from(prev_vel)).length() / p.slot_s;
+        prev_vel = vel;
+        max_accel = max_accel.max(accel);
         let speed = Vector2::from(vel).length();
         let heading = headings[t - 1];
         let centre = sensing_centre_m(pos, heading, offset);
@@ -251,8 +337,10 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
             along_track_width_m: cell.along_track_width_m,
             cross_track_width_m: cell.cross_track_width_m,
             worst_width_m: cell.worst_width_m,
+            accel_mps2: accel,
         });
     }
+    viol.accel_mps2 = (max_accel - p.max_accel_mps2).max(0.0);
     // clamp negatives (the max started at 0 so they are ≥ 0 already, except NaN)
     for v in [
         &mut viol.sensing_m,
@@ -260,6 +348,7 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         &mut viol.max_speed_mps,
         &mut viol.range_paper_m,
         &mut viol.worst_width_m,
+        &mut viol.accel_mps2,
     ] {
         if v.is_nan() {
             *v = f64::INFINITY;
@@ -279,6 +368,8 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         slots_out_of_view: out_of_view,
         slots_unresolved: unresolved,
         slots_blind: blind,
+        max_accel_mps2: max_accel,
+        accel_limit_mps2: p.max_accel_mps2,
     }
 }
 

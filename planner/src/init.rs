@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::evaluate::ResolutionMode;
+use crate::evaluate::{Dynamics, ResolutionMode, ACCEL_MARGIN_REL};
 use crate::geometry::{distance, heading_unit, Point2, ResolutionCell, Vector2, RIGHT_TURN};
 use crate::power::PowerModel;
 use crate::{Mission, Trajectory};
@@ -68,6 +68,41 @@ pub fn reachable_between(p: &crate::Params, g1_m: [f64; 2], g2_m: [f64; 2], slot
     let d = distance(&Point2::from(g1_m), &Point2::from(g2_m));
     let reach = 2.0 * r + offset + v_step.hypot(offset) + v_step * slots.saturating_sub(1) as f64;
     d <= reach + 1e-9 * (1.0 + d + offset)
+}
+
+/// [`precheck`], and under [`Dynamics::Vehicle`] also: the azimuth speed V_min reachable by the
+/// first landmark slot t₀ from the start velocity v₀ at the acceleration limit,
+/// ‖v₀‖ + a_max δ t₀ ≥ V_min (a necessary condition).
+pub fn precheck_with(mission: &Mission, dynamics: Dynamics) -> Result<(), Infeasibility> {
+    precheck(mission)?;
+    if dynamics == Dynamics::Paper {
+        return Ok(());
+    }
+    let p = mission.params();
+    let Some(t0) = (1..=mission.slots()).find(|&t| mission.target_m(t).is_some()) else {
+        return Ok(());
+    };
+    let v0 = mission.start_velocity_mps();
+    let speed0 = v0[0].hypot(v0[1]);
+    let reach = speed0 + p.max_accel_mps2 * p.slot_s * t0 as f64;
+    let v_min = p.min_speed_mps();
+    if reach < v_min - crate::evaluate::FEASIBILITY_TOL {
+        return Err(Infeasibility {
+            slot: t0,
+            t_s: t0 as f64 * p.slot_s,
+            reason: format!(
+                "the first landmark's slot needs the azimuth speed {v_min:.3} m/s, but from \
+                 start_velocity_mps = ({}, {}) m/s at max_accel_mps2 = {:.3} m/s² the UAV \
+                 reaches at most {reach:.3} m/s by t = {} s (state a start velocity, a larger \
+                 max_accel_mps2, or plan with the paper's dynamics)",
+                v0[0],
+                v0[1],
+                p.max_accel_mps2,
+                t0 as f64 * p.slot_s
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Checks necessary conditions: the azimuth requirement within the speed limit, the range
@@ -226,7 +261,34 @@ fn reference_m(mission: &Mission, t: usize) -> Option<(Point2<f64>, Option<Point
 /// the UAV at distance H tan η from the gliding reference point, and prefer efficient speeds.
 /// It is usually feasible; the planner repairs it (phase I) when it is not.
 pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajectory {
+    guidance_start_with(mission, resolution, Dynamics::Paper)
+}
+
+/// [`guidance_start`] for a vehicle model: under [`Dynamics::Vehicle`] each slot's velocity is
+/// the guidance law's choice moved into the disc of radius a_max δ around the previous one (the
+/// mission's start velocity first), so the start meets the acceleration limit in every slot.
+pub fn guidance_start_with(
+    mission: &Mission,
+    resolution: ResolutionMode,
+    dynamics: Dynamics,
+) -> Trajectory {
     let p = mission.params();
+    let max_change = p.max_accel_mps2 * p.slot_s * (1.0 - 2.0 * ACCEL_MARGIN_REL);
+    let mut velocity = Vector2::from(mission.start_velocity_mps());
+    let limit = |q: Point2<f64>, qn: Point2<f64>, velocity: &mut Vector2<f64>| -> Point2<f64> {
+        if dynamics == Dynamics::Paper {
+            return qn;
+        }
+        let wanted = (qn - q) / p.slot_s;
+        let change = wanted - *velocity;
+        let norm = change.norm();
+        *velocity = if norm > max_change {
+            *velocity + change * (max_change / norm)
+        } else {
+            wanted
+        };
+        q + *velocity * p.slot_s
+    };
     let model = PowerModel::new(p);
     let delta = p.slot_s;
     let offset = p.centre_offset_m();
@@ -246,7 +308,7 @@ pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajecto
     for t in 1..=mission.slots() {
         let Some((reference, landmark)) = reference_m(mission, t) else {
             // no landmark at all: cruise east at the least-power speed
-            q += Vector2::x() * (delta * v_star);
+            q = limit(q, q + Vector2::x() * (delta * v_star), &mut velocity);
             pos.push(q.into());
             continue;
         };
@@ -285,7 +347,7 @@ pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajecto
                 }
             }
         }
-        q = best.1;
+        q = limit(q, best.1, &mut velocity);
         pos.push(q.into());
     }
     Trajectory {

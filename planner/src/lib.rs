@@ -34,9 +34,9 @@ pub mod trajectory;
 pub use driver::{
     plan, plan_with_observer, plan_with_stop, IterationRecord, NoObserver, Observer,
     OptionConflict, OptionName, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason,
-    DEFAULT_RESOLUTION,
+    DEFAULT_DYNAMICS, DEFAULT_RESOLUTION,
 };
-pub use evaluate::{evaluate, Evaluation, SlotEval, Violations};
+pub use evaluate::{evaluate, Dynamics, Evaluation, SlotEval, Violations};
 pub use landmarks::{LandmarkWindow, LandmarksSpec, Preset, Schedule};
 pub use mission::{Mission, MissionError, MissionFile};
 pub use params::{ParamError, Params, ParamsOverride};

@@ -180,6 +180,8 @@ impl Mission {
             return None;
         }
         let mut params = self.params.clone();
+        // the start velocity of the mission itself, whatever the coarse grid's first slot senses
+        params.start_velocity_mps = Some(self.start_velocity_mps());
         params.slot_s *= factor as f64;
         let slot_landmark = (1..=n / factor)
             .map(|k| self.schedule.slot_landmark[k * factor - 1])
@@ -192,6 +194,42 @@ impl Mission {
                 slot_landmark,
             },
         })
+    }
+
+    /// The velocity at the start, (v_x, v_y) m/s: [`Params::start_velocity_mps`] when the
+    /// mission states one, else a rule of the mission alone (not of any plan), so that a user can
+    /// state the same value:
+    ///
+    /// - at rest when the UAV can reach the azimuth speed V_min from rest by the first landmark
+    ///   slot t₀ at the acceleration limit (a_max t₀ δ ≥ V_min; no landmark: at rest);
+    /// - otherwise (the paper's missions, whose first window opens at t = 0: from rest the first
+    ///   slot could reach only a_max δ ≈ 2.8 m/s of the 7.07 m/s required) already flying, as
+    ///   the paper's model assumes, at the least-power speed within [V_min, V_m] with the first
+    ///   landmark on the sensing side: heading h with J h pointing from q₀ to the landmark
+    ///   (J the rotation by −90°, so the landmark lies H tan η away, where the sensing centre is).
+    ///
+    /// `summary.json` reports the value used (`start_velocity_mps`).
+    pub fn start_velocity_mps(&self) -> [f64; 2] {
+        let p = &self.params;
+        if let Some(v) = p.start_velocity_mps {
+            return v;
+        }
+        let Some((t0, g)) = (1..=self.slots()).find_map(|t| self.target_m(t).map(|g| (t, g)))
+        else {
+            return [0.0, 0.0];
+        };
+        let v_min = p.min_speed_mps();
+        if p.max_accel_mps2 * t0 as f64 * p.slot_s >= v_min || v_min > p.max_speed_mps {
+            return [0.0, 0.0];
+        }
+        let model = crate::power::PowerModel::new(p);
+        let (speed, _) = model.min_power_in(v_min.min(p.max_speed_mps), p.max_speed_mps);
+        let to = nalgebra::Vector2::new(g[0] - p.start_m[0], g[1] - p.start_m[1]);
+        let Some(u) = to.try_normalize(1e-9) else {
+            return [0.0, 0.0];
+        };
+        // J h = u with J (x, y) = (y, −x): h = (−u_y, u_x)
+        [-u.y * speed, u.x * speed]
     }
 
     /// The mission's name.
@@ -249,8 +287,10 @@ impl Mission {
             rotor_disc_area_m2,
             air_density_kgpm3,
             fuselage_drag_ratio,
-            uav_mass_kg
+            uav_mass_kg,
+            max_accel_mps2
         );
+        o.start_velocity_mps = p.start_velocity_mps;
         MissionFile {
             name: Some(self.name.clone()),
             params: o,

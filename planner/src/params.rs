@@ -76,6 +76,27 @@ pub struct Params {
     pub fuselage_drag_ratio: f64,
     /// UAV mass, kg (Table II; informational, the power model already folds it in).
     pub uav_mass_kg: f64,
+    /// Largest horizontal acceleration of the vehicle, m/s² (the vehicle dynamics only:
+    /// `PlanOptions::dynamics`). Default g·tan 30° ≈ 5.66 m/s²: a multirotor accelerates
+    /// horizontally by tilting its thrust, and ArduPilot's default lean-angle limit is
+    /// ANGLE_MAX = 30° ([`DEFAULT_TILT_LIMIT_DEG`]).
+    pub max_accel_mps2: f64,
+    /// Velocity of the UAV as it passes the start q_0, (v_x, v_y) m/s; `None`: the rule of
+    /// [`crate::Mission::start_velocity_mps`] (at rest, unless the first landmark comes too soon
+    /// to reach the azimuth speed from rest).
+    pub start_velocity_mps: Option<[f64; 2]>,
+}
+
+/// Standard gravity, m/s².
+pub const STANDARD_GRAVITY_MPS2: f64 = 9.806_65;
+
+/// The tilt (lean-angle) limit behind the default of [`Params::max_accel_mps2`], degrees:
+/// ArduPilot's default ANGLE_MAX of 30° (copter parameter ANGLE_MAX = 3000 centidegrees).
+pub const DEFAULT_TILT_LIMIT_DEG: f64 = 30.0;
+
+/// The default horizontal acceleration limit, g·tan([`DEFAULT_TILT_LIMIT_DEG`]) ≈ 5.662 m/s².
+pub fn default_max_accel_mps2() -> f64 {
+    STANDARD_GRAVITY_MPS2 * DEFAULT_TILT_LIMIT_DEG.to_radians().tan()
 }
 
 impl Default for Params {
@@ -103,6 +124,8 @@ impl Default for Params {
             air_density_kgpm3: 1.225,
             fuselage_drag_ratio: 0.3,
             uav_mass_kg: 2.0,
+            max_accel_mps2: default_max_accel_mps2(),
+            start_velocity_mps: None,
         }
     }
 }
@@ -134,6 +157,8 @@ pub struct ParamsOverride {
     pub air_density_kgpm3: Option<f64>,
     pub fuselage_drag_ratio: Option<f64>,
     pub uav_mass_kg: Option<f64>,
+    pub max_accel_mps2: Option<f64>,
+    pub start_velocity_mps: Option<[f64; 2]>,
 }
 
 /// Which values a scalar parameter may take.
@@ -167,6 +192,7 @@ macro_rules! scalar_fields {
                 $( if let Some(v) = o.$name { self.$name = v; } )*
                 if let Some(v) = o.start_m { self.start_m = v; }
                 if let Some(v) = o.bs_m { self.bs_m = v; }
+                if let Some(v) = o.start_velocity_mps { self.start_velocity_mps = Some(v); }
             }
         }
     };
@@ -193,6 +219,7 @@ scalar_fields! {
     air_density_kgpm3: Range::NonNegative,
     fuselage_drag_ratio: Range::NonNegative,
     uav_mass_kg: Range::Positive,
+    max_accel_mps2: Range::Positive,
 }
 
 /// `x` with at most six significant digits and no trailing zeros (`1.5708`, `600.001`, `2`),
@@ -276,6 +303,28 @@ impl Params {
                         reason: "coordinates must be finite numbers".into(),
                     });
                 }
+            }
+        }
+        if let Some(v) = self.start_velocity_mps {
+            for value in v {
+                if !value.is_finite() {
+                    return Err(ParamError::Invalid {
+                        field: "start_velocity_mps",
+                        value,
+                        reason: "components must be finite numbers".into(),
+                    });
+                }
+            }
+            let speed = v[0].hypot(v[1]);
+            if speed > self.max_speed_mps {
+                return Err(ParamError::Invalid {
+                    field: "start_velocity_mps",
+                    value: speed,
+                    reason: format!(
+                        "its speed must not exceed max_speed_mps = {} m/s",
+                        short(self.max_speed_mps)
+                    ),
+                });
             }
         }
         let ratio = self.horizon_s / self.slot_s;
@@ -362,6 +411,12 @@ mod tests {
         p.validate().unwrap();
         assert_eq!(p.slots(), 600);
         assert!((p.min_speed_mps() - 7.0711).abs() < 1e-3);
+        // g tan 30°
+        assert!(
+            (p.max_accel_mps2 - 5.6619).abs() < 1e-4,
+            "{}",
+            p.max_accel_mps2
+        );
         assert!((p.centre_offset_m() - 1000.0).abs() < 1e-9);
         // r_s from W_a = 0.5 m is the 200 m default.
         assert!((p.sensing_radius_from_antenna_m(0.5) - 200.0).abs() < 1e-9);
@@ -398,6 +453,25 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn start_velocity_is_checked_by_name() {
+        let mut p = Params::default();
+        p.start_velocity_mps = Some([f64::NAN, 0.0]);
+        assert!(p
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("start_velocity_mps"));
+        p.start_velocity_mps = Some([40.0, 40.0]);
+        let msg = p.validate().unwrap_err().to_string();
+        assert!(
+            msg.contains("start_velocity_mps") && msg.contains("max_speed_mps"),
+            "{msg}"
+        );
+        p.start_velocity_mps = Some([3.0, -4.0]);
+        p.validate().unwrap();
     }
 
     #[test]

@@ -97,6 +97,27 @@ pub struct Summary {
     /// A best-effort plan: its energy above the least-energy plan's, %.
     #[serde(default)]
     pub extra_energy_pct: Option<f64>,
+    /// The vehicle model the plan was made for (`vehicle`: within `accel_limit_mps2` in every
+    /// slot, part of `feasible`; `paper`: the velocity may jump).
+    #[serde(default)]
+    pub dynamics: crate::evaluate::Dynamics,
+    /// Largest acceleration between consecutive slots, ‖v_t − v_{t−1}‖/δ (the first slot from
+    /// `start_velocity_mps`), on the exact geometry, m/s².
+    #[serde(default)]
+    pub max_accel_mps2: f64,
+    /// The vehicle's acceleration limit (`max_accel_mps2` of the mission), m/s².
+    #[serde(default)]
+    pub accel_limit_mps2: f64,
+    /// Largest (acceleration − limit)⁺ over the slots, m/s² (reported whatever the dynamics).
+    #[serde(default)]
+    pub max_accel_violation_mps2: f64,
+    /// Slots whose acceleration exceeds the limit (to its relative tolerance 1e-7).
+    #[serde(default)]
+    pub slots_over_accel_limit: usize,
+    /// The velocity at the start the accelerations are measured from, (v_x, v_y) m/s (the
+    /// mission's `start_velocity_mps`, or its rule's value when the mission states none).
+    #[serde(default)]
+    pub start_velocity_mps: [f64; 2],
 }
 
 impl Summary {
@@ -154,12 +175,24 @@ impl Summary {
                 .best_effort
                 .as_ref()
                 .map(|b| 100.0 * (ev.energy_j / b.least_energy_j - 1.0)),
+            dynamics: result.dynamics,
+            max_accel_mps2: ev.max_accel_mps2,
+            accel_limit_mps2: p.max_accel_mps2,
+            max_accel_violation_mps2: ev.violations.accel_mps2,
+            slots_over_accel_limit: ev
+                .slots
+                .iter()
+                .filter(|s| {
+                    s.accel_mps2 > p.max_accel_mps2 * (1.0 + crate::evaluate::ACCEL_TOL_REL)
+                })
+                .count(),
+            start_velocity_mps: mission.start_velocity_mps(),
         }
     }
 }
 
 /// The columns of `trajectory.csv`.
-pub const TRAJECTORY_COLUMNS: &str = "t_s,x_m,y_m,speed_mps,heading_rad,xc_m,yc_m,landmark_x_m,landmark_y_m,in_view,centre_error_m,power_w,energy_j,range_resolution_paper_m,range_resolution_general_m,azimuth_resolution_m,bistatic_angle_deg,grad_norm,psi_rad,along_track_width_m,cross_track_width_m,worst_width_m";
+pub const TRAJECTORY_COLUMNS: &str = "t_s,x_m,y_m,speed_mps,heading_rad,xc_m,yc_m,landmark_x_m,landmark_y_m,in_view,centre_error_m,power_w,energy_j,range_resolution_paper_m,range_resolution_general_m,azimuth_resolution_m,bistatic_angle_deg,grad_norm,psi_rad,along_track_width_m,cross_track_width_m,worst_width_m,accel_mps2";
 
 /// A number of a CSV table as Rust's `{}` prints it (shortest round trip, `1` for 1.0), NaN as
 /// `nan`: the csv crate's own float format (ryu: `1.0`, `1e20`) would change the published
@@ -208,6 +241,7 @@ struct TrajectoryRow {
     along_track_width_m: CsvNum,
     cross_track_width_m: CsvNum,
     worst_width_m: CsvNum,
+    accel_mps2: CsvNum,
 }
 
 impl TrajectoryRow {
@@ -237,6 +271,7 @@ impl TrajectoryRow {
             along_track_width_m: nan,
             cross_track_width_m: nan,
             worst_width_m: nan,
+            accel_mps2: nan,
         }
     }
 
@@ -266,6 +301,7 @@ impl TrajectoryRow {
             along_track_width_m: CsvNum(e.along_track_width_m),
             cross_track_width_m: CsvNum(e.cross_track_width_m),
             worst_width_m: CsvNum(e.worst_width_m),
+            accel_mps2: CsvNum(e.accel_mps2),
         }
     }
 }
@@ -315,7 +351,7 @@ mod tests {
         w.serialize(TrajectoryRow::start([-12.5, 3.0])).unwrap();
         let text = String::from_utf8(w.into_inner().unwrap()).unwrap();
         let start =
-            "-12.5,3,nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,nan,nan";
+            "-12.5,3,nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,nan,nan,nan";
         assert_eq!(text, format!("{TRAJECTORY_COLUMNS}\n0,{start}\n"));
     }
 

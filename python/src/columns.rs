@@ -31,6 +31,7 @@ fn slot_value(name: &str, e: &SlotEval) -> Option<f64> {
         "along_track_width_m" => e.along_track_width_m,
         "cross_track_width_m" => e.cross_track_width_m,
         "worst_width_m" => e.worst_width_m,
+        "accel_mps2" => e.accel_mps2,
         _ => return None,
     })
 }

@@ -96,7 +96,7 @@ impl BestEffortBasis {
         )?;
         let coarse = if least_energy
             .evaluation
-            .is_feasible_for(ResolutionMode::General)
+            .is_feasible_with(ResolutionMode::General, options.dynamics)
             || !options.coarse
         {
             None
@@ -115,9 +115,13 @@ impl BestEffortBasis {
                 &coarse_options,
                 deadline,
             )
-            .filter(|t| evaluate(mission, t).is_feasible())
+            .filter(|t| {
+                evaluate(mission, t).is_feasible_with(ResolutionMode::Paper, options.dynamics)
+            })
             .or_else(|| strict_plan(mission, options, observer, stop))
-            .filter(|t| evaluate(mission, t).is_feasible_for(ResolutionMode::General))
+            .filter(|t| {
+                evaluate(mission, t).is_feasible_with(ResolutionMode::General, options.dynamics)
+            })
         };
         Ok(Self {
             least_energy,
@@ -191,13 +195,18 @@ fn best_effort_until(
     let finish = |mut out: PlanResult, programs: usize, info: BestEffort| {
         out.scheme = Scheme::Exact;
         out.resolution = general;
+        out.dynamics = options.dynamics;
         out.start_energy_j = least_j;
         out.cone_programs += programs;
         out.best_effort = Some(info);
         out.solve_seconds = started.elapsed().as_secs_f64();
         out
     };
-    if basis.least_energy.evaluation.is_feasible_for(general) {
+    if basis
+        .least_energy
+        .evaluation
+        .is_feasible_with(general, options.dynamics)
+    {
         return Ok(finish(basis.least_energy.clone(), 0, info));
     }
     observer.on_phase("best effort");
@@ -215,6 +224,7 @@ fn best_effort_until(
         resolution: general,
         cell_slack_weight: Some(weight),
         energy_cap_j: cap_j,
+        dynamics: options.dynamics,
         ..ExactTuning::default()
     };
     let mut solver = SocpSolver::new(options.exact_socp);

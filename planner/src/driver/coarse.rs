@@ -1,7 +1,8 @@
 //! Coarse-to-fine levels: the start solved on coarser slot grids first.
 
-use crate::evaluate::ResolutionMode;
-use crate::init::guidance_start;
+use crate::evaluate::{Dynamics, ResolutionMode};
+use crate::geometry::Vector2;
+use crate::init::guidance_start_with;
 use crate::schemes::exact::{ExactObjective, ExactTuning};
 use crate::shortfall::total_deficit_m;
 use crate::socp::SocpSolver;
@@ -117,6 +118,10 @@ pub(super) fn coarse_start_from(
         exact_rules && options.resolution == ResolutionMode::General && !options.strict_resolution;
     let tuning = ExactTuning {
         whole_slot_sensing: true,
+        dynamics: options.dynamics,
+        // the first coarse slot's velocity, placed at its middle, is interpolated from the start
+        // velocity placed δ/2 before the start (where the finer grid's constraint puts it)
+        first_accel_window_s: Some(0.5 * (coarse.params().slot_s + delta)),
         resolution: if best_effort {
             ResolutionMode::Paper
         } else {
@@ -149,8 +154,15 @@ pub(super) fn coarse_start_from(
             level + 1,
         ) {
             Some(LevelStart::Solved(t)) => vec![t],
-            Some(LevelStart::Stalled(t)) => vec![t, guidance_start(&coarse, options.resolution)],
-            None => vec![guidance_start(&coarse, options.resolution)],
+            Some(LevelStart::Stalled(t)) => vec![
+                t,
+                guidance_start_with(&coarse, options.resolution, options.dynamics),
+            ],
+            None => vec![guidance_start_with(
+                &coarse,
+                options.resolution,
+                options.dynamics,
+            )],
         },
     };
     let mut best: Option<(f64, Trajectory)> = None;
@@ -242,14 +254,91 @@ pub(super) fn coarse_start_from(
             best = Some(tr);
         }
     }
-    let to_fine = |tr: Trajectory| Trajectory {
-        slot_s: delta,
-        start_m: tr.start_m,
-        pos_m: (1..=n).map(|t| tr.position_at(t as f64 * delta)).collect(),
+    let to_fine = |tr: Trajectory| match options.dynamics {
+        Dynamics::Paper => Trajectory {
+            slot_s: delta,
+            start_m: tr.start_m,
+            pos_m: (1..=n).map(|t| tr.position_at(t as f64 * delta)).collect(),
+        },
+        Dynamics::Vehicle => smooth_to_fine(&tr, mission.start_velocity_mps(), delta, n),
     };
     match (best, stalled) {
         (Some((_, tr)), _) => Some(LevelStart::Solved(to_fine(tr))),
         (None, Some(tr)) => Some(LevelStart::Stalled(to_fine(tr))),
         (None, None) => None,
+    }
+}
+
+/// A coarse track on `n` slots of `delta` with the velocity interpolated linearly between the
+/// coarse slots' middles (the start velocity `v0_mps` placed δ/2 before the start, as the fine
+/// grid's first-slot constraint places it) and the positions integrated from the start: where
+/// the coarse track changes its velocity by at most a_max Δ per slot Δ (and its first slot by
+/// a_max (Δ + δ)/2 from `v0_mps`), the fine track changes it by at most a_max δ per slot δ.
+/// The positions depart from the coarse track by about Δ/8 of a slot's velocity change (phase I
+/// repairs what that costs the sensing).
+fn smooth_to_fine(coarse: &Trajectory, v0_mps: [f64; 2], delta: f64, n: usize) -> Trajectory {
+    let big = coarse.slot_s;
+    let knots: Vec<(f64, Vector2<f64>)> = std::iter::once((-0.5 * delta, Vector2::from(v0_mps)))
+        .chain((1..=coarse.slots()).map(|k| {
+            (
+                (k as f64 - 0.5) * big,
+                Vector2::from(coarse.velocity_mps(k)),
+            )
+        }))
+        .collect();
+    let velocity_at = |time: f64| -> Vector2<f64> {
+        let i = knots.partition_point(|(tk, _)| *tk <= time);
+        match (i.checked_sub(1).and_then(|j| knots.get(j)), knots.get(i)) {
+            (Some(&(ta, va)), Some(&(tb, vb))) => va + (vb - va) * ((time - ta) / (tb - ta)),
+            (Some(&(_, va)), None) => va,
+            (None, Some(&(_, vb))) => vb,
+            (None, None) => Vector2::zeros(),
+        }
+    };
+    let mut q = Vector2::from(coarse.start_m);
+    let pos_m = (1..=n)
+        .map(|j| {
+            q += velocity_at((j as f64 - 0.5) * delta) * delta;
+            [q.x, q.y]
+        })
+        .collect();
+    Trajectory {
+        slot_s: delta,
+        start_m: coarse.start_m,
+        pos_m,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A coarse track that changes its velocity by a_max Δ per slot (and its first slot by
+    /// a_max (Δ + δ)/2) becomes a fine track that changes it by at most a_max δ per slot.
+    #[test]
+    fn smooth_interpolation_keeps_the_acceleration_limit() {
+        let (a, big, delta, k) = (5.0, 2.5, 0.5, 5usize);
+        let v0 = Vector2::new(10.0, 0.0);
+        let mut v = v0 + Vector2::new(0.0, a * 0.5 * (big + delta));
+        let mut q = Vector2::new(0.0, 0.0);
+        let mut pos_m = Vec::new();
+        for i in 0..8 {
+            q += v * big;
+            pos_m.push([q.x, q.y]);
+            let turn = if i % 2 == 0 { 1.0 } else { -1.0 };
+            v += Vector2::new(turn * a * big * 0.6, -a * big * 0.8);
+        }
+        let coarse = Trajectory {
+            slot_s: big,
+            start_m: [0.0, 0.0],
+            pos_m,
+        };
+        let fine = smooth_to_fine(&coarse, [v0.x, v0.y], delta, 8 * k);
+        let mut prev = v0;
+        for t in 1..=fine.slots() {
+            let vt = Vector2::from(fine.velocity_mps(t));
+            assert!((vt - prev).norm() <= a * delta * (1.0 + 1e-9), "slot {t}");
+            prev = vt;
+        }
     }
 }

@@ -42,6 +42,18 @@ pub enum PlanError {
     /// ([`PlanOptions::check_best_effort`](super::PlanOptions::check_best_effort)).
     #[error(transparent)]
     OptionConflict(#[from] super::OptionConflict),
+    /// A vehicle model the scheme cannot plan with (`paper` and `baseline` have the paper's
+    /// model only).
+    #[error(
+        "dynamics {dynamics} applies to the exact-geometry schemes (exact, baseline-exact) only, \
+         not to {scheme}"
+    )]
+    DynamicsConflict {
+        /// The scheme.
+        scheme: super::Scheme,
+        /// The vehicle model asked for.
+        dynamics: crate::evaluate::Dynamics,
+    },
     /// An option is out of range.
     #[error("option `{field}` = {value}: {reason}")]
     InvalidOption {

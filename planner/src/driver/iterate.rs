@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
+use crate::evaluate::{evaluate, Dynamics, Evaluation, ResolutionMode};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::schemes::paper::{PaperObjective, PaperState};
 use crate::shortfall::total_deficit_m;
@@ -82,6 +82,7 @@ pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) ->
         resolution: ResolutionMode::Paper,
         init_replaced: None,
         best_effort: None,
+        dynamics: Dynamics::Paper,
     }
 }
 
@@ -309,6 +310,7 @@ impl Judge<'_> {
             None => ev.is_feasible_for(self.tuning.resolution),
         };
         constraints
+            && ev.meets(self.tuning.dynamics)
             && self
                 .tuning
                 .energy_cap_j

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
-use crate::evaluate::ResolutionMode;
+use crate::evaluate::{Dynamics, ResolutionMode};
 use crate::socp::SocpSettings;
 use crate::Trajectory;
 
@@ -22,6 +22,12 @@ pub const DEFAULT_RESOLUTION_WEIGHT_J_PER_M: f64 = 100.0;
 /// to [`ResolutionMode::Paper`] ([`Scheme::default_resolution`]), and `reproduce` keeps the
 /// paper's resolution, as the paper's figures do.
 pub const DEFAULT_RESOLUTION: ResolutionMode = ResolutionMode::General;
+
+/// The vehicle model of the schemes a user flies (`exact`, its best effort and trade-off,
+/// `baseline-exact`) unless a request says otherwise, through every interface; the comparison
+/// schemes `paper` and `baseline`, and `reproduce`, keep the paper's model
+/// ([`Scheme::default_dynamics`]).
+pub const DEFAULT_DYNAMICS: Dynamics = Dynamics::Paper;
 
 /// Which planner to run. Its names (`exact`, `paper`, `baseline`, `baseline-exact`) are the
 /// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).
@@ -64,6 +70,22 @@ impl Scheme {
     /// The name used on the command line and in reports.
     pub fn name(self) -> &'static str {
         self.into()
+    }
+
+    /// The vehicle model of this scheme unless a request names one: [`DEFAULT_DYNAMICS`] for the
+    /// exact-geometry schemes, the paper's model for `paper` and `baseline` (which can only use
+    /// it).
+    pub fn default_dynamics(self) -> Dynamics {
+        match self {
+            Scheme::Exact | Scheme::BaselineExact => DEFAULT_DYNAMICS,
+            Scheme::Paper | Scheme::Baseline => Dynamics::Paper,
+        }
+    }
+
+    /// Whether the scheme can plan under `dynamics` (`paper` and `baseline` have the paper's
+    /// model only).
+    pub fn supports(self, dynamics: Dynamics) -> bool {
+        matches!(self, Scheme::Exact | Scheme::BaselineExact) || dynamics == Dynamics::Paper
     }
 
     /// The resolution requirement of this scheme unless a request names one:
@@ -217,6 +239,11 @@ pub struct PlanOptions {
     /// Best effort only: the energy one metre of resolution deficit is worth, J/m. Large values
     /// make the objective lexicographic (deficit first, then energy).
     pub resolution_weight_j_per_m: f64,
+    /// The vehicle model: [`Dynamics::Vehicle`] keeps the acceleration between consecutive slots
+    /// within `max_accel_mps2`, from the mission's start velocity on (the exact-geometry schemes
+    /// only); [`Dynamics::Paper`] lets the velocity jump, as the paper does.
+    /// [`PlanOptions::for_scheme`] gives each scheme its default ([`Scheme::default_dynamics`]).
+    pub dynamics: Dynamics,
 }
 
 impl PlanOptions {
@@ -226,6 +253,7 @@ impl PlanOptions {
         Self {
             scheme,
             resolution: scheme.default_resolution(),
+            dynamics: scheme.default_dynamics(),
             ..Self::default()
         }
     }
@@ -301,6 +329,12 @@ impl PlanOptions {
                 );
             }
         }
+        if !self.scheme.supports(self.dynamics) {
+            return Err(PlanError::DynamicsConflict {
+                scheme: self.scheme,
+                dynamics: self.dynamics,
+            });
+        }
         self.check_best_effort()?;
         Ok(())
     }
@@ -332,6 +366,7 @@ impl Default for PlanOptions {
             strict_resolution: false,
             max_extra_energy_pct: None,
             resolution_weight_j_per_m: DEFAULT_RESOLUTION_WEIGHT_J_PER_M,
+            dynamics: DEFAULT_DYNAMICS,
         }
     }
 }

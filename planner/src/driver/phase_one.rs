@@ -1,6 +1,6 @@
 //! Phase I (elastic SCA): repairing an infeasible start.
 
-use crate::evaluate::{evaluate, Evaluation, ResolutionMode};
+use crate::evaluate::{evaluate, Dynamics, Evaluation, ResolutionMode, ACCEL_TOL_REL};
 use crate::geometry::{distance, Point2, Vector2};
 use crate::init::Infeasibility;
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
@@ -14,13 +14,24 @@ use super::PlanError;
 /// summed over slots (the same quantities that the subproblem's slack σ_t bounds). With
 /// `whole_slot`, the sensing excess is the larger of the slot-end centre's and the slot-start
 /// centre's (straight flight at the slot's heading), as [`ExactTuning::whole_slot_sensing`] imposes.
+///
+/// Under [`Dynamics::Vehicle`] it adds, over all slots, the velocity change beyond the limit,
+/// (‖v_t − v_{t−1}‖ − a_max δ)⁺ in m/s (what the acceleration slack τ_t/δ bounds).
 pub(super) fn total_violation(
     mission: &Mission,
     ev: &Evaluation,
-    mode: ResolutionMode,
+    (mode, dynamics): (ResolutionMode, Dynamics),
     whole_slot: bool,
 ) -> f64 {
     let p = mission.params();
+    let accel_excess: f64 = match dynamics {
+        Dynamics::Paper => 0.0,
+        Dynamics::Vehicle => ev
+            .slots
+            .iter()
+            .map(|s| (s.accel_mps2 - p.max_accel_mps2).max(0.0) * p.slot_s)
+            .sum(),
+    };
     let v_min = p.min_speed_mps();
     let keepout = p.range_keepout_m();
     ev.slots
@@ -46,7 +57,8 @@ pub(super) fn total_violation(
                 .max(width.min(10.0 * p.d_min_m))
                 .max(0.0)
         })
-        .sum()
+        .sum::<f64>()
+        + accel_excess
 }
 
 /// Phase I (elastic SCA): while `start` violates the exact constraints, minimise the objective
@@ -76,7 +88,7 @@ pub(super) fn make_feasible(
     let mode = base.resolution;
     let mut current = start;
     let mut ev = evaluate(mission, &current);
-    if ev.is_feasible_for(mode) {
+    if ev.is_feasible_with(mode, base.dynamics) {
         return Ok((current, 0));
     }
     observer.on_phase("repair");
@@ -90,7 +102,8 @@ pub(super) fn make_feasible(
         ..*base
     };
     let slot_start = exact_rules && base.whole_slot_sensing;
-    let violation_of = |ev: &Evaluation| total_violation(mission, ev, mode, slot_start);
+    let violation_of =
+        |ev: &Evaluation| total_violation(mission, ev, (mode, base.dynamics), slot_start);
     let mut merit = value(&ev) + weight * violation_of(&ev);
     let mut best_violation = violation_of(&ev);
     let mut stalls = 0;
@@ -155,7 +168,7 @@ pub(super) fn make_feasible(
             current = cand;
             ev = cand_ev;
             merit = cand_merit;
-            if ev.is_feasible_for(mode) {
+            if ev.is_feasible_with(mode, base.dynamics) {
                 return Ok((current, it));
             }
             tuning.kappa_scale = (tuning.kappa_scale * 0.5).max(1.0 / 16.0);
@@ -185,36 +198,55 @@ pub(super) fn make_feasible(
             }
         }
     }
-    let error = stalled_error(mission, &ev, mode);
+    let error = stalled_error(mission, &ev, (mode, base.dynamics));
     Err(PhaseOneFailure {
         error,
         stalled: Some(current),
     })
 }
 
-/// The refusal of a phase I that stalled at `ev`: the first slot that is out of view, too slow
-/// or (under the general resolution) wider than d_min.
-fn stalled_error(mission: &Mission, ev: &Evaluation, mode: ResolutionMode) -> PlanError {
+/// The refusal of a phase I that stalled at `ev`: the first slot that is out of view, too slow,
+/// (under the general resolution) wider than d_min or (under the vehicle dynamics) above the
+/// acceleration limit.
+fn stalled_error(
+    mission: &Mission,
+    ev: &Evaluation,
+    (mode, dynamics): (ResolutionMode, Dynamics),
+) -> PlanError {
     let p = mission.params();
+    let vehicle = dynamics == Dynamics::Vehicle;
+    let too_fast = |a: f64| vehicle && a > p.max_accel_mps2 * (1.0 + ACCEL_TOL_REL);
     let first = ev
         .slots
         .iter()
         .find(|s| {
             !s.in_view
+                || too_fast(s.accel_mps2)
                 || (s.landmark_m.is_some()
                     && (s.speed_mps < p.min_speed_mps() - 1e-4
                         || (mode == ResolutionMode::General && s.worst_width_m > p.d_min_m + 1e-4)))
         })
         .map(|s| s.t)
         .unwrap_or(1);
+    let accel = if vehicle {
+        let v0 = mission.start_velocity_mps();
+        format!(
+            ", an acceleration excess of {:.3} m/s² over max_accel_mps2 = {:.3} m/s² from \
+             start_velocity_mps = ({:.2}, {:.2}) m/s",
+            ev.violations.accel_mps2, p.max_accel_mps2, v0[0], v0[1]
+        )
+    } else {
+        String::new()
+    };
     PlanError::Infeasible(Infeasibility {
         slot: first,
         t_s: first as f64 * p.slot_s,
         reason: format!(
             "no trajectory found that keeps every landmark in view at the required resolution \
-             ({} resolution; phase I stalled with a sensing violation of {:.2} m, a speed \
-             shortfall of {:.3} m/s and a worst cell width of d_min + {:.2} m)",
+             ({} resolution, {} dynamics; phase I stalled with a sensing violation of {:.2} m, a \
+             speed shortfall of {:.3} m/s{accel} and a worst cell width of d_min + {:.2} m)",
             mode.name(),
+            dynamics.name(),
             ev.violations.sensing_m,
             ev.violations.min_speed_mps,
             ev.violations.worst_width_m

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::evaluate::{Evaluation, ResolutionMode};
+use crate::evaluate::{Dynamics, Evaluation, ResolutionMode};
 use crate::shortfall::ResolutionShortfall;
 use crate::Trajectory;
 
@@ -94,17 +94,23 @@ pub struct PlanResult {
     /// [`PlanOptions::strict_resolution`]: super::PlanOptions::strict_resolution
     #[serde(default)]
     pub best_effort: Option<BestEffort>,
+    /// The vehicle model the plan was made for (under [`Dynamics::Vehicle`] it meets the
+    /// acceleration limit in every slot).
+    #[serde(default)]
+    pub dynamics: Dynamics,
 }
 
 impl PlanResult {
     /// Whether the plan meets what it was planned for on the exact geometry: every constraint
     /// of (p2), and the general resolution in every landmark slot when it was planned for it
-    /// strictly (a best-effort plan reports its shortfall instead).
+    /// strictly (a best-effort plan reports its shortfall instead), and the acceleration limit in
+    /// every slot when it was made for [`Dynamics::Vehicle`].
     pub fn is_feasible(&self) -> bool {
-        match self.best_effort {
+        let constraints = match self.best_effort {
             Some(_) => self.evaluation.is_feasible(),
             None => self.evaluation.is_feasible_for(self.resolution),
-        }
+        };
+        constraints && self.evaluation.meets(self.dynamics)
     }
 }
 

@@ -14,7 +14,7 @@
 //! problem that is tight at the previous iterate: each iterate is exactly feasible and its true
 //! energy is no larger than the previous one (a majorisation–minimisation sequence).
 
-use crate::evaluate::ResolutionMode;
+use crate::evaluate::{Dynamics, ResolutionMode, ACCEL_MARGIN_REL};
 use crate::geometry::{heading_unit, CellLinear, Length, Matrix2, Point2, Vector2, RIGHT_TURN};
 use crate::params::SPEED_OF_LIGHT_MPS;
 use crate::power::PowerModel;
@@ -89,6 +89,16 @@ pub struct ExactTuning {
     /// Cap on the surrogate energy, J (it over-estimates the true energy and is tight at the
     /// previous iterate, so an iterate that meets it has at most this true energy).
     pub energy_cap_j: Option<f64>,
+    /// The vehicle model: under [`Dynamics::Vehicle`] every slot's velocity differs from the
+    /// previous one (the mission's start velocity for the first) by at most a_max δ, one
+    /// second-order cone per slot (exact, no linearisation); in elastic mode each slot gets a
+    /// slack on it.
+    pub dynamics: Dynamics,
+    /// The time over which the first slot's velocity may differ from the start velocity, s
+    /// (`None`: the slot length). A coarse level sets (Δ + δ)/2 so that its track, with the
+    /// velocity interpolated linearly between slot middles onto the finer slots δ, keeps the
+    /// limit there too.
+    pub first_accel_window_s: Option<f64>,
 }
 
 impl Default for ExactTuning {
@@ -102,6 +112,8 @@ impl Default for ExactTuning {
             resolution: ResolutionMode::Paper,
             cell_slack_weight: None,
             energy_cap_j: None,
+            dynamics: Dynamics::Paper,
+            first_accel_window_s: None,
         }
     }
 }
@@ -125,6 +137,8 @@ struct SlotVars {
     shift: Option<usize>,
     /// Best effort: the cell's deficit slack ρ_t, m.
     rho: Option<usize>,
+    /// Elastic mode under the vehicle dynamics: the acceleration slack τ_t, m of step change.
+    accel_slack: Option<usize>,
 }
 
 /// The linearisation data of one slot, from the previous iterate.
@@ -192,6 +206,16 @@ impl ExactSubproblem {
                 &[vx.clone(), vy.clone()],
             );
             b.nonneg(Lin::var(sv.v, -SPEED_UNIT_MPS).plus_const(v_max));
+            if tuning.dynamics == Dynamics::Vehicle {
+                accel_cone(
+                    &mut b,
+                    mission,
+                    tuning,
+                    (&vars, prev.start_m),
+                    t,
+                    (&vx, &vy),
+                );
+            }
 
             if let Some(energy) = sv.energy {
                 energy_cones(
@@ -373,6 +397,11 @@ fn objective_terms(
         if let (Some(sig), Some(w)) = (sv.sigma, tuning.elastic_weight) {
             b.add_linear_cost(sig, w * objective_scale);
         }
+        if let (Some(tau), Some(w)) = (sv.accel_slack, tuning.elastic_weight) {
+            // τ/δ is the velocity change beyond the limit, m/s (phase I's measure)
+            b.add_linear_cost(tau, w * objective_scale / delta);
+            b.nonneg(Lin::var(tau, 1.0));
+        }
         if let (Some(rho), Some(w)) = (sv.rho, tuning.cell_slack_weight) {
             b.add_linear_cost(rho, w * objective_scale);
             b.nonneg(Lin::var(rho, 1.0));
@@ -438,6 +467,8 @@ fn layout(
         let best_effort = general && tuning.cell_slack_weight.is_some();
         let shift = (general && !best_effort).then(&mut take);
         let rho = best_effort.then(&mut take);
+        let accel_slack = (tuning.elastic_weight.is_some() && tuning.dynamics == Dynamics::Vehicle)
+            .then(&mut take);
         vars.push(SlotVars {
             x,
             y,
@@ -447,6 +478,7 @@ fn layout(
             sigma,
             shift,
             rho,
+            accel_slack,
         });
     }
     (vars, next)
@@ -657,6 +689,38 @@ fn energy_cap(
         }
     }
     b.nonneg(e);
+}
+
+/// The vehicle's acceleration limit into slot `t`: ‖v_t − v_{t−1}‖ ≤ a_max δ in steps,
+/// ‖s_t − s_{t−1}‖ ≤ a_max δ² (1 − [`ACCEL_MARGIN_REL`]) (+ τ_t in elastic mode), with
+/// s_0 = v_0 δ from the mission's start velocity and, for the first slot, a_max δ w
+/// (w = [`ExactTuning::first_accel_window_s`]).
+fn accel_cone(
+    b: &mut ProblemBuilder,
+    mission: &Mission,
+    tuning: &ExactTuning,
+    (vars, start_m): (&[SlotVars], [f64; 2]),
+    t: usize,
+    (vx, vy): (&Lin, &Lin),
+) {
+    let p = mission.params();
+    let delta = p.slot_s;
+    let (dx, dy, window) = if t == 1 {
+        let v0 = mission.start_velocity_mps();
+        (
+            vx.clone().plus_const(-v0[0] * delta),
+            vy.clone().plus_const(-v0[1] * delta),
+            tuning.first_accel_window_s.unwrap_or(delta),
+        )
+    } else {
+        let (px, py) = step_exprs(vars, t - 1, start_m);
+        (vx.clone().minus_lin(&px), vy.clone().minus_lin(&py), delta)
+    };
+    let mut head = Lin::constant_only(p.max_accel_mps2 * delta * window * (1.0 - ACCEL_MARGIN_REL));
+    if let Some(tau) = vars[t - 1].accel_slack {
+        head = head.plus(tau, 1.0);
+    }
+    b.soc(head, &[dx, dy]);
 }
 
 /// (x_t − x_{t−1}, y_t − y_{t−1}) as affine expressions (q_0 is a constant).
