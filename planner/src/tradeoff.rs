@@ -1,7 +1,9 @@
 //! The energy–resolution trade-off of a mission: from the least-energy plan to the
 //! best-resolved plan, the best-effort plan under a rising cap on the extra energy.
 
-use crate::driver::{best_effort_from, BestEffortBasis, NoObserver, PlanError, PlanOptions};
+use crate::driver::{
+    best_effort_from, BestEffortBasis, NoObserver, Observer, PlanError, PlanOptions,
+};
 use crate::evaluate::ResolutionMode;
 use crate::shortfall::ResolutionShortfall;
 use crate::{Mission, PlanResult};
@@ -37,6 +39,33 @@ pub fn tradeoff(
     options: &PlanOptions,
     caps_pct: &[f64],
 ) -> Result<Vec<TradeoffPoint>, PlanError> {
+    tradeoff_with_observer(mission, options, caps_pct, &mut NoObserver)
+}
+
+/// Passes a point's phases and iterations on, each phase named with the point.
+struct PointObserver<'a> {
+    inner: &'a mut dyn Observer,
+    point: String,
+}
+
+impl Observer for PointObserver<'_> {
+    fn on_iteration(&mut self, record: &crate::driver::IterationRecord) {
+        self.inner.on_iteration(record);
+    }
+    fn on_phase(&mut self, phase: &str) {
+        self.inner.on_phase(&format!("{}: {phase}", self.point));
+    }
+}
+
+/// [`tradeoff`], telling `observer` each iteration of each point's plan and each phase as
+/// `"point K/N (cap C %): PHASE"` (the least-energy plan first).
+pub fn tradeoff_with_observer(
+    mission: &Mission,
+    options: &PlanOptions,
+    caps_pct: &[f64],
+    observer: &mut dyn Observer,
+) -> Result<Vec<TradeoffPoint>, PlanError> {
+    let total = caps_pct.len() + 2;
     let options = PlanOptions {
         resolution: ResolutionMode::General,
         strict_resolution: false,
@@ -44,7 +73,14 @@ pub fn tradeoff(
         ..options.clone()
     };
     options.validate()?;
-    let basis = BestEffortBasis::new(mission, &options, &mut NoObserver)?;
+    let basis = BestEffortBasis::new(
+        mission,
+        &options,
+        &mut PointObserver {
+            inner: &mut *observer,
+            point: format!("point 1/{total} (least energy)"),
+        },
+    )?;
     let least_j = basis.least_energy_j();
     let point = |cap_pct, plan: PlanResult| TradeoffPoint {
         cap_pct,
@@ -72,7 +108,16 @@ pub fn tradeoff(
             max_extra_energy_pct: cap,
             ..options.clone()
         };
-        let plan = best_effort_from(mission, &capped, &basis, Some(&start), &mut NoObserver)?;
+        let label = format!(
+            "point {}/{total} ({})",
+            points.len() + 1,
+            cap.map_or("no cap".to_string(), |c| format!("cap {c} %"))
+        );
+        let mut named = PointObserver {
+            inner: &mut *observer,
+            point: label,
+        };
+        let plan = best_effort_from(mission, &capped, &basis, Some(&start), &mut named)?;
         // the next cap starts from this plan (within the larger cap too)
         start = plan.trajectory.clone();
         let p = point(cap, plan);

@@ -381,7 +381,15 @@ fn tradeoff_command(mission: &Path, out: &Path, caps_pct: &[f64]) -> Result<(), 
         return Err(bad(anyhow::anyhow!("--caps-pct must be ascending")));
     }
     let options = PlanOptions::default();
-    let points = planner::tradeoff::tradeoff(&m, &options, caps_pct).map_err(plan_failure)?;
+    let pb = spinner();
+    let points = planner::tradeoff::tradeoff_with_observer(
+        &m,
+        &options,
+        caps_pct,
+        &mut Progress(pb.clone()),
+    )
+    .map_err(plan_failure)?;
+    pb.finish_and_clear();
     report::tradeoff::write_tradeoff_dir(out, &m, &points)
         .with_context(|| format!("writing {}", out.display()))?;
     out!("point  cap/%  energy/J  extra/%  unresolved windows  slots  excess width/m");

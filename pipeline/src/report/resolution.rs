@@ -206,7 +206,7 @@ pub fn cell_svg(cell: &CellReport, title: &str) -> Result<String, Box<dyn std::e
             )))?;
         }
         note.draw(&Text::new(
-            "filled: measured −3 dB region; red: predicted ellipse in its parallelogram (× main-lobe factor)",
+            "filled: measured −3 dB region; red: predicted ellipse and parallelogram",
             (8, 4),
             ("sans-serif", LABEL_FONT_PX).into_font(),
         ))?;
