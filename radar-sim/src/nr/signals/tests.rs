@@ -1,0 +1,241 @@
+//! Tests of the reference signals against the standard's formulas, property by property.
+
+use super::*;
+use crate::nr::frame::{CyclicPrefix, TddPattern};
+use std::collections::HashSet;
+
+fn frame(mu: u8, prbs: usize) -> FrameStructure {
+    FrameStructure::new(
+        mu,
+        CyclicPrefix::Normal,
+        prbs,
+        None,
+        TddPattern::all_downlink(),
+        "radar.nr",
+    )
+    .unwrap()
+}
+
+fn every_slot() -> Periodicity {
+    Periodicity {
+        period_slots: 1,
+        offset_slot: 0,
+        length: 1,
+    }
+}
+
+#[test]
+fn ssb_layout() {
+    let b = ssb(17, 3).unwrap();
+    let count = |kind| b.iter().filter(|r| r.kind == kind).count();
+    assert_eq!((count(ReKind::Pss), count(ReKind::Sss)), (127, 127));
+    assert_eq!((count(ReKind::PbchDmrs), count(ReKind::Pbch)), (144, 432));
+    let cells: HashSet<(usize, usize)> = b.iter().map(|r| (r.k, r.l)).collect();
+    assert_eq!(cells.len(), b.len(), "each RE once");
+    for r in &b {
+        assert!(r.k < 240 && r.l < 4);
+        if r.kind == ReKind::PbchDmrs {
+            assert_eq!(r.k % 4, 17 % 4);
+            assert!((r.value.norm_sqr() - 1.0).abs() < 1e-12);
+        }
+        if r.l == 2 && matches!(r.kind, ReKind::Pbch | ReKind::PbchDmrs) {
+            assert!(r.k < 48 || r.k >= 192, "{r:?}");
+        }
+    }
+    assert!(ssb(1008, 0).is_err() && ssb(0, 8).is_err());
+}
+
+#[test]
+fn ssb_burst_lands_on_its_symbols() {
+    let f = frame(1, 52);
+    let cfg = SsbConfig {
+        cell_id: 5,
+        first_prb: 10,
+        count: 4,
+        period_ms: 20,
+    };
+    cfg.validate(&f, "radar.nr").unwrap();
+    // Case C: blocks at symbols 2, 8, 16, 22 of the half frame → slot 0: 2..6, 8..12;
+    // slot 1: 2..6 (16), 8..12 (22)
+    for slot in [0u64, 1] {
+        let res = cfg.res_in_slot(&f, slot);
+        let pss_symbols: HashSet<usize> = res
+            .iter()
+            .filter(|r| r.kind == ReKind::Pss)
+            .map(|r| r.l)
+            .collect();
+        assert_eq!(pss_symbols, HashSet::from([2, 8]), "slot {slot}");
+        assert!(res.iter().all(|r| (120..360).contains(&r.k)));
+    }
+    assert!(cfg.res_in_slot(&f, 2).is_empty());
+    // 20 ms later (40 slots at μ = 1) again; 10 ms later not
+    assert!(!cfg.res_in_slot(&f, 40).is_empty());
+    assert!(cfg.res_in_slot(&f, 20).is_empty());
+    let bad = SsbConfig {
+        first_prb: 40,
+        ..cfg.clone()
+    };
+    assert_eq!(
+        bad.validate(&f, "radar.nr").unwrap_err().field,
+        "radar.nr.ssb_first_prb"
+    );
+    let bad = SsbConfig {
+        count: 9,
+        ..cfg.clone()
+    };
+    assert_eq!(
+        bad.validate(&f, "radar.nr").unwrap_err().field,
+        "radar.nr.ssb_count"
+    );
+    assert_eq!(ssb_candidate_symbols(3).len(), 64);
+}
+
+#[test]
+fn trs_positions_and_sequence() {
+    let f = frame(1, 24);
+    let cfg = TrsConfig {
+        scrambling_id: 77,
+        k0: 1,
+        l0: 5,
+        period: Periodicity {
+            period_slots: 20,
+            offset_slot: 3,
+            length: 2,
+        },
+    };
+    cfg.validate("radar.nr").unwrap();
+    assert!(cfg.res_in_slot(&f, 2).is_empty() && cfg.res_in_slot(&f, 5).is_empty());
+    for slot in [3u64, 4, 23, 24] {
+        let res = cfg.res_in_slot(&f, slot);
+        assert_eq!(res.len(), 2 * 3 * 24);
+        for r in &res {
+            assert!(r.l == 5 || r.l == 9);
+            assert_eq!(r.k % 4, 1, "density 3: every 4th subcarrier from k0");
+        }
+        // the sequence of symbol 9 is r(m) of c_init(77, slot, 9)
+        let r9 = qpsk_sequence(csi_rs_c_init(77, (slot % 20) as usize, 9, 14), 72);
+        let got: Vec<_> = res.iter().filter(|r| r.l == 9).map(|r| r.value).collect();
+        assert_eq!(got, r9);
+    }
+    let bad = TrsConfig { l0: 7, ..cfg };
+    assert_eq!(
+        bad.validate("radar.nr").unwrap_err().field,
+        "radar.nr.trs_first_symbol"
+    );
+}
+
+#[test]
+fn prs_combs_cover_every_subcarrier_once() {
+    let f = frame(2, 25);
+    for comb in [2usize, 4, 6, 12] {
+        for offset in 0..comb {
+            let cfg = PrsConfig {
+                sequence_id: 1234,
+                comb,
+                symbols: 12,
+                start_symbol: 1,
+                re_offset: offset,
+                period: every_slot(),
+            };
+            cfg.validate(&f, "radar.nr").unwrap();
+            let res = cfg.res_in_slot(&f, 7);
+            assert_eq!(res.len(), 12 * f.subcarriers() / comb);
+            // every group of `comb` consecutive symbols covers each subcarrier exactly once
+            for g in 0..12 / comb {
+                let mut seen = vec![0usize; f.subcarriers()];
+                for r in res.iter().filter(|r| (r.l - 1) / comb == g) {
+                    seen[r.k] += 1;
+                }
+                assert!(seen.iter().all(|&c| c == 1), "comb {comb} offset {offset}");
+            }
+            // within a symbol: spacing comb, starting at (offset + k') mod comb
+            for (j, kp) in prs_offsets(comb).iter().enumerate() {
+                let ks: Vec<usize> = res.iter().filter(|r| r.l == 1 + j).map(|r| r.k).collect();
+                assert_eq!(ks[0], (offset + kp) % comb);
+                assert!(ks.windows(2).all(|w| w[1] - w[0] == comb));
+                let want = qpsk_sequence(prs_c_init(1234, 7, 1 + j, 14), ks.len());
+                let got: Vec<_> = res
+                    .iter()
+                    .filter(|r| r.l == 1 + j)
+                    .map(|r| r.value)
+                    .collect();
+                assert_eq!(got, want);
+            }
+        }
+    }
+    let base = PrsConfig {
+        sequence_id: 0,
+        comb: 4,
+        symbols: 4,
+        start_symbol: 0,
+        re_offset: 0,
+        period: every_slot(),
+    };
+    for (cfg, field) in [
+        (PrsConfig { comb: 3, ..base }, "radar.nr.prs_comb"),
+        (PrsConfig { symbols: 2, ..base }, "radar.nr.prs_symbols"),
+        (
+            PrsConfig {
+                start_symbol: 11,
+                ..base
+            },
+            "radar.nr.prs_start_symbol",
+        ),
+        (
+            PrsConfig {
+                re_offset: 4,
+                ..base
+            },
+            "radar.nr.prs_re_offset",
+        ),
+        (
+            PrsConfig {
+                sequence_id: 4096,
+                ..base
+            },
+            "radar.nr.prs_sequence_id",
+        ),
+    ] {
+        assert_eq!(cfg.validate(&f, "radar.nr").unwrap_err().field, field);
+    }
+}
+
+#[test]
+fn pdsch_dmrs_positions() {
+    let f = frame(0, 10);
+    let cfg = PdschDmrsConfig {
+        scrambling_id: 300,
+        n_scid: 1,
+        type_a_position: 2,
+        additional_positions: 2,
+    };
+    cfg.validate("radar.nr").unwrap();
+    assert_eq!(cfg.symbols(14), vec![2, 7, 11]);
+    assert_eq!(cfg.symbols(10), vec![2, 6, 9]);
+    assert_eq!(cfg.symbols(2), Vec::<usize>::new());
+    let a3 = PdschDmrsConfig {
+        additional_positions: 3,
+        ..cfg
+    };
+    assert_eq!(a3.symbols(14), vec![2, 5, 8, 11]);
+    assert_eq!(a3.symbols(12), vec![2, 5, 8, 11]);
+    let a1 = PdschDmrsConfig {
+        additional_positions: 1,
+        ..cfg
+    };
+    assert_eq!(a1.symbols(14), vec![2, 11]);
+    let res = cfg.res_in_slot(&f, 3, 14, &[1, 4]);
+    assert_eq!(res.len(), 3 * 2 * 6);
+    for r in &res {
+        assert_eq!(r.k % 2, 0);
+        assert!((12..24).contains(&r.k) || (48..60).contains(&r.k));
+    }
+    // PRB 4's values are r(24..30) of the sequence from CRB 0
+    let r = qpsk_sequence(pdsch_dmrs_c_init(300, 1, 0, 3, 7, 14), 30);
+    let got: Vec<_> = res
+        .iter()
+        .filter(|x| x.l == 7 && x.k >= 48)
+        .map(|x| x.value)
+        .collect();
+    assert_eq!(got, r[24..30].to_vec());
+}
