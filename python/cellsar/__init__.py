@@ -56,6 +56,7 @@ def plan(
     time_limit_s: Optional[float] = None,
     progress: Optional[Callable[[dict], Any]] = None,
     tolerance: Optional[float] = None,
+    dynamics: Optional[str] = None,
 ) -> Plan:
     """Plans ``mission`` and returns the :class:`Plan`.
 
@@ -82,6 +83,11 @@ def plan(
             (``iteration``, ``objective``, ``true_energy_j``, ...); an exception raised in it
             stops the plan and is re-raised.
         tolerance: relative change of the objective that stops the iterations (1e-4).
+        dynamics: ``"vehicle"`` (the velocity changes by at most the mission's
+            ``max_accel_mps2`` times the slot length from slot to slot, from its
+            ``start_velocity_mps``) or ``"paper"`` (the velocity may jump, as in the paper).
+            ``None`` (the default) takes the scheme's default, as ``cellsar-planner plan
+            --dynamics``; ``"vehicle"`` with ``"paper"`` or ``"baseline"`` is a ValueError.
 
     Raises:
         InfeasibleMission: the mission cannot be flown (``slot``, ``t_s``, ``reason``).
@@ -107,6 +113,7 @@ def plan(
             "time_limit_s": time_limit_s,
             "progress": progress,
             "tolerance": tolerance,
+            "dynamics": dynamics,
         },
     )
 

@@ -8,7 +8,7 @@ use pyo3::exceptions::{PyAttributeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use planner::evaluate::ResolutionMode;
+use planner::evaluate::{Dynamics, ResolutionMode};
 use planner::{PlanOptions, PlanResult, Scheme, Summary, Trajectory};
 
 use crate::columns;
@@ -72,6 +72,7 @@ impl PyPlan {
         self.result
             .evaluation
             .is_feasible_for(self.result.resolution)
+            && self.result.evaluation.meets(self.result.dynamics)
     }
 
     /// The scheme's name.
@@ -274,6 +275,7 @@ pub struct PlanArgs<'py> {
     time_limit_s: Option<f64>,
     progress: Option<Py<PyAny>>,
     tolerance: Option<f64>,
+    dynamics: Option<String>,
 }
 
 /// Plans a mission and returns the `Plan` (`cellsar.plan` documents the options).
@@ -286,9 +288,12 @@ pub fn plan(py: Python<'_>, mission: PyRef<'_, PyMission>, args: PlanArgs<'_>) -
     let options = PlanOptions {
         scheme,
         resolution: match &args.resolution {
-            Some(name) => {
-                parse_named(name, &ResolutionMode::ALL, ResolutionMode::name, "resolution")?
-            }
+            Some(name) => parse_named(
+                name,
+                &ResolutionMode::ALL,
+                ResolutionMode::name,
+                "resolution",
+            )?,
             None => defaults.resolution,
         },
         strict_resolution: args.strict_resolution.unwrap_or(defaults.strict_resolution),
@@ -302,6 +307,10 @@ pub fn plan(py: Python<'_>, mission: PyRef<'_, PyMission>, args: PlanArgs<'_>) -
         max_iterations: args.max_iterations.unwrap_or(defaults.max_iterations),
         tolerance: args.tolerance.unwrap_or(defaults.tolerance),
         time_limit_s: args.time_limit_s,
+        dynamics: match &args.dynamics {
+            Some(name) => parse_named(name, &Dynamics::ALL, Dynamics::name, "dynamics")?,
+            None => defaults.dynamics,
+        },
         ..defaults
     };
     // refused before the mission is planned, with the library's message (a ValueError)

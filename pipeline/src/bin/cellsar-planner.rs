@@ -14,7 +14,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use pipeline::report::{self, reproduce};
 use planner::dmin::{expected_dmin_m, expected_dmin_monte_carlo_m, CdfForm};
-use planner::evaluate::ResolutionMode;
+use planner::evaluate::{Dynamics, ResolutionMode};
 use planner::Summary;
 use planner::{
     evaluate, plan_with_observer, IterationRecord, Mission, Observer, PlanOptions, PlanResult,
@@ -72,6 +72,12 @@ enum Command {
         resolution: Option<ResolutionMode>,
         #[command(flatten)]
         best_effort: BestEffortArgs,
+        /// Vehicle model: vehicle (for the exact-geometry schemes: the velocity changes by at
+        /// most the mission's max_accel_mps2 × δ from slot to slot, from its
+        /// start_velocity_mps) or paper (the default for now, and the only model of paper and
+        /// baseline: the velocity may jump).
+        #[arg(long, value_parser = pipeline::args::enum_parser::<Dynamics>())]
+        dynamics: Option<Dynamics>,
         /// Wall-time limit of the whole run, s: the iterations stop at the first check after it
         /// and the last accepted (feasible) iterate is written, with termination `time_limit`;
         /// a run still repairing its start then fails (exit 1).
@@ -223,6 +229,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             plain_sca,
             resolution,
             best_effort,
+            dynamics,
             time_limit_s,
             no_init_fallback,
         } => {
@@ -254,8 +261,15 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 replace_unrepairable_init: !no_init_fallback,
                 strict_resolution: best_effort.strict_resolution,
                 max_extra_energy_pct: best_effort.max_extra_energy_pct,
+                dynamics: dynamics.unwrap_or(scheme.default_dynamics()),
                 ..PlanOptions::default()
             };
+            if !scheme.supports(options.dynamics) {
+                return Err(bad(anyhow::anyhow!(
+                    "--dynamics {} applies to --scheme exact and baseline-exact only, not to {scheme}",
+                    options.dynamics
+                )));
+            }
             pipeline::args::check_best_effort_flags(&options).map_err(bad)?;
             let pb = spinner();
             let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));

@@ -95,6 +95,11 @@ enum Cmd {
         /// landmark slot (exit 3) instead of planning the best effort.
         #[arg(long)]
         strict_resolution: bool,
+        /// The plan's vehicle model: `vehicle` (the acceleration limit of the mission's
+        /// `max_accel_mps2` between slots) or `paper` (the default for now: the velocity may
+        /// jump); as `cellsar run --dynamics`.
+        #[arg(long, default_value_t = planner::Scheme::Exact.default_dynamics(), value_parser = pipeline::args::enum_parser::<planner::Dynamics>())]
+        dynamics: planner::Dynamics,
     },
     /// Resolution report: measured −3 dB region of a point response vs the predicted cell at
     /// several bistatic angles (one near blind) and bandwidths → RESOLUTION.md, JSON, SVGs.
@@ -350,10 +355,12 @@ fn run_cli() -> Result<()> {
             limits,
             resolution,
             strict_resolution,
+            dynamics,
         } => {
             let plan_options = planner::PlanOptions {
                 resolution,
                 strict_resolution,
+                dynamics,
                 ..Default::default()
             };
             pipeline::args::check_best_effort_flags(&plan_options).map_err(bad)?;

@@ -95,6 +95,12 @@ pub struct RunArgs {
     /// landmark slot (the planner's refusal, exit 3) instead of planning the best effort.
     #[arg(long)]
     pub strict_resolution: bool,
+    /// The plan's vehicle model: `vehicle` (the velocity changes by at most the mission's
+    /// `max_accel_mps2` × δ from slot to slot, from its `start_velocity_mps`) or `paper` (the
+    /// default for now: the velocity may jump, as in the paper); top-level docs/user-guide.md,
+    /// "Vehicle limits". Sent with the plan request.
+    #[arg(long, default_value_t = planner::Scheme::Exact.default_dynamics(), value_parser = crate::args::enum_parser::<planner::Dynamics>())]
+    pub dynamics: planner::Dynamics,
     /// How IQ frames reach the processor.
     #[arg(long, value_enum, default_value_t = Transport::Iox)]
     pub transport: Transport,
@@ -285,7 +291,7 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     FrameLayout::new(&[], setup.scene.radar.samples_per_pulse(), mfb)
         .with_context(|| format!("scene {}", args.scene.display()))
         .map_err(Failure::bad_input)?;
-    planner::init::precheck(&mission)
+    planner::init::precheck_with(&mission, args.dynamics)
         .with_context(|| format!("mission {}", args.mission.display()))
         .map_err(Failure::infeasible)?;
     Ok(mission)

@@ -43,6 +43,7 @@ impl Session<'_> {
             options: PlanRequestOptions {
                 resolution: Some(self.args().resolution),
                 strict_resolution: Some(self.args().strict_resolution),
+                dynamics: Some(self.args().dynamics),
                 ..PlanRequestOptions::default()
             },
         };

@@ -3,7 +3,7 @@
 
 use bridge::keys::KeyError;
 use bridge::{Message, MissionId};
-use planner::evaluate::ResolutionMode;
+use planner::evaluate::{Dynamics, ResolutionMode};
 use planner::summary::Summary;
 use planner::{Mission, MissionFile, PlanOptions, PlanResult, Scheme};
 use serde::{Deserialize, Serialize};
@@ -45,6 +45,11 @@ pub struct PlanRequestOptions {
     /// refused where `strict_resolution` is.
     #[serde(default)]
     pub max_extra_energy_pct: Option<f64>,
+    /// `vehicle` (the acceleration limit of the mission's `max_accel_mps2` between slots, from
+    /// its start velocity) or `paper` (the velocity may jump); default: the scheme's
+    /// ([`Scheme::default_dynamics`]); `vehicle` is refused with `paper` and `baseline`.
+    #[serde(default)]
+    pub dynamics: Option<Dynamics>,
 }
 
 impl PlanRequestOptions {
@@ -80,6 +85,16 @@ impl PlanRequestOptions {
                 )));
             }
             o.max_extra_energy_pct = Some(pct);
+        }
+        if let Some(d) = self.dynamics {
+            if !o.scheme.supports(d) {
+                return Err(BadRequest(format!(
+                    "options.dynamics: {d} applies to the exact-geometry schemes (exact, \
+                     baseline-exact) only, not to {}",
+                    o.scheme
+                )));
+            }
+            o.dynamics = d;
         }
         o.check_best_effort()
             .map_err(|e| BadRequest(format!("options.{e}")))?;

@@ -26,7 +26,9 @@ pub const DEFAULT_RESOLUTION: ResolutionMode = ResolutionMode::General;
 /// The vehicle model of the schemes a user flies (`exact`, its best effort and trade-off,
 /// `baseline-exact`) unless a request says otherwise, through every interface; the comparison
 /// schemes `paper` and `baseline`, and `reproduce`, keep the paper's model
-/// ([`Scheme::default_dynamics`]).
+/// ([`Scheme::default_dynamics`]). For now the paper's: with [`Dynamics::Vehicle`] the
+/// far-start mission's best effort leaves 1 window (14 slots) unresolved, where the paper's
+/// model resolves every slot (docs/user-guide.md, "Vehicle limits").
 pub const DEFAULT_DYNAMICS: Dynamics = Dynamics::Paper;
 
 /// Which planner to run. Its names (`exact`, `paper`, `baseline`, `baseline-exact`) are the
