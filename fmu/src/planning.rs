@@ -3,7 +3,9 @@
 
 use std::time::Instant;
 
+use planner::evaluate::ResolutionMode;
 use planner::{LandmarkWindow, LandmarksSpec, Mission, Trajectory};
+use serde::{Deserialize, Serialize};
 
 use crate::core::Num;
 
@@ -16,6 +18,71 @@ pub struct Planned {
     pub solve_s: f64,
     /// One line for the log.
     pub summary: String,
+}
+
+/// The options of the initial plan that the FMU's parameters `resolution`, `strict_resolution`
+/// and `max_extra_energy_pct` set: the plan options a user gives `cellsar-planner plan`
+/// (`--resolution`, `--strict-resolution`, `--max-extra-energy-pct`), with the same defaults
+/// ([`planner::PlanOptions::default`]). Re-plans inside a step ignore them: they plan for
+/// [`REPLAN_RESOLUTION`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct InitialPlan {
+    /// [`planner::PlanOptions::resolution`].
+    pub resolution: ResolutionMode,
+    /// [`planner::PlanOptions::strict_resolution`].
+    pub strict_resolution: bool,
+    /// [`planner::PlanOptions::max_extra_energy_pct`] (`None`: no cap).
+    pub max_extra_energy_pct: Option<f64>,
+}
+
+impl Default for InitialPlan {
+    fn default() -> Self {
+        let d = planner::PlanOptions::default();
+        Self {
+            resolution: d.resolution,
+            strict_resolution: d.strict_resolution,
+            max_extra_energy_pct: d.max_extra_energy_pct,
+        }
+    }
+}
+
+impl InitialPlan {
+    /// The planner's options: these, and the library's defaults for everything else.
+    pub fn plan_options(&self) -> planner::PlanOptions {
+        planner::PlanOptions {
+            resolution: self.resolution,
+            strict_resolution: self.strict_resolution,
+            max_extra_energy_pct: self.max_extra_energy_pct,
+            ..Default::default()
+        }
+    }
+
+    /// Checks the options with the library's [`planner::PlanOptions::validate`] (which includes
+    /// [`planner::PlanOptions::check_best_effort`]); the error is the library's message, which
+    /// names the options by their fields, the names of the FMU's parameters.
+    pub fn validate(&self) -> Result<(), String> {
+        self.plan_options().validate().map_err(|e| e.to_string())
+    }
+
+    /// The plan for a log line: "resolution general (best effort, no energy cap)".
+    pub fn describe(&self) -> String {
+        let detail = match (
+            self.resolution,
+            self.strict_resolution,
+            self.max_extra_energy_pct,
+        ) {
+            (ResolutionMode::Paper, _, _) => " (the least-energy plan)".to_string(),
+            (ResolutionMode::General, true, _) => " (strict)".to_string(),
+            (ResolutionMode::General, false, None) => " (best effort, no energy cap)".to_string(),
+            (ResolutionMode::General, false, Some(pct)) => {
+                format!(
+                    " (best effort, at most {}% more energy than the least-energy plan)",
+                    Num(pct)
+                )
+            }
+        };
+        format!("resolution {}{detail}", self.resolution)
+    }
 }
 
 /// Plans `mission` with the planner's defaults ([`planner::PlanOptions::default`]: the `exact`
@@ -420,6 +487,9 @@ fn remainder(moved: &Mission, current: &Trajectory, from_slot: usize, window: us
     let mut sub_params = p.clone();
     sub_params.start_m = current.q(from_slot);
     sub_params.horizon_s = remaining as f64 * slot_s;
+    if from_slot > 0 {
+        sub_params.start_velocity_mps = Some(splice_velocity_mps(current, from_slot, p));
+    }
     let init = Trajectory {
         slot_s,
         start_m: current.q(from_slot),
@@ -438,6 +508,23 @@ fn remainder(moved: &Mission, current: &Trajectory, from_slot: usize, window: us
         sub_params,
         init,
         moved_slots,
+    }
+}
+
+/// The UAV's velocity as it passes q_{from_slot} on `current` (`from_slot` ≥ 1): that of the
+/// last committed slot, (q_{from_slot} − q_{from_slot−1})/δ, at most the speed limit (a plan may
+/// pass it by rounding). It is the sub-mission's start velocity, so that a re-plan under the
+/// vehicle dynamics (`planner::PlanOptions::dynamics`) continues from the velocity flown instead
+/// of the mission's start rule; the paper's dynamics ignore it.
+fn splice_velocity_mps(current: &Trajectory, from_slot: usize, p: &planner::Params) -> [f64; 2] {
+    let (a, b) = (current.q(from_slot - 1), current.q(from_slot));
+    let v = [(b[0] - a[0]) / p.slot_s, (b[1] - a[1]) / p.slot_s];
+    let speed = v[0].hypot(v[1]);
+    if speed > p.max_speed_mps {
+        let k = p.max_speed_mps / speed;
+        [v[0] * k, v[1] * k]
+    } else {
+        v
     }
 }
 
@@ -568,6 +655,23 @@ points = [
         );
         assert!(re.transition_slots >= 2);
         assert!(re.summary.contains(&describe_attempts(&re.attempts)));
+    }
+
+    #[test]
+    fn the_sub_mission_starts_with_the_velocity_flown() {
+        let mission = short_mission();
+        let current = plan(&mission, None).unwrap().trajectory;
+        let p = mission.params();
+        let rest = remainder(&mission, &current, 5, 0);
+        let v = rest.sub_params.start_velocity_mps.unwrap();
+        let (a, b) = (current.q(4), current.q(5));
+        for i in 0..2 {
+            assert!((v[i] - (b[i] - a[i]) / p.slot_s).abs() < 1e-9, "{v:?}");
+        }
+        assert_eq!(rest.sub_params.start_m, b);
+        // from the start, the mission's own start rule
+        let rest = remainder(&mission, &current, 0, 0);
+        assert_eq!(rest.sub_params.start_velocity_mps, p.start_velocity_mps);
     }
 
     #[test]

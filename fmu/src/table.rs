@@ -177,6 +177,13 @@ pub const UNITS: &[Unit] = &[
         rad: 0,
     },
     Unit {
+        name: "m/s2",
+        kg: 0,
+        m: 1,
+        s: -2,
+        rad: 0,
+    },
+    Unit {
         name: "W",
         kg: 1,
         m: 2,
@@ -277,6 +284,12 @@ pub mod planner_vr {
     pub const BS_M: u32 = 12;
     /// `mission_file`.
     pub const MISSION_FILE: u32 = 100;
+    /// `resolution` (String): the initial plan's resolution requirement.
+    pub const RESOLUTION: u32 = 101;
+    /// `strict_resolution` (Boolean).
+    pub const STRICT_RESOLUTION: u32 = 102;
+    /// `max_extra_energy_pct`.
+    pub const MAX_EXTRA_ENERGY_PCT: u32 = 103;
     /// `landmark_x_in_m`.
     pub const LANDMARK_X_IN: u32 = 200;
     /// `landmark_y_in_m`.
@@ -427,6 +440,7 @@ pub const PLANNER_VARS: &[Var] = &[
     param("air_density_kgpm3", 22, Some("kg/m3"), "Air density rho"),
     param("fuselage_drag_ratio", 23, None, "Fuselage drag ratio d_f"),
     param("uav_mass_kg", 24, Some("kg"), "UAV mass (informational)"),
+    param("max_accel_mps2", 25, Some("m/s2"), "Largest horizontal acceleration a_max; only the vehicle dynamics use it (planner PlanOptions::dynamics: the FMU plans with the library's default dynamics)"),
     Var {
         name: "mission_file",
         vr: pv::MISSION_FILE,
@@ -436,6 +450,36 @@ pub const PLANNER_VARS: &[Var] = &[
         len: 1,
         unit: None,
         description: "Mission file (TOML or JSON); a relative path is looked up in the FMU's resources/ directory, then in the working directory. Its [params] are overridden by the parameters set through FMI.",
+    },
+    Var {
+        name: "resolution",
+        vr: pv::RESOLUTION,
+        ty: VarType::String,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 1,
+        unit: None,
+        description: "Resolution requirement of the initial plan (cellsar-planner plan --resolution): general (the default: the worst width of the general resolution cell within d_min in every landmark slot, or where the geometry does not allow it the best effort, as cellsar-planner plan, cellsar run and the Python package plan) or paper (the paper's resolutions within d_min: the least-energy plan). Re-plans inside a step (after a landmark move) always use paper, to stay fast; output plan_resolution says which plan is flown.",
+    },
+    Var {
+        name: "strict_resolution",
+        vr: pv::STRICT_RESOLUTION,
+        ty: VarType::Boolean,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 1,
+        unit: None,
+        description: "Initial plan under resolution general only (cellsar-planner plan --strict-resolution): refuse a mission whose resolution cell cannot be held within d_min in every landmark slot (ExitInitializationMode returns Error naming the first slot) instead of planning the best effort. Refused at ExitInitializationMode under resolution paper. Re-plans inside a step ignore it (they use paper).",
+    },
+    Var {
+        name: "max_extra_energy_pct",
+        vr: pv::MAX_EXTRA_ENERGY_PCT,
+        ty: VarType::Real,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 1,
+        unit: None,
+        description: "Initial plan's best effort only (cellsar-planner plan --max-extra-energy-pct), in percent: the best-resolved plan that uses at most this many percent more energy than the least-energy plan; NaN (the default): no cap. A negative or infinite value is refused at the set, a finite one under resolution paper at ExitInitializationMode. Re-plans inside a step ignore it (they use paper).",
     },
     Var {
         name: "landmark_x_in_m",
@@ -475,7 +519,7 @@ pub const PLANNER_VARS: &[Var] = &[
     output("worst_cell_width_m", pv::WORST_WIDTH, VarType::Real, Some("m"), "Worst width of the resolution cell at the sensed point (erratum 12 (docs/paper-notes.md))"),
     output("replan_count", pv::REPLAN_COUNT, VarType::Integer, None, "Receding-horizon re-plans so far"),
     output("slots_out_of_view", pv::SLOTS_OUT_OF_VIEW, VarType::Integer, None, "Slots of the plan (whole horizon, flown ones included) whose landmark is not within r_s of the sensing centre at the slot end, against the landmarks in effect (moved ones included); 0 for a plan that keeps every landmark in view"),
-    output("plan_resolution", pv::PLAN_RESOLUTION, VarType::Integer, None, "Resolution requirement of the plan flown now: 1 = general (the initial plan: the general cell as a best effort, the default of cellsar-planner plan, cellsar run and the Python package), 0 = paper (the least-energy plan: every re-plan after a landmark move, which plans for the paper's resolution to stay fast)"),
+    output("plan_resolution", pv::PLAN_RESOLUTION, VarType::Integer, None, "Resolution requirement of the plan flown now: 1 = general, 0 = paper. Before any re-plan it is the parameter resolution (default general: the general cell as a best effort, the default of cellsar-planner plan, cellsar run and the Python package); after a re-plan (a landmark move) 0: every re-plan plans the least-energy plan for the paper's resolution, to stay fast"),
     Var {
         name: "plan_solve_time_s",
         vr: pv::SOLVE_TIME,

@@ -40,6 +40,7 @@ pub fn double(v: f64) -> String {
 enum Start {
     Reals(Vec<f64>),
     Str(String),
+    Bool(bool),
 }
 
 fn start_value(core: &Core, var: &Var) -> Option<Start> {
@@ -52,7 +53,8 @@ fn start_value(core: &Core, var: &Var) -> Option<Start> {
             .collect::<Option<Vec<f64>>>()
             .map(Start::Reals),
         VarType::String => core.get_string(var).ok().map(Start::Str),
-        VarType::Integer | VarType::Boolean => None,
+        VarType::Boolean => core.get_bool(var, 0.0).ok().map(Start::Bool),
+        VarType::Integer => None,
     }
 }
 
@@ -166,6 +168,9 @@ pub fn fmi2(info: &ModelInfo) -> String {
                 Some(Start::Str(s)) => {
                     let _ = write!(typed, r#" start="{}""#, escape(s));
                 }
+                Some(Start::Bool(b)) => {
+                    let _ = write!(typed, r#" start="{b}""#);
+                }
                 None => {}
             }
             if let Some(u) = var.unit {
@@ -210,9 +215,15 @@ pub fn fmi3(info: &ModelInfo) -> String {
         let elem = var.ty.fmi3_name();
         let mut attrs = common_attrs(var, var.name, var.vr);
         let start = start_value(&core, var);
-        if let Some(Start::Reals(v)) = &start {
-            let list: Vec<String> = v.iter().map(|x| double(*x)).collect();
-            let _ = write!(attrs, r#" start="{}""#, list.join(" "));
+        match &start {
+            Some(Start::Reals(v)) => {
+                let list: Vec<String> = v.iter().map(|x| double(*x)).collect();
+                let _ = write!(attrs, r#" start="{}""#, list.join(" "));
+            }
+            Some(Start::Bool(b)) => {
+                let _ = write!(attrs, r#" start="{b}""#);
+            }
+            Some(Start::Str(_)) | None => {}
         }
         if let Some(u) = var.unit {
             let _ = write!(attrs, r#" unit="{}""#, escape(u));
@@ -293,6 +304,10 @@ mod tests {
         assert!(x.contains(r#"<String start="default_mission.toml"/>"#));
         assert!(!x.contains(r#"name="time""#));
         assert!(x.contains(r#"<Real start="NaN" unit="m"/>"#)); // landmark inputs
+                                                                // the initial plan's options at the library's defaults (NaN: no cap)
+        assert!(x.contains(r#"<String start="general"/>"#), "{x}");
+        assert!(x.contains(r#"<Boolean start="false"/>"#), "{x}");
+        assert!(x.contains(r#"name="max_extra_energy_pct" valueReference="103" causality="parameter" variability="fixed""#));
     }
 
     #[test]
@@ -304,5 +319,11 @@ mod tests {
             "{x}"
         );
         assert!(x.contains(r#"<Start value="default_mission.toml"/>"#));
+        assert!(x.contains(r#"<Start value="general"/>"#));
+        assert!(
+            x.contains(r#"<Boolean name="strict_resolution" valueReference="102" causality="parameter" variability="fixed""#)
+                && x.contains(r#" start="false"/>"#),
+            "{x}"
+        );
     }
 }

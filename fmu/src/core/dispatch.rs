@@ -72,10 +72,10 @@ impl Core {
                 .run
                 .as_ref()
                 .map_or(0, |r| count(r.eval.slots_out_of_view))),
-            // the initial plan is the library's default; a re-plan is for the paper's resolution
+            // the initial plan is for the parameter `resolution`; a re-plan for the paper's
             (Core::Planner(c), pv::PLAN_RESOLUTION) => Ok(crate::planning::resolution_code(
                 match c.run.as_ref().map_or(0, |r| r.replans) {
-                    0 => planner::DEFAULT_RESOLUTION,
+                    0 => c.initial.resolution,
                     _ => crate::planning::REPLAN_RESOLUTION,
                 },
             )),
@@ -115,31 +115,46 @@ impl Core {
         }
     }
 
+    /// Checks that a Boolean may be set, without setting it.
+    pub fn check_bool(&self, var: &Var) -> Result<(), FmuError> {
+        match self {
+            Core::Planner(c) => c.check_bool(var),
+            Core::Mover(_) => Err(unknown(var)),
+        }
+    }
+
+    /// Sets a Boolean (after [`Core::check_bool`]; it checks again).
+    pub fn set_bool(&mut self, var: &Var, value: bool) -> Result<(), FmuError> {
+        match self {
+            Core::Planner(c) => c.set_bool(var, value),
+            Core::Mover(_) => Err(unknown(var)),
+        }
+    }
+
     /// Reads a String.
     pub fn get_string(&self, var: &Var) -> Result<String, FmuError> {
-        match (self, var.vr) {
-            (Core::Planner(c), pv::MISSION_FILE) => Ok(c.mission_file.clone()),
-            _ => Err(unknown(var)),
+        match self {
+            Core::Planner(c) => c.get_string(var),
+            Core::Mover(_) => Err(unknown(var)),
         }
     }
 
-    /// Checks that a String may be set, without setting it.
-    pub fn check_string(&self, var: &Var) -> Result<(), FmuError> {
-        match (self, var.vr) {
-            (Core::Planner(_), pv::MISSION_FILE) => Ok(()),
-            _ => Err(unknown(var)),
+    /// Checks that a String may be set to `value`, without setting it.
+    pub fn check_string(&self, var: &Var, value: &str) -> Result<(), FmuError> {
+        match self {
+            Core::Planner(c) => c.check_string(var, value),
+            Core::Mover(_) => Err(unknown(var)),
         }
     }
 
-    /// Sets a String.
+    /// Sets a String (after [`Core::check_string`]; it checks again).
     pub fn set_string(&mut self, var: &Var, value: &str) -> Result<(), FmuError> {
-        match (self, var.vr) {
-            (Core::Planner(c), pv::MISSION_FILE) => {
-                c.mission_file = value.to_string();
-                c.run = None;
-                Ok(())
+        match self {
+            Core::Planner(c) => {
+                c.check_string(var, value)?;
+                c.set_string(var, value)
             }
-            _ => Err(unknown(var)),
+            Core::Mover(_) => Err(unknown(var)),
         }
     }
 

@@ -14,6 +14,8 @@ pub struct PlannerCore {
     pub(super) params_set: BTreeSet<String>,
     /// `mission_file`.
     pub(super) mission_file: String,
+    /// `resolution`, `strict_resolution`, `max_extra_energy_pct`: the initial plan's options.
+    pub(super) initial: planning::InitialPlan,
     /// `landmark_x_in_m`, `landmark_y_in_m`.
     pub(super) landmark_in_m: [f64; 2],
     /// Test hook (hidden variable; only with the `test-hooks` feature).
@@ -29,6 +31,7 @@ impl Default for PlannerCore {
             params: Params::default(),
             params_set: BTreeSet::new(),
             mission_file: DEFAULT_MISSION_FILE.to_string(),
+            initial: planning::InitialPlan::default(),
             landmark_in_m: [f64::NAN, f64::NAN],
             #[cfg(feature = "test-hooks")]
             debug_panic: 0,
@@ -44,6 +47,10 @@ impl PlannerCore {
             pv::BS_M => return Ok(self.params.bs_m[elem.min(1)]),
             pv::LANDMARK_X_IN => return Ok(self.landmark_in_m[0]),
             pv::LANDMARK_Y_IN => return Ok(self.landmark_in_m[1]),
+            // NaN: no cap
+            pv::MAX_EXTRA_ENERGY_PCT => {
+                return Ok(self.initial.max_extra_energy_pct.unwrap_or(f64::NAN))
+            }
             _ => {}
         }
         if var.causality == crate::table::Causality::Parameter {
@@ -98,6 +105,9 @@ impl PlannerCore {
         if var.causality != crate::table::Causality::Parameter || var.ty != VarType::Real {
             return Err(unknown(var));
         }
+        if var.vr == pv::MAX_EXTRA_ENERGY_PCT {
+            return check_max_extra_energy_pct(value);
+        }
         if !value.is_finite() {
             return Err(FmuError::error(format!(
                 "parameter `{}` = {}: must be a finite number",
@@ -127,6 +137,11 @@ impl PlannerCore {
                 self.landmark_in_m[1] = value;
                 return Ok(());
             }
+            pv::MAX_EXTRA_ENERGY_PCT => {
+                self.initial.max_extra_energy_pct = (!value.is_nan()).then_some(value);
+                self.run = None;
+                return Ok(());
+            }
             pv::START_M => {
                 self.params.start_m[elem] = value;
                 value == d.start_m[elem]
@@ -153,6 +168,9 @@ impl PlannerCore {
     }
 
     pub(super) fn get_bool(&self, var: &Var, tau_s: f64) -> Result<bool, FmuError> {
+        if var.vr == pv::STRICT_RESOLUTION {
+            return Ok(self.initial.strict_resolution);
+        }
         if var.vr != pv::IN_VIEW {
             return Err(unknown(var));
         }
@@ -161,6 +179,85 @@ impl PlannerCore {
         })?;
         Ok(run.sample(tau_s).in_view)
     }
+}
+
+/// Checks a value of `max_extra_energy_pct` on its own: NaN (no cap) or what the library's
+/// [`planner::PlanOptions::validate`] accepts as a cap (its message otherwise). Whether a cap
+/// applies to the plan (resolution general) is checked at initialisation, when every option is
+/// known.
+fn check_max_extra_energy_pct(value: f64) -> Result<(), FmuError> {
+    if value.is_nan() {
+        return Ok(());
+    }
+    planning::InitialPlan {
+        max_extra_energy_pct: Some(value),
+        ..Default::default()
+    }
+    .validate()
+    .map_err(|e| {
+        FmuError::error(format!(
+            "parameter `max_extra_energy_pct` refused: {e} (NaN: no cap)"
+        ))
+    })
+}
+
+impl PlannerCore {
+    pub(super) fn check_bool(&self, var: &Var) -> Result<(), FmuError> {
+        if var.vr == pv::STRICT_RESOLUTION {
+            Ok(())
+        } else {
+            Err(unknown(var))
+        }
+    }
+
+    pub(super) fn set_bool(&mut self, var: &Var, value: bool) -> Result<(), FmuError> {
+        self.check_bool(var)?;
+        self.initial.strict_resolution = value;
+        self.run = None;
+        Ok(())
+    }
+
+    pub(super) fn get_string(&self, var: &Var) -> Result<String, FmuError> {
+        match var.vr {
+            pv::MISSION_FILE => Ok(self.mission_file.clone()),
+            pv::RESOLUTION => Ok(self.initial.resolution.to_string()),
+            _ => Err(unknown(var)),
+        }
+    }
+
+    pub(super) fn check_string(&self, var: &Var, value: &str) -> Result<(), FmuError> {
+        match var.vr {
+            pv::MISSION_FILE => Ok(()),
+            pv::RESOLUTION => parse_resolution(value).map(|_| ()),
+            _ => Err(unknown(var)),
+        }
+    }
+
+    pub(super) fn set_string(&mut self, var: &Var, value: &str) -> Result<(), FmuError> {
+        match var.vr {
+            pv::MISSION_FILE => self.mission_file = value.to_string(),
+            pv::RESOLUTION => self.initial.resolution = parse_resolution(value)?,
+            _ => return Err(unknown(var)),
+        }
+        self.run = None;
+        Ok(())
+    }
+}
+
+/// The value of the parameter `resolution`: a name of [`planner::evaluate::ResolutionMode`]
+/// (`general`, `paper`), as `cellsar-planner plan --resolution` takes it.
+fn parse_resolution(value: &str) -> Result<planner::evaluate::ResolutionMode, FmuError> {
+    use planner::evaluate::ResolutionMode;
+    ResolutionMode::ALL
+        .into_iter()
+        .find(|m| m.name() == value)
+        .ok_or_else(|| {
+            let names: Vec<&str> = ResolutionMode::ALL.iter().map(|m| m.name()).collect();
+            FmuError::error(format!(
+                "parameter `resolution` = \"{value}\" refused: must be one of {}",
+                names.join(", ")
+            ))
+        })
 }
 
 impl PlannerCore {
@@ -172,20 +269,28 @@ impl PlannerCore {
         if self.run.is_some() {
             return Ok(());
         }
+        // the options first: a refused combination needs no mission
+        self.initial.validate().map_err(|e| {
+            FmuError::error(format!(
+                "the initial plan's options (parameters `resolution`, `strict_resolution`, `max_extra_energy_pct`) are refused: {e}"
+            ))
+        })?;
         let (mission, source) = self.resolve_mission(resources)?;
         log.log(
             Category::Events,
             Status::Ok,
             &format!(
-                "mission '{}' from {}: {} slots of {} s, {} landmark windows; planning the whole horizon",
+                "mission '{}' from {}: {} slots of {} s, {} landmark windows; planning the whole horizon for {}",
                 mission.name(),
                 source.display(),
                 mission.slots(),
                 Num(mission.params().slot_s),
-                mission.schedule().landmarks.len()
+                mission.schedule().landmarks.len(),
+                self.initial.describe()
             ),
         );
-        let planned = planning::plan(&mission, None).map_err(|e| {
+        let options = self.initial.plan_options();
+        let planned = planning::plan_with(&mission, None, &options).map_err(|e| {
             FmuError::error(format!(
                 "mission '{}' ({}) cannot be flown: {e}",
                 mission.name(),

@@ -35,6 +35,14 @@ fn start_values_are_spec_defaults() {
     {
         for i in 0..v.len {
             let got = core.get_real(v, i, 0.0).unwrap();
+            if v.name == "max_extra_energy_pct" {
+                // NaN: no cap, the library's default
+                assert!(planner::PlanOptions::default()
+                    .max_extra_energy_pct
+                    .is_none());
+                assert!(got.is_nan(), "{got}");
+                continue;
+            }
             let want = match v.name {
                 "start_m" => d.start_m[i],
                 "bs_m" => d.bs_m[i],
@@ -343,4 +351,125 @@ fn mission_file_size_is_bounded() {
     assert_eq!(read_mission_text(&ok).unwrap(), "a = 1");
     let e = read_mission_text(&dir.path().join("none.toml")).unwrap_err();
     assert!(e.message.contains("none.toml"), "{e}");
+}
+
+#[test]
+fn plan_options_start_at_the_library_defaults() {
+    let core = Core::new(ModelKind::Planner);
+    let d = planner::PlanOptions::default();
+    assert_eq!(
+        core.get_string(var(PLANNER_VARS, "resolution")).unwrap(),
+        d.resolution.name()
+    );
+    assert_eq!(
+        core.get_bool(var(PLANNER_VARS, "strict_resolution"), 0.0)
+            .unwrap(),
+        d.strict_resolution
+    );
+    let Core::Planner(c) = &core else {
+        panic!("not a planner")
+    };
+    assert_eq!(c.initial.plan_options(), d);
+}
+
+#[test]
+fn the_initial_plan_uses_the_resolution_parameter() {
+    let mission = short_mission();
+    for (name, code) in [("paper", 0), ("general", 1)] {
+        let (core, _dir, r) = planned(SHORT, |c| {
+            c.set_string(var(PLANNER_VARS, "resolution"), name).unwrap();
+        });
+        r.unwrap();
+        assert_eq!(
+            core.get_int(var(PLANNER_VARS, "plan_resolution")).unwrap(),
+            code
+        );
+        let options = planner::PlanOptions {
+            resolution: name.parse().unwrap(),
+            ..Default::default()
+        };
+        let want = planning::plan_with(&mission, None, &options).unwrap();
+        let Core::Planner(c) = &core else {
+            panic!("not a planner")
+        };
+        assert_eq!(c.run.as_ref().unwrap().traj, want.trajectory, "{name}");
+    }
+}
+
+#[test]
+fn bad_plan_option_values_are_refused_at_the_set() {
+    let mut core = Core::new(ModelKind::Planner);
+    let res = var(PLANNER_VARS, "resolution");
+    let e = core.set_string(res, "exact").unwrap_err();
+    assert!(
+        e.message.contains("`resolution` = \"exact\"") && e.message.contains("paper, general"),
+        "{}",
+        e.message
+    );
+    assert_eq!(core.get_string(res).unwrap(), "general");
+    let pct = var(PLANNER_VARS, "max_extra_energy_pct");
+    for bad in [-1.0, f64::INFINITY, f64::NEG_INFINITY] {
+        let e = core.set_real(pct, 0, bad).unwrap_err();
+        // the library's message
+        let lib = planner::PlanOptions {
+            max_extra_energy_pct: Some(bad),
+            ..Default::default()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.message.contains("`max_extra_energy_pct`") && e.message.contains(&lib),
+            "{} / {lib}",
+            e.message
+        );
+        assert!(core.get_real(pct, 0, 0.0).unwrap().is_nan());
+    }
+    core.set_real(pct, 0, 10.0).unwrap();
+    assert_eq!(core.get_real(pct, 0, 0.0).unwrap(), 10.0);
+    core.set_real(pct, 0, f64::NAN).unwrap();
+    assert!(core.get_real(pct, 0, 0.0).unwrap().is_nan());
+}
+
+#[test]
+fn best_effort_options_under_the_paper_resolution_are_refused_at_initialisation() {
+    type Setup = fn(&mut Core);
+    let cases: [(Setup, planner::PlanOptions); 2] = [
+        (
+            |c| {
+                c.set_bool(var(PLANNER_VARS, "strict_resolution"), true)
+                    .unwrap()
+            },
+            planner::PlanOptions {
+                resolution: planner::evaluate::ResolutionMode::Paper,
+                strict_resolution: true,
+                ..Default::default()
+            },
+        ),
+        (
+            |c| {
+                c.set_real(var(PLANNER_VARS, "max_extra_energy_pct"), 0, 10.0)
+                    .unwrap()
+            },
+            planner::PlanOptions {
+                resolution: planner::evaluate::ResolutionMode::Paper,
+                max_extra_energy_pct: Some(10.0),
+                ..Default::default()
+            },
+        ),
+    ];
+    for (setup, options) in cases {
+        let started = std::time::Instant::now();
+        let (core, _dir, r) = planned(SHORT, |c| {
+            c.set_string(var(PLANNER_VARS, "resolution"), "paper")
+                .unwrap();
+            setup(c);
+        });
+        let lib = options.validate().unwrap_err().to_string();
+        let e = r.unwrap_err();
+        assert!(e.message.contains(&lib), "{} / {lib}", e.message);
+        assert!(!core.is_ready());
+        // refused before planning
+        assert!(started.elapsed().as_secs_f64() < 5.0);
+    }
 }

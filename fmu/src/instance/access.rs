@@ -208,13 +208,24 @@ impl Instance {
         })
     }
 
-    /// Sets Boolean values given in the C type of the FMI version (no Boolean variable is
-    /// settable: every call is refused, naming the variable).
-    pub fn set_bool<B>(&mut self, func: &str, vrs: &[u32], values: &[B]) -> Result<(), FmuError> {
+    /// Sets Boolean values given in the C type of the FMI version (any non-zero value is
+    /// true), all or nothing.
+    pub fn set_bool<B: Copy + Into<i64>>(
+        &mut self,
+        func: &str,
+        vrs: &[u32],
+        values: &[B],
+    ) -> Result<(), FmuError> {
         same_len(func, vrs.len(), values.len())?;
-        for &vr in vrs {
+        let mut todo = Vec::with_capacity(vrs.len());
+        for (&vr, &v) in vrs.iter().zip(values) {
             let (var, _) = self.lookup(func, vr)?;
             self.check_set(func, var, VarType::Boolean)?;
+            self.core.check_bool(var)?;
+            todo.push((var, v.into() != 0));
+        }
+        for (var, v) in todo {
+            self.core.set_bool(var, v)?;
         }
         Ok(())
     }
@@ -249,10 +260,10 @@ impl Instance {
     ) -> Result<(), FmuError> {
         same_len(func, vrs.len(), values.len())?;
         let mut todo = Vec::with_capacity(vrs.len());
-        for &vr in vrs {
+        for (&vr, v) in vrs.iter().zip(values) {
             let (var, _) = self.lookup(func, vr)?;
             self.check_set(func, var, VarType::String)?;
-            self.core.check_string(var)?;
+            self.core.check_string(var, v)?;
             todo.push(var);
         }
         for (var, v) in todo.into_iter().zip(values) {

@@ -167,6 +167,15 @@ class Fmu:
         self.fmu.exitInitializationMode()
         self.time = start
 
+    def init_status(self, start=0.0, stop=None, params=None, strings=None):
+        """`init`, returning the FMI status of the first call that fails (3 Error; 0 when none
+        does) instead of raising."""
+        try:
+            self.init(start=start, stop=stop, params=params, strings=strings)
+            return 0
+        except FMICallException as e:
+            return e.status
+
     def step(self, h, t=None):
         t = self.time if t is None else t
         self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
@@ -207,9 +216,15 @@ class Fmu:
         return self.vars[name].valueReference
 
     def set(self, **values):
+        """Sets variables by name, each with the call of its type (Real/Float64, Boolean,
+        String)."""
         for name, value in values.items():
             v = self.vars[name]
-            if self.version == "fmi2":
+            if v.type == "Boolean":
+                self.fmu.setBoolean([v.valueReference], [bool(value)])
+            elif v.type == "String":
+                self.fmu.setString([v.valueReference], [value])
+            elif self.version == "fmi2":
                 self.fmu.setReal([v.valueReference], [float(value)])
             else:
                 vals = list(value) if v.shape else [float(value)]
@@ -230,7 +245,8 @@ class Fmu:
             if self.version == "fmi2":
                 return self.fmu.getInteger([v.valueReference])[0]
             return self.fmu.getInt32([v.valueReference])[0]
-        return self.fmu.getString([v.valueReference])[0]
+        s = self.fmu.getString([v.valueReference])[0]  # FMI 2: bytes
+        return s.decode("utf-8") if isinstance(s, bytes) else s
 
     def outputs(self, names=OUTPUTS):
         return {n: self.get(n) for n in names}

@@ -2,6 +2,7 @@
 receding-horizon re-plan, and a coupled co-simulation with a second FMU."""
 
 import csv
+import json
 import math
 import os
 import pathlib
@@ -11,12 +12,14 @@ import subprocess
 import numpy as np
 import pytest
 from fmpy import simulate_fmu
+from fmpy.fmi1 import FMICallException
 
 from conftest import REPO, Fmu, fmu_path, run, status_of
 
 DEFAULT_MISSION = REPO / "missions" / "default-30m.toml"
 OFFSET_M = 1000.0  # H tan(eta) with the the default parameters
 RS_M = 200.0
+ERROR = 3
 
 
 def planner_bin():
@@ -33,17 +36,36 @@ def planner_bin():
         "`cargo build --release -p planner --bin cellsar-planner` or set CELLSAR_PLANNER_BIN")
 
 
-def reference_plan(mission, outdir):
-    """Runs `cellsar-planner plan MISSION --out DIR` (the FMU's initial plan is the library's
-    default, the CLI's: the general cell as a best effort); returns {t_s: (x_m, y_m)} at slot
-    times."""
-    subprocess.run([str(planner_bin()), "plan", str(mission), "--out", str(outdir)],
-                   check=True, capture_output=True, timeout=600)
+def cli_plan(mission, outdir, flags=()):
+    """Runs `cellsar-planner plan MISSION --out DIR FLAGS`; returns the completed process."""
+    return subprocess.run(
+        [str(planner_bin()), "plan", str(mission), "--out", str(outdir), *flags],
+        capture_output=True, text=True, timeout=600)
+
+
+def read_trajectory(outdir):
+    """{t_s: (x_m, y_m)} at slot times from a plan directory's trajectory.csv."""
     rows = {}
     with open(outdir / "trajectory.csv", newline="") as f:
         for r in csv.DictReader(f):
             rows[round(float(r["t_s"]), 9)] = (float(r["x_m"]), float(r["y_m"]))
     return rows
+
+
+def reference_plan(mission, outdir, flags=()):
+    """Runs `cellsar-planner plan MISSION --out DIR FLAGS` (without flags: the CLI's default
+    plan, the general cell as a best effort, which is the FMU's default initial plan);
+    returns {t_s: (x_m, y_m)} at slot times."""
+    p = cli_plan(mission, outdir, flags)
+    assert p.returncode == 0, p.stderr
+    return read_trajectory(outdir)
+
+
+def cli_error(process):
+    """The message of a failed `cellsar-planner` run (its last `error: ` line, without it)."""
+    lines = [l for l in process.stderr.splitlines() if l.startswith("error: ")]
+    assert lines, process.stderr
+    return lines[-1][len("error: "):]
 
 
 def test_default_mission_matches_cellsar_planner(tmp_path):
@@ -394,12 +416,17 @@ def test_parameter_array_elements_override_the_file_one_by_one(version, tmp_path
 
 
 def test_replan_skips_planner_calls_that_cannot_succeed(version):
-    """The default mission's landmark moved by (40, 20) m at t = 65 s cannot be seen in the next
-    slot: the re-plan goes straight to a one-slot delay (one planner call; the planner spent
-    about 9 s failing on the zero delay before), and the debug log lists every call's time."""
+    """From the paper's initial plan (parameter `resolution` = paper), the default mission's
+    landmark moved by (40, 20) m at t = 65 s cannot be seen in the next slot: the re-plan goes
+    straight to a one-slot delay (one planner call; the planner spent about 9 s failing on the
+    zero delay before), and the debug log lists every call's time."""
     f = Fmu(version)
     assert f.instantiate(debug=True)
-    f.init(stop=300.0)
+    # the paper's plan, whose sensing centre passes landmark 6 on the side the move goes away
+    # from; the default best effort circles a centre on the other side, towards which the move
+    # goes, and keeps the moved landmark in view at once
+    f.init(stop=300.0, params={"resolution": "paper"})
+    assert f.get("plan_resolution") == 0
     while f.time < 65.0 - 1e-9:
         f.step(0.5)
     f.set(landmark_x_in_m=f.get("landmark_x_m") + 40.0,
@@ -413,4 +440,147 @@ def test_replan_skips_planner_calls_that_cannot_succeed(version):
     warning = [m for _, s, m in f.logs[n:] if s == WARNING]
     assert "1 re-planned slot(s) are out of view: landmark 6 in slot 131 " in warning[0], warning
     assert f.get("replan_count") == 1
+    f.unload()
+
+
+# The initial plan's options as FMU parameters and as the same options of `cellsar-planner plan`,
+# and the value of the output `plan_resolution` before any re-plan.
+PLAN_OPTIONS = [
+    ({}, [], 1),
+    ({"resolution": "paper"}, ["--resolution", "paper"], 0),
+    ({"max_extra_energy_pct": 10.0}, ["--max-extra-energy-pct", "10"], 1),
+    ({"strict_resolution": True}, ["--strict-resolution"], 1),
+]
+
+
+def plan_outputs(f, stop, step=0.5):
+    """Steps the FMU from 0 to `stop`; returns {t_s: (x_m, y_m)} at every step."""
+    rows = {0.0: (f.get("x_m"), f.get("y_m"))}
+    for k in range(int(round(stop / step))):
+        f.step(step, t=k * step)
+        rows[round((k + 1) * step, 9)] = (f.get("x_m"), f.get("y_m"))
+    return rows
+
+
+def test_default_initial_plan_is_the_cli_default_plan(version, tmp_path, short_mission):
+    """Without plan options the initial plan is `cellsar-planner plan`'s default plan, the
+    general resolution cell as a best effort (the CLI's summary.json says so), to 1e-6 m; the
+    parameters read back the library's defaults and `plan_resolution` is 1 (general)."""
+    ref = reference_plan(short_mission, tmp_path / "plan")
+    summary = json.loads((tmp_path / "plan" / "summary.json").read_text())
+    assert summary["resolution"] == "general" and summary["best_effort"] is not None, summary
+    f = Fmu(version)
+    assert f.instantiate()
+    f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    assert f.get("resolution") == "general"
+    assert f.get("strict_resolution") is False
+    assert math.isnan(f.get("max_extra_energy_pct"))
+    assert f.get("plan_resolution") == 1
+    got = plan_outputs(f, 20.0)
+    worst = max(max(abs(got[t][0] - x), abs(got[t][1] - y)) for t, (x, y) in ref.items())
+    assert worst <= 1e-6, f"largest deviation {worst} m"
+    f.unload()
+
+
+@pytest.mark.parametrize("params,flags,code", PLAN_OPTIONS,
+                         ids=["default", "paper", "cap-10pct", "strict"])
+def test_initial_plan_options_match_cellsar_planner(version, tmp_path, short_mission, params,
+                                                    flags, code):
+    """Each plan option set as a parameter gives the plan `cellsar-planner plan` makes with the
+    same option, to 1e-6 m at every slot time; a mission the CLI cannot plan with it is refused
+    at ExitInitializationMode with the same message in the log (the strict general resolution
+    cannot be held on the short mission today)."""
+    cli = cli_plan(short_mission, tmp_path / "plan", flags)
+    f = Fmu(version)
+    assert f.instantiate()
+    status = f.init_status(stop=20.0, params=params,
+                           strings={"mission_file": str(short_mission)})
+    for name, value in params.items():
+        assert f.get(name) == value, name
+    if cli.returncode != 0:
+        assert status == ERROR, f.messages()
+        # the CLI says "mission cannot be flown: <the planner's message>"
+        detail = cli_error(cli).split("cannot be flown: ", 1)[-1]
+        assert "cannot be flown" in f.messages() and detail in f.messages(), (detail, f.logs)
+        f.unload()
+        return
+    assert status == 0, f.messages()
+    assert f.get("plan_resolution") == code
+    ref = read_trajectory(tmp_path / "plan")
+    got = plan_outputs(f, 20.0)
+    worst = max(max(abs(got[t][0] - x), abs(got[t][1] - y)) for t, (x, y) in ref.items())
+    assert worst <= 1e-6, f"largest deviation {worst} m"
+    f.unload()
+
+
+def test_best_effort_options_under_the_paper_resolution_are_refused(version, tmp_path,
+                                                                    short_mission):
+    """`strict_resolution` or `max_extra_energy_pct` with `resolution` = paper: the library's
+    check refuses the combination at ExitInitializationMode (the order of the sets does not
+    matter), with the message `cellsar-planner plan` gives for the same flags, naming the
+    parameters instead of the flags; nothing is planned."""
+    flag_names = [("--strict-resolution", "strict_resolution"),
+                  ("--max-extra-energy-pct", "max_extra_energy_pct"),
+                  ("--resolution", "resolution")]
+    for params, flags in [
+        ({"strict_resolution": True}, ["--strict-resolution"]),
+        ({"max_extra_energy_pct": 10.0}, ["--max-extra-energy-pct", "10"]),
+    ]:
+        cli = cli_plan(short_mission, tmp_path / "plan", ["--resolution", "paper", *flags])
+        assert cli.returncode != 0
+        expected = cli_error(cli)
+        for flag, name in flag_names:
+            expected = expected.replace(flag, name)
+        assert "applies to resolution general only, not to paper" in expected, expected
+        f = Fmu(version)
+        assert f.instantiate()
+        # the best-effort option first: each set is fine on its own
+        status = f.init_status(stop=20.0, params={**params, "resolution": "paper"},
+                               strings={"mission_file": str(short_mission)})
+        assert status == ERROR, f.messages()
+        errors = [m for _, s, m in f.logs if s == ERROR]
+        assert len(errors) == 1 and expected in errors[0], (expected, f.logs)
+        assert "ExitInitializationMode" in errors[0], errors
+        with pytest.raises(Exception):
+            f.get("x_m")
+        f.unload()
+
+
+def test_bad_plan_option_values_are_refused_at_the_set(version, short_mission, tmp_path):
+    """An unknown `resolution` or a negative or infinite `max_extra_energy_pct` is refused by the
+    set call (the latter with the library's message, as `cellsar-planner plan` prints it), and
+    the value stays as it was; NaN is no cap."""
+    f = Fmu(version)
+    assert f.instantiate()
+    # parameters can be read from initialisation mode on (and set until its end)
+    if version == "fmi2":
+        f.fmu.setupExperiment(startTime=0.0, stopTime=20.0)
+        f.fmu.enterInitializationMode()
+    else:
+        f.fmu.enterInitializationMode(startTime=0.0, stopTime=20.0)
+    f.set_string("mission_file", str(short_mission))
+    with pytest.raises(FMICallException):
+        f.set(resolution="exact")
+    assert "`resolution` = \"exact\"" in f.messages() and "general" in f.messages()
+    assert f.get("resolution") == "general"
+    for bad, text in [(-1.0, "-1"), (math.inf, "inf")]:
+        cli = cli_plan(short_mission, tmp_path / "plan", [f"--max-extra-energy-pct={text}"])
+        assert cli.returncode != 0
+        with pytest.raises(FMICallException):
+            f.set(max_extra_energy_pct=bad)
+        assert cli_error(cli) in f.messages(), (cli.stderr, f.logs)
+        assert math.isnan(f.get("max_extra_energy_pct"))
+    f.set(max_extra_energy_pct=5.0)
+    assert f.get("max_extra_energy_pct") == 5.0
+    f.set(max_extra_energy_pct=math.nan)
+    assert math.isnan(f.get("max_extra_energy_pct"))
+    f.set(resolution="paper")
+    f.fmu.exitInitializationMode()
+    assert f.get("resolution") == "paper" and f.get("plan_resolution") == 0
+    # fixed after initialisation
+    with pytest.raises(FMICallException):
+        f.set(resolution="general")
+    with pytest.raises(FMICallException):
+        f.set(strict_resolution=True)
+    assert "is fixed" in f.messages()
     f.unload()
