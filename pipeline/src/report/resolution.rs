@@ -275,14 +275,16 @@ mod tests {
         assert!(svg.starts_with("<svg"), "{svg}");
         assert!(svg.contains("B = 150 MHz, test case"));
         assert!(svg.contains("β = 45.0°, ψ = 90.0°"));
-        assert!(svg.contains("predicted cell"));
-        // the measured region, filled, and the predicted cell's outline (closed: 5 points)
+        assert!(svg.contains("predicted ellipse and parallelogram"));
+        // the measured region, filled, the predicted parallelogram's outline (closed: 5 points)
+        // and the predicted ellipse's (closed: 181 points)
         assert!(svg.contains("<polygon") && svg.contains("#4C72B0"), "{svg}");
-        let outline = svg
+        let outlines: Vec<usize> = svg
             .lines()
-            .find(|l| l.contains("#C44E52") && l.contains("points="))
-            .unwrap();
-        assert_eq!(outline.matches(',').count(), 5, "{outline}");
+            .filter(|l| l.contains("#C44E52") && l.contains("points="))
+            .map(|l| l.matches(',').count())
+            .collect();
+        assert_eq!(outlines, [5, 181], "{svg}");
         // the range gradient and the track, labelled
         assert!(svg.contains("\ng\n") && svg.contains("\ntrack\n"), "{svg}");
     }
