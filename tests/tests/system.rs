@@ -534,17 +534,19 @@ fn a_best_effort_run_reports_the_resolution_it_reached() {
 
 /// A Zenoh client configuration file in `dir`, as `deploy/client.json5` (waits for its router:
 /// `connect.timeout_ms: -1`), whose router, at an unused loopback port, never comes.
-fn client_without_router(dir: &std::path::Path) -> std::path::PathBuf {
+fn client_without_router(dir: &std::path::Path) -> (std::path::PathBuf, std::net::TcpListener) {
+    // the router's port stays held by a listener that never answers Zenoh's handshake, so that
+    // no other test's process can take it while this one runs (a free port picked and
+    // released was once taken by a peer of a test running beside it, and the session opened)
+    let held = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = held.local_addr().unwrap().port();
     let file = dir.join("client.json5");
     let text = std::fs::read_to_string(root().join("pipeline/deploy/client.json5"))
         .unwrap()
-        .replace(
-            "tcp/192.168.1.10:7447",
-            &format!("tcp/127.0.0.1:{}", free_port()),
-        );
+        .replace("tcp/192.168.1.10:7447", &format!("tcp/127.0.0.1:{port}"));
     assert!(text.contains("timeout_ms: -1"), "{text}");
     std::fs::write(&file, text).unwrap();
-    file
+    (file, held)
 }
 
 /// Sends SIGINT to `pid` once `wait` has passed (from a thread of its own).
@@ -562,7 +564,7 @@ fn interrupt_after(pid: u32, wait: Duration) {
 #[test]
 fn services_waiting_for_their_router_stop_on_sigint() {
     let dir = tempfile::tempdir().unwrap();
-    let cfg = client_without_router(dir.path());
+    let (cfg, _held) = client_without_router(dir.path());
     let cfg = cfg.to_str().unwrap();
     let scene = scene();
     let scene = scene.to_str().unwrap();
@@ -638,7 +640,7 @@ fn services_waiting_for_their_router_stop_on_sigint() {
 #[test]
 fn launcher_waiting_for_its_router_exits_130_on_sigint() {
     let dir = tempfile::tempdir().unwrap();
-    let cfg = client_without_router(dir.path());
+    let (cfg, _held) = client_without_router(dir.path());
     let signal_after = Duration::from_millis(3000);
     let e = cellsar_bounded(
         &run_args(
