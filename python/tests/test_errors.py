@@ -83,6 +83,12 @@ def test_bad_options():
         cellsar.plan(mission, scheme="baseline", max_extra_energy_pct=5.0)
     with pytest.raises(ValueError, match="applies to scheme exact only, not to baseline-exact"):
         cellsar.plan(mission, scheme="baseline-exact", resolution="general", strict_resolution=True)
+    # both together: a strict plan would ignore the cap
+    with pytest.raises(
+        ValueError,
+        match="^strict_resolution and max_extra_energy_pct exclude each other: a strict plan has no energy cap$",
+    ):
+        cellsar.plan(mission, strict_resolution=True, max_extra_energy_pct=5.0)
 
 
 def test_progress_exception_stops_the_plan():

@@ -140,7 +140,9 @@ impl OptionName {
 
 /// Best-effort options ([`PlanOptions::strict_resolution`],
 /// [`PlanOptions::max_extra_energy_pct`]) given to a plan that would ignore them: one under the
-/// paper's resolution, or of a scheme other than `exact`. Its message names the options by
+/// paper's resolution, or of a scheme other than `exact`; or both together on a plan they apply
+/// to, where they exclude each other (a strict plan has no energy cap, and the cap would be
+/// ignored). Its message names the options by
 /// their fields; [`OptionConflict::describe`] names them another way (the command line's
 /// flags), with the same words.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -165,18 +167,25 @@ impl OptionConflict {
             .map(|&o| name(o))
             .collect::<Vec<_>>()
             .join(" and ");
+        let applies = if self.given.len() > 1 {
+            "apply"
+        } else {
+            "applies"
+        };
         if self.resolution == ResolutionMode::Paper {
             format!(
-                "{given} applies to {} general only, not to {}",
+                "{given} {applies} to {} general only, not to {}",
                 name(OptionName::Resolution),
                 self.resolution
             )
-        } else {
+        } else if self.scheme != Scheme::Exact {
             format!(
-                "{given} applies to {} exact only, not to {}",
+                "{given} {applies} to {} exact only, not to {}",
                 name(OptionName::Scheme),
                 self.scheme
             )
+        } else {
+            format!("{given} exclude each other: a strict plan has no energy cap")
         }
     }
 }
@@ -262,7 +271,8 @@ impl PlanOptions {
 
     /// Refuses the best-effort options ([`PlanOptions::strict_resolution`],
     /// [`PlanOptions::max_extra_energy_pct`]) where the plan would ignore them: under the
-    /// paper's resolution, or with a scheme other than `exact`. Part of
+    /// paper's resolution, or with a scheme other than `exact`, and the two together (a strict
+    /// plan would ignore the cap). Part of
     /// [`PlanOptions::validate`]; every interface checks its options with it before planning.
     pub fn check_best_effort(&self) -> Result<(), OptionConflict> {
         let mut given = Vec::new();
@@ -273,7 +283,7 @@ impl PlanOptions {
             given.push(OptionName::MaxExtraEnergyPct);
         }
         let applies = self.resolution == ResolutionMode::General && self.scheme == Scheme::Exact;
-        if given.is_empty() || applies {
+        if given.is_empty() || (applies && given.len() == 1) {
             return Ok(());
         }
         Err(OptionConflict {
@@ -452,13 +462,23 @@ mod tests {
         let e = both.check_best_effort().unwrap_err();
         assert_eq!(
             e.to_string(),
-            "strict_resolution and max_extra_energy_pct applies to resolution general only, not to paper"
+            "strict_resolution and max_extra_energy_pct apply to resolution general only, not to paper"
         );
         assert_eq!(
             e.describe(OptionName::flag),
-            "--strict-resolution and --max-extra-energy-pct applies to --resolution general only, not to paper"
+            "--strict-resolution and --max-extra-energy-pct apply to --resolution general only, not to paper"
         );
         assert_eq!(both.validate(), Err(PlanError::OptionConflict(e)));
+        // both together where they apply: a strict plan would ignore the cap
+        let strict_capped = PlanOptions {
+            strict_resolution: true,
+            ..capped.clone()
+        };
+        let e = strict_capped.validate().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "strict_resolution and max_extra_energy_pct exclude each other: a strict plan has no energy cap"
+        );
         // a comparison scheme ignores them under the general resolution too
         let baseline = PlanOptions {
             scheme: Scheme::BaselineExact,
