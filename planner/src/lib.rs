@@ -18,6 +18,7 @@
 pub mod dmin;
 pub mod driver;
 pub mod evaluate;
+pub mod files;
 pub mod geometry;
 pub mod init;
 pub mod landmarks;

@@ -124,10 +124,11 @@ impl Mission {
     /// Reads a mission file: `.json` as JSON, anything else as TOML.
     pub fn from_path(path: &Path) -> Result<Self, MissionError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|error| MissionError::Io {
-            path: shown.clone(),
-            error,
-        })?;
+        let text = crate::files::read_text_bounded(path, crate::files::MAX_INPUT_FILE_BYTES)
+            .map_err(|error| MissionError::Io {
+                path: shown.clone(),
+                error,
+            })?;
         let is_json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));

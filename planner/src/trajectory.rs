@@ -144,10 +144,11 @@ impl Trajectory {
         start_m: [f64; 2],
     ) -> Result<Self, TrajectoryError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|error| TrajectoryError::Io {
-            path: shown.clone(),
-            error,
-        })?;
+        let text = crate::files::read_text_bounded(path, crate::files::MAX_INPUT_FILE_BYTES)
+            .map_err(|error| TrajectoryError::Io {
+                path: shown.clone(),
+                error,
+            })?;
         Self::from_csv_str(&text, &shown, slot_s, slots, start_m)
     }
 

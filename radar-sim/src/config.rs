@@ -108,7 +108,8 @@ impl SceneFile {
 
     /// Reads and validates a scene file.
     pub fn from_path(path: &std::path::Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| RadarError::read(path, e))?;
+        let text = planner::files::read_text_bounded(path, planner::files::MAX_INPUT_FILE_BYTES)
+            .map_err(|e| RadarError::read(path, e))?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
