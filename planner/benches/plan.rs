@@ -79,16 +79,6 @@ fn mission(spacing_m: f64, slot_s: f64) -> Mission {
     must(m.with_params(p), "default mission with a new slot length")
 }
 
-/// The options these benchmarks time: the defaults with the paper's resolution (the
-/// least-energy plan, as before the library's default became the general best effort), so the
-/// times stay comparable with BENCHMARKS.md.
-fn least_energy() -> PlanOptions {
-    PlanOptions {
-        resolution: ResolutionMode::Paper,
-        ..PlanOptions::default()
-    }
-}
-
 /// The feasible start of the plain SCA (`cellsar-planner plan --no-coarse --max-iterations 0`):
 /// the guidance path made feasible on the coarse grid, interpolated and repaired on the fine one.
 fn feasible_start(m: &Mission) -> Trajectory {
@@ -139,7 +129,7 @@ fn phase_split(m: &Mission) -> String {
         ..PhaseClock::default()
     };
     let r = must(
-        plan_with_observer(m, &least_energy(), &mut clock),
+        plan_with_observer(m, &PlanOptions::least_energy(), &mut clock),
         "default plan",
     );
     let total = r.solve_seconds;
@@ -181,7 +171,12 @@ fn plan_default(c: &mut Criterion) {
                     p.push(line);
                 }
             }
-            b.iter(|| must(plan(black_box(&m), &least_energy()), "default plan"))
+            b.iter(|| {
+                must(
+                    plan(black_box(&m), &PlanOptions::least_energy()),
+                    "default plan",
+                )
+            })
         });
     }
     g.finish();
@@ -199,7 +194,12 @@ fn default_mission_plan(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(10))
         .sampling_mode(SamplingMode::Flat);
     g.bench_function("default-30m", |b| {
-        b.iter(|| must(plan(black_box(&m), &least_energy()), "default plan"))
+        b.iter(|| {
+            must(
+                plan(black_box(&m), &PlanOptions::least_energy()),
+                "default plan",
+            )
+        })
     });
     g.finish();
 }
@@ -395,7 +395,7 @@ fn scaling(c: &mut Criterion) {
             b.iter_custom(|iters| {
                 let t0 = Instant::now();
                 for _ in 0..iters {
-                    black_box(must(plan(m, &least_energy()), "scaling plan"));
+                    black_box(must(plan(m, &PlanOptions::least_energy()), "scaling plan"));
                 }
                 let d = t0.elapsed();
                 record("scaling_plan", n, d.as_secs_f64() / iters.max(1) as f64);

@@ -22,14 +22,7 @@ fn best_effort(max_extra_energy_pct: Option<f64>) -> PlanOptions {
 #[test]
 fn default_mission_best_effort_leaves_two_windows_and_half_of_them_within_ten_percent() {
     let m = Mission::preset(Preset::Default, 30.0).unwrap();
-    let least = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
+    let least = plan(&m, &PlanOptions::least_energy()).unwrap();
     let best = plan(&m, &best_effort(None)).unwrap();
     // judged again on the exact geometry, independently of the planner's own evaluation
     let ev = evaluate(&m, &best.trajectory);
@@ -127,15 +120,7 @@ fn the_tradeoff_curve_meets_its_caps_and_never_loses_resolution() {
     use planner::tradeoff::{tradeoff, UNUSED_CAP_PCT};
     let m = Mission::preset(Preset::Default, 30.0).unwrap();
     let caps = [1.0, 5.0];
-    let points = tradeoff(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-        &caps,
-    )
-    .unwrap();
+    let points = tradeoff(&m, &PlanOptions::least_energy(), &caps).unwrap();
     assert_eq!(points.len(), caps.len() + 2);
     assert_eq!(points[0].cap_pct, Some(0.0));
     assert_eq!(points[0].extra_energy_pct, 0.0);

@@ -136,14 +136,7 @@ fn default_mission_from_the_far_end_of_the_allowed_arc_has_a_general_plan() {
         .map(|s| s.worst_width_m)
         .fold(0.0, f64::max);
     assert!(worst <= m.params().d_min_m + 1e-4, "worst cell {worst} m");
-    let paper = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
+    let paper = plan(&m, &PlanOptions::least_energy()).unwrap();
     let cost = ev.energy_j / paper.evaluation.energy_j - 1.0;
     assert!(
         cost > 0.0 && cost < 0.15,

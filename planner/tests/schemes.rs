@@ -2,7 +2,6 @@
 //! Each scheme on short missions, checked on the exact geometry by code written here, independent
 //! of the optimiser and of `planner::evaluate`.
 
-use planner::evaluate::ResolutionMode;
 use planner::landmarks::{LandmarkWindow, LandmarksSpec};
 use planner::{plan, Mission, Params, PlanOptions, Preset, Scheme, TerminationReason, Trajectory};
 
@@ -105,14 +104,7 @@ fn short_mission() -> Mission {
 #[test]
 fn exact_is_feasible_and_monotone_on_a_short_mission() {
     let m = short_mission();
-    let r = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
+    let r = plan(&m, &PlanOptions::least_energy()).unwrap();
     let c = check(&m, &r.trajectory);
     assert!(
         c.max_sensing_excess_m <= 1e-4,
@@ -139,14 +131,7 @@ fn exact_is_feasible_and_monotone_on_a_short_mission() {
 #[test]
 fn exact_reaches_the_floor_on_the_default_mission_30m() {
     let m = Mission::preset(Preset::Default, 30.0).unwrap();
-    let r = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
+    let r = plan(&m, &PlanOptions::least_energy()).unwrap();
     let c = check(&m, &r.trajectory);
     assert_feasible_on_exact_geometry(&c);
     // floor T·P(V*) ≈ 15 087 J; the target is within 5 %
@@ -166,14 +151,7 @@ fn exact_reaches_the_floor_on_the_default_mission_30m() {
 #[test]
 fn exact_is_feasible_on_the_default_mission_200m() {
     let m = Mission::preset(Preset::Default, 200.0).unwrap();
-    let r = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
+    let r = plan(&m, &PlanOptions::least_energy()).unwrap();
     let c = check(&m, &r.trajectory);
     assert_feasible_on_exact_geometry(&c);
     // The centre must follow a 5.8 km L-shaped route with the UAV outside the corner; docs/paper-notes.md ("Where the results
@@ -201,14 +179,7 @@ fn exact_reaches_the_floor_at_once_on_random_realisations_18_3_19_and_0() {
         ))
         .unwrap();
         let m = Mission::from_file_struct(&file).unwrap();
-        let r = plan(
-            &m,
-            &PlanOptions {
-                resolution: ResolutionMode::Paper,
-                ..PlanOptions::default()
-            },
-        )
-        .unwrap();
+        let r = plan(&m, &PlanOptions::least_energy()).unwrap();
         let c = check(&m, &r.trajectory);
         assert_feasible_on_exact_geometry(&c);
         assert!(
@@ -232,9 +203,8 @@ fn paper_and_baselines_run_and_report_their_own_objective() {
         let r = plan(
             &m,
             &PlanOptions {
-                resolution: ResolutionMode::Paper,
                 scheme,
-                ..Default::default()
+                ..PlanOptions::least_energy()
             },
         )
         .unwrap();
@@ -255,22 +225,13 @@ fn paper_and_baselines_run_and_report_their_own_objective() {
 fn paper_first_iteration_from_a_given_path_is_reproducible() {
     let m = short_mission();
     // a feasible path: the exact scheme's own result
-    let start = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap()
-    .trajectory;
+    let start = plan(&m, &PlanOptions::least_energy()).unwrap().trajectory;
     let first = |reuse: bool, tol: f64| {
         let mut o = PlanOptions {
-            resolution: ResolutionMode::Paper,
             scheme: Scheme::Paper,
             init: Some(start.clone()),
             max_iterations: 1,
-            ..Default::default()
+            ..PlanOptions::least_energy()
         };
         o.socp.reuse = reuse;
         o.socp.tol_feas = tol;
@@ -299,14 +260,7 @@ fn infeasible_mission_is_reported_before_solving() {
         ..Default::default()
     };
     let m = Mission::new("far", p, &spec).unwrap();
-    let e = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap_err();
+    let e = plan(&m, &PlanOptions::least_energy()).unwrap_err();
     match e {
         planner::PlanError::Infeasible(i) => assert_eq!(i.slot, 1),
         other => panic!("unexpected {other}"),
@@ -321,14 +275,7 @@ fn init_paths_phase_one_cannot_use_are_still_planned() {
     // the repair program (85 % of the previous step) lay above the speed limit.
     let m = short_mission();
     let n = m.slots();
-    let built_in = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
+    let built_in = plan(&m, &PlanOptions::least_energy()).unwrap();
     let shifted = Trajectory {
         pos_m: built_in
             .trajectory
@@ -346,9 +293,8 @@ fn init_paths_phase_one_cannot_use_are_still_planned() {
         let r = plan(
             &m,
             &PlanOptions {
-                resolution: ResolutionMode::Paper,
                 init: Some(init),
-                ..Default::default()
+                ..PlanOptions::least_energy()
             },
         )
         .unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -370,9 +316,8 @@ fn init_that_starts_elsewhere_is_rejected() {
     let e = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             init: Some(bad),
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap_err();
@@ -391,9 +336,8 @@ fn bad_init_is_rejected_with_a_message() {
     let e = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             init: Some(bad),
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap_err();
@@ -408,9 +352,8 @@ fn time_limit_returns_the_last_feasible_iterate() {
     let start = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             max_iterations: 1,
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap();
@@ -418,10 +361,9 @@ fn time_limit_returns_the_last_feasible_iterate() {
     let r = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             init: Some(start.trajectory.clone()),
             time_limit_s: Some(1e-9),
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap();
@@ -434,11 +376,10 @@ fn time_limit_returns_the_last_feasible_iterate() {
     let r = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             scheme: Scheme::Paper,
             init: Some(start.trajectory),
             time_limit_s: Some(1e-9),
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap();
@@ -459,10 +400,9 @@ fn time_limit_during_repair_is_an_error_that_says_so() {
     let e = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             init: Some(parked),
             time_limit_s: Some(1e-9),
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap_err();
@@ -475,9 +415,8 @@ fn time_limit_during_repair_is_an_error_that_says_so() {
     let r = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             time_limit_s: Some(1e6),
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap();
@@ -490,33 +429,29 @@ fn bad_options_are_named() {
     for (options, field) in [
         (
             PlanOptions {
-                resolution: ResolutionMode::Paper,
                 time_limit_s: Some(f64::NAN),
-                ..Default::default()
+                ..PlanOptions::least_energy()
             },
             "time_limit_s",
         ),
         (
             PlanOptions {
-                resolution: ResolutionMode::Paper,
                 time_limit_s: Some(0.0),
-                ..Default::default()
+                ..PlanOptions::least_energy()
             },
             "time_limit_s",
         ),
         (
             PlanOptions {
-                resolution: ResolutionMode::Paper,
                 tolerance: -1.0,
-                ..Default::default()
+                ..PlanOptions::least_energy()
             },
             "tolerance",
         ),
         (
             PlanOptions {
-                resolution: ResolutionMode::Paper,
                 min_kappa_scale: 2.0,
-                ..Default::default()
+                ..PlanOptions::least_energy()
             },
             "min_kappa_scale",
         ),
@@ -543,9 +478,8 @@ fn unrepairable_init_falls_back_only_when_allowed() {
     let r = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             init: Some(parked.clone()),
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap();
@@ -558,10 +492,9 @@ fn unrepairable_init_falls_back_only_when_allowed() {
     let e = plan(
         &m,
         &PlanOptions {
-            resolution: ResolutionMode::Paper,
             init: Some(parked),
             replace_unrepairable_init: false,
-            ..Default::default()
+            ..PlanOptions::least_energy()
         },
     )
     .unwrap_err();

@@ -6,19 +6,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use planner::evaluate::ResolutionMode;
 use planner::{plan, Mission, PlanOptions, Preset};
 
 fn energy_j(spacing_m: f64) -> f64 {
     let m = Mission::preset(Preset::Default, spacing_m).unwrap();
-    let r = plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
+    let r = plan(&m, &PlanOptions::least_energy()).unwrap();
     assert!(r.evaluation.is_feasible(), "{spacing_m} m: infeasible");
     r.evaluation.energy_j
 }

@@ -3,7 +3,6 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use planner::evaluate::ResolutionMode;
 use planner::{
     plan_with_stop, IterationRecord, LandmarksSpec, Mission, MissionFile, NoObserver, Observer,
     ParamsOverride, PlanError, PlanOptions, Preset, Scheme, TerminationReason,
@@ -40,9 +39,8 @@ impl Observer for StopAtFirst<'_> {
 fn a_stop_during_the_iterations_returns_the_last_accepted_iterate() {
     let m = short_mission();
     let options = PlanOptions {
-        resolution: ResolutionMode::Paper,
         scheme: Scheme::Paper,
-        ..PlanOptions::default()
+        ..PlanOptions::least_energy()
     };
     let unstopped = planner::plan(&m, &options).unwrap();
     assert!(unstopped.iterations > 2, "{}", unstopped.iterations);
@@ -58,15 +56,7 @@ fn a_stop_during_the_iterations_returns_the_last_accepted_iterate() {
 fn a_stop_before_the_start_ends_at_once() {
     let m = short_mission();
     let stop = AtomicBool::new(true);
-    match plan_with_stop(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-        &mut NoObserver,
-        &stop,
-    ) {
+    match plan_with_stop(&m, &PlanOptions::least_energy(), &mut NoObserver, &stop) {
         Err(PlanError::TimeLimit { iterations, .. }) => assert_eq!(iterations, 0),
         Ok(r) => {
             assert_eq!(r.termination, TerminationReason::TimeLimit);
@@ -80,24 +70,9 @@ fn a_stop_before_the_start_ends_at_once() {
 fn an_unset_flag_changes_nothing() {
     let m = short_mission();
     let stop = AtomicBool::new(false);
-    let with_flag = plan_with_stop(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-        &mut NoObserver,
-        &stop,
-    )
-    .unwrap();
-    let plain = planner::plan(
-        &m,
-        &PlanOptions {
-            resolution: ResolutionMode::Paper,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap();
+    let with_flag =
+        plan_with_stop(&m, &PlanOptions::least_energy(), &mut NoObserver, &stop).unwrap();
+    let plain = planner::plan(&m, &PlanOptions::least_energy()).unwrap();
     assert_eq!(with_flag.trajectory, plain.trajectory);
     assert_eq!(with_flag.evaluation.energy_j, plain.evaluation.energy_j);
 }

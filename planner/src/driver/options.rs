@@ -258,6 +258,15 @@ pub struct PlanOptions {
 }
 
 impl PlanOptions {
+    /// The default options with the paper's resolution: the least-energy plan (the paper's
+    /// criterion, what `--resolution paper` plans).
+    pub fn least_energy() -> Self {
+        Self {
+            resolution: ResolutionMode::Paper,
+            ..Self::default()
+        }
+    }
+
     /// The default options with `scheme` and its default resolution
     /// ([`Scheme::default_resolution`]): what a request that names only the scheme plans with.
     pub fn for_scheme(scheme: Scheme) -> Self {
