@@ -17,6 +17,12 @@
 //! fft_size = 4096
 //! cp_samples = 1024
 //!
+//! reference = "ideal"  # or "pilots" / "reconstructed" (with [radar.nr])
+//!
+//! [radar.nr]           # optional: the 5G NR cell that illuminates (numerology, PRBs, TDD,
+//! numerology = 2       # reference signals, load, QAM orders, the pulse's slot and symbols)
+//! tdd_pattern = "DDDSU"
+//!
 //! [processing]         # canceller, range filter, backprojection grid, CFAR
 //! canceller = "eca-b"
 //! ```
@@ -25,10 +31,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{RadarError, Result};
 
+mod nr;
 mod objects;
 mod processing;
 mod radar;
 
+pub use nr::{NrConfig, NR_PREFIX};
 pub use objects::ObjectsConfig;
 pub use processing::{CancellerKind, ProcessingConfig, RangeFilter, Weighting};
 pub use radar::{Modulation, MotionModel, RadarConfig};

@@ -3,8 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{finite, positive, BOLTZMANN_J_PER_K, MAX_SAMPLES_PER_PULSE};
+use super::{finite, positive, NrConfig, BOLTZMANN_J_PER_K, MAX_SAMPLES_PER_PULSE};
 use crate::error::{RadarError, Result};
+use crate::nr::Reference;
 
 /// QAM order of the BS data symbols.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -93,6 +94,20 @@ pub struct RadarConfig {
     pub thermal_noise: bool,
     /// Include the direct path BS → UAV. Default true.
     pub direct_path: bool,
+    /// What the UAV's processor knows of the transmitted signal: `ideal` (every value),
+    /// `pilots` (the reference signals' REs only) or `reconstructed` (the pilots and the data
+    /// decided hard from its own direct-path recording). The last two need `[radar.nr]`.
+    /// Default ideal.
+    #[serde(skip_serializing_if = "is_ideal")]
+    pub reference: Reference,
+    /// The 5G NR cell that illuminates (`[radar.nr]`); absent: one OFDM symbol of
+    /// `modulation` on every subcarrier per pulse, at `prf_hz`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub nr: Option<NrConfig>,
+}
+
+fn is_ideal(r: &Reference) -> bool {
+    *r == Reference::Ideal
 }
 
 impl Default for RadarConfig {
@@ -118,6 +133,8 @@ impl Default for RadarConfig {
             seed: 7,
             thermal_noise: true,
             direct_path: true,
+            reference: Reference::Ideal,
+            nr: None,
         }
     }
 }
@@ -196,6 +213,46 @@ impl RadarConfig {
                 "radar.sidelobe_floor_db",
                 "floors are relative to the peak gain and must be <= 0 dB",
             ));
+        }
+        self.validate_reference()
+    }
+
+    /// The reference and the NR cell: `pilots` and `reconstructed` need `[radar.nr]`,
+    /// `reconstructed` the direct path; the cell's own values are checked with the PRBs that
+    /// `radar.nr.prbs` or `radar.bandwidth_hz` give (else the most, 275: the mission's band is
+    /// checked in [`RadarConfig::resolve`]).
+    fn validate_reference(&self) -> Result<()> {
+        match (&self.nr, self.reference) {
+            (None, Reference::Pilots | Reference::Reconstructed) => {
+                let name = if self.reference == Reference::Pilots {
+                    "pilots"
+                } else {
+                    "reconstructed"
+                };
+                return Err(RadarError::config(
+                    "radar.reference",
+                    format!(
+                        "\"{name}\" needs the NR cell's signal: add a [radar.nr] table \
+                         (without it every subcarrier carries data and only \"ideal\" applies)"
+                    ),
+                ));
+            }
+            (Some(_), Reference::Reconstructed) if !self.direct_path => {
+                return Err(RadarError::config(
+                    "radar.reference",
+                    "\"reconstructed\" demodulates the direct path, which radar.direct_path = \
+                     false leaves out",
+                ))
+            }
+            _ => {}
+        }
+        if let Some(nr) = &self.nr {
+            let prbs = match (nr.prbs, self.bandwidth_hz) {
+                (Some(n), _) => n,
+                (None, Some(b)) => nr.resolved_prbs(b, "radar.bandwidth_hz")?,
+                (None, None) => crate::nr::frame::MAX_PRBS,
+            };
+            nr.illumination(prbs, self.seed)?;
         }
         Ok(())
     }

@@ -231,7 +231,7 @@ impl NrGrid {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::nr::frame::{CyclicPrefix, TddPattern};
     use crate::nr::signals::Periodicity;

@@ -9,17 +9,21 @@
 //!   mapper (§5.1) and every c_init;
 //! - [`signals`]: SSB (PSS, SSS, PBCH DMRS, PBCH), TRS, PRS and PDSCH DMRS at their REs;
 //! - [`grid`]: one downlink symbol's resource grid (reference signals, data on the loaded PRBs,
-//!   nothing elsewhere) and what the UAV knows of it.
+//!   nothing elsewhere) and what the UAV knows of it;
+//! - [`illumination`]: which symbols of the stream make the radar's pulses, and the PRF.
 //!
 //! Subcarrier indices `k` count from subcarrier 0 of common resource block 0, which this model
 //! puts at the carrier's lowest subcarrier (N_grid^start = 0, point A at the band's edge).
 
 pub mod frame;
 pub mod grid;
+pub mod illumination;
 pub mod sequences;
 pub mod signals;
 
 pub use frame::{CyclicPrefix, FrameStructure, SymbolUse, TddPattern};
+pub use grid::{NrGrid, Reference};
+pub use illumination::{NrIllumination, PulseSlots};
 /// The complex type of every value in this module.
 pub use rustfft::num_complex::Complex64;
 
