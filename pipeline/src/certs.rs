@@ -1,13 +1,18 @@
-//! `cellsar certs`: a test certificate authority and one certificate per role for a deployment
-//! with mutual TLS (`pipeline/deploy/tls/`).
+//! `cellsar certs`: a test certificate authority, the router's certificate and one client
+//! certificate per role for a deployment with mutual TLS (`pipeline/deploy/tls/`).
 //!
 //! Into one directory it writes `ca.pem` and `ca.key` (the deployment's CA), and for every role
 //! `<role>.pem` and `<role>.key`: a certificate signed by the CA whose common name is the role
-//! (the router's access control matches it, `cert_common_names`) and whose subject alternative
-//! names are the given host names and addresses (a client checks the router's against the
-//! address it connects to). Keys are ECDSA P-256, PKCS#8 PEM, mode 0600. Every file is written
-//! atomically (a unique temporary file, synced, renamed), and nothing is written when one of
-//! the files exists already, unless `--force`.
+//! (the router's access control matches it, `cert_common_names`). The router's certificate
+//! ([`ROUTER_ROLE`]) is a server certificate only (extended key usage serverAuth) and names the
+//! `--host` names and addresses, which a client checks against the address it connects to;
+//! these must be names no public certificate authority may certify
+//! ([`bridge::zconfig::is_private_name`]: Zenoh's TLS client also trusts the public Web PKI
+//! roots, so the name is what keeps a publicly trusted certificate out). Every other role's
+//! certificate is a client certificate only (clientAuth, no host names): a stolen role key
+//! cannot serve as the router. Keys are ECDSA P-256, PKCS#8 PEM, mode 0600. Every file is
+//! written atomically (a unique temporary file, synced, renamed), and nothing is written when
+//! one of the files exists already, unless `--force`.
 
 use std::fs::{File, Permissions};
 use std::io::Write;
@@ -30,7 +35,10 @@ pub const DEFAULT_ROLES: [&str; 6] = [
     "launcher",
 ];
 
-/// The host names of the certificates when no `--host` is given.
+/// The role whose certificate is the router's: a server certificate for the `--host` names.
+pub const ROUTER_ROLE: &str = "router";
+
+/// The host names of the router's certificate when no `--host` is given.
 pub const DEFAULT_HOSTS: [&str; 2] = ["localhost", "127.0.0.1"];
 
 /// Longest validity accepted, days (10 years).
@@ -46,9 +54,10 @@ pub struct CertsArgs {
     /// [default: router, planner, echo, processor, bridge, launcher].
     #[arg(long = "role", value_name = "ROLE")]
     pub roles: Vec<String>,
-    /// A host name or IP address of the certificates' subject alternative names (repeatable;
-    /// the router's must include the address clients connect to) [default: localhost,
-    /// 127.0.0.1].
+    /// A host name or IP address of the router's certificate (repeatable): the address or
+    /// name clients connect to, one no public CA may certify (a private, loopback or
+    /// link-local address, or a name under .internal, .localhost, .test, .local or
+    /// .home.arpa) [default: localhost, 127.0.0.1].
     #[arg(long = "host", value_name = "NAME_OR_IP")]
     pub hosts: Vec<String>,
     /// Days the certificates are valid.
@@ -152,15 +161,61 @@ fn validity(days: u32) -> Result<(time::OffsetDateTime, time::OffsetDateTime), C
     ))
 }
 
-/// Makes the CA and every role's certificate and key in memory (nothing written yet).
-fn make_all(args: &CertsArgs) -> Result<Vec<Output>, CertsError> {
-    let roles = roles(args)?;
-    let (not_before, not_after) = validity(args.days)?;
+/// The router's host names: the `--host` values (or the defaults), each a name no public CA
+/// may certify.
+fn router_hosts(args: &CertsArgs) -> Result<Vec<String>, CertsError> {
     let hosts: Vec<String> = if args.hosts.is_empty() {
         DEFAULT_HOSTS.iter().map(|h| h.to_string()).collect()
     } else {
         args.hosts.clone()
     };
+    if let Some(h) = hosts.iter().find(|h| !bridge::zconfig::is_private_name(h)) {
+        return Err(CertsError::Flag {
+            flag: "--host",
+            value: h.clone(),
+            reason: format!(
+                "a public certificate authority may certify this name, and Zenoh's TLS client \
+                 trusts the public roots besides the deployment's CA; give the router a private \
+                 address (10/8, 172.16/12, 192.168/16, loopback) or a name under one of .{}",
+                bridge::zconfig::PRIVATE_DNS_SUFFIXES.join(", .")
+            ),
+        });
+    }
+    Ok(hosts)
+}
+
+/// The parameters of `role`'s certificate: the router's a server certificate for `hosts`,
+/// every other role's a client certificate without host names.
+fn leaf_params(
+    role: &str,
+    hosts: &[String],
+    validity: (time::OffsetDateTime, time::OffsetDateTime),
+) -> Result<CertificateParams, CertsError> {
+    let router = role == ROUTER_ROLE;
+    let names = if router { hosts.to_vec() } else { Vec::new() };
+    let mut p = CertificateParams::new(names).map_err(|e| CertsError::Flag {
+        flag: "--host",
+        value: hosts.join(","),
+        reason: e.to_string(),
+    })?;
+    p.distinguished_name.push(DnType::CommonName, role);
+    p.key_usages = vec![KeyUsagePurpose::DigitalSignature];
+    // the router serves, every other role is only ever a client of it: a role's key cannot
+    // stand in for the router (a client refuses a server certificate without serverAuth)
+    p.extended_key_usages = vec![if router {
+        ExtendedKeyUsagePurpose::ServerAuth
+    } else {
+        ExtendedKeyUsagePurpose::ClientAuth
+    }];
+    (p.not_before, p.not_after) = validity;
+    Ok(p)
+}
+
+/// Makes the CA and every role's certificate and key in memory (nothing written yet).
+fn make_all(args: &CertsArgs) -> Result<Vec<Output>, CertsError> {
+    let roles = roles(args)?;
+    let validity = validity(args.days)?;
+    let hosts = router_hosts(args)?;
     let cert_err = |what: &str| {
         let what = what.to_string();
         move |error| CertsError::Cert { what, error }
@@ -175,8 +230,7 @@ fn make_all(args: &CertsArgs) -> Result<Vec<Output>, CertsError> {
         KeyUsagePurpose::CrlSign,
         KeyUsagePurpose::DigitalSignature,
     ];
-    ca.not_before = not_before;
-    ca.not_after = not_after;
+    (ca.not_before, ca.not_after) = validity;
     let ca_cert = ca
         .self_signed(&ca_key)
         .map_err(cert_err("CA certificate"))?;
@@ -194,24 +248,7 @@ fn make_all(args: &CertsArgs) -> Result<Vec<Output>, CertsError> {
     ];
     let issuer = Issuer::new(ca, ca_key);
     for role in roles {
-        let mut p = CertificateParams::new(hosts.clone()).map_err(|e| CertsError::Flag {
-            flag: "--host",
-            value: hosts.join(","),
-            reason: e.to_string(),
-        })?;
-        p.distinguished_name.push(DnType::CommonName, role.as_str());
-        p.key_usages = vec![
-            KeyUsagePurpose::DigitalSignature,
-            KeyUsagePurpose::KeyEncipherment,
-        ];
-        // every process is a TLS client of the router, the router a server; a role's
-        // certificate serves both ways (a peer listens and connects)
-        p.extended_key_usages = vec![
-            ExtendedKeyUsagePurpose::ServerAuth,
-            ExtendedKeyUsagePurpose::ClientAuth,
-        ];
-        p.not_before = not_before;
-        p.not_after = not_after;
+        let p = leaf_params(&role, &hosts, validity)?;
         let what = format!("certificate of {role}");
         let key = KeyPair::generate().map_err(cert_err(&what))?;
         let cert = p.signed_by(&key, &issuer).map_err(cert_err(&what))?;
@@ -293,7 +330,7 @@ mod tests {
         CertsArgs {
             out: dir.to_path_buf(),
             roles: vec!["router".into(), "echo".into()],
-            hosts: vec!["10.0.0.1".into(), "router.example".into()],
+            hosts: vec!["10.0.0.1".into(), "router.cellsar.internal".into()],
             days: 30,
             force: false,
         }
@@ -303,11 +340,31 @@ mod tests {
         CertificateDer::from_pem_file(path).unwrap()
     }
 
-    /// Each role's certificate chains to the CA (for a client and for a server), names the
-    /// role as its common name and the hosts asked for (and no other) as its alternative
-    /// names; a certificate of another CA does not chain.
+    /// `leaf` verified against `anchor` for `usage` (at most one intermediate: none here).
+    fn verify(
+        leaf: &CertificateDer<'_>,
+        anchor: &rustls_pki_types::TrustAnchor<'_>,
+        usage: webpki::KeyUsage,
+    ) -> Result<(), webpki::Error> {
+        let ee = webpki::EndEntityCert::try_from(leaf).unwrap();
+        ee.verify_for_usage(
+            webpki::ALL_VERIFICATION_ALGS,
+            std::slice::from_ref(anchor),
+            &[],
+            UnixTime::now(),
+            usage,
+            None,
+            None,
+        )
+        .map(drop)
+    }
+
+    /// The router's certificate chains to the CA as a server and names the hosts asked for
+    /// (and no other); every other role's chains as a client only (no serverAuth: a client
+    /// refuses it as the router) and names no host; each names its role as common name; a
+    /// certificate of another CA does not chain.
     #[test]
-    fn certificates_chain_to_the_ca_with_the_names_asked_for() {
+    fn the_router_serves_and_the_roles_are_clients_of_the_ca() {
         let dir = tempfile::tempdir().unwrap();
         let written = make_certs(&args(dir.path())).unwrap();
         let names: Vec<String> = written
@@ -327,34 +384,37 @@ mod tests {
         );
         let ca = der(&dir.path().join("ca.pem"));
         let anchor = webpki::anchor_from_trusted_cert(&ca).unwrap();
-        let now = UnixTime::now();
+        let router = der(&dir.path().join("router.pem"));
+        let echo = der(&dir.path().join("echo.pem"));
+        verify(&router, &anchor, webpki::KeyUsage::server_auth()).unwrap();
+        let no_eku = |r: Result<(), webpki::Error>| {
+            matches!(r, Err(webpki::Error::RequiredEkuNotFoundContext(_)))
+        };
+        assert!(no_eku(verify(
+            &router,
+            &anchor,
+            webpki::KeyUsage::client_auth()
+        )));
+        verify(&echo, &anchor, webpki::KeyUsage::client_auth()).unwrap();
+        assert!(no_eku(verify(
+            &echo,
+            &anchor,
+            webpki::KeyUsage::server_auth()
+        )));
+        let valid_for = |leaf: &CertificateDer<'_>, name: &str| {
+            let ee = webpki::EndEntityCert::try_from(leaf).unwrap();
+            ee.verify_is_valid_for_subject_name(&ServerName::try_from(name).unwrap())
+                .is_ok()
+        };
+        for ok in ["10.0.0.1", "router.cellsar.internal"] {
+            assert!(valid_for(&router, ok), "router {ok}");
+            assert!(!valid_for(&echo, ok), "echo {ok}");
+        }
+        for bad in ["10.0.0.2", "localhost", "other.internal"] {
+            assert!(!valid_for(&router, bad), "{bad}");
+        }
         for role in ["router", "echo"] {
             let leaf = der(&dir.path().join(format!("{role}.pem")));
-            let ee = webpki::EndEntityCert::try_from(&leaf).unwrap();
-            for usage in [
-                webpki::KeyUsage::client_auth(),
-                webpki::KeyUsage::server_auth(),
-            ] {
-                ee.verify_for_usage(
-                    webpki::ALL_VERIFICATION_ALGS,
-                    std::slice::from_ref(&anchor),
-                    &[],
-                    now,
-                    usage,
-                    None,
-                    None,
-                )
-                .unwrap_or_else(|e| panic!("{role}: {e:?}"));
-            }
-            for ok in ["10.0.0.1", "router.example"] {
-                let n = ServerName::try_from(ok).unwrap();
-                ee.verify_is_valid_for_subject_name(&n)
-                    .unwrap_or_else(|e| panic!("{role} {ok}: {e:?}"));
-            }
-            for bad in ["10.0.0.2", "localhost", "other.example"] {
-                let n = ServerName::try_from(bad).unwrap();
-                assert!(ee.verify_is_valid_for_subject_name(&n).is_err(), "{bad}");
-            }
             let (_, x) = x509_parser::parse_x509_certificate(&leaf).unwrap();
             let cns: Vec<&str> = x
                 .subject()
@@ -371,23 +431,25 @@ mod tests {
             let days =
                 (x.validity().not_after.timestamp() - x.validity().not_before.timestamp()) / 86_400;
             assert_eq!(days, 30, "{role}");
+            let san = x.subject_alternative_name().unwrap();
+            assert_eq!(san.is_some(), role == "router", "{role}");
         }
-        // another CA's certificate does not chain to this one
+        // another CA's certificates do not chain to this one
         let other = tempfile::tempdir().unwrap();
         make_certs(&args(other.path())).unwrap();
-        let stranger = der(&other.path().join("echo.pem"));
-        let ee = webpki::EndEntityCert::try_from(&stranger).unwrap();
-        assert!(ee
-            .verify_for_usage(
-                webpki::ALL_VERIFICATION_ALGS,
-                &[anchor],
-                &[],
-                now,
-                webpki::KeyUsage::client_auth(),
-                None,
-                None,
-            )
-            .is_err());
+        for (role, usage) in [
+            ("echo", webpki::KeyUsage::client_auth()),
+            ("router", webpki::KeyUsage::server_auth()),
+        ] {
+            let stranger = der(&other.path().join(format!("{role}.pem")));
+            // the same issuer name, another key: the signature does not verify
+            let r = verify(&stranger, &anchor, usage);
+            assert_eq!(
+                r,
+                Err(webpki::Error::InvalidSignatureForPublicKey),
+                "{role}"
+            );
+        }
     }
 
     /// Keys are 0600, certificates 0644; no temporary file is left; an existing set is kept
@@ -444,11 +506,24 @@ mod tests {
             (vec!["echo", "echo"], vec![], 1, "--role"),
             (vec!["echo"], vec![], 0, "--days"),
             (vec!["echo"], vec![], MAX_DAYS + 1, "--days"),
+            (
+                vec!["router"],
+                vec!["8.8.8.8"],
+                1,
+                "--host \"8.8.8.8\": a public",
+            ),
+            (vec!["echo"], vec!["router.example.com"], 1, "--host"),
+            (
+                vec!["router"],
+                vec!["10.0.0.1", "[2001:db8::1]"],
+                1,
+                "--host",
+            ),
         ] {
             let a = CertsArgs {
                 out: dir.path().join("x"),
                 roles: roles.into_iter().map(String::from).collect(),
-                hosts,
+                hosts: hosts.into_iter().map(String::from).collect(),
                 days,
                 force: false,
             };
@@ -470,11 +545,18 @@ mod tests {
         };
         let written = make_certs(&a).unwrap();
         assert_eq!(written.len(), 2 + 2 * DEFAULT_ROLES.len());
-        let leaf = der(&a.out.join("launcher.pem"));
-        let ee = webpki::EndEntityCert::try_from(&leaf).unwrap();
+        let router = der(&a.out.join("router.pem"));
+        let ee = webpki::EndEntityCert::try_from(&router).unwrap();
         for h in DEFAULT_HOSTS {
             ee.verify_is_valid_for_subject_name(&ServerName::try_from(h).unwrap())
                 .unwrap();
+        }
+        let launcher = der(&a.out.join("launcher.pem"));
+        let ee = webpki::EndEntityCert::try_from(&launcher).unwrap();
+        for h in DEFAULT_HOSTS {
+            assert!(ee
+                .verify_is_valid_for_subject_name(&ServerName::try_from(h).unwrap())
+                .is_err());
         }
     }
 }

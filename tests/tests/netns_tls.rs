@@ -45,15 +45,33 @@ fn make_certs(dir: &Path, name: &str, host: &str) -> PathBuf {
 /// what the router denied.
 const ACL_LOG: &str = "RUST_LOG=info,zenoh::net::routing::interceptor::access_control=trace";
 
+/// What a client logs of its connections: why a handshake failed (debug).
+const TLS_LOG: &str = "info,zenoh::net::runtime::orchestrator=debug,zenoh_link_tls=debug";
+
 /// The router of `pipeline/deploy/tls/router.json5`, in namespace A.
 fn start_router(hosts: &TwoHosts, dir: &Path, certs: &Path) -> Service {
+    start_router_as(hosts, dir, certs, "router", "router")
+}
+
+/// The router of `pipeline/deploy/tls/router.json5` in namespace A, presenting `certs`'s
+/// certificate and key of `role` (the router's own: `router`), logging to `name`.
+fn start_router_as(hosts: &TwoHosts, dir: &Path, certs: &Path, role: &str, name: &str) -> Service {
     let cfg = config(dir, "tls/router.json5", &hosts.ip_a, Some(certs));
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    for ext in ["pem", "key"] {
+        assert!(text.contains(&format!("router.{ext}")), "{cfg}");
+    }
+    let text = text
+        .replace("router.pem", &format!("{role}.pem"))
+        .replace("router.key", &format!("{role}.key"));
+    let cfg_as = dir.join(format!("{name}.json5"));
+    std::fs::write(&cfg_as, text).unwrap();
     let [ip, netns, exec, a] = hosts.in_a();
     let mut router = Service::start_in(
         &[ip, netns, exec, a, "env", ACL_LOG],
-        "router",
+        name,
         dir,
-        &["router".into(), "-c".into(), cfg],
+        &["router".into(), "-c".into(), cfg_as.display().to_string()],
     );
     wait_for_log(&mut router, "router running", Duration::from_secs(30));
     router
@@ -210,6 +228,17 @@ fn pipeline_over_mutual_tls_with_access_control() {
 /// A client of the TLS router with `tls` settings (none: plain TCP), started in namespace B
 /// as a planner service that tries once to connect and exits when it cannot.
 fn client(hosts: &TwoHosts, dir: &Path, name: &str, tls: Option<&str>) -> Service {
+    client_logging(hosts, dir, name, tls, "info")
+}
+
+/// [`client`] with `RUST_LOG=rust_log`.
+fn client_logging(
+    hosts: &TwoHosts,
+    dir: &Path,
+    name: &str,
+    tls: Option<&str>,
+    rust_log: &str,
+) -> Service {
     let (proto, tls) = match tls {
         Some(t) => (
             "tls",
@@ -227,8 +256,10 @@ fn client(hosts: &TwoHosts, dir: &Path, name: &str, tls: Option<&str>) -> Servic
         ),
     )
     .unwrap();
+    let [ip, netns, exec, b] = hosts.in_b();
+    let log = format!("RUST_LOG={rust_log}");
     Service::start_in(
-        &hosts.in_b(),
+        &[ip, netns, exec, b, "env", &log],
         name,
         dir,
         &["planner".into(), "-c".into(), cfg.display().to_string()],
@@ -298,6 +329,68 @@ fn strangers_cannot_open_a_session_with_the_tls_router() {
     }
 }
 
+/// A client with the deployment's CA and a valid planner certificate refuses a router that
+/// presents a role's certificate (the processor's: signed by the same CA, but a client
+/// certificate naming no host) and one that presents a router certificate of another CA for
+/// the same address; it accepts the deployment's router (so the refusals are the router
+/// certificates', not a broken set-up).
+fn clients_refuse_a_router_that_is_not_the_deployments() {
+    let hosts = two_namespaces();
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let certs = make_certs(d, "certs", &hosts.ip_a);
+    let other = make_certs(d, "other-ca", &hosts.ip_a);
+    let tls = format!(
+        "root_ca_certificate: '{}', enable_mtls: true, verify_name_on_connect: true, \
+         connect_private_key: '{}', connect_certificate: '{}'",
+        certs.join("ca.pem").display(),
+        certs.join("planner.key").display(),
+        certs.join("planner.pem").display()
+    );
+    for (name, router_certs, role, why) in [
+        (
+            "role-cert",
+            &certs,
+            "processor",
+            "invalid peer certificate: certificate does not allow extended key usage for \
+             server authentication",
+        ),
+        (
+            "other-ca",
+            &other,
+            "router",
+            "invalid peer certificate: BadSignature",
+        ),
+    ] {
+        let router_name = format!("router-{name}");
+        let mut router = start_router_as(&hosts, d, router_certs, role, &router_name);
+        let mut c = client_logging(&hosts, d, &format!("client-of-{name}"), Some(&tls), TLS_LOG);
+        let st = exit_within(&mut c, Duration::from_secs(60));
+        let log = c.log_text();
+        assert_eq!(st.code(), Some(1), "{name}: {st}\n{log}");
+        assert!(!log.contains("plan service ready"), "{name}:\n{log}");
+        // for the reason of its own, as the client saw it
+        assert!(log.contains(why), "{name}: {why:?}:\n{log}");
+        // the router saw the client give up the handshake (it does not know why: the
+        // client's verdict on the router's certificate)
+        assert!(
+            !router.log_text().contains("invalid peer certificate"),
+            "{name}: the router refused the client, not the other way round:\n{}",
+            router.log_text()
+        );
+        assert_eq!(
+            router.stop(Duration::from_secs(20)).code(),
+            Some(0),
+            "{name}"
+        );
+    }
+    // the deployment's own router: the same client opens its session
+    let _router = start_router(&hosts, d, &certs);
+    let mut good = client(&hosts, d, "client-of-router", Some(&tls));
+    wait_for_log(&mut good, "plan service ready", Duration::from_secs(30));
+    assert_eq!(good.stop(Duration::from_secs(20)).code(), Some(0));
+}
+
 fn main() {
     harness::trials::main(&[
         Test::netns(
@@ -307,6 +400,10 @@ fn main() {
         Test::netns(
             "strangers_cannot_open_a_session_with_the_tls_router",
             strangers_cannot_open_a_session_with_the_tls_router,
+        ),
+        Test::netns(
+            "clients_refuse_a_router_that_is_not_the_deployments",
+            clients_refuse_a_router_that_is_not_the_deployments,
         ),
     ]);
 }

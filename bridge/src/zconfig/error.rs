@@ -54,4 +54,13 @@ pub enum ConfigError {
         #[source]
         source: ZenohError,
     },
+    /// A flag or setting that would silently downgrade a configuration that enables TLS or
+    /// access control (a plain endpoint, multicast scouting, no check of the router's name).
+    #[error("invalid Zenoh configuration: {what}: {reason}")]
+    Downgrade {
+        /// The flag and its value, or the file and its setting.
+        what: String,
+        /// Why it is refused.
+        reason: String,
+    },
 }

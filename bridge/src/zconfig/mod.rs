@@ -21,6 +21,11 @@
 //! `scouting.multicast.enabled` itself (Zenoh's own default is on): a process joins only the
 //! peers and routers it is told about ([`scouting`] module).
 //!
+//! Once a `--config` file enables TLS or access control, nothing may downgrade it: a non-`tls/`
+//! endpoint (of `-e`, `-l` or the file), multicast scouting, a client that does not check the
+//! router's name, or one that connects to a name a public CA may certify are refused, naming
+//! the flag or the file's setting ([`secure`] module, [`ConfigError::Downgrade`]).
+//!
 //! Every configuration built here bounds what a peer can make this process allocate: Zenoh
 //! reassembles a fragmented message in memory before anyone sees it, up to
 //! `transport/link/rx/max_message_size` (1 GiB by Zenoh's default). It is set to
@@ -38,10 +43,12 @@ use crate::zenoh_error::ZenohError;
 mod describe;
 mod error;
 mod scouting;
+mod secure;
 
 pub use describe::{describe, effective_endpoints, effective_mode, waiting_client_json5};
 pub use error::ConfigError;
 pub use scouting::MULTICAST_SCOUTING_KEY;
+pub use secure::{is_private_name, what_secures, PRIVATE_DNS_SUFFIXES};
 
 /// The Zenoh session mode.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -206,6 +213,8 @@ impl ZenohArgs {
             })?,
             None => Config::default(),
         };
+        // what the file enables (TLS, access control) no flag may take away
+        let secured = self.config.as_ref().and(what_secures(&config));
         let mode = self.mode.or(if self.config.is_none() {
             Some(Mode::Peer)
         } else {
@@ -254,7 +263,24 @@ impl ZenohArgs {
                 "--zenoh-max-message-bytes",
             )?;
         }
+        if let Some(why) = secured {
+            secure::check(self, &config, why)?;
+        }
         Ok(config)
+    }
+
+    /// What the `--config` file enables of TLS and access control, in words (`None`: no file,
+    /// or a file that enables neither); an error when the file cannot be read.
+    pub fn secured_by(&self) -> Result<Option<&'static str>, ConfigError> {
+        match &self.config {
+            Some(path) => Config::from_file(path)
+                .map(|c| what_secures(&c))
+                .map_err(|e| ConfigError::File {
+                    path: path.clone(),
+                    source: e.into(),
+                }),
+            None => Ok(None),
+        }
     }
 
     /// The largest message to set in `config`: the flag's (checked), else the default unless
