@@ -3,7 +3,9 @@
 //! the pulse's symbols, and an upsampled range profile by zero-padded inverse FFT.
 //!
 //! Normalisation: a path `a·u(n − Δ)` gives a profile `p(x)` that peaks at `x = Δ` with value `a`
-//! (reciprocal filter exactly; matched filter on average). Profile sample j of a window starting
+//! (reciprocal filter exactly; matched filter on average). Where the reference is zero (an empty
+//! RE of an NR grid, or one the processor does not know) the RE is masked, and the profile is
+//! normalised by the weights of the known REs of all the pulse's symbols. Profile sample j of a window starting
 //! at j0 lies at delay `(j0 + j)/U` samples (periodic in N).
 
 use std::sync::Arc;
@@ -67,8 +69,25 @@ impl RangeCompressor {
         let num = &self.num;
         let nsc = num.subcarriers;
         let wsum: f64 = self.weights.iter().sum();
-        let scale =
-            (nsc as f64).sqrt() / (num.fft_size as f64 * windows.len().max(1) as f64 * wsum);
+        let full = windows
+            .iter()
+            .all(|w| w.data.iter().all(|x| x.re != 0.0 || x.im != 0.0));
+        let scale = if full {
+            (nsc as f64).sqrt() / (num.fft_size as f64 * windows.len().max(1) as f64 * wsum)
+        } else {
+            // a mask (empty or unknown REs are zero): normalise by the known REs' weights
+            let known: f64 = windows
+                .iter()
+                .flat_map(|w| w.data.iter().zip(&self.weights))
+                .filter(|(x, _)| x.re != 0.0 || x.im != 0.0)
+                .map(|(_, w)| w)
+                .sum();
+            if known > 0.0 {
+                (nsc as f64).sqrt() / (num.fft_size as f64 * known)
+            } else {
+                0.0
+            }
+        };
         let mut z = vec![Complex64::new(0.0, 0.0); nsc];
         for w in windows {
             for (i, zi) in z.iter_mut().enumerate() {

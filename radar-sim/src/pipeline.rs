@@ -16,6 +16,7 @@ mod detect;
 mod frames;
 mod imaging;
 mod processor;
+mod reference;
 mod result;
 mod setup;
 

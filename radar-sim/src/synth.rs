@@ -46,6 +46,7 @@ use crate::waveform::{Numerology, C_MPS};
 #[cfg(target_arch = "x86_64")]
 mod avx512;
 mod path_sums;
+mod timing;
 
 pub(crate) use path_sums::path_sums;
 
@@ -257,8 +258,6 @@ impl Synthesizer {
         }
         let num = &self.num;
         let n = num.fft_size;
-        let ncp = num.cp_samples as f64;
-        let ns = num.symbol_samples() as f64;
         let nsc = num.subcarriers;
         let fs = num.sample_rate_hz();
         let centre = n as f64 / 2.0;
@@ -277,7 +276,9 @@ impl Synthesizer {
             }
             terms += 1;
         }
-        // Y^{(j)}_i = X^{m+j}_i e^{−j2π k_i j N_cp / N} / √N_sc (zero before the first symbol)
+        let timing = timing::WindowTiming::new(num.nr.as_deref(), m, n, num.cp_samples);
+        // Y^{(j)}_i = X^{m+j}_i e^{−j2π k_i o_j / N} / √N_sc (zero before the first symbol), o_j
+        // the offset of symbol m + j's useful part from symbol m's (j (N + N_cp) without NR)
         let scale = 1.0 / (nsc as f64).sqrt();
         let mut ys: Vec<(i64, Vec<Complex64>)> = Vec::new();
         let mut y_of = |j: i64, ys: &mut Vec<(i64, Vec<Complex64>)>| -> usize {
@@ -288,7 +289,7 @@ impl Synthesizer {
                 Some(x) => {
                     let mut w = vec![Complex64::new(scale, 0.0); nsc];
                     if j != 0 {
-                        let cp = (j * num.cp_samples as i64).rem_euclid(n as i64);
+                        let cp = timing.phase_offset(j, n, num.cp_samples);
                         phase_ramp(cp as f64, k0 as f64, n, &mut w);
                         w.iter_mut().for_each(|v| *v *= scale);
                     }
@@ -303,7 +304,7 @@ impl Synthesizer {
             ys.len() - 1
         };
         // each path's first piece and its change point (if any)
-        let j_of = |k: f64, d: f64| ((k - d + ncp) / ns).floor() as i64;
+        let j_of = |k: f64, d: f64| timing.j_of(k - d);
         let mut groups: Vec<(i64, Vec<&Path>)> = Vec::new();
         let mut events: Vec<(usize, &Path, i64, i64)> = Vec::new(); // (first sample, path, j0, j1)
         for p in paths {
@@ -314,7 +315,7 @@ impl Synthesizer {
                 None => groups.push((j0, vec![p])),
             }
             if j1 != j0 {
-                let s = (d - ncp + j1 as f64 * ns).ceil().clamp(0.0, n as f64) as usize;
+                let s = timing.change_at(d, j1).ceil().clamp(0.0, n as f64) as usize;
                 events.push((s, p, j0, j1));
             }
         }
@@ -424,7 +425,6 @@ impl Synthesizer {
             });
         }
         let fs = self.num.sample_rate_hz();
-        let ns = self.num.symbol_samples() as f64;
         let mut cache: HashMap<i64, Arc<Vec<Complex32>>> = HashMap::new();
         let num = &self.num;
         let mut data = |m: i64| -> Option<Arc<Vec<Complex32>>> {
@@ -448,8 +448,7 @@ impl Synthesizer {
                 MotionModel::StopAndHop => (pulse.pos_m, pulse.vel_mps),
                 MotionModel::IntraPulse => {
                     // window centre of symbol m in BS time, relative to the pulse's reference time
-                    let t = (m as f64 * ns
-                        + self.num.cp_samples as f64
+                    let t = (self.num.useful_start_sample(m as u64)
                         + pulse.window_delay_samples as f64
                         + n as f64 / 2.0)
                         / fs;

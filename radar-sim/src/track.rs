@@ -224,7 +224,9 @@ pub fn plan_apertures(
     Ok(out)
 }
 
-/// The pulses of `ap` along `track`: look l, pulse i at t = t_start + l T + (i + ½)/PRF.
+/// The pulses of `ap` along `track`: look l, pulse i at t = t_start + l T + (i + ½)/PRF (under
+/// NR: at the centre of the pulse slot's symbols of that PRF period, see
+/// [`Numerology::pulse_symbol`]).
 pub fn plan_pulses(
     track: &dyn Track,
     num: &Numerology,
@@ -237,6 +239,7 @@ pub fn plan_pulses(
     for l in 0..ap.looks {
         for i in 0..ap.pulses_per_look {
             let t = ap.t_start_s + l as f64 * ap.look_s + (i as f64 + 0.5) / prf_hz;
+            let (symbol, t) = num.pulse_symbol(t);
             let pos = track.position_m(t);
             let rd = dist3(pos, bs_m);
             out.push(PulseMeta {
@@ -244,7 +247,7 @@ pub fn plan_pulses(
                 aperture: ap.index,
                 look: l,
                 t_s: t,
-                symbol: (t / num.symbol_s()).floor().max(0.0) as u64,
+                symbol,
                 pos_m: pos,
                 vel_mps: track.velocity_mps(t),
                 heading: track.heading(t),

@@ -6,6 +6,8 @@
 //! symbol has unit mean power per sample when the QAM alphabet has unit mean power. Symbol m
 //! starts (CP first) at time `m (N + N_cp) / f_s` in BS time.
 
+use std::sync::Arc;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rustfft::num_complex::{Complex32, Complex64};
@@ -13,6 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::{Modulation, RadarConfig};
 use crate::error::{RadarError, Result};
+use crate::nr::NrIllumination;
 
 /// Speed of light, m/s (same constant as the planner).
 pub const C_MPS: f64 = planner::params::SPEED_OF_LIGHT_MPS;
@@ -34,6 +37,11 @@ pub struct Numerology {
     pub modulation: Modulation,
     /// Seed of the data symbols.
     pub seed: u64,
+    /// The NR cell whose grid, per-symbol CPs and pulse slots replace the plain waveform
+    /// (`[radar.nr]`); None: every symbol is `modulation` on every subcarrier with `cp_samples`.
+    /// Rebuilt from the scene, never serialised.
+    #[serde(skip)]
+    pub nr: Option<Arc<NrIllumination>>,
 }
 
 impl Numerology {
@@ -55,7 +63,57 @@ impl Numerology {
             carrier_hz: C_MPS / wavelength_m,
             modulation: radar.modulation,
             seed: radar.seed,
+            nr: None,
         })
+    }
+
+    /// This numerology with the NR cell `nr` (its subcarriers must be this one's).
+    pub fn with_nr(mut self, nr: Option<Arc<NrIllumination>>) -> Result<Self> {
+        if let Some(ill) = &nr {
+            let f = &ill.grid.frame;
+            if f.subcarriers() != self.subcarriers
+                || f.fft_size() != self.fft_size
+                || f.base_cp_samples() != self.cp_samples
+            {
+                return Err(RadarError::config(
+                    "radar.nr",
+                    format!(
+                        "the cell's {} subcarriers, FFT size {} and CP {} differ from the \
+                         radar's {}, {} and {}",
+                        f.subcarriers(),
+                        f.fft_size(),
+                        f.base_cp_samples(),
+                        self.subcarriers,
+                        self.fft_size,
+                        self.cp_samples
+                    ),
+                ));
+            }
+        }
+        self.nr = nr;
+        Ok(self)
+    }
+
+    /// The sample (from the start of the BS's stream) at which symbol `m`'s useful part starts:
+    /// `m (N + N_cp) + N_cp`, or the NR frame's, whose CPs differ per symbol.
+    pub fn useful_start_sample(&self, m: u64) -> f64 {
+        match &self.nr {
+            None => m as f64 * self.symbol_samples() as f64 + self.cp_samples as f64,
+            Some(ill) => ill.grid.frame.useful_start_sample(m) as f64,
+        }
+    }
+
+    /// The first symbol of the pulse at nominal time `t_s` and the pulse's reference time:
+    /// `(⌊t / T_sym⌋, t)`, or under NR the pulse slot of period ⌊t · PRF⌋ and the centre of its
+    /// symbols.
+    pub fn pulse_symbol(&self, t_s: f64) -> (u64, f64) {
+        match &self.nr {
+            None => ((t_s / self.symbol_s()).floor().max(0.0) as u64, t_s),
+            Some(ill) => {
+                let m = ill.pulse_symbol(t_s);
+                (m, ill.pulse_centre_s(m))
+            }
+        }
     }
 
     /// Sample rate f_s = N Δf, Hz.
@@ -109,8 +167,17 @@ impl Numerology {
     }
 
     /// The QAM data X_{m,k} of symbol `m` (N_sc values, unit mean power), reproducible from the
-    /// seed alone in any order.
+    /// seed alone in any order; under NR the cell's grid (zero where nothing is sent).
     pub fn symbol_data(&self, m: u64) -> Vec<Complex32> {
+        if let Some(ill) = &self.nr {
+            return ill
+                .grid
+                .symbol(m)
+                .values
+                .iter()
+                .map(|v| Complex32::new(v.re as f32, v.im as f32))
+                .collect();
+        }
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x0FD3_A5A5_0000_0000);
         rng.set_stream(m);
         let bits = self.modulation.bits();

@@ -62,7 +62,6 @@ impl Processor {
             s = e;
         }
         let fs = num.sample_rate_hz();
-        let ns = num.symbol_samples() as f64;
         let results: Vec<Result<BatchOut>> = ranges
             .par_iter()
             .map(|r| {
@@ -70,20 +69,24 @@ impl Processor {
                 for (k, p) in pulses[r.clone()].iter().enumerate() {
                     let rd = crate::track::dist3(p.pos_m, self.setup.bs_m);
                     let dp = rd * fs / C_MPS - p.window_delay_samples as f64;
-                    for s in 0..spp {
-                        let off = ((r.start + k) * spp + s) * n;
-                        let mut spec: Vec<Complex64> = iq[off..off + n]
-                            .iter()
-                            .map(|v| Complex64::new(v.re as f64, v.im as f64))
-                            .collect();
-                        self.fft.process(&mut spec);
+                    let specs: Vec<Vec<Complex64>> = (0..spp)
+                        .map(|s| {
+                            let off = ((r.start + k) * spp + s) * n;
+                            let mut spec: Vec<Complex64> = iq[off..off + n]
+                                .iter()
+                                .map(|v| Complex64::new(v.re as f64, v.im as f64))
+                                .collect();
+                            self.fft.process(&mut spec);
+                            spec
+                        })
+                        .collect();
+                    let refs = self.pulse_reference(p.symbol, &specs, dp);
+                    for (s, (spec, data)) in specs.into_iter().zip(refs).enumerate() {
                         let m_sym = p.symbol + s as u64;
                         windows.push(SymbolWindow {
                             spectrum: spec,
-                            data: Arc::new(num.symbol_data(m_sym)),
-                            t_s: (m_sym as f64 * ns
-                                + num.cp_samples as f64
-                                + p.window_delay_samples as f64)
+                            data: Arc::new(data),
+                            t_s: (num.useful_start_sample(m_sym) + p.window_delay_samples as f64)
                                 / fs,
                             dp_delay_samples: dp,
                         });

@@ -31,6 +31,9 @@ pub struct Processor {
     pub(super) fft: Arc<dyn Fft<f64>>,
     pub(super) ifft: Arc<dyn Fft<f64>>,
     pub(super) link: Synthesizer,
+    /// Under NR, the profile noise factor of the reference's mask (see
+    /// [`Processor::profile_noise_var`]).
+    pub(super) nr_noise_factor: Option<f64>,
 }
 
 impl std::fmt::Debug for Processor {
@@ -53,7 +56,17 @@ impl Processor {
         let fft = planner.forward(setup.num.fft_size);
         let ifft = planner.inverse(setup.num.fft_size);
         let link = setup.synthesizer(Vec::new())?;
+        let nr_noise_factor = match setup.num.nr.as_deref() {
+            Some(ill) => Some(Self::nr_noise_factor(
+                ill,
+                setup.scene.radar.reference,
+                pc.range_filter,
+                &pc.range_weighting.weights(setup.num.subcarriers),
+            )?),
+            None => None,
+        };
         Ok(Self {
+            nr_noise_factor,
             setup,
             canceller,
             compressor,
@@ -73,9 +86,14 @@ impl Processor {
         &self.compressor
     }
 
-    /// Variance of one profile sample from thermal noise, W.
+    /// Variance of one profile sample from thermal noise, W. Under NR, with the mean noise
+    /// factor of the reference's known REs over the first pulses (fewer known REs: more noise
+    /// per profile sample, since the profile is normalised by them).
     pub fn profile_noise_var(&self) -> f64 {
         let num = &self.setup.num;
+        if let Some(f) = self.nr_noise_factor {
+            return self.link.noise_power_w() * num.subcarriers as f64 / num.fft_size as f64 * f;
+        }
         let pc = &self.setup.scene.processing;
         let w = pc.range_weighting.weights(num.subcarriers);
         let s1: f64 = w.iter().sum();

@@ -14,7 +14,8 @@ use crate::waveform::Numerology;
 pub struct RadarSetup {
     /// The mission parameters (geometry, B, λ, T_d, d_min, ...).
     pub params: planner::Params,
-    /// The scene file.
+    /// The scene file, its `[radar]` resolved ([`crate::config::RadarConfig::resolve`]: under
+    /// `[radar.nr]` the PRF, symbols per pulse, numerology and CP are the cell's).
     pub scene: SceneFile,
     /// The resolved OFDM numerology.
     pub num: Numerology,
@@ -33,7 +34,14 @@ impl RadarSetup {
             .validate()
             .map_err(|e| RadarError::config("params", e.to_string()))?;
         scene.validate()?;
-        let num = Numerology::new(&scene.radar, params.bandwidth_hz, params.wavelength_m)?;
+        // under [radar.nr] the PRF, symbols per pulse, numerology and CP follow from the cell
+        let (radar, nr) = scene.radar.resolve(params.bandwidth_hz)?;
+        let scene = &SceneFile {
+            radar,
+            ..scene.clone()
+        };
+        let num =
+            Numerology::new(&scene.radar, params.bandwidth_hz, params.wavelength_m)?.with_nr(nr)?;
         let antenna = Antenna::new(
             &scene.radar,
             params.wavelength_m,
