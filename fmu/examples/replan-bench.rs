@@ -60,6 +60,7 @@ fn main() -> Result<()> {
                 max_iterations,
                 tolerance,
                 coarse,
+                ..Default::default()
             };
             let r = fmu::planning::replan(&mission, &full.trajectory, from, window, moved, &o);
             times.push(match r {

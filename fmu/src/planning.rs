@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use planner::evaluate::ResolutionMode;
+use planner::evaluate::{Dynamics, ResolutionMode};
 use planner::{LandmarkWindow, LandmarksSpec, Mission, Trajectory};
 use serde::{Deserialize, Serialize};
 
@@ -20,11 +20,12 @@ pub struct Planned {
     pub summary: String,
 }
 
-/// The options of the initial plan that the FMU's parameters `resolution`, `strict_resolution`
-/// and `max_extra_energy_pct` set: the plan options a user gives `cellsar-planner plan`
-/// (`--resolution`, `--strict-resolution`, `--max-extra-energy-pct`), with the same defaults
-/// ([`planner::PlanOptions::default`]). Re-plans inside a step ignore them: they plan for
-/// [`REPLAN_RESOLUTION`].
+/// The options of the initial plan that the FMU's parameters `resolution`, `strict_resolution`,
+/// `max_extra_energy_pct` and `dynamics` set: the plan options a user gives `cellsar-planner plan`
+/// (`--resolution`, `--strict-resolution`, `--max-extra-energy-pct`, `--dynamics`), with the same
+/// defaults ([`planner::PlanOptions::default`]). Re-plans inside a step ignore the resolution
+/// options (they plan for [`REPLAN_RESOLUTION`]) and keep the dynamics
+/// ([`ReplanOptions::dynamics`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct InitialPlan {
     /// [`planner::PlanOptions::resolution`].
@@ -33,6 +34,9 @@ pub struct InitialPlan {
     pub strict_resolution: bool,
     /// [`planner::PlanOptions::max_extra_energy_pct`] (`None`: no cap).
     pub max_extra_energy_pct: Option<f64>,
+    /// [`planner::PlanOptions::dynamics`]: the vehicle model of the initial plan and of every
+    /// re-plan.
+    pub dynamics: Dynamics,
 }
 
 impl Default for InitialPlan {
@@ -42,6 +46,7 @@ impl Default for InitialPlan {
             resolution: d.resolution,
             strict_resolution: d.strict_resolution,
             max_extra_energy_pct: d.max_extra_energy_pct,
+            dynamics: d.dynamics,
         }
     }
 }
@@ -53,6 +58,7 @@ impl InitialPlan {
             resolution: self.resolution,
             strict_resolution: self.strict_resolution,
             max_extra_energy_pct: self.max_extra_energy_pct,
+            dynamics: self.dynamics,
             ..Default::default()
         }
     }
@@ -64,7 +70,8 @@ impl InitialPlan {
         self.plan_options().validate().map_err(|e| e.to_string())
     }
 
-    /// The plan for a log line: "resolution general (best effort, no energy cap)".
+    /// The plan for a log line: "resolution general (best effort, no energy cap), dynamics
+    /// vehicle".
     pub fn describe(&self) -> String {
         let detail = match (
             self.resolution,
@@ -81,7 +88,10 @@ impl InitialPlan {
                 )
             }
         };
-        format!("resolution {}{detail}", self.resolution)
+        format!(
+            "resolution {}{detail}, dynamics {}",
+            self.resolution, self.dynamics
+        )
     }
 }
 
@@ -137,6 +147,10 @@ pub struct ReplanOptions {
     /// `planner::PlanOptions::coarse`: repair an infeasible warm start on a coarse grid (slots of
     /// about 2.5 s) first. Off, the warm start is repaired on the mission's own slots.
     pub coarse: bool,
+    /// `planner::PlanOptions::dynamics`: the vehicle model of the re-plan, that of the initial
+    /// plan (the FMU's parameter `dynamics`). Under [`Dynamics::Vehicle`] the re-plan starts
+    /// with the velocity flown into q_{from_slot}.
+    pub dynamics: Dynamics,
 }
 
 /// The defaults were chosen with `cargo run --release -p fmu --example replan-bench` (see
@@ -152,6 +166,7 @@ impl Default for ReplanOptions {
             max_iterations: 5,
             tolerance: 1e-3,
             coarse: false,
+            dynamics: planner::DEFAULT_DYNAMICS,
         }
     }
 }
@@ -329,6 +344,7 @@ pub fn replan(
         tolerance: options.tolerance,
         coarse: options.coarse,
         resolution: REPLAN_RESOLUTION,
+        dynamics: options.dynamics,
         ..Default::default()
     };
     let started = Instant::now();
@@ -599,120 +615,4 @@ fn transition(plan: WindowPlan, moved_slots: Option<(usize, usize)>) -> (usize, 
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
-    use super::*;
-    use planner::geometry::{Point2, RIGHT_TURN};
-
-    /// A 20 s mission of two landmark windows, for the tests of this crate.
-    pub(crate) const SHORT: &str = r#"name = "short"
-[params]
-horizon_s = 20
-[landmarks]
-points = [
-  { x_m = 0, y_m = 0, from_s = 0, to_s = 10 },
-  { x_m = 0, y_m = 30, from_s = 10, to_s = 20 },
-]
-"#;
-
-    /// [`SHORT`] as a mission.
-    pub(crate) fn short_mission() -> Mission {
-        Mission::from_file_struct(&planner::MissionFile::from_toml_str(SHORT).unwrap()).unwrap()
-    }
-
-    #[test]
-    fn replan_skips_delays_the_reach_bound_rules_out() {
-        let mission = short_mission();
-        let current = plan(&mission, None).unwrap().trajectory;
-        let p = mission.params();
-        let from = 5;
-        // out of reach of the next two slots, within reach of the third
-        let q = current.q(from);
-        let hop = (p.max_speed_mps * p.slot_s).hypot(p.centre_offset_m());
-        let d = hop + p.sensing_radius_m + 1.5 * p.max_speed_mps * p.slot_s;
-        let g = current.q(from + 1);
-        let u = (Point2::from(g) - Point2::from(q)).normalize();
-        // to the right of the track, where the centre is
-        let moved = (Point2::from(q) + RIGHT_TURN * u * d).into();
-        let re = replan(
-            &mission,
-            &current,
-            from,
-            0,
-            moved,
-            &ReplanOptions::default(),
-        )
-        .unwrap();
-        assert_eq!(
-            re.attempts[0].window,
-            WindowPlan::Delayed(2),
-            "{}",
-            re.summary
-        );
-        assert!(
-            re.summary.contains("delays below 2 skipped"),
-            "{}",
-            re.summary
-        );
-        assert!(re.transition_slots >= 2);
-        assert!(re.summary.contains(&describe_attempts(&re.attempts)));
-    }
-
-    #[test]
-    fn the_sub_mission_starts_with_the_velocity_flown() {
-        let mission = short_mission();
-        let current = plan(&mission, None).unwrap().trajectory;
-        let p = mission.params();
-        let rest = remainder(&mission, &current, 5, 0);
-        let v = rest.sub_params.start_velocity_mps.unwrap();
-        let (a, b) = (current.q(4), current.q(5));
-        for i in 0..2 {
-            assert!((v[i] - (b[i] - a[i]) / p.slot_s).abs() < 1e-9, "{v:?}");
-        }
-        assert_eq!(rest.sub_params.start_m, b);
-        // from the start, the mission's own start rule
-        let rest = remainder(&mission, &current, 0, 0);
-        assert_eq!(rest.sub_params.start_velocity_mps, p.start_velocity_mps);
-    }
-
-    #[test]
-    fn replan_leaves_an_unreachable_window_out() {
-        let mission = short_mission();
-        let current = plan(&mission, None).unwrap().trajectory;
-        let re = replan(
-            &mission,
-            &current,
-            5,
-            0,
-            [1e7, 0.0],
-            &ReplanOptions::default(),
-        )
-        .unwrap();
-        assert!(re.window_dropped);
-        assert_eq!(re.transition_slots, 15);
-        // no planner call for a delay: the window is out of reach in all its slots
-        assert_eq!(re.attempts.len(), 1);
-        assert_eq!(re.attempts[0].window, WindowPlan::Dropped);
-        let eval = planner::evaluate(&re.mission, &re.trajectory);
-        assert_eq!(eval.slots_out_of_view, 20);
-    }
-
-    #[test]
-    fn attempts_are_described_with_their_times() {
-        let a = [
-            Attempt {
-                window: WindowPlan::Delayed(0),
-                solve_s: 9.5124,
-                error: Some("infeasible".into()),
-            },
-            Attempt {
-                window: WindowPlan::Delayed(1),
-                solve_s: 0.21,
-                error: None,
-            },
-        ];
-        assert_eq!(
-            describe_attempts(&a),
-            "delay 0: failed after 9.512 s (infeasible); delay 1: 0.210 s"
-        );
-    }
-}
+pub(crate) mod tests;

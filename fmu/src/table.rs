@@ -139,85 +139,30 @@ pub struct Unit {
     pub rad: i32,
 }
 
+/// A unit with its exponents of kg, m, s and rad.
+const fn unit(name: &'static str, kg: i32, m: i32, s: i32, rad: i32) -> Unit {
+    Unit {
+        name,
+        kg,
+        m,
+        s,
+        rad,
+    }
+}
+
 /// Every unit a table may use.
 pub const UNITS: &[Unit] = &[
-    Unit {
-        name: "Hz",
-        kg: 0,
-        m: 0,
-        s: -1,
-        rad: 0,
-    },
-    Unit {
-        name: "m",
-        kg: 0,
-        m: 1,
-        s: 0,
-        rad: 0,
-    },
-    Unit {
-        name: "s",
-        kg: 0,
-        m: 0,
-        s: 1,
-        rad: 0,
-    },
-    Unit {
-        name: "rad",
-        kg: 0,
-        m: 0,
-        s: 0,
-        rad: 1,
-    },
-    Unit {
-        name: "m/s",
-        kg: 0,
-        m: 1,
-        s: -1,
-        rad: 0,
-    },
-    Unit {
-        name: "m/s2",
-        kg: 0,
-        m: 1,
-        s: -2,
-        rad: 0,
-    },
-    Unit {
-        name: "W",
-        kg: 1,
-        m: 2,
-        s: -3,
-        rad: 0,
-    },
-    Unit {
-        name: "J",
-        kg: 1,
-        m: 2,
-        s: -2,
-        rad: 0,
-    },
-    Unit {
-        name: "kg",
-        kg: 1,
-        m: 0,
-        s: 0,
-        rad: 0,
-    },
-    Unit {
-        name: "m2",
-        kg: 0,
-        m: 2,
-        s: 0,
-        rad: 0,
-    },
-    Unit {
-        name: "kg/m3",
-        kg: 1,
-        m: -3,
-        s: 0,
-        rad: 0,
-    },
+    unit("Hz", 0, 0, -1, 0),
+    unit("m", 0, 1, 0, 0),
+    unit("s", 0, 0, 1, 0),
+    unit("rad", 0, 0, 0, 1),
+    unit("m/s", 0, 1, -1, 0),
+    unit("m/s2", 0, 1, -2, 0),
+    unit("W", 1, 2, -3, 0),
+    unit("J", 1, 2, -2, 0),
+    unit("kg", 1, 0, 0, 0),
+    unit("m2", 0, 2, 0, 0),
+    unit("kg/m3", 1, -3, 0, 0),
 ];
 
 /// A log category the models use (declared in `LogCategories`).
@@ -282,6 +227,8 @@ pub mod planner_vr {
     pub const START_M: u32 = 10;
     /// `bs_m` (array of 2).
     pub const BS_M: u32 = 12;
+    /// `start_velocity_mps` (array of 2).
+    pub const START_VELOCITY: u32 = 26;
     /// `mission_file`.
     pub const MISSION_FILE: u32 = 100;
     /// `resolution` (String): the initial plan's resolution requirement.
@@ -290,6 +237,8 @@ pub mod planner_vr {
     pub const STRICT_RESOLUTION: u32 = 102;
     /// `max_extra_energy_pct`.
     pub const MAX_EXTRA_ENERGY_PCT: u32 = 103;
+    /// `dynamics` (String): the vehicle model of every plan.
+    pub const DYNAMICS: u32 = 104;
     /// `landmark_x_in_m`.
     pub const LANDMARK_X_IN: u32 = 200;
     /// `landmark_y_in_m`.
@@ -332,6 +281,12 @@ pub mod planner_vr {
     pub const SLOTS_OUT_OF_VIEW: u32 = 317;
     /// `plan_resolution`.
     pub const PLAN_RESOLUTION: u32 = 318;
+    /// `commanded_accel_mps2`.
+    pub const COMMANDED_ACCEL: u32 = 319;
+    /// `commanded_accel_x_mps2`.
+    pub const COMMANDED_ACCEL_X: u32 = 320;
+    /// `commanded_accel_y_mps2`.
+    pub const COMMANDED_ACCEL_Y: u32 = 321;
     /// `plan_solve_time_s` (local).
     pub const SOLVE_TIME: u32 = 400;
     /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests, settable only in
@@ -440,7 +395,17 @@ pub const PLANNER_VARS: &[Var] = &[
     param("air_density_kgpm3", 22, Some("kg/m3"), "Air density rho"),
     param("fuselage_drag_ratio", 23, None, "Fuselage drag ratio d_f"),
     param("uav_mass_kg", 24, Some("kg"), "UAV mass (informational)"),
-    param("max_accel_mps2", 25, Some("m/s2"), "Largest horizontal acceleration a_max; only the vehicle dynamics use it (planner PlanOptions::dynamics: the FMU plans with the library's default dynamics)"),
+    param("max_accel_mps2", 25, Some("m/s2"), "Largest horizontal acceleration a_max between consecutive slots (default g tan 30 deg, a 30 deg tilt limit); the plans keep to it under dynamics = vehicle only"),
+    Var {
+        name: "start_velocity_mps",
+        vr: pv::START_VELOCITY,
+        ty: VarType::Real,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 2,
+        unit: Some("m/s"),
+        description: "UAV velocity at the start q_0 (v_x, v_y), from which the first slot's acceleration is counted. Both NaN (the start value): the mission file's start_velocity_mps, else the mission's rule (at rest, unless the first landmark comes too soon to reach the azimuth speed from rest). Both finite: this velocity (its speed at most max_speed_mps); one NaN and one finite is refused at ExitInitializationMode. After initialisation it reads the value in effect.",
+    },
     Var {
         name: "mission_file",
         vr: pv::MISSION_FILE,
@@ -482,6 +447,16 @@ pub const PLANNER_VARS: &[Var] = &[
         description: "Initial plan's best effort only (cellsar-planner plan --max-extra-energy-pct), in percent: the best-resolved plan that uses at most this many percent more energy than the least-energy plan; NaN (the default): no cap. A negative or infinite value is refused at the set, a finite one under resolution paper at ExitInitializationMode. Re-plans inside a step ignore it (they use paper).",
     },
     Var {
+        name: "dynamics",
+        vr: pv::DYNAMICS,
+        ty: VarType::String,
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        len: 1,
+        unit: None,
+        description: "Vehicle model of every plan, the initial plan and the re-plans inside a step (cellsar-planner plan --dynamics): vehicle (the velocity changes by at most max_accel_mps2 times slot_s from slot to slot, from start_velocity_mps on; a re-plan continues from the velocity flown) or paper (the paper's model: the velocity may jump). The start value is the library's default (planner::DEFAULT_DYNAMICS).",
+    },
+    Var {
         name: "landmark_x_in_m",
         vr: pv::LANDMARK_X_IN,
         ty: VarType::Real,
@@ -520,6 +495,9 @@ pub const PLANNER_VARS: &[Var] = &[
     output("replan_count", pv::REPLAN_COUNT, VarType::Integer, None, "Receding-horizon re-plans so far"),
     output("slots_out_of_view", pv::SLOTS_OUT_OF_VIEW, VarType::Integer, None, "Slots of the plan (whole horizon, flown ones included) whose landmark is not within r_s of the sensing centre at the slot end, against the landmarks in effect (moved ones included); 0 for a plan that keeps every landmark in view"),
     output("plan_resolution", pv::PLAN_RESOLUTION, VarType::Integer, None, "Resolution requirement of the plan flown now: 1 = general, 0 = paper. Before any re-plan it is the parameter resolution (default general: the general cell as a best effort, the default of cellsar-planner plan, cellsar run and the Python package); after a re-plan (a landmark move) 0: every re-plan plans the least-energy plan for the paper's resolution, to stay fast"),
+    output("commanded_accel_mps2", pv::COMMANDED_ACCEL, VarType::Real, Some("m/s2"), "Commanded horizontal acceleration of the current slot t, |v_t - v_(t-1)| / slot_s: the plan's slot-to-slot velocity difference over the slot duration (v_0 = start_velocity_mps), the accel_mps2 of trajectory.csv; at most max_accel_mps2 (to 1e-6 relative) under dynamics = vehicle"),
+    output("commanded_accel_x_mps2", pv::COMMANDED_ACCEL_X, VarType::Real, Some("m/s2"), "x component of commanded_accel_mps2: (v_t - v_(t-1)) / slot_s, x"),
+    output("commanded_accel_y_mps2", pv::COMMANDED_ACCEL_Y, VarType::Real, Some("m/s2"), "y component of commanded_accel_mps2: (v_t - v_(t-1)) / slot_s, y"),
     Var {
         name: "plan_solve_time_s",
         vr: pv::SOLVE_TIME,
@@ -695,7 +673,7 @@ mod tests {
                 .unwrap_or_else(|| panic!("parameter {name} missing from the table"));
             assert_eq!(v.causality, Causality::Parameter);
         }
-        for name in ["start_m", "bs_m"] {
+        for name in ["start_m", "bs_m", "start_velocity_mps"] {
             assert!(PLANNER_VARS.iter().any(|v| v.name == name && v.len == 2));
         }
     }

@@ -76,6 +76,9 @@ impl PlannerCore {
     }
 
     /// Reads the mission file and applies the parameters set through FMI on top of its `[params]`.
+    /// The mission's start velocity is pinned (`start_velocity_mps` given, by the file, by FMI,
+    /// or else the value of the mission's rule): a landmark move that rebuilds the mission keeps
+    /// the velocity the UAV started with, from which the first slot's acceleration counts.
     pub(super) fn resolve_mission(
         &self,
         resources: Option<&Path>,
@@ -92,6 +95,9 @@ impl PlannerCore {
             MissionFile::from_toml_str(&text)
         }
         .map_err(|e| FmuError::error(format!("mission file {shown}: {e}")))?;
+        if let Some(v) = self.start_velocity_set()? {
+            file.params.start_velocity_mps = Some(v);
+        }
         if !self.params_set.is_empty() {
             let mut map = serde_json::to_value(&file.params)
                 .map_err(|e| FmuError::error(format!("mission file {shown}: {e}")))?;
@@ -134,18 +140,25 @@ impl PlannerCore {
             file.params = serde_json::from_value(map)
                 .map_err(|e| FmuError::error(format!("parameters set through FMI: {e}")))?;
         }
-        let mission = Mission::from_file_struct(&file).map_err(|e| {
-            let text = match &e {
-                // the planner writes the value in full decimal (309 digits for -1e308)
-                planner::MissionError::Param(planner::ParamError::Invalid {
-                    field,
-                    value,
-                    reason,
-                }) => format!("parameter `{field}` = {}: {reason}", Num(*value)),
-                other => other.to_string(),
-            };
-            FmuError::error(format!("mission {shown}: {text}"))
-        })?;
+        let build = |file: &MissionFile| {
+            Mission::from_file_struct(file).map_err(|e| {
+                let text = match &e {
+                    // the planner writes the value in full decimal (309 digits for -1e308)
+                    planner::MissionError::Param(planner::ParamError::Invalid {
+                        field,
+                        value,
+                        reason,
+                    }) => format!("parameter `{field}` = {}: {reason}", Num(*value)),
+                    other => other.to_string(),
+                };
+                FmuError::error(format!("mission {shown}: {text}"))
+            })
+        };
+        let mut mission = build(&file)?;
+        if file.params.start_velocity_mps.is_none() {
+            file.params.start_velocity_mps = Some(mission.start_velocity_mps());
+            mission = build(&file)?;
+        }
         let slots = mission.slots();
         if slots > MAX_FMU_SLOTS {
             let p = mission.params();

@@ -204,6 +204,8 @@ mod planner_core;
 mod run;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod vehicle_tests;
 
 use dispatch::unknown;
 pub use dispatch::{Core, StepReport};

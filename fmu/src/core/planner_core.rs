@@ -14,8 +14,10 @@ pub struct PlannerCore {
     pub(super) params_set: BTreeSet<String>,
     /// `mission_file`.
     pub(super) mission_file: String,
-    /// `resolution`, `strict_resolution`, `max_extra_energy_pct`: the initial plan's options.
+    /// `resolution`, `strict_resolution`, `max_extra_energy_pct`, `dynamics`: the plan options.
     pub(super) initial: planning::InitialPlan,
+    /// `start_velocity_mps` as set through FMI (NaN, NaN: the mission's own).
+    pub(super) start_velocity_in_mps: [f64; 2],
     /// `landmark_x_in_m`, `landmark_y_in_m`.
     pub(super) landmark_in_m: [f64; 2],
     /// Test hook (hidden variable; only with the `test-hooks` feature).
@@ -32,6 +34,7 @@ impl Default for PlannerCore {
             params_set: BTreeSet::new(),
             mission_file: DEFAULT_MISSION_FILE.to_string(),
             initial: planning::InitialPlan::default(),
+            start_velocity_in_mps: [f64::NAN; 2],
             landmark_in_m: [f64::NAN, f64::NAN],
             #[cfg(feature = "test-hooks")]
             debug_panic: 0,
@@ -50,6 +53,13 @@ impl PlannerCore {
             // NaN: no cap
             pv::MAX_EXTRA_ENERGY_PCT => {
                 return Ok(self.initial.max_extra_energy_pct.unwrap_or(f64::NAN))
+            }
+            // the value in effect once planned, the value set (NaN: the mission's own) before
+            pv::START_VELOCITY => {
+                return Ok(match &self.run {
+                    Some(run) => run.mission.start_velocity_mps()[elem.min(1)],
+                    None => self.start_velocity_in_mps[elem.min(1)],
+                })
             }
             _ => {}
         }
@@ -85,6 +95,9 @@ impl PlannerCore {
             pv::RANGE_RES_PAPER => s.range_resolution_paper_m,
             pv::AZIMUTH_RES_PAPER => s.azimuth_resolution_paper_m,
             pv::WORST_WIDTH => s.worst_cell_width_m,
+            pv::COMMANDED_ACCEL => s.commanded_accel_abs_mps2,
+            pv::COMMANDED_ACCEL_X => s.commanded_accel_mps2[0],
+            pv::COMMANDED_ACCEL_Y => s.commanded_accel_mps2[1],
             _ => return Err(unknown(var)),
         })
     }
@@ -107,6 +120,20 @@ impl PlannerCore {
         }
         if var.vr == pv::MAX_EXTRA_ENERGY_PCT {
             return check_max_extra_energy_pct(value);
+        }
+        if var.vr == pv::START_VELOCITY {
+            // NaN: the mission's own start velocity (checked as a pair at initialisation)
+            return if elem >= 2 {
+                Err(unknown(var))
+            } else if value.is_infinite() {
+                Err(FmuError::error(format!(
+                    "parameter `{}` = {}: must be a finite number (a velocity component, m/s) or NaN (the mission's own start velocity)",
+                    crate::table::fmi2_name(var, elem),
+                    Num(value)
+                )))
+            } else {
+                Ok(())
+            };
         }
         if !value.is_finite() {
             return Err(FmuError::error(format!(
@@ -139,6 +166,11 @@ impl PlannerCore {
             }
             pv::MAX_EXTRA_ENERGY_PCT => {
                 self.initial.max_extra_energy_pct = (!value.is_nan()).then_some(value);
+                self.run = None;
+                return Ok(());
+            }
+            pv::START_VELOCITY => {
+                self.start_velocity_in_mps[elem] = value;
                 self.run = None;
                 return Ok(());
             }
@@ -221,6 +253,7 @@ impl PlannerCore {
         match var.vr {
             pv::MISSION_FILE => Ok(self.mission_file.clone()),
             pv::RESOLUTION => Ok(self.initial.resolution.to_string()),
+            pv::DYNAMICS => Ok(self.initial.dynamics.to_string()),
             _ => Err(unknown(var)),
         }
     }
@@ -229,6 +262,7 @@ impl PlannerCore {
         match var.vr {
             pv::MISSION_FILE => Ok(()),
             pv::RESOLUTION => parse_resolution(value).map(|_| ()),
+            pv::DYNAMICS => parse_dynamics(value).map(|_| ()),
             _ => Err(unknown(var)),
         }
     }
@@ -237,6 +271,7 @@ impl PlannerCore {
         match var.vr {
             pv::MISSION_FILE => self.mission_file = value.to_string(),
             pv::RESOLUTION => self.initial.resolution = parse_resolution(value)?,
+            pv::DYNAMICS => self.initial.dynamics = parse_dynamics(value)?,
             _ => return Err(unknown(var)),
         }
         self.run = None;
@@ -260,7 +295,38 @@ fn parse_resolution(value: &str) -> Result<planner::evaluate::ResolutionMode, Fm
         })
 }
 
+/// The value of the parameter `dynamics`: a name of [`planner::evaluate::Dynamics`] (`paper`,
+/// `vehicle`), as `cellsar-planner plan --dynamics` takes it.
+fn parse_dynamics(value: &str) -> Result<planner::evaluate::Dynamics, FmuError> {
+    use planner::evaluate::Dynamics;
+    Dynamics::ALL
+        .into_iter()
+        .find(|m| m.name() == value)
+        .ok_or_else(|| {
+            let names: Vec<&str> = Dynamics::ALL.iter().map(|m| m.name()).collect();
+            FmuError::error(format!(
+                "parameter `dynamics` = \"{value}\" refused: must be one of {}",
+                names.join(", ")
+            ))
+        })
+}
+
 impl PlannerCore {
+    /// The start velocity set through FMI: `None` when both components are NaN (the mission's
+    /// own); an error when only one is.
+    pub(super) fn start_velocity_set(&self) -> Result<Option<[f64; 2]>, FmuError> {
+        let v = self.start_velocity_in_mps;
+        match (v[0].is_nan(), v[1].is_nan()) {
+            (true, true) => Ok(None),
+            (false, false) => Ok(Some(v)),
+            _ => Err(FmuError::error(format!(
+                "parameter `start_velocity_mps` = ({}, {}) m/s refused: set both components to finite numbers (the start velocity) or both to NaN (the mission's own: its start_velocity_mps, else the mission's rule)",
+                Num(v[0]),
+                Num(v[1])
+            ))),
+        }
+    }
+
     pub(super) fn initialize(
         &mut self,
         resources: Option<&Path>,
@@ -272,7 +338,7 @@ impl PlannerCore {
         // the options first: a refused combination needs no mission
         self.initial.validate().map_err(|e| {
             FmuError::error(format!(
-                "the initial plan's options (parameters `resolution`, `strict_resolution`, `max_extra_energy_pct`) are refused: {e}"
+                "the plan options (parameters `resolution`, `strict_resolution`, `max_extra_energy_pct`, `dynamics`) are refused: {e}"
             ))
         })?;
         let (mission, source) = self.resolve_mission(resources)?;
@@ -318,6 +384,7 @@ impl PlannerCore {
             replans: 0,
             solve_s: planned.solve_s,
             moved: BTreeSet::new(),
+            dynamics: self.initial.dynamics,
         });
         Ok(())
     }
@@ -465,7 +532,10 @@ fn replan_after_move(
         from,
         window,
         mv.input,
-        &planning::ReplanOptions::default(),
+        &planning::ReplanOptions {
+            dynamics: run.dynamics,
+            ..Default::default()
+        },
     ) {
         Ok(re) => {
             run.moved.insert(window);

@@ -19,6 +19,8 @@ pub struct Run {
     pub solve_s: f64,
     /// Landmark windows moved by the inputs.
     pub moved: BTreeSet<usize>,
+    /// The vehicle model of the plan and of every re-plan (parameter `dynamics`).
+    pub dynamics: planner::evaluate::Dynamics,
 }
 
 /// The values of every output at one instant.
@@ -50,6 +52,11 @@ pub struct Sample {
     pub azimuth_resolution_paper_m: f64,
     /// Worst cell width, m.
     pub worst_cell_width_m: f64,
+    /// Commanded acceleration of the slot, (v_t − v_{t−1})/δ with v_0 the mission's start
+    /// velocity, m/s².
+    pub commanded_accel_mps2: [f64; 2],
+    /// Its magnitude, the evaluator's `accel_mps2` of the slot, m/s².
+    pub commanded_accel_abs_mps2: f64,
 }
 
 /// The slot (1-based) whose values hold at mission time `tau_s`: slot t covers ((t−1)δ, tδ]
@@ -86,6 +93,8 @@ impl Run {
                 range_resolution_paper_m: f64::NAN,
                 azimuth_resolution_paper_m: f64::NAN,
                 worst_cell_width_m: f64::NAN,
+                commanded_accel_mps2: [0.0; 2],
+                commanded_accel_abs_mps2: 0.0,
             };
         };
         let pos_m = self.traj.position_at(tau_s);
@@ -95,6 +104,12 @@ impl Run {
             0.0
         };
         let into_slot_s = (tau_s - (k - 1) as f64 * p.slot_s).clamp(0.0, p.slot_s);
+        let before_mps = if k >= 2 {
+            self.eval.slots[k - 2].velocity_mps
+        } else {
+            self.mission.start_velocity_mps()
+        };
+        let accel = |i: usize| (s.velocity_mps[i] - before_mps[i]) / p.slot_s;
         Sample {
             pos_m,
             speed_mps: s.speed_mps,
@@ -109,6 +124,8 @@ impl Run {
             range_resolution_paper_m: s.range_resolution_paper_m,
             azimuth_resolution_paper_m: s.azimuth_resolution_paper_m,
             worst_cell_width_m: s.worst_width_m,
+            commanded_accel_mps2: [accel(0), accel(1)],
+            commanded_accel_abs_mps2: s.accel_mps2,
         }
     }
 }
