@@ -416,7 +416,8 @@ def test_parameter_array_elements_override_the_file_one_by_one(version, tmp_path
 
 
 def test_replan_skips_planner_calls_that_cannot_succeed(version):
-    """From the paper's initial plan (parameter `resolution` = paper), the default mission's
+    """From the paper's initial plan (parameter `resolution` = paper) under the paper's dynamics
+    (the reach bound that skips the calls is the speed limit's), the default mission's
     landmark moved by (40, 20) m at t = 65 s cannot be seen in the next slot: the re-plan goes
     straight to a one-slot delay (one planner call; the planner spent about 9 s failing on the
     zero delay before), and the debug log lists every call's time."""
@@ -425,7 +426,7 @@ def test_replan_skips_planner_calls_that_cannot_succeed(version):
     # the paper's plan, whose sensing centre passes landmark 6 on the side the move goes away
     # from; the default best effort circles a centre on the other side, towards which the move
     # goes, and keeps the moved landmark in view at once
-    f.init(stop=300.0, params={"resolution": "paper"})
+    f.init(stop=300.0, params={"resolution": "paper"}, strings={"dynamics": "paper"})
     assert f.get("plan_resolution") == 0
     while f.time < 65.0 - 1e-9:
         f.step(0.5)
