@@ -40,3 +40,140 @@ fn every_shipped_configuration_bounds_the_message_size() {
         );
     }
 }
+
+/// `cellsar ARGS`, which must refuse before anything starts: exit 2, its error output naming
+/// `named`.
+fn refused<S: AsRef<std::ffi::OsStr> + std::fmt::Debug>(args: &[S], named: &str) {
+    let o = std::process::Command::new(harness::pipeline::exe())
+        .args(args)
+        .env("RUST_LOG", "warn")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {}\n{err}", o.status);
+    assert!(err.contains(named), "{args:?}: {named:?} in\n{err}");
+}
+
+/// With a shipped TLS configuration no flag turns the deployment into a plain one: a
+/// non-tls/ endpoint (-e, -l), --multicast-scouting, a peer launcher, and a child the
+/// launcher starts without its own --child-config are refused before anything starts
+/// (exit 2, the flag named); each process as `cellsar` runs it.
+#[test]
+fn no_flag_downgrades_the_tls_deployment() {
+    let deploy = root().join("pipeline/deploy/tls");
+    let cfg = |r: &str| deploy.join(format!("{r}.json5")).display().to_string();
+    let scene = harness::pipeline::scene().display().to_string();
+    let mission = harness::pipeline::mission().display().to_string();
+    let (processor, planner, router, bridge) = (
+        cfg("processor"),
+        cfg("planner"),
+        cfg("router"),
+        cfg("bridge"),
+    );
+    refused(
+        &[
+            "process",
+            "--scene",
+            &scene,
+            "-c",
+            &processor,
+            "-e",
+            "tcp/192.168.1.10:7447",
+        ],
+        "--connect tcp/192.168.1.10:7447: not a tls/ endpoint",
+    );
+    refused(
+        &["planner", "-c", &planner, "--multicast-scouting"],
+        "--multicast-scouting: multicast scouting",
+    );
+    refused(
+        &["router", "-c", &router, "-l", "tcp/0.0.0.0:7447"],
+        "--listen tcp/0.0.0.0:7447: not a tls/ endpoint",
+    );
+    refused(
+        &[
+            "bridge",
+            "--service",
+            "x",
+            "-c",
+            &bridge,
+            "-e",
+            "tcp/192.168.1.10:7447",
+        ],
+        "--connect tcp/192.168.1.10:7447",
+    );
+    refused(
+        &["planner", "-c", &planner, "-e", "tls/203.0.113.7:7447"],
+        "203.0.113.7 is a name a public certificate authority may certify",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out_s = out.display().to_string();
+    let (launcher, echo) = (cfg("launcher"), cfg("echo"));
+    let planner_cc = format!("planner={planner}");
+    let echo_cc = format!("echo={echo}");
+    let run = |extra: &[&str]| -> Vec<String> {
+        [
+            "run",
+            &mission,
+            "--scene",
+            &scene,
+            "--out",
+            &out_s,
+            "--transport",
+            "zenoh",
+            "--external",
+            "processor",
+            "-c",
+            &launcher,
+        ]
+        .iter()
+        .chain(extra)
+        .map(|s| s.to_string())
+        .collect()
+    };
+    // the bridge without its own configuration
+    let a = run(&["--child-config", &planner_cc, "--child-config", &echo_cc]);
+    refused(&a, "--child-config bridge=FILE missing");
+    // every child its own, but the launcher's flags add a plain endpoint or scouting
+    let bridge_cc = format!("bridge={bridge}");
+    let all = [
+        "--child-config",
+        &planner_cc,
+        "--child-config",
+        &echo_cc,
+        "--child-config",
+        &bridge_cc,
+    ];
+    for (flag, named) in [
+        (
+            &["-e", "tcp/192.168.1.10:7447"][..],
+            "--connect tcp/192.168.1.10:7447",
+        ),
+        (&["--multicast-scouting"], "--multicast-scouting"),
+        (
+            &["-m", "peer"],
+            "-m peer: Zenoh's default listen endpoint of mode peer",
+        ),
+    ] {
+        let mut extra: Vec<&str> = all.to_vec();
+        extra.extend(flag);
+        refused(&run(&extra), named);
+    }
+    // a child's configuration that is plain
+    let plain = root()
+        .join("pipeline/deploy/client.json5")
+        .display()
+        .to_string();
+    let plain_cc = format!("echo={plain}");
+    let a = run(&[
+        "--child-config",
+        &planner_cc,
+        "--child-config",
+        &plain_cc,
+        "--child-config",
+        &bridge_cc,
+    ]);
+    refused(&a, "enables neither TLS nor access control");
+    assert!(!out.exists(), "a refused run created its output directory");
+}

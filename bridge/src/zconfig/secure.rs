@@ -118,15 +118,24 @@ pub(super) fn check(args: &ZenohArgs, config: &Config, why: &str) -> Result<(), 
         reason: format!("{reason} (the configuration enables {why})"),
     };
     let mode = effective_mode(config);
+    // the listen endpoints are Zenoh's defaults for the mode where nothing sets them
+    let default_listen = Config::default().get_json("listen/endpoints").ok();
+    let zenoh_default = config.get_json("listen/endpoints").ok() == default_listen;
+    let mode_source = match args.mode {
+        Some(m) => format!("-m {}", m.as_str()),
+        None => file.clone(),
+    };
     for (which, flag, given) in [
         ("connect", "--connect", &args.connect),
         ("listen", "--listen", &args.listen),
     ] {
         for ep in effective_endpoints(config, which, &mode) {
-            let source = if given.is_empty() {
-                format!("{file}: {which} endpoint {ep}")
-            } else {
+            let source = if !given.is_empty() {
                 format!("{flag} {ep}")
+            } else if which == "listen" && zenoh_default {
+                format!("{mode_source}: Zenoh's default listen endpoint of mode {mode}, {ep}")
+            } else {
+                format!("{file}: {which} endpoint {ep}")
             };
             let Some(rest) = ep.strip_prefix("tls/") else {
                 return Err(refuse(
@@ -301,6 +310,13 @@ mod tests {
             ),
             (
                 ZenohArgs {
+                    mode: Some(super::super::Mode::Peer),
+                    ..with(&client)
+                },
+                "-m peer: Zenoh's default listen endpoint of mode peer, tcp/".into(),
+            ),
+            (
+                ZenohArgs {
                     multicast_scouting: true,
                     ..with(&client)
                 },
@@ -358,7 +374,7 @@ mod tests {
                 format!(
                     "{{ mode: 'peer', connect: {{ endpoints: ['tls/10.0.0.1:7447'] }}, {TLS} }}"
                 ),
-                "peer-default.json5: listen endpoint tcp/",
+                "peer-default.json5: Zenoh's default listen endpoint of mode peer, tcp/",
             ),
             (
                 "scouting.json5",

@@ -244,6 +244,15 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     {
         z.to_config().map_err(Failure::bad_input)?;
     }
+    // with TLS or access control, each child the launcher starts has a configuration of its own
+    let local = |r: &str| !args.external.iter().any(|e| e == r);
+    let started: Vec<&str> = ["planner", "echo", "processor", "bridge"]
+        .into_iter()
+        .filter(|r| local(r))
+        .filter(|r| *r != "bridge" || args.transport == Transport::Zenoh || args.bridge)
+        .collect();
+    net::check_secure_children(&args.zenoh, &net.child, &started, &args.child_config)
+        .map_err(|e| Failure::bad_input(anyhow!(e)))?;
     // the iceoryx2 configuration file and prefix as every child reads them (the root is
     // created by the children)
     IoxArgs {

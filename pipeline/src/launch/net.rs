@@ -118,6 +118,22 @@ pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Re
         });
     }
     // a peer or router launcher: the children's hub
+    if let Some(why) = user.secured_by().map_err(|e| e.to_string())? {
+        let source = match (user.mode, &user.config) {
+            (Some(m), _) => format!("-m {}", m.as_str()),
+            (None, f) => format!(
+                "-c {} (mode {mode})",
+                f.as_ref()
+                    .map(|f| f.display().to_string())
+                    .unwrap_or_default()
+            ),
+        };
+        return Err(format!(
+            "{source}: with {why}, the launcher and its children must be clients of the router \
+             (mode client): a peer or router launcher gives every child a plain loopback \
+             listener, and the roles' certificates cannot serve"
+        ));
+    }
     let mut launcher = user.clone();
     let listen: Vec<(String, String)> = if !user.listen.is_empty() {
         user.listen
@@ -242,6 +258,51 @@ pub fn parse_child_config(s: &str) -> std::result::Result<(String, PathBuf), Str
     .to_config()
     .map_err(|e| cellsar_error::error_chain(&e))?;
     Ok((role.to_string(), file))
+}
+
+/// In a run whose `-c` file enables TLS or access control, every child the launcher starts
+/// (`started`) must present its own role's certificate: it needs its own `--child-config`, a
+/// file that enables TLS or access control too and that the children's flags (`child`, the
+/// launcher's with that file) keep so. Refused otherwise, naming the role and the flag. A run
+/// without such a file is not checked.
+pub fn check_secure_children(
+    user: &ZenohArgs,
+    child: &ZenohArgs,
+    started: &[&str],
+    child_config: &[(String, PathBuf)],
+) -> std::result::Result<(), String> {
+    let Some(why) = user.secured_by().map_err(|e| e.to_string())? else {
+        return Ok(());
+    };
+    let launcher_file = user
+        .config
+        .as_ref()
+        .map(|f| f.display().to_string())
+        .unwrap_or_default();
+    for role in started {
+        let Some((_, file)) = child_config.iter().find(|(r, _)| r == role) else {
+            return Err(format!(
+                "--child-config {role}=FILE missing: -c {launcher_file} enables {why}, and the \
+                 {role} would run with the launcher's configuration and certificate; give the \
+                 {role} its own (--child-config {role}=FILE) or run it elsewhere (--external \
+                 {role})"
+            ));
+        };
+        let own = ZenohArgs {
+            config: Some(file.clone()),
+            ..child.clone()
+        };
+        let flag = format!("--child-config {role}={}", file.display());
+        if own.secured_by().map_err(|e| e.to_string())?.is_none() {
+            return Err(format!(
+                "{flag}: enables neither TLS nor access control, while -c {launcher_file} \
+                 enables {why}"
+            ));
+        }
+        own.to_config()
+            .map_err(|e| format!("{flag}: {}", cellsar_error::error_chain(&e)))?;
+    }
+    Ok(())
 }
 
 /// A child's command line with its Zenoh configuration file replaced by `file` (`--config`
@@ -530,5 +591,104 @@ mod tests {
                 .unwrap(),
             "true"
         );
+    }
+
+    const TLS: &str = "transport: { link: { tls: { root_ca_certificate: '/c/ca.pem', \
+        connect_private_key: '/c/x.key', connect_certificate: '/c/x.pem', \
+        enable_mtls: true } } }";
+
+    /// With TLS or access control the launcher is a client of the router, and every child it
+    /// starts has its own configuration that enables them too; anything else is refused,
+    /// naming the flag (or the role and `--child-config`).
+    #[test]
+    fn a_secure_run_has_clients_with_their_own_configurations() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = |name: &str, text: String| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, text).unwrap();
+            p
+        };
+        let client = |name: &str| {
+            file(
+                name,
+                format!(
+                    "{{ mode: 'client', connect: {{ endpoints: ['tls/10.0.0.1:7447'] }}, {TLS} }}"
+                ),
+            )
+        };
+        let launcher = client("launcher.json5");
+        let peer = file(
+            "peer.json5",
+            format!("{{ mode: 'peer', listen: {{ endpoints: ['tls/127.0.0.1:7447'] }}, {TLS} }}"),
+        );
+        let plain = file(
+            "plain.json5",
+            "{ mode: 'client', connect: { endpoints: ['tcp/10.0.0.1:7447'] } }".into(),
+        );
+        let with = |f: &Path| ZenohArgs {
+            config: Some(f.to_path_buf()),
+            ..ZenohArgs::default()
+        };
+        // a peer or router launcher (by its file, or by -m): refused
+        let e = network(false, &with(&peer), 17000).err().unwrap();
+        assert!(
+            e.contains("peer.json5 (mode peer): with TLS settings"),
+            "{e}"
+        );
+        assert!(e.contains("mode client"), "{e}");
+        let e = network(
+            false,
+            &ZenohArgs {
+                mode: Some(Mode::Router),
+                ..with(&peer)
+            },
+            17000,
+        )
+        .err()
+        .unwrap();
+        assert!(e.starts_with("-m router: with TLS settings"), "{e}");
+        // the same peer file without TLS forms the launcher's mesh
+        let plain_peer = file(
+            "plain-peer.json5",
+            "{ mode: 'peer', listen: { endpoints: ['tcp/127.0.0.1:17447'] } }".into(),
+        );
+        network(false, &with(&plain_peer), 17000).unwrap();
+        // a client launcher: each child it starts has its own secure file
+        let user = with(&launcher);
+        let net = network(false, &user, 17000).unwrap();
+        let roles = ["planner", "echo", "bridge"];
+        let own: Vec<(String, PathBuf)> = roles
+            .iter()
+            .map(|r| (r.to_string(), client(&format!("{r}.json5"))))
+            .collect();
+        check_secure_children(&user, &net.child, &roles, &own).unwrap();
+        // one missing: named, with the flag to give
+        let e = check_secure_children(&user, &net.child, &roles, &own[..2]).unwrap_err();
+        assert!(e.starts_with("--child-config bridge=FILE missing"), "{e}");
+        assert!(e.contains("--external bridge"), "{e}");
+        // one plain: named
+        let mut mixed = own.clone();
+        mixed[1].1 = plain.clone();
+        let e = check_secure_children(&user, &net.child, &roles, &mixed).unwrap_err();
+        assert!(
+            e.starts_with(&format!(
+                "--child-config echo={}: enables neither",
+                plain.display()
+            )),
+            "{e}"
+        );
+        // the launcher's flags that the children get keep them secure: -e tcp/ refused
+        let over = ZenohArgs {
+            connect: vec!["tcp/10.0.0.1:7447".into()],
+            ..user.clone()
+        };
+        let e = check_secure_children(&over, &over, &roles, &own).unwrap_err();
+        assert!(
+            e.contains("--connect tcp/10.0.0.1:7447: not a tls/ endpoint"),
+            "{e}"
+        );
+        // a plain run: nothing asked of the children
+        check_secure_children(&with(&plain), &with(&plain), &roles, &[]).unwrap();
+        check_secure_children(&ZenohArgs::default(), &ZenohArgs::default(), &roles, &[]).unwrap();
     }
 }
