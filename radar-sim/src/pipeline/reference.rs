@@ -95,9 +95,11 @@ impl Processor {
         Ok(acc / SAMPLED_PULSES as f64)
     }
 
-    /// The reference of the pulse whose windows start at symbol `m0`, one per window, from their
-    /// received spectra `spectra` (N bins each) and the direct path's delay `dp_delay_samples`.
-    pub(super) fn pulse_reference(
+    /// The reference of the pulse whose windows start at symbol `m0`, one per window (N_sc
+    /// values), from their received spectra `spectra` (N bins each, unnormalised forward FFT of
+    /// the windows) and the direct path's delay in the window from navigation,
+    /// `dp_delay_samples`.
+    pub fn pulse_reference(
         &self,
         m0: u64,
         spectra: &[Vec<Complex64>],
