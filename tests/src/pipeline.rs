@@ -486,3 +486,61 @@ pub fn counter(log: &str, marker: &str, key: &str) -> Option<u64> {
         .parse()
         .ok()
 }
+
+/// Prints the logs of a test's processes when the test fails (on drop while panicking):
+/// each file of `files` and every `*.log` in `dirs` (a launcher's `out/logs`), the last
+/// `tail_lines` lines of each but its trace lines, with its path. Declare it after the temporary directory that
+/// holds the logs, so that it is dropped (and prints) before the directory is removed.
+pub struct LogsOnFailure {
+    /// Log files.
+    pub files: Vec<PathBuf>,
+    /// Directories whose `*.log` files are printed too.
+    pub dirs: Vec<PathBuf>,
+    /// Lines printed from the end of each file.
+    pub tail_lines: usize,
+}
+
+impl LogsOnFailure {
+    /// The logs of `files` and `dirs`, the last 400 lines of each.
+    pub fn new(files: Vec<PathBuf>, dirs: Vec<PathBuf>) -> Self {
+        LogsOnFailure {
+            files,
+            dirs,
+            tail_lines: 400,
+        }
+    }
+}
+
+impl Drop for LogsOnFailure {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            return;
+        }
+        let mut files = self.files.clone();
+        for d in &self.dirs {
+            let mut in_dir: Vec<PathBuf> = std::fs::read_dir(d)
+                .map(|r| {
+                    r.filter_map(|e| e.ok().map(|e| e.path()))
+                        .filter(|p| p.extension().is_some_and(|e| e == "log"))
+                        .collect()
+                })
+                .unwrap_or_default();
+            in_dir.sort();
+            files.extend(in_dir);
+        }
+        for f in files {
+            let text = std::fs::read_to_string(&f).unwrap_or_else(|e| format!("(unreadable: {e})"));
+            // trace lines (a router's every access-control decision) would hide the rest
+            let all = text.lines().count();
+            let lines: Vec<&str> = text.lines().filter(|l| !l.contains(" TRACE ")).collect();
+            let from = lines.len().saturating_sub(self.tail_lines);
+            eprintln!(
+                "===== {} (last {} of {all} lines, {} trace lines left out) =====\n{}",
+                f.display(),
+                lines.len() - from,
+                all - lines.len(),
+                lines[from..].join("\n")
+            );
+        }
+    }
+}

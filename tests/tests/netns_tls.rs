@@ -110,6 +110,16 @@ fn pipeline_over_mutual_tls_with_access_control() {
     let d = dir.path();
     let certs = make_certs(d, "certs", &hosts.ip_a);
     let role = |r: &str| config(d, &format!("tls/{r}.json5"), &hosts.ip_a, Some(&certs));
+    // every process's log, printed if the test fails (the router's access-control decisions,
+    // the launcher's and its children's logs)
+    let _logs = LogsOnFailure::new(
+        ["router", "processor", "forger"]
+            .iter()
+            .map(|n| d.join(format!("{n}.log")))
+            .chain([d.join("launcher.err")])
+            .collect(),
+        vec![d.join("out/logs")],
+    );
     let router = start_router(&hosts, d, &certs);
     let _processor = Service::start_in(
         &hosts.in_b(),
