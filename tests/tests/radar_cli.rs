@@ -510,3 +510,110 @@ fn closed_loop_plans_for_the_general_resolution_cell() {
     assert_eq!(s["feasible"], true);
     assert_eq!(s["slots_unresolved_general"], 0);
 }
+
+/// `closed-loop` of the default mission's first 20 s under the NR scene of `reference`: every
+/// landmark in view detected, the report and metrics written; returns the metrics.
+fn nr_closed_loop(reference: &str) -> serde_json::Value {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("loop");
+    let o = bin()
+        .arg("closed-loop")
+        .arg(root().join("missions/default-30m.toml"))
+        .arg("--scene")
+        .arg(root().join(format!("radar-sim/scenes/nr-{reference}.toml")))
+        .arg("--out")
+        .arg(&out)
+        .args(["--horizon-s", "20"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{reference}: {text}");
+    assert!(
+        text.contains("every landmark in view detected: yes"),
+        "{reference}: {text}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    for r in report["rows"].as_array().unwrap() {
+        assert_eq!(r["detected"], true, "{reference}: {r}");
+    }
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("processed/metrics.json")).unwrap())
+            .unwrap();
+    assert_eq!(m["pd"].as_f64().unwrap(), 1.0, "{reference}: {m}");
+    // the recording keeps the scene: processing it again gives the same detections
+    let again = dir.path().join("again");
+    let o = bin()
+        .arg("process")
+        .arg("--in")
+        .arg(out.join("recording"))
+        .arg("--out")
+        .arg(&again)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(again.join("detections.csv")).unwrap(),
+        std::fs::read_to_string(out.join("processed/detections.csv")).unwrap()
+    );
+    m
+}
+
+#[test]
+fn nr_cell_closed_loop_with_the_ideal_reference() {
+    nr_closed_loop("ideal");
+}
+
+#[test]
+fn nr_cell_closed_loop_with_the_pilots_alone() {
+    nr_closed_loop("pilots");
+}
+
+#[test]
+fn nr_cell_closed_loop_with_the_reconstructed_reference() {
+    nr_closed_loop("reconstructed");
+}
+
+#[test]
+fn nr_scene_errors_name_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, key, value, append, field) in [
+        (
+            "pilots-plain.toml",
+            "direct_path",
+            "true\nreference = \"pilots\"",
+            "",
+            "radar.reference",
+        ),
+        (
+            "nr-comb.toml",
+            "direct_path",
+            "true",
+            "[radar.nr]\nprs_comb = 5",
+            "radar.nr.prs_comb",
+        ),
+        (
+            "nr-uplink.toml",
+            "direct_path",
+            "true",
+            "[radar.nr]\npulse_slot = 4\npulse_period_slots = 5",
+            "radar.nr.pulse_slot",
+        ),
+        // the PRF follows from the cell: another value is refused
+        (
+            "nr-prf.toml",
+            "prf_hz",
+            "250.0",
+            "[radar.nr]",
+            "radar.prf_hz",
+        ),
+    ] {
+        let scene = scene_with(dir.path(), name, key, value);
+        let text = std::fs::read_to_string(&scene).unwrap();
+        std::fs::write(&scene, format!("{text}\n{append}\n")).unwrap();
+        let o = short_closed_loop(dir.path(), &scene).output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {e}");
+        assert!(e.contains(field), "{name}: {e}");
+    }
+}
