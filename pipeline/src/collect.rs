@@ -27,6 +27,57 @@ pub struct Collector {
     pub duplicates: u64,
     /// Messages of other missions or apertures out of range, ignored.
     pub foreign: u64,
+    /// Messages of this mission that contradict themselves (an image whose pixels are not
+    /// `nx × ny`, a marker outside it), logged and skipped.
+    pub malformed: u64,
+}
+
+/// Malformed messages logged as warnings before the log turns quiet about them (the rest are
+/// counted and logged at debug level).
+const LOUD_MALFORMED: u64 = 10;
+
+/// Largest image accepted, pixels (`nx × ny`): 16 Mi, the largest that fits in a message of
+/// `bridge::envelope::MAX_BODY_BYTES` (64 MiB of f32).
+pub const MAX_IMAGE_PIXELS: usize = 16 << 20;
+
+/// Why `img` contradicts itself (`None`: consistent): a grid that is empty or larger than
+/// [`MAX_IMAGE_PIXELS`], a pixel count other than `nx × ny`, a marker outside the grid, a
+/// centre or spacing that is not finite (or a spacing not above 0).
+pub fn image_problem(img: &ApertureImage) -> Option<String> {
+    let (nx, ny) = (img.nx as usize, img.ny as usize);
+    let Some(pixels) = nx
+        .checked_mul(ny)
+        .filter(|p| (1..=MAX_IMAGE_PIXELS).contains(p))
+    else {
+        return Some(format!(
+            "a grid of {nx} × {ny} pixels (1..={MAX_IMAGE_PIXELS} accepted)"
+        ));
+    };
+    if img.multilook.len() != pixels {
+        return Some(format!(
+            "{} pixels for a grid of {nx} × {ny} = {pixels}",
+            img.multilook.len()
+        ));
+    }
+    if let Some((x, y)) = img
+        .markers
+        .iter()
+        .find(|(x, y)| *x as usize >= nx || *y as usize >= ny)
+    {
+        return Some(format!(
+            "a marker at ({x}, {y}) outside the {nx} × {ny} grid"
+        ));
+    }
+    if !(img.centre_m.iter().all(|c| c.is_finite())
+        && img.spacing_m.is_finite()
+        && img.spacing_m > 0.0)
+    {
+        return Some(format!(
+            "centre {:?} m, spacing {} m (finite, spacing above 0 expected)",
+            img.centre_m, img.spacing_m
+        ));
+    }
+    None
 }
 
 /// What a message added.
@@ -38,6 +89,8 @@ pub enum Added {
     Duplicate,
     /// Not for this mission.
     Foreign,
+    /// Contradicts itself: skipped.
+    Malformed,
 }
 
 impl Collector {
@@ -55,6 +108,7 @@ impl Collector {
             metrics: None,
             duplicates: 0,
             foreign: 0,
+            malformed: 0,
         })
     }
 
@@ -79,10 +133,22 @@ impl Collector {
         Added::New
     }
 
-    /// Adds (and writes) the image of one aperture.
+    /// Adds (and writes) the image of one aperture. One that contradicts itself
+    /// ([`image_problem`]) is counted, logged and skipped ([`Added::Malformed`]), so that the
+    /// aperture's real image still counts; only writing the files can fail.
     pub fn add_image(&mut self, img: &ApertureImage) -> Result<Added> {
         if let Some(a) = self.check(img.mission_id, Some(img.aperture)) {
             return Ok(a);
+        }
+        if let Some(why) = image_problem(img) {
+            self.malformed += 1;
+            let aperture = img.aperture;
+            if self.malformed <= LOUD_MALFORMED {
+                tracing::warn!(aperture, reason = %why, "malformed image skipped");
+            } else {
+                tracing::debug!(aperture, reason = %why, "malformed image skipped");
+            }
+            return Ok(Added::Malformed);
         }
         if self.images.contains_key(&img.aperture) {
             self.duplicates += 1;
@@ -191,4 +257,73 @@ pub fn write_image(dir: &Path, img: &ApertureImage) -> Result<()> {
     };
     write_aperture_view(dir, &frame, &img.multilook)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(aperture: u32, nx: u32, ny: u32, pixels: usize) -> ApertureImage {
+        ApertureImage {
+            mission_id: MissionId(7),
+            aperture,
+            nx,
+            ny,
+            centre_m: [10.0, -5.0],
+            spacing_m: 0.5,
+            multilook: (0..pixels).map(|i| 1.0 + i as f32).collect(),
+            markers: vec![(1, 2)],
+        }
+    }
+
+    /// An image that contradicts itself is counted and skipped, never an error, and the
+    /// aperture's consistent image that comes after it is taken and written; a consistent
+    /// copy after that is a duplicate.
+    #[test]
+    fn a_malformed_image_is_skipped_and_the_real_one_still_counts() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut c = Collector::new(MissionId(7), 2, dir.path()).unwrap();
+        let bad = [
+            image(0, 4, 3, 11),
+            image(0, 4, 3, 13),
+            image(0, 0, 3, 0),
+            image(0, u32::MAX, u32::MAX, 0),
+            ApertureImage {
+                markers: vec![(4, 0)],
+                ..image(0, 4, 3, 12)
+            },
+            ApertureImage {
+                markers: vec![(0, 3)],
+                ..image(0, 4, 3, 12)
+            },
+            ApertureImage {
+                spacing_m: 0.0,
+                ..image(0, 4, 3, 12)
+            },
+            ApertureImage {
+                centre_m: [f64::NAN, 0.0],
+                ..image(0, 4, 3, 12)
+            },
+        ];
+        for (i, b) in bad.iter().enumerate() {
+            assert!(image_problem(b).is_some(), "{i}");
+            assert_eq!(c.add_image(b).unwrap(), Added::Malformed, "{i}");
+        }
+        assert_eq!(c.malformed, bad.len() as u64);
+        let npy = dir.path().join("images/aperture_000.npy");
+        assert!(!npy.exists());
+        let good = image(0, 4, 3, 12);
+        assert_eq!(image_problem(&good), None);
+        assert_eq!(c.add_image(&good).unwrap(), Added::New);
+        assert!(npy.is_file());
+        assert_eq!(c.add_image(&good).unwrap(), Added::Duplicate);
+        // another mission's or an aperture out of range: foreign, as before
+        assert_eq!(c.add_image(&image(2, 4, 3, 11)).unwrap(), Added::Foreign);
+        assert_eq!(
+            (c.malformed, c.duplicates, c.foreign),
+            (bad.len() as u64, 1, 1)
+        );
+        let msg = image_problem(&image(0, 4, 3, 11)).unwrap();
+        assert_eq!(msg, "11 pixels for a grid of 4 × 3 = 12");
+    }
 }

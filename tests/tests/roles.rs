@@ -1,6 +1,8 @@
 //! A hostile peer on the launcher's own mesh (loopback, no authentication): it forges a
-//! processor status `{role: "processor", state: "failed"}` and detections of every aperture
-//! under an instance name of its own, before and during a normal run. The launcher accepts
+//! processor status `{role: "processor", state: "failed"}`, detections of every aperture
+//! under an instance name of its own, and an image of aperture 0 whose pixel count is not
+//! `nx × ny`, before and during a normal run. A malformed image is counted and skipped, never
+//! fatal, and the aperture's real image still counts. The launcher accepts
 //! statuses and detections only from the instances that announced themselves in their role
 //! (liveliness), so the run neither aborts nor takes a forged result: it completes with the
 //! closed loop's detections, and the forgeries are counted as foreign.
@@ -31,6 +33,7 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
             "600".into(),
             "--interval-ms".into(),
             "5".into(),
+            "--malformed-images".into(),
             "-m".into(),
             "peer".into(),
             "-l".into(),
@@ -73,5 +76,12 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
         p["collector"]
     );
     assert!(log.contains("foreign detections skipped"), "{log}");
+    // the malformed images too: counted and logged, the run went on
+    assert!(
+        p["collector"]["malformed"].as_u64().unwrap() > 0,
+        "{}",
+        p["collector"]
+    );
+    assert!(log.contains("malformed image skipped"), "{log}");
     assert!(!log.contains("gave up the mission"), "{log}");
 }

@@ -79,7 +79,7 @@ impl Session<'_> {
             "imaging_s": c.imaging_s,
             "aperture_done_s": c.aperture_done_s,
             "restarts": self.restarts(),
-            "collector": {"duplicates": c.col.duplicates, "foreign": c.col.foreign, "resend_requests": c.resend_requests,
+            "collector": {"duplicates": c.col.duplicates, "foreign": c.col.foreign, "malformed": c.col.malformed, "resend_requests": c.resend_requests,
                 "refused_senders": self.senders.refused,
                 "detections": subs.detections.counters().snapshot(),
                 "images": subs.images.counters().snapshot(),

@@ -1,7 +1,9 @@
 //! `forge`: a hostile peer of the pipeline. It learns the mission ids from the keys it may
 //! see (plans, statuses) and, for each, keeps publishing a forged processor status
 //! `{role: "processor", state: "failed"}` and forged detections of every aperture (one
-//! detection far off the scene at `FORGED_X_M`), under an instance name of its own.
+//! detection far off the scene at `FORGED_X_M`), under an instance name of its own; with
+//! `--malformed-images`, also an image of aperture 0 (which every mission has) whose pixel
+//! count is not `nx × ny`.
 
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
@@ -12,7 +14,7 @@ use bridge::net::{PublishOptions, TypedPublisher};
 use bridge::zenoh::sample::Sample;
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohArgs};
-use pipeline::protocol::{keys, ApertureDetections, Detection, ServiceStatus};
+use pipeline::protocol::{keys, ApertureDetections, ApertureImage, Detection, ServiceStatus};
 use serde::Serialize;
 
 use super::{ready, report, tools::z_node};
@@ -35,6 +37,9 @@ pub(super) struct ForgeArgs {
     /// Pause between two rounds, ms.
     #[arg(long, default_value_t = 200)]
     interval_ms: u64,
+    /// Also publish an image of aperture 0 whose pixel count differs from nx × ny.
+    #[arg(long)]
+    malformed_images: bool,
     #[command(flatten)]
     zenoh: ZenohArgs,
 }
@@ -44,6 +49,7 @@ struct ForgeReport {
     missions: usize,
     statuses: u64,
     detections: u64,
+    images: u64,
     errors: u64,
 }
 
@@ -58,6 +64,7 @@ fn mission_of(key: &str) -> Option<MissionId> {
 struct Forger {
     status: TypedPublisher<ServiceStatus>,
     detections: TypedPublisher<ApertureDetections>,
+    images: Vec<TypedPublisher<ApertureImage>>,
 }
 
 pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
@@ -98,11 +105,20 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
                     mission_id: id,
                     ..PublishOptions::json()
                 };
+                let mut images = Vec::new();
+                if a.malformed_images {
+                    let o = PublishOptions {
+                        mission_id: id,
+                        ..PublishOptions::default()
+                    };
+                    images.push(node.publisher(&keys::image(id, 0)?, o)?);
+                }
                 forgers.push((
                     id,
                     Forger {
                         status: node.publisher(&keys::status(id, "processor")?, opts)?,
                         detections: node.publisher(&keys::detections(id)?, opts)?,
+                        images,
                     },
                 ));
             }
@@ -143,6 +159,23 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
                 };
                 match f.detections.put(&d) {
                     Ok(_) => r.detections += 1,
+                    Err(_) => r.errors += 1,
+                }
+            }
+            for (k, p) in f.images.iter().enumerate() {
+                // 8 × 8 pixels announced, 63 sent
+                let img = ApertureImage {
+                    mission_id: *id,
+                    aperture: k as u32,
+                    nx: 8,
+                    ny: 8,
+                    centre_m: [0.0, 0.0],
+                    spacing_m: 1.0,
+                    multilook: vec![1.0; 63],
+                    markers: Vec::new(),
+                };
+                match p.put(&img) {
+                    Ok(_) => r.images += 1,
                     Err(_) => r.errors += 1,
                 }
             }
