@@ -72,39 +72,64 @@ impl RangeCompressor {
         let full = windows
             .iter()
             .all(|w| w.data.iter().all(|x| x.re != 0.0 || x.im != 0.0));
-        let scale = if full {
-            (nsc as f64).sqrt() / (num.fft_size as f64 * windows.len().max(1) as f64 * wsum)
-        } else {
-            // a mask (empty or unknown REs are zero): normalise by the known REs' weights
-            let known: f64 = windows
-                .iter()
-                .flat_map(|w| w.data.iter().zip(&self.weights))
-                .filter(|(x, _)| x.re != 0.0 || x.im != 0.0)
-                .map(|(_, w)| w)
-                .sum();
-            if known > 0.0 {
-                (nsc as f64).sqrt() / (num.fft_size as f64 * known)
-            } else {
-                0.0
+        let mut z = vec![Complex64::new(0.0, 0.0); nsc];
+        let filter = |x: Complex32| {
+            let x = Complex64::new(x.re as f64, x.im as f64);
+            match self.filter {
+                RangeFilter::Matched => x.conj(),
+                RangeFilter::Reciprocal => {
+                    let p = x.norm_sqr();
+                    if p > 0.0 {
+                        x.conj() / p
+                    } else {
+                        Complex64::new(0.0, 0.0)
+                    }
+                }
             }
         };
-        let mut z = vec![Complex64::new(0.0, 0.0); nsc];
+        if full {
+            let scale =
+                (nsc as f64).sqrt() / (num.fft_size as f64 * windows.len().max(1) as f64 * wsum);
+            for w in windows {
+                for (i, zi) in z.iter_mut().enumerate() {
+                    *zi += w.spectrum[num.bin(i)] * filter(w.data[i]) * (self.weights[i] * scale);
+                }
+            }
+            return z;
+        }
+        // a mask (empty or unknown REs are zero): each subcarrier is the mean over the pulse's
+        // symbols that know it, and the profile is normalised by the weights of the subcarriers
+        // known in any of them (staggered comb symbols then fill the band evenly)
+        let mut count = vec![0u32; nsc];
+        for w in windows {
+            for (c, x) in count.iter_mut().zip(w.data.iter()) {
+                *c += u32::from(x.re != 0.0 || x.im != 0.0);
+            }
+        }
+        let known: f64 = count
+            .iter()
+            .zip(&self.weights)
+            .filter(|(c, _)| **c > 0)
+            .map(|(_, w)| w)
+            .sum();
+        if known <= 0.0 {
+            return z;
+        }
+        let base = (nsc as f64).sqrt() / (num.fft_size as f64 * known);
+        let scales: Vec<f64> = count
+            .iter()
+            .zip(&self.weights)
+            .map(|(c, w)| {
+                if *c > 0 {
+                    w * base / f64::from(*c)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         for w in windows {
             for (i, zi) in z.iter_mut().enumerate() {
-                let x = w.data[i];
-                let x = Complex64::new(x.re as f64, x.im as f64);
-                let f = match self.filter {
-                    RangeFilter::Matched => x.conj(),
-                    RangeFilter::Reciprocal => {
-                        let p = x.norm_sqr();
-                        if p > 0.0 {
-                            x.conj() / p
-                        } else {
-                            Complex64::new(0.0, 0.0)
-                        }
-                    }
-                };
-                *zi += w.spectrum[num.bin(i)] * f * (self.weights[i] * scale);
+                *zi += w.spectrum[num.bin(i)] * filter(w.data[i]) * scales[i];
             }
         }
         z

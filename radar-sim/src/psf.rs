@@ -10,10 +10,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::{CancellerKind, SceneFile};
 use crate::error::Result;
-use crate::pipeline::{Processor, RadarSetup};
+use crate::nr::Reference;
+use crate::pipeline::{Compressed, Processor, RadarSetup};
 use crate::resolution::CellReport;
 use crate::scene::SceneObject;
 use crate::synth::Components;
+use crate::track::PulseMeta;
 use crate::track::{plan_apertures, plan_pulses, LinearTrack};
 
 /// One geometry: a straight track at `speed_mps` heading `heading_deg` whose sensing centre
@@ -67,7 +69,17 @@ pub fn measure_case(params: &planner::Params, case: &PsfCase) -> Result<CellRepo
     scene.radar.thermal_noise = false;
     scene.radar.direct_path = false;
     scene.processing.canceller = CancellerKind::None;
-    let setup = RadarSetup::new(params, &scene)?;
+    Ok(measure_case_in(params, case, &scene)?.0)
+}
+
+/// Measures `case` under `scene` (its noise and direct path as set there): the cell, and the
+/// compressed spectra and pulses of the look (for [`range_profile_levels`]).
+pub fn measure_case_in(
+    params: &planner::Params,
+    case: &PsfCase,
+    scene: &SceneFile,
+) -> Result<(CellReport, Compressed, Processor, Vec<PulseMeta>)> {
+    let setup = RadarSetup::new(params, scene)?;
     let proc = Processor::new(setup.clone())?;
     let t_mid = 0.5 * setup.look_s;
     let track = LinearTrack::through(
@@ -103,7 +115,8 @@ pub fn measure_case(params: &planner::Params, case: &PsfCase) -> Result<CellRepo
         .synthesize_frame(&pulses, Components::ALL)?;
     let grid = setup.grid(&ap);
     let c = proc.compress(&grid, &pulses, &iq, ap.pulses_per_look, None, true)?;
-    proc.measure_cell(&c, &pulses, 0..pulses.len(), case.target_m)
+    let cell = proc.measure_cell(&c, &pulses, 0..pulses.len(), case.target_m)?;
+    Ok((cell, c, proc, pulses))
 }
 
 /// One row of the resolution report.
@@ -121,4 +134,105 @@ pub fn params_at(bandwidth_hz: f64) -> planner::Params {
         bandwidth_hz,
         ..Default::default()
     }
+}
+
+/// The range profile of a point target around its delay, from one pulse's compressed spectrum:
+/// the peak, the highest sidelobe (beyond the main lobe's first nulls) and the level at the
+/// comb alias `delay + alias_samples`, in dB relative to the peak.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ProfileLevels {
+    /// Peak sidelobe over the whole profile (N samples around the peak), dB.
+    pub peak_sidelobe_db: f64,
+    /// The profile at the alias delay, dB.
+    pub alias_db: f64,
+}
+
+/// [`ProfileLevels`] of the middle pulse of `c` (spectra kept) for a target at `target_m`, with
+/// the alias at `alias_samples` from the peak, scanning the N-sample period at a quarter
+/// sample.
+pub fn range_profile_levels(
+    proc: &Processor,
+    c: &Compressed,
+    pulses: &[PulseMeta],
+    target_m: [f64; 2],
+    alias_samples: f64,
+) -> Option<ProfileLevels> {
+    let k = pulses.len() / 2;
+    let z = c.spectra.as_ref()?.get(k)?;
+    let p = &pulses[k];
+    let setup = proc.setup();
+    let delay = setup
+        .geometry()
+        .delay_samples(target_m, p.pos_m, p.window_delay_samples);
+    let comp = proc.compressor();
+    let n = setup.num.fft_size as f64;
+    // the main lobe's first null: N/N_sc unweighted, twice that with a Hann or Hamming taper
+    let nulls = match setup.scene.processing.range_weighting {
+        crate::config::Weighting::None => 1.0,
+        _ => 2.0,
+    };
+    let lobe = nulls * n / setup.num.subcarriers as f64;
+    let peak = comp.evaluate(z, delay).norm();
+    if peak <= 0.0 {
+        return None;
+    }
+    let steps = (4.0 * n) as usize;
+    let side = (0..steps)
+        .map(|j| j as f64 / 4.0 - n / 2.0)
+        .filter(|x| x.abs() > lobe)
+        .map(|x| comp.evaluate(z, delay + x).norm())
+        .fold(0.0, f64::max);
+    let alias = comp.evaluate(z, delay + alias_samples).norm();
+    let db = |v: f64| 20.0 * (v.max(1e-300) / peak).log10();
+    Some(ProfileLevels {
+        peak_sidelobe_db: db(side),
+        alias_db: db(alias),
+    })
+}
+
+/// One reference's measured response.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ReferenceResponse {
+    /// The reference.
+    pub reference: Reference,
+    /// Symbols per pulse.
+    pub pulse_symbols: usize,
+    /// The −3 dB cell against its prediction.
+    pub cell: CellReport,
+    /// Range-profile levels of the middle pulse.
+    pub levels: ProfileLevels,
+}
+
+/// The response of each reference under the NR cell `nr` (default canceller, no noise, the
+/// direct path on, so that `reconstructed` decides on it) for `case`: the comb alias at
+/// N / prs_comb samples.
+pub fn reference_responses(
+    params: &planner::Params,
+    case: &PsfCase,
+    nr: &crate::config::NrConfig,
+) -> Result<Vec<ReferenceResponse>> {
+    let mut out = Vec::new();
+    for reference in [
+        Reference::Ideal,
+        Reference::Pilots,
+        Reference::Reconstructed,
+    ] {
+        let mut scene = SceneFile::default();
+        scene.radar.thermal_noise = false;
+        scene.radar.reference = reference;
+        scene.radar.nr = Some(nr.clone());
+        let (cell, c, proc, pulses) = measure_case_in(params, case, &scene)?;
+        let alias = proc.setup().num.fft_size as f64 / nr.prs_comb as f64;
+        let levels =
+            range_profile_levels(&proc, &c, &pulses, case.target_m, alias).ok_or_else(|| {
+                crate::RadarError::Mismatch("no response at the target: nothing to measure".into())
+            })?;
+        out.push(ReferenceResponse {
+            reference,
+            pulse_symbols: nr.pulse_symbols,
+            cell,
+            levels,
+        });
+    }
+    Ok(out)
 }

@@ -2,9 +2,10 @@
 //! - `ideal`: every value the BS sent (without `[radar.nr]` the seeded QAM data);
 //! - `pilots`: the reference signals' REs (PSS, SSS, PBCH DMRS, TRS, PRS, PDSCH DMRS) with the
 //!   others zero, so that the canceller's basis and range compression see only them (a per-symbol
-//!   mask: [`crate::compress::RangeCompressor::spectrum`] normalises by the known REs of each
-//!   pulse, and combines the pulse's symbols coherently, so the PRS's staggered comb offsets
-//!   fill the band and its comb ambiguity cancels over a full staggering cycle);
+//!   mask: [`crate::compress::RangeCompressor::spectrum`] averages each subcarrier over the
+//!   pulse's symbols that know it and normalises by the subcarriers known, so the PRS's
+//!   staggered comb offsets fill the band evenly and its comb alias cancels over a full
+//!   staggering cycle);
 //! - `reconstructed`: the pilots, and each data RE decided hard from the UAV's own recording of
 //!   the pulse: the direct path's complex gain ĝ is the least-squares fit over the pulse's pilot
 //!   REs of `Y_i = ĝ (N/√N_sc) X_i e^{−j2πk_iΔ_d/N}` (Δ_d the direct path's delay in the window
@@ -46,10 +47,11 @@ impl Processor {
             + p.first_symbol as u64
     }
 
-    /// Under NR, the profile noise factor `mean_q Σ_{w,i known} w_i² |f_i|² / (Σ_{w,i known}
-    /// w_i)²` over the first [`SAMPLED_PULSES`] pulses (f the range filter, w the range
-    /// weights), so that a profile sample's noise variance is `σ² N_sc / N` times it (without
-    /// NR: `f̄² Σw² / (S (Σw)²)` exactly, S symbols per pulse). Refuses `pilots` and
+    /// Under NR, the profile noise factor `mean_q Σ_i w_i² (Σ_{s knows i} |f_{s,i}|²) / c_i² /
+    /// (Σ_{i: c_i > 0} w_i)²` over the first [`SAMPLED_PULSES`] pulses (f the range filter, w
+    /// the range weights, c_i the pulse's symbols that know subcarrier i: range compression
+    /// averages over them), so that a profile sample's noise variance is `σ² N_sc / N` times it
+    /// (without NR: `f̄² Σw² / (S (Σw)²)` exactly, S symbols per pulse). Refuses `pilots` and
     /// `reconstructed` when a sampled pulse holds no pilot (nothing to compress, or to
     /// equalise the direct path with).
     pub(super) fn nr_noise_factor(
@@ -58,22 +60,24 @@ impl Processor {
         filter: RangeFilter,
         weights: &[f64],
     ) -> Result<f64> {
+        let nsc = weights.len();
         let mut acc = 0.0;
         for q in 0..SAMPLED_PULSES {
             let m0 = Self::pulse_start(ill, q);
-            let (mut s1, mut s2, mut pilots) = (0.0, 0.0, 0usize);
+            // per subcarrier: symbols that know it, and Σ |f|² over them
+            let (mut count, mut f2) = (vec![0u32; nsc], vec![0.0f64; nsc]);
+            let mut pilots = 0usize;
             for s in 0..ill.pulse.symbols as u64 {
                 let sym = ill.grid.symbol(m0 + s);
-                for ((v, r), w) in sym.values.iter().zip(&sym.roles).zip(weights) {
+                for (i, (v, r)) in sym.values.iter().zip(&sym.roles).enumerate().take(nsc) {
                     pilots += usize::from(*r == Role::Pilot);
                     if known(reference, *r) {
                         let p = v.norm_sqr();
-                        let f2 = match filter {
+                        count[i] += 1;
+                        f2[i] += match filter {
                             RangeFilter::Matched => p,
                             RangeFilter::Reciprocal => 1.0 / p,
                         };
-                        s1 += w;
-                        s2 += w * w * f2;
                     }
                 }
             }
@@ -87,6 +91,14 @@ impl Processor {
                          on a DMRS symbol (radar.nr.pulse_first_symbol)"
                     ),
                 ));
+            }
+            let (mut s1, mut s2) = (0.0, 0.0);
+            for ((c, f), w) in count.iter().zip(&f2).zip(weights) {
+                if *c > 0 {
+                    let c = f64::from(*c);
+                    s1 += w;
+                    s2 += w * w * f / (c * c);
+                }
             }
             if s1 > 0.0 {
                 acc += s2 / (s1 * s1);
