@@ -2,10 +2,13 @@
 //! middle of a window), with and without warm start from the rest of the current plan, and with
 //! the warm start repaired on a coarse grid first or on the mission's own slots. Each cell lists
 //! the re-plan's time, the spliced plan's true energy, the warm start's sensing excess, the start
-//! used, the transition slots and every planner call with its time.
+//! used, the transition slots and every planner call with its time. `--dynamics` plans the initial
+//! plan and every re-plan under that vehicle model (default: the library's,
+//! `planner::DEFAULT_DYNAMICS`), as the FMU's parameter `dynamics` does; `--resolution` is the
+//! initial plan's (default: the library's; the re-plans are for the paper's, as in the FMU).
 //!
 //! ```text
-//! cargo run --release -p fmu --example replan-bench [-- [T ...] [--offset DX,DY]]
+//! cargo run --release -p fmu --example replan-bench [-- [T ...] [--offset DX,DY] [--dynamics vehicle|paper] [--resolution general|paper]]
 //! ```
 
 use anyhow::{Context, Result};
@@ -16,17 +19,32 @@ fn main() -> Result<()> {
     let mission = Mission::from_file_struct(
         &MissionFile::from_toml_str(fmu::core::DEFAULT_MISSION_TOML).map_err(anyhow::Error::msg)?,
     )?;
-    let full = fmu::planning::plan(&mission, None).map_err(anyhow::Error::msg)?;
-    println!("initial plan: {}", full.summary);
-    println!("| move at t [s] | slots re-planned | warm [s] | warm, 5 it [s] | warm, 5 it, fine repair [s] | cold [s] | cold, 5 it [s] |");
-    println!("|---|---|---|---|---|---|---|");
-    // arguments: move times in s (default: the six below) and `--offset DX,DY` in m (default 40,20)
+    // arguments: move times in s (default: the six below), `--offset DX,DY` in m (default 40,20)
+    // and `--dynamics NAME`
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut offset = [40.0, 20.0];
+    let mut dynamics = planner::DEFAULT_DYNAMICS;
+    let mut resolution = planner::DEFAULT_RESOLUTION;
     let mut times: Vec<f64> = Vec::new();
     let mut i = 0;
     while i < args.len() {
-        if args[i] == "--offset" {
+        if args[i] == "--dynamics" {
+            let v = args
+                .get(i + 1)
+                .context("--dynamics needs vehicle or paper")?;
+            dynamics = v
+                .parse()
+                .with_context(|| format!("--dynamics {v}: vehicle or paper"))?;
+            i += 2;
+        } else if args[i] == "--resolution" {
+            let v = args
+                .get(i + 1)
+                .context("--resolution needs general or paper")?;
+            resolution = v
+                .parse()
+                .with_context(|| format!("--resolution {v}: general or paper"))?;
+            i += 2;
+        } else if args[i] == "--offset" {
             let v = args.get(i + 1).context("--offset needs DX,DY")?;
             let (dx, dy) = v.split_once(',').context("--offset DX,DY")?;
             offset = [dx.parse()?, dy.parse()?];
@@ -36,6 +54,18 @@ fn main() -> Result<()> {
             i += 1;
         }
     }
+    let options = planner::PlanOptions {
+        dynamics,
+        resolution,
+        ..Default::default()
+    };
+    let full = fmu::planning::plan_with(&mission, None, &options).map_err(anyhow::Error::msg)?;
+    println!(
+        "initial plan (resolution {resolution}, {dynamics} dynamics): {}",
+        full.summary
+    );
+    println!("| move at t [s] | slots re-planned | warm [s] | warm, 5 it [s] | warm, 5 it, fine repair [s] | cold [s] | cold, 5 it [s] |");
+    println!("|---|---|---|---|---|---|---|");
     let times = if times.is_empty() {
         vec![5.0, 65.0, 125.0, 185.0, 245.0, 295.0]
     } else {
@@ -60,7 +90,7 @@ fn main() -> Result<()> {
                 max_iterations,
                 tolerance,
                 coarse,
-                ..Default::default()
+                dynamics,
             };
             let r = fmu::planning::replan(&mission, &full.trajectory, from, window, moved, &o);
             times.push(match r {
