@@ -127,3 +127,113 @@ mod tests {
         assert!(10.0 * g.log10() < -6.0);
     }
 }
+
+/// The base station's sectored antenna, the element pattern of 3GPP TR 38.901 Table 7.3-1
+/// pointed at the sector's azimuth φ_s and electrically down-tilted by θ_tilt:
+/// `A_V(θ) = −min(12 ((θ − 90° − θ_tilt)/θ_3dB)², SLA_V)` (θ the zenith angle),
+/// `A_H(φ) = −min(12 ((φ − φ_s)/φ_3dB)², A_max)`, `A = −min(−(A_V + A_H), A_max)`, and the
+/// power gain `G_max + A` dB. TR 38.901's values: θ_3dB = φ_3dB = 65°, SLA_V = A_max = 30 dB;
+/// G_max is the scene's `tx_gain_dbi` (the panel's peak gain).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SectorAntenna {
+    /// Sector azimuth φ_s, rad from +x counter-clockwise.
+    pub azimuth_rad: f64,
+    /// Electrical down-tilt θ_tilt below the horizon, rad.
+    pub downtilt_rad: f64,
+    /// Half-power beamwidth, both planes, rad.
+    pub beamwidth_rad: f64,
+    /// Front-to-back ratio A_max, dB (> 0).
+    pub front_to_back_db: f64,
+    /// Side-lobe limit of the vertical cut SLA_V, dB (> 0).
+    pub sidelobe_db: f64,
+}
+
+impl SectorAntenna {
+    /// The pattern A(θ, φ) in dB (≤ 0) towards `p` from the antenna at `bs`.
+    pub fn pattern_db(&self, bs: [f64; 3], p: [f64; 3]) -> f64 {
+        let d = [p[0] - bs[0], p[1] - bs[1], p[2] - bs[2]];
+        let horiz = d[0].hypot(d[1]);
+        // zenith angle: 90° horizontal, more below
+        let zenith = horiz.atan2(d[2]);
+        let phi = d[1].atan2(d[0]) - self.azimuth_rad;
+        let phi =
+            (phi + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        let bw = self.beamwidth_rad;
+        let tilt = std::f64::consts::FRAC_PI_2 + self.downtilt_rad;
+        let av = -(12.0 * ((zenith - tilt) / bw).powi(2)).min(self.sidelobe_db);
+        let ah = -(12.0 * (phi / bw).powi(2)).min(self.front_to_back_db);
+        -(-(av + ah)).min(self.front_to_back_db)
+    }
+
+    /// The pattern as a power factor (≤ 1) towards `p`.
+    pub fn gain_towards(&self, bs: [f64; 3], p: [f64; 3]) -> f64 {
+        10f64.powf(self.pattern_db(bs, p) / 10.0)
+    }
+}
+
+#[cfg(test)]
+mod sector_tests {
+    use super::*;
+
+    fn sector() -> SectorAntenna {
+        SectorAntenna {
+            azimuth_rad: 135f64.to_radians(),
+            downtilt_rad: 10f64.to_radians(),
+            beamwidth_rad: 65f64.to_radians(),
+            front_to_back_db: 30.0,
+            sidelobe_db: 30.0,
+        }
+    }
+
+    /// The point at azimuth `az` and depression `dep` (degrees) 1 km from the BS at the origin.
+    fn at(az: f64, dep: f64) -> [f64; 3] {
+        let (a, e) = (az.to_radians(), dep.to_radians());
+        [
+            1e3 * e.cos() * a.cos(),
+            1e3 * e.cos() * a.sin(),
+            -1e3 * e.sin(),
+        ]
+    }
+
+    #[test]
+    fn tr_38_901_element_pattern() {
+        let s = sector();
+        let o = [0.0; 3];
+        assert!(s.pattern_db(o, at(135.0, 10.0)).abs() < 1e-12, "boresight");
+        // half the beamwidth off boresight in either plane: −3 dB
+        for p in [
+            at(135.0 + 32.5, 10.0),
+            at(135.0 - 32.5, 10.0),
+            at(135.0, 42.5),
+        ] {
+            assert!(
+                (s.pattern_db(o, p) + 3.0).abs() < 1e-9,
+                "{}",
+                s.pattern_db(o, p)
+            );
+        }
+        // behind: the front-to-back ratio; far above a narrow beam: the vertical side-lobe
+        // limit (65° beams never reach it: 12 (100°/65°)² = 28.4 dB at the zenith)
+        assert!((s.pattern_db(o, at(-45.0, 10.0)) + 30.0).abs() < 1e-12);
+        assert!((s.pattern_db(o, at(135.0, -60.0)) + 12.0 * (70.0f64 / 65.0).powi(2)).abs() < 1e-9);
+        let narrow = SectorAntenna {
+            beamwidth_rad: 20f64.to_radians(),
+            sidelobe_db: 20.0,
+            ..s
+        };
+        assert!((narrow.pattern_db(o, at(135.0, -60.0)) + 20.0).abs() < 1e-12);
+        // the sum of both cuts is capped at A_max
+        assert!((s.pattern_db(o, at(-45.0, -60.0)) + 30.0).abs() < 1e-12);
+        let both = s.pattern_db(o, at(135.0 + 32.5, 42.5));
+        assert!((both + 6.0).abs() < 1e-9, "{both}");
+        assert!((s.gain_towards(o, at(135.0 + 32.5, 10.0)) - 10f64.powf(-0.3)).abs() < 1e-12);
+        // azimuths wrap
+        let w = SectorAntenna {
+            azimuth_rad: 170f64.to_radians(),
+            ..s
+        };
+        assert!(
+            (w.pattern_db(o, at(-170.0, 10.0)) - w.pattern_db(o, at(150.0, 10.0))).abs() < 1e-9
+        );
+    }
+}

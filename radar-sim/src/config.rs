@@ -39,7 +39,7 @@ mod radar;
 pub use nr::{NrConfig, NR_PREFIX};
 pub use objects::ObjectsConfig;
 pub use processing::{CancellerKind, ProcessingConfig, RangeFilter, Weighting};
-pub use radar::{Modulation, MotionModel, RadarConfig};
+pub use radar::{BsAntennaConfig, Modulation, MotionModel, RadarConfig};
 
 /// Boltzmann constant, J/K.
 pub const BOLTZMANN_J_PER_K: f64 = 1.380_649e-23;

@@ -86,6 +86,7 @@ pub struct Synthesizer {
     num: Numerology,
     motion: MotionModel,
     antenna: Antenna,
+    bs_sector: Option<crate::antenna::SectorAntenna>,
     bs_m: [f64; 3],
     objects: Vec<SceneObject>,
     eirp_w: f64,
@@ -133,6 +134,7 @@ impl Synthesizer {
         Ok(Self {
             motion: radar.motion,
             antenna,
+            bs_sector: radar.bs_antenna.as_ref().map(|a| a.sector(bs_m)),
             bs_m,
             objects,
             eirp_w: radar.tx_power_w
@@ -167,15 +169,21 @@ impl Synthesizer {
         self.symbols_per_pulse * self.num.fft_size
     }
 
-    /// Received direct-path power for a UAV at `pos` with `heading`, W.
+    /// Received direct-path power for a UAV at `pos` with `heading`, W (the BS's sector pattern
+    /// towards the UAV included, under `[radar.bs_antenna]`).
     pub fn direct_power_w(&self, pos: [f64; 3], heading: [f64; 2]) -> f64 {
         let r = dist3(pos, self.bs_m);
         let lam = self.num.wavelength_m();
         let g = self.antenna.gain_towards(pos, heading, self.bs_m);
-        self.eirp_w * g * lam * lam / (4.0 * std::f64::consts::PI * r).powi(2)
+        let p = self.eirp_w * g * lam * lam / (4.0 * std::f64::consts::PI * r).powi(2);
+        match &self.bs_sector {
+            None => p,
+            Some(s) => p * s.gain_towards(self.bs_m, pos),
+        }
     }
 
-    /// Received echo power of `obj` for a UAV at `pos` with `heading`, W.
+    /// Received echo power of `obj` for a UAV at `pos` with `heading`, W (the BS's sector
+    /// pattern towards the object included, under `[radar.bs_antenna]`).
     pub fn echo_power_w(&self, obj: &SceneObject, pos: [f64; 3], heading: [f64; 2]) -> f64 {
         let p = [obj.x_m, obj.y_m, 0.0];
         let rt = dist3(self.bs_m, p);
@@ -183,7 +191,11 @@ impl Synthesizer {
         let lam = self.num.wavelength_m();
         let g = self.antenna.gain_towards(pos, heading, p);
         let four_pi3 = (4.0 * std::f64::consts::PI).powi(3);
-        self.eirp_w * g * obj.rcs_m2 * lam * lam / (four_pi3 * rt * rt * rr * rr)
+        let pw = self.eirp_w * g * obj.rcs_m2 * lam * lam / (four_pi3 * rt * rt * rr * rr);
+        match &self.bs_sector {
+            None => pw,
+            Some(s) => pw * s.gain_towards(self.bs_m, p),
+        }
     }
 
     /// The paths of one symbol window for a UAV at `pos` moving with `vel`, window delay `d`.

@@ -70,7 +70,8 @@ pub struct RadarConfig {
     pub modulation: Modulation,
     /// BS transmit power over the band, W. Default 40.
     pub tx_power_w: f64,
-    /// BS antenna gain (isotropic model), dBi. Default 15.
+    /// BS antenna gain, dBi: in every direction (isotropic model), or the sector's peak under
+    /// `[radar.bs_antenna]`. Default 15.
     pub tx_gain_dbi: f64,
     /// System losses, dB. Default 3.
     pub system_loss_db: f64,
@@ -104,6 +105,85 @@ pub struct RadarConfig {
     /// `modulation` on every subcarrier per pulse, at `prf_hz`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub nr: Option<NrConfig>,
+    /// The BS's sectored antenna (`[radar.bs_antenna]`, TR 38.901's element pattern with
+    /// `tx_gain_dbi` as its peak gain) for the direct path and the illumination; absent: an
+    /// isotropic `tx_gain_dbi` in every direction.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bs_antenna: Option<BsAntennaConfig>,
+}
+
+/// The `[radar.bs_antenna]` table: a sector of TR 38.901 Table 7.3-1.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BsAntennaConfig {
+    /// Sector azimuth, degrees from +x counter-clockwise. Default: towards the mission frame's
+    /// origin (the landmarks' area) from the BS.
+    pub azimuth_deg: Option<f64>,
+    /// Electrical down-tilt below the horizon, degrees, −90..=90. Default: towards the origin
+    /// on the ground, atan(H_b / horizontal distance).
+    pub downtilt_deg: Option<f64>,
+    /// Half-power beamwidth in both planes, degrees, in (0, 360]. Default 65.
+    pub beamwidth_deg: f64,
+    /// Front-to-back ratio A_max, dB, > 0. Default 30.
+    pub front_to_back_db: f64,
+    /// Side-lobe limit of the vertical cut SLA_V, dB, > 0. Default 30.
+    pub sidelobe_db: f64,
+}
+
+impl Default for BsAntennaConfig {
+    fn default() -> Self {
+        Self {
+            azimuth_deg: None,
+            downtilt_deg: None,
+            beamwidth_deg: 65.0,
+            front_to_back_db: 30.0,
+            sidelobe_db: 30.0,
+        }
+    }
+}
+
+impl BsAntennaConfig {
+    /// Checks the values; errors name the field.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(a) = self.azimuth_deg {
+            finite("radar.bs_antenna.azimuth_deg", a)?;
+        }
+        if let Some(t) = self.downtilt_deg {
+            finite("radar.bs_antenna.downtilt_deg", t)?;
+            if t.abs() > 90.0 {
+                return Err(RadarError::config(
+                    "radar.bs_antenna.downtilt_deg",
+                    format!("{t} must lie in -90..=90"),
+                ));
+            }
+        }
+        positive("radar.bs_antenna.beamwidth_deg", self.beamwidth_deg)?;
+        if self.beamwidth_deg > 360.0 {
+            return Err(RadarError::config(
+                "radar.bs_antenna.beamwidth_deg",
+                format!("{} must be at most 360", self.beamwidth_deg),
+            ));
+        }
+        positive("radar.bs_antenna.front_to_back_db", self.front_to_back_db)?;
+        positive("radar.bs_antenna.sidelobe_db", self.sidelobe_db)
+    }
+
+    /// The sector of a BS at `bs_m` (x, y, H_b).
+    pub fn sector(&self, bs_m: [f64; 3]) -> crate::antenna::SectorAntenna {
+        let az = self
+            .azimuth_deg
+            .map_or_else(|| (-bs_m[1]).atan2(-bs_m[0]), f64::to_radians);
+        let tilt = self
+            .downtilt_deg
+            .map_or_else(|| bs_m[2].atan2(bs_m[0].hypot(bs_m[1])), f64::to_radians);
+        crate::antenna::SectorAntenna {
+            azimuth_rad: az,
+            downtilt_rad: tilt,
+            beamwidth_rad: self.beamwidth_deg.to_radians(),
+            front_to_back_db: self.front_to_back_db,
+            sidelobe_db: self.sidelobe_db,
+        }
+    }
 }
 
 fn is_ideal(r: &Reference) -> bool {
@@ -135,6 +215,7 @@ impl Default for RadarConfig {
             direct_path: true,
             reference: Reference::Ideal,
             nr: None,
+            bs_antenna: None,
         }
     }
 }
@@ -213,6 +294,9 @@ impl RadarConfig {
                 "radar.sidelobe_floor_db",
                 "floors are relative to the peak gain and must be <= 0 dB",
             ));
+        }
+        if let Some(a) = &self.bs_antenna {
+            a.validate()?;
         }
         self.validate_reference()
     }

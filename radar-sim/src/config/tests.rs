@@ -109,3 +109,39 @@ fn weighting_factors() {
     let w = Weighting::Hann.weights(8);
     assert!((w[0] - w[7]).abs() < 1e-12 && w[3] > 0.9);
 }
+
+#[test]
+fn bs_antenna_errors_name_the_field() {
+    SceneFile::from_toml_str("[radar.bs_antenna]\n", "s.toml").unwrap();
+    for (text, field) in [
+        (
+            "[radar.bs_antenna]\nbeamwidth_deg = 0\n",
+            "radar.bs_antenna.beamwidth_deg",
+        ),
+        (
+            "[radar.bs_antenna]\nbeamwidth_deg = 400\n",
+            "radar.bs_antenna.beamwidth_deg",
+        ),
+        (
+            "[radar.bs_antenna]\ndowntilt_deg = 95\n",
+            "radar.bs_antenna.downtilt_deg",
+        ),
+        (
+            "[radar.bs_antenna]\nfront_to_back_db = -3\n",
+            "radar.bs_antenna.front_to_back_db",
+        ),
+        (
+            "[radar.bs_antenna]\nsidelobe_db = 0\n",
+            "radar.bs_antenna.sidelobe_db",
+        ),
+        (
+            "[radar.bs_antenna]\nazimuth_deg = nan\n",
+            "radar.bs_antenna.azimuth_deg",
+        ),
+    ] {
+        let e = err(text);
+        assert!(e.starts_with(field), "{text}: {e}");
+    }
+    let e = err("[radar.bs_antenna]\ntilt = 3\n");
+    assert!(e.contains("tilt"), "{e}");
+}

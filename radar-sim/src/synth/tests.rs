@@ -270,3 +270,47 @@ fn exact_under_nr_with_per_symbol_cps() {
     // uplink symbols are silent: slot 4 of DDDSU (symbols 56..70)
     assert!(num.symbol_data(60).iter().all(|x| x.norm() == 0.0));
 }
+
+#[test]
+fn the_sector_pattern_scales_the_direct_path_and_the_echoes() {
+    let bs = [1000.0, -1000.0, 30.0];
+    let iso_r = RadarConfig::default();
+    let sec_r = RadarConfig {
+        bs_antenna: Some(crate::config::BsAntennaConfig::default()),
+        ..RadarConfig::default()
+    };
+    let obj = SceneObject {
+        id: 0,
+        x_m: -300.0,
+        y_m: 400.0,
+        rcs_m2: 10.0,
+        phase_rad: 0.0,
+        landmark: None,
+    };
+    let make = |r: &RadarConfig| {
+        let num = Numerology::new(r, 150e6, 0.1).unwrap();
+        let ant = Antenna::new(r, 0.1, std::f64::consts::FRAC_PI_4);
+        Synthesizer::new(num, r, ant, bs, vec![obj]).unwrap()
+    };
+    let (iso, sec) = (make(&iso_r), make(&sec_r));
+    let sector = sec_r.bs_antenna.as_ref().unwrap().sector(bs);
+    // by default the sector points at the origin on the ground: 0 dB there
+    assert!(sector.pattern_db(bs, [0.0, 0.0, 0.0]).abs() < 1e-12);
+    let heading = [0.0, 1.0];
+    for pos in [
+        [0.0, 0.0, 100.0],
+        [-500.0, 300.0, 100.0],
+        [2000.0, -3000.0, 100.0],
+    ] {
+        let g = sector.gain_towards(bs, pos);
+        let ratio = sec.direct_power_w(pos, heading) / iso.direct_power_w(pos, heading);
+        assert!((ratio / g - 1.0).abs() < 1e-12, "{ratio} vs {g}");
+        let q = [obj.x_m, obj.y_m, 0.0];
+        let ratio = sec.echo_power_w(&obj, pos, heading) / iso.echo_power_w(&obj, pos, heading);
+        assert!((ratio / sector.gain_towards(bs, q) - 1.0).abs() < 1e-12);
+    }
+    // the UAV behind the sector: 30 dB below the isotropic model
+    let behind = [3000.0, -3000.0, 30.0];
+    let ratio = sec.direct_power_w(behind, heading) / iso.direct_power_w(behind, heading);
+    assert!((10.0 * ratio.log10() + 30.0).abs() < 1e-9, "{ratio}");
+}
