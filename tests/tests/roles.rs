@@ -1,8 +1,10 @@
 //! A hostile peer on the launcher's own mesh (loopback, no authentication): it forges a
 //! processor status `{role: "processor", state: "failed"}`, detections of every aperture
 //! under an instance name of its own, and an image of aperture 0 whose pixel count is not
-//! `nx × ny`, before and during a normal run. A malformed image is counted and skipped, never
-//! fatal, and the aperture's real image still counts. The launcher accepts
+//! `nx × ny`, before and during a normal run; it also answers the launcher's plan request at
+//! once with a plan of another mission. A malformed image is counted and skipped, never fatal,
+//! and the aperture's real image still counts; the forged plan is skipped and the planner's
+//! taken. The launcher accepts
 //! statuses and detections only from the instances that announced themselves in their role
 //! (liveliness), so the run neither aborts nor takes a forged result: it completes with the
 //! closed loop's detections, and the forgeries are counted as foreign.
@@ -34,6 +36,7 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
             "--interval-ms".into(),
             "5".into(),
             "--malformed-images".into(),
+            "--forge-plans".into(),
             "-m".into(),
             "peer".into(),
             "-l".into(),
@@ -83,5 +86,23 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
         p["collector"]
     );
     assert!(log.contains("malformed image skipped"), "{log}");
+    // the forged plan reply was skipped (the run planned the mission it asked for: the
+    // reference detections above)
+    assert!(
+        forger
+            .log_text()
+            .contains("answered a plan request with a forged plan"),
+        "{}",
+        forger.log_text()
+    );
+    assert!(
+        p["collector"]["refused_plans"].as_u64().unwrap() >= 1,
+        "{}",
+        p["collector"]
+    );
+    assert!(
+        log.contains("a plan reply that does not answer the request skipped"),
+        "{log}"
+    );
     assert!(!log.contains("gave up the mission"), "{log}");
 }

@@ -15,6 +15,28 @@ use super::plan_refusal;
 use super::session::Session;
 use crate::protocol::{self, Plan, PlanRequest, PlanRequestOptions, MAX_PLAN_BYTES};
 
+/// Why `plan` does not answer `request` (`None`: it does): a plan of another mission or with
+/// other options than those asked for, or whose mission id is not the one computed from its
+/// mission and options ([`protocol::mission_id`]), which every process keys the mission by.
+pub(super) fn plan_mismatch(request: &PlanRequest, plan: &Plan) -> Option<String> {
+    if plan.mission != request.mission {
+        return Some(format!(
+            "a plan of another mission ({:?}, asked for {:?})",
+            plan.mission.name, request.mission.name
+        ));
+    }
+    if plan.options != request.options {
+        return Some("a plan with other options than those asked for".to_string());
+    }
+    let id = protocol::mission_id(&plan.mission, &plan.options);
+    (plan.mission_id != id).then(|| {
+        format!(
+            "mission id {} where its mission and options give {id}",
+            plan.mission_id
+        )
+    })
+}
+
 /// The time left for the plan.
 struct PlanClock {
     timeout: Duration,
@@ -118,6 +140,16 @@ impl Session<'_> {
         }
     }
 
+    /// Counts, logs and reports a plan reply that does not answer the request.
+    fn refuse_plan(&mut self, planner: &str, why: &str) {
+        self.refused_plans += 1;
+        tracing::warn!(planner, reason = %why, "a plan reply that does not answer the request skipped");
+        self.setup.events.emit(
+            "plan_refused",
+            &[("planner", planner.into()), ("reason", why.into())],
+        );
+    }
+
     fn retry_event(&self, attempt: u32, error: String) {
         self.setup.events.emit(
             "plan_retry",
@@ -186,9 +218,65 @@ impl Session<'_> {
                     spinner.set_message(s.message.message.clone());
                 }
             }
-            if let Some(a) = query.poll(Duration::from_millis(20)) {
-                return Ok(Some(a.map(|r| r.message)));
+            match query.poll(Duration::from_millis(20)) {
+                None => {}
+                Some(Ok(r)) => match plan_mismatch(request, &r.message) {
+                    // skipped: the next reply (the planner's own) may still come
+                    Some(why) => self.refuse_plan(&r.message.planner, &why),
+                    None => return Ok(Some(Ok(r.message))),
+                },
+                Some(Err(e)) => return Ok(Some(Err(e))),
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::services::plan::plan_request;
+    use planner::{MissionFile, NoObserver};
+
+    fn request(name: &str) -> PlanRequest {
+        PlanRequest {
+            mission: MissionFile::from_toml_str(&format!(
+                "name = \"{name}\"\n[params]\nhorizon_s = 20.0\n[landmarks]\npoints = [{{ x_m = \
+                 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }}, {{ x_m = 0.0, y_m = 30.0, from_s = \
+                 10.0, to_s = 20.0 }}]\n"
+            ))
+            .unwrap(),
+            options: PlanRequestOptions {
+                resolution: Some(planner::evaluate::ResolutionMode::Paper),
+                ..PlanRequestOptions::default()
+            },
+        }
+    }
+
+    /// The planner's plan answers its request; one of another mission, with other options,
+    /// or with a mission id that its content does not give, does not, each said why.
+    #[test]
+    fn a_plan_must_answer_the_request_and_carry_its_own_id() {
+        let req = request("short");
+        let plan = plan_request(&req, "p1", &mut NoObserver).unwrap();
+        assert_eq!(plan_mismatch(&req, &plan), None);
+        let other = plan_request(&request("other"), "p1", &mut NoObserver).unwrap();
+        let why = plan_mismatch(&req, &other).unwrap();
+        assert!(why.contains("another mission (Some(\"other\")"), "{why}");
+        let opts = PlanRequest {
+            options: PlanRequestOptions::default(),
+            ..req.clone()
+        };
+        let why = plan_mismatch(&opts, &plan).unwrap();
+        assert!(why.contains("other options"), "{why}");
+        let forged = Plan {
+            mission_id: other.mission_id,
+            ..plan.clone()
+        };
+        let why = plan_mismatch(&req, &forged).unwrap();
+        assert!(
+            why.starts_with(&format!("mission id {}", other.mission_id)),
+            "{why}"
+        );
+        assert!(why.ends_with(&plan.mission_id.to_string()), "{why}");
     }
 }

@@ -78,6 +78,8 @@ pub(super) struct Session<'a> {
     alive: LivelinessWatcher,
     /// The instances seen alive, which statuses and detections must come from.
     pub senders: Senders,
+    /// Plan replies that did not answer the request ([`super::plan::plan_mismatch`]), skipped.
+    pub refused_plans: u64,
     /// `--timeout-s` from the start; `None`: no limit (also for one past what an `Instant`
     /// can hold, rather than a panic).
     deadline: Option<Instant>,
@@ -96,6 +98,7 @@ impl<'a> Session<'a> {
         Ok(Session {
             alive: node.watch_liveliness(keys::ALIVE_ALL)?,
             senders: Senders::default(),
+            refused_plans: 0,
             subs: Subscriptions::open(node)?,
             deadline: setup
                 .args

@@ -3,7 +3,8 @@
 //! `{role: "processor", state: "failed"}` and forged detections of every aperture (one
 //! detection far off the scene at `FORGED_X_M`), under an instance name of its own; with
 //! `--malformed-images`, also an image of aperture 0 (which every mission has) whose pixel
-//! count is not `nx × ny`.
+//! count is not `nx × ny`; with `--forge-plans`, it answers every plan request at once with
+//! a plan of another mission (planned when it starts).
 
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
@@ -14,7 +15,9 @@ use bridge::net::{PublishOptions, TypedPublisher};
 use bridge::zenoh::sample::Sample;
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohArgs};
-use pipeline::protocol::{keys, ApertureDetections, ApertureImage, Detection, ServiceStatus};
+use pipeline::protocol::{
+    keys, ApertureDetections, ApertureImage, Detection, Plan, PlanRequest, ServiceStatus,
+};
 use serde::Serialize;
 
 use super::{ready, report, tools::z_node};
@@ -40,6 +43,9 @@ pub(super) struct ForgeArgs {
     /// Also publish an image of aperture 0 whose pixel count differs from nx × ny.
     #[arg(long)]
     malformed_images: bool,
+    /// Also answer every plan request (cellsar/plan) at once with a plan of another mission.
+    #[arg(long)]
+    forge_plans: bool,
     #[command(flatten)]
     zenoh: ZenohArgs,
 }
@@ -50,7 +56,27 @@ struct ForgeReport {
     statuses: u64,
     detections: u64,
     images: u64,
+    plans: u64,
     errors: u64,
+}
+
+/// A plan of a mission of its own ("forged"), for answering plan requests.
+fn forged_plan() -> Result<Plan> {
+    let mission = planner::MissionFile::from_toml_str(
+        "name = \"forged\"\n[params]\nhorizon_s = 20.0\n[landmarks]\npoints = [{ x_m = 0.0, \
+         y_m = 0.0, from_s = 0.0, to_s = 10.0 }, { x_m = 0.0, y_m = 30.0, from_s = 10.0, to_s = \
+         20.0 }]\n",
+    )
+    .map_err(|e| anyhow::anyhow!("the forged mission: {e}"))?;
+    let req = PlanRequest {
+        mission,
+        options: Default::default(),
+    };
+    Ok(pipeline::services::plan::plan_request(
+        &req,
+        "intruder",
+        &mut planner::NoObserver,
+    )?)
 }
 
 fn mission_of(key: &str) -> Option<MissionId> {
@@ -89,11 +115,29 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
                 .map_err(|e| anyhow::anyhow!("subscribing to {sel}: {e}"))?,
         );
     }
+    let plans = if a.forge_plans {
+        let q =
+            node.queryable::<PlanRequest>(keys::PLAN, bridge::net::SubscribeOptions::default())?;
+        Some((q, forged_plan()?))
+    } else {
+        None
+    };
     ready();
     let mut forgers: Vec<(MissionId, Forger)> = Vec::new();
     let mut r = ForgeReport::default();
     let end = Instant::now() + a.duration_s.duration();
     while Instant::now() < end {
+        if let Some((q, plan)) = &plans {
+            while let Some(request) = q.recv_timeout(Duration::ZERO) {
+                match request.reply(plan, bridge::Meta::default()) {
+                    Ok(()) => {
+                        r.plans += 1;
+                        eprintln!("answered a plan request with a forged plan");
+                    }
+                    Err(_) => r.errors += 1,
+                }
+            }
+        }
         let ids: Vec<MissionId> = seen
             .lock()
             .map(|s| s.iter().copied().collect())
