@@ -13,6 +13,9 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+mod start;
+use start::StartSearch;
+
 use crate::landmarks::{LandmarksSpec, Preset, Schedule, ScheduleError};
 use crate::params::{ParamError, Params, ParamsOverride};
 
@@ -81,6 +84,10 @@ pub struct Mission {
     name: String,
     params: Params,
     schedule: Schedule,
+    /// [`Mission::start_velocity_mps`] once computed (its search costs ~9 000 cell evaluations;
+    /// the evaluator asks for it on every call).
+    #[serde(skip)]
+    start_velocity: start::Cache,
 }
 
 impl Mission {
@@ -96,6 +103,7 @@ impl Mission {
             name: name.into(),
             params,
             schedule,
+            start_velocity: start::Cache::default(),
         })
     }
 
@@ -169,6 +177,7 @@ impl Mission {
             name: self.name.clone(),
             params,
             schedule,
+            start_velocity: start::Cache::default(),
         })
     }
 
@@ -194,6 +203,7 @@ impl Mission {
                 landmarks: self.schedule.landmarks.clone(),
                 slot_landmark,
             },
+            start_velocity: start::Cache::default(),
         })
     }
 
@@ -207,10 +217,24 @@ impl Mission {
     ///   slot could reach only a_max δ ≈ 2.8 m/s of the 7.07 m/s required) already flying, as
     ///   the paper's model assumes, at the least-power speed within [V_min, V_m] with the first
     ///   landmark on the sensing side: heading h with J h pointing from q₀ to the landmark
-    ///   (J the rotation by −90°, so the landmark lies H tan η away, where the sensing centre is).
+    ///   (J the rotation by −90°, so the landmark lies H tan η away, where the sensing centre is);
+    ///   where flying straight on at that velocity leaves the resolution cell of the first slot
+    ///   wider than d_min, the velocity nearest to it (speed within [V_min, V_m], heading within a
+    ///   quarter turn, [`StartSearch`]) that keeps the landmark in view there with the cell
+    ///   ([`crate::geometry::ResolutionCell::worst_width_m`]) within d_min, when one exists. The
+    ///   first slot's velocity can differ from the start velocity by only a_max δ, so a start
+    ///   velocity that cannot resolve it would leave that slot unresolved in every flyable plan.
     ///
     /// `summary.json` reports the value used (`start_velocity_mps`).
     pub fn start_velocity_mps(&self) -> [f64; 2] {
+        *self
+            .start_velocity
+            .0
+            .get_or_init(|| self.start_velocity_rule())
+    }
+
+    /// [`Mission::start_velocity_mps`], computed.
+    fn start_velocity_rule(&self) -> [f64; 2] {
         let p = &self.params;
         if let Some(v) = p.start_velocity_mps {
             return v;
@@ -230,7 +254,18 @@ impl Mission {
             return [0.0, 0.0];
         };
         // J h = u with J (x, y) = (y, −x): h = (−u_y, u_x)
-        [-u.y * speed, u.x * speed]
+        let sensing_side = u.x.atan2(-u.y);
+        let preferred = crate::geometry::heading_unit(sensing_side) * speed;
+        let search = StartSearch {
+            mission: self,
+            t0,
+            landmark_m: g,
+            preferred_mps: preferred,
+            speed_range_mps: (v_min, p.max_speed_mps),
+            centre_heading_rad: sensing_side,
+        };
+        let v = search.nearest_resolving().unwrap_or(preferred);
+        [v.x, v.y]
     }
 
     /// The mission's name.

@@ -200,14 +200,7 @@ fn exact_reaches_the_floor_at_once_on_random_realisations_18_3_19_and_0() {
 fn paper_and_baselines_run_and_report_their_own_objective() {
     let m = short_mission();
     for scheme in [Scheme::Paper, Scheme::Baseline, Scheme::BaselineExact] {
-        let r = plan(
-            &m,
-            &PlanOptions {
-                scheme,
-                ..PlanOptions::least_energy()
-            },
-        )
-        .unwrap();
+        let r = plan(&m, &PlanOptions::for_scheme(scheme)).unwrap();
         let c = check(&m, &r.trajectory);
         assert!((c.energy_j - r.evaluation.energy_j).abs() < 1e-6 * c.energy_j);
         assert!(!r.objective_history.is_empty(), "{scheme}");
@@ -228,10 +221,9 @@ fn paper_first_iteration_from_a_given_path_is_reproducible() {
     let start = plan(&m, &PlanOptions::least_energy()).unwrap().trajectory;
     let first = |reuse: bool, tol: f64| {
         let mut o = PlanOptions {
-            scheme: Scheme::Paper,
             init: Some(start.clone()),
             max_iterations: 1,
-            ..PlanOptions::least_energy()
+            ..PlanOptions::for_scheme(Scheme::Paper)
         };
         o.socp.reuse = reuse;
         o.socp.tol_feas = tol;
@@ -376,10 +368,9 @@ fn time_limit_returns_the_last_feasible_iterate() {
     let r = plan(
         &m,
         &PlanOptions {
-            scheme: Scheme::Paper,
             init: Some(start.trajectory),
             time_limit_s: Some(1e-9),
-            ..PlanOptions::least_energy()
+            ..PlanOptions::for_scheme(Scheme::Paper)
         },
     )
     .unwrap();

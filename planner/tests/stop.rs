@@ -39,8 +39,7 @@ impl Observer for StopAtFirst<'_> {
 fn a_stop_during_the_iterations_returns_the_last_accepted_iterate() {
     let m = short_mission();
     let options = PlanOptions {
-        scheme: Scheme::Paper,
-        ..PlanOptions::least_energy()
+        ..PlanOptions::for_scheme(Scheme::Paper)
     };
     let unstopped = planner::plan(&m, &options).unwrap();
     assert!(unstopped.iterations > 2, "{}", unstopped.iterations);

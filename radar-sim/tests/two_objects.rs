@@ -1,7 +1,8 @@
-//! Issue 6, the two-object test: two objects d_min apart along the iso-range direction of a
+//! The two-object test: two objects d_min apart along the iso-range direction of a
 //! near-blind slot merge into one detection when imaged along a plan made with
 //! `--resolution paper`, and are both detected along a plan made with `--resolution general`
-//! (the same planner calls as `cellsar-planner plan missions/two-objects.toml --resolution ..`).
+//! (the same planner calls as `cellsar-planner plan missions/two-objects.toml --dynamics paper
+//! --resolution ..`).
 //!
 //! The general plan keeps the worst cell width at d_min, the Rayleigh distance: whether two
 //! coherent point echoes that far apart show a dip between them depends on their relative
@@ -32,8 +33,12 @@ fn mission() -> planner::Mission {
 }
 
 fn plan(m: &planner::Mission, resolution: ResolutionMode) -> planner::Trajectory {
+    // the paper's vehicle model: the contrast between the two resolution criteria, as the
+    // paper's missions are planned (under the vehicle limits the paper plan's start is less
+    // blind)
     let opts = planner::PlanOptions {
         resolution,
+        dynamics: planner::Dynamics::Paper,
         ..Default::default()
     };
     let r = planner::plan(m, &opts).unwrap();

@@ -72,10 +72,10 @@ enum Command {
         resolution: Option<ResolutionMode>,
         #[command(flatten)]
         best_effort: BestEffortArgs,
-        /// Vehicle model: vehicle (for the exact-geometry schemes: the velocity changes by at
-        /// most the mission's max_accel_mps2 × δ from slot to slot, from its
-        /// start_velocity_mps) or paper (the default for now, and the only model of paper and
-        /// baseline: the velocity may jump).
+        /// Vehicle model: vehicle (the default for the exact-geometry schemes: the velocity
+        /// changes by at most the mission's max_accel_mps2 × δ from slot to slot, from its
+        /// start_velocity_mps) or paper (the only model of paper and baseline: the velocity may
+        /// jump).
         #[arg(long, value_parser = pipeline::args::enum_parser::<Dynamics>())]
         dynamics: Option<Dynamics>,
         /// Wall-time limit of the whole run, s: the iterations stop at the first check after it

@@ -95,9 +95,9 @@ enum Cmd {
         /// landmark slot (exit 3) instead of planning the best effort.
         #[arg(long)]
         strict_resolution: bool,
-        /// The plan's vehicle model: `vehicle` (the acceleration limit of the mission's
-        /// `max_accel_mps2` between slots) or `paper` (the default for now: the velocity may
-        /// jump); as `cellsar run --dynamics`.
+        /// The plan's vehicle model: `vehicle` (the default: the acceleration limit of the
+        /// mission's `max_accel_mps2` between slots) or `paper` (the velocity may jump); as
+        /// `cellsar run --dynamics`.
         #[arg(long, default_value_t = planner::Scheme::Exact.default_dynamics(), value_parser = pipeline::args::enum_parser::<planner::Dynamics>())]
         dynamics: planner::Dynamics,
     },

@@ -195,6 +195,13 @@ fn write_report_md(
         plan.summary.feasible,
         pipeline["plan_s"].as_f64().unwrap_or(f64::NAN)
     );
+    let sm = &plan.summary;
+    let _ = writeln!(
+        s,
+        "- vehicle: {} dynamics, peak acceleration {:.2} m/s² between slots, {} slots above the \
+         {:.2} m/s² limit (max_accel_mps2)",
+        sm.dynamics, sm.max_accel_mps2, sm.slots_over_accel_limit, sm.accel_limit_mps2
+    );
     let best_effort = plan.result.best_effort.as_ref();
     if let (Some(b), Some(r)) = (best_effort, plan.summary.resolution_shortfall.as_ref()) {
         let _ = writeln!(

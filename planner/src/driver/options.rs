@@ -24,12 +24,11 @@ pub const DEFAULT_RESOLUTION_WEIGHT_J_PER_M: f64 = 100.0;
 pub const DEFAULT_RESOLUTION: ResolutionMode = ResolutionMode::General;
 
 /// The vehicle model of the schemes a user flies (`exact`, its best effort and trade-off,
-/// `baseline-exact`) unless a request says otherwise, through every interface; the comparison
+/// `baseline-exact`) unless a request says otherwise, through every interface: a multirotor's
+/// acceleration limit (mission `max_accel_mps2`, from its start velocity on). The comparison
 /// schemes `paper` and `baseline`, and `reproduce`, keep the paper's model
-/// ([`Scheme::default_dynamics`]). For now the paper's: with [`Dynamics::Vehicle`] the
-/// far-start mission's best effort leaves 1 window (14 slots) unresolved, where the paper's
-/// model resolves every slot (docs/user-guide.md, "Vehicle limits").
-pub const DEFAULT_DYNAMICS: Dynamics = Dynamics::Paper;
+/// ([`Scheme::default_dynamics`]).
+pub const DEFAULT_DYNAMICS: Dynamics = Dynamics::Vehicle;
 
 /// Which planner to run. Its names (`exact`, `paper`, `baseline`, `baseline-exact`) are the
 /// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).

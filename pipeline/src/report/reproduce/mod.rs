@@ -321,9 +321,11 @@ fn run_jobs(jobs: &[Job]) -> Results {
     );
     let results: Mutex<BTreeMap<String, (Mission, Outcome)>> = Mutex::new(BTreeMap::new());
     jobs.par_iter().for_each(|job| {
+        // the paper's vehicle model for every scheme, as the paper's figures
         let options = PlanOptions {
             scheme: job.scheme,
             resolution: job.resolution,
+            dynamics: planner::Dynamics::Paper,
             ..PlanOptions::default()
         };
         let outcome = plan(&job.mission, &options).map_err(|e| e.to_string());
