@@ -2,9 +2,10 @@
 //! processor status `{role: "processor", state: "failed"}`, detections of every aperture
 //! under an instance name of its own, and an image of aperture 0 whose pixel count is not
 //! `nx × ny`, before and during a normal run; it also answers the launcher's plan request at
-//! once with a plan of another mission. A malformed image is counted and skipped, never fatal,
-//! and the aperture's real image still counts; the forged plan is skipped and the planner's
-//! taken. The launcher accepts
+//! once with a plan of another mission, and publishes that plan under a mission id its content
+//! does not give. A malformed image is counted and skipped, never fatal, and the aperture's
+//! real image still counts; the forged plan reply is skipped and the planner's taken; the echo
+//! and the processor skip the published plan whose id they recompute. The launcher accepts
 //! statuses and detections only from the instances that announced themselves in their role
 //! (liveliness), so the run neither aborts nor takes a forged result: it completes with the
 //! closed loop's detections, and the forgeries are counted as foreign.
@@ -104,5 +105,12 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
         log.contains("a plan reply that does not answer the request skipped"),
         "{log}"
     );
+    for role in ["echo", "processor"] {
+        let child = l.log(role);
+        assert!(
+            child.contains("plan skipped: its mission id is not its content's"),
+            "{role}:\n{child}"
+        );
+    }
     assert!(!log.contains("gave up the mission"), "{log}");
 }

@@ -28,13 +28,7 @@ pub(super) fn plan_mismatch(request: &PlanRequest, plan: &Plan) -> Option<String
     if plan.options != request.options {
         return Some("a plan with other options than those asked for".to_string());
     }
-    let id = protocol::mission_id(&plan.mission, &plan.options);
-    (plan.mission_id != id).then(|| {
-        format!(
-            "mission id {} where its mission and options give {id}",
-            plan.mission_id
-        )
-    })
+    plan.id_problem()
 }
 
 /// The time left for the plan.

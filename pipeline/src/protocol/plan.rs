@@ -201,6 +201,18 @@ impl Plan {
     pub fn key(&self) -> Result<String, KeyError> {
         keys::plan(self.mission_id)
     }
+
+    /// Why the plan's mission id is not the one its mission and options give ([`mission_id`],
+    /// recomputed), which every process keys the mission by; `None` when it is.
+    pub fn id_problem(&self) -> Option<String> {
+        let id = mission_id(&self.mission, &self.options);
+        (self.mission_id != id).then(|| {
+            format!(
+                "mission id {} where its mission and options give {id}",
+                self.mission_id
+            )
+        })
+    }
 }
 
 /// A request for known plans (sent to `cellsar/<mission>/plan` or [`keys::ALL_PLANS`]).

@@ -87,6 +87,8 @@ pub struct EchoReport {
     pub bytes: u64,
     /// Plans refused because `--max-missions` missions had requests queued.
     pub plans_refused: u64,
+    /// Plans skipped because their mission id is not the one their content gives.
+    pub plans_inconsistent: u64,
     /// Missions let go to make room for new ones (`--max-missions`).
     pub evicted: u64,
 }
@@ -260,6 +262,12 @@ impl<'a> Echo<'a> {
     fn add_plan(&mut self, plan: Plan) {
         let id = plan.mission_id;
         if self.missions.contains_key(&id) {
+            return;
+        }
+        if let Some(why) = plan.id_problem() {
+            self.report.plans_inconsistent += 1;
+            tracing::warn!(mission = %id, planner = %plan.planner, reason = %why,
+                "plan skipped: its mission id is not its content's");
             return;
         }
         if !self.make_room(id) {

@@ -131,6 +131,8 @@ pub struct ProcessReport {
     pub republished: u64,
     /// Plans refused because `--max-missions` missions were in progress.
     pub plans_refused: u64,
+    /// Plans skipped because their mission id is not the one their content gives.
+    pub plans_inconsistent: u64,
     /// Missions let go to make room for new ones (`--max-missions`).
     pub evicted: u64,
     /// Outcomes or metrics that could not be saved to the state directory (still published).

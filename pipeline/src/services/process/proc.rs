@@ -197,6 +197,12 @@ impl Proc<'_> {
         if self.runs.iter().any(|r| r.ctx.base.mission_id == id) {
             return;
         }
+        if let Some(why) = plan.id_problem() {
+            self.report.plans_inconsistent += 1;
+            tracing::warn!(mission = %id, planner = %plan.planner, reason = %why,
+                "plan skipped: its mission id is not its content's");
+            return;
+        }
         let droppable = self
             .runs
             .iter()

@@ -4,7 +4,8 @@
 //! detection far off the scene at `FORGED_X_M`), under an instance name of its own; with
 //! `--malformed-images`, also an image of aperture 0 (which every mission has) whose pixel
 //! count is not `nx × ny`; with `--forge-plans`, it answers every plan request at once with
-//! a plan of another mission (planned when it starts).
+//! a plan of another mission (planned when it starts), and publishes that plan under a mission
+//! id its content does not give (`FORGED_PLAN_ID`).
 
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
@@ -21,6 +22,9 @@ use pipeline::protocol::{
 use serde::Serialize;
 
 use super::{ready, report, tools::z_node};
+
+/// The mission id the published forged plan claims (its content gives another).
+pub(super) const FORGED_PLAN_ID: MissionId = MissionId(0x5eed_5eed_5eed_5eed);
 
 /// x of the forged detection, m: far from any scene's landmarks.
 pub(super) const FORGED_X_M: f64 = 987_654.0;
@@ -105,9 +109,10 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
             node.session()
                 .declare_subscriber(sel)
                 .callback(move |sample: Sample| {
-                    if let (Some(id), Ok(mut s)) =
-                        (mission_of(sample.key_expr().as_str()), s.lock())
-                    {
+                    // not the mission of its own forged plan
+                    let id =
+                        mission_of(sample.key_expr().as_str()).filter(|id| *id != FORGED_PLAN_ID);
+                    if let (Some(id), Ok(mut s)) = (id, s.lock()) {
                         s.insert(id);
                     }
                 })
@@ -118,7 +123,19 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     let plans = if a.forge_plans {
         let q =
             node.queryable::<PlanRequest>(keys::PLAN, bridge::net::SubscribeOptions::default())?;
-        Some((q, forged_plan()?))
+        let plan = forged_plan()?;
+        let wrong_id = Plan {
+            mission_id: FORGED_PLAN_ID,
+            ..plan.clone()
+        };
+        let publisher = node.publisher::<Plan>(
+            &keys::plan(FORGED_PLAN_ID)?,
+            PublishOptions {
+                mission_id: FORGED_PLAN_ID,
+                ..PublishOptions::default()
+            },
+        )?;
+        Some((q, plan, publisher, wrong_id))
     } else {
         None
     };
@@ -127,7 +144,11 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     let mut r = ForgeReport::default();
     let end = Instant::now() + a.duration_s.duration();
     while Instant::now() < end {
-        if let Some((q, plan)) = &plans {
+        if let Some((q, plan, publisher, wrong_id)) = &plans {
+            match publisher.put(wrong_id) {
+                Ok(_) => r.plans += 1,
+                Err(_) => r.errors += 1,
+            }
             while let Some(request) = q.recv_timeout(Duration::ZERO) {
                 match request.reply(plan, bridge::Meta::default()) {
                     Ok(()) => {
