@@ -28,7 +28,7 @@ pub struct Collector {
     /// Messages of other missions or apertures out of range, ignored.
     pub foreign: u64,
     /// Messages of this mission that contradict themselves (an image whose pixels are not
-    /// `nx × ny`, a marker outside it), logged and skipped.
+    /// `nx × ny`, a marker outside it, detections of another aperture), logged and skipped.
     pub malformed: u64,
 }
 
@@ -39,6 +39,37 @@ const LOUD_MALFORMED: u64 = 10;
 /// Largest image accepted, pixels (`nx × ny`): 16 Mi, the largest that fits in a message of
 /// `bridge::envelope::MAX_BODY_BYTES` (64 MiB of f32).
 pub const MAX_IMAGE_PIXELS: usize = 16 << 20;
+
+/// Why detections of a mission of `apertures` apertures contradict themselves (`None`:
+/// consistent): another aperture count than the mission's, a detection of another aperture
+/// than the message's, a position that is not finite or an SNR that is not a number.
+pub fn detections_problem(d: &ApertureDetections, apertures: usize) -> Option<String> {
+    if d.apertures as usize != apertures {
+        return Some(format!(
+            "{} apertures claimed for a mission of {apertures}",
+            d.apertures
+        ));
+    }
+    if let Some(x) = d
+        .detections
+        .iter()
+        .find(|x| x.aperture != d.aperture as usize)
+    {
+        return Some(format!(
+            "a detection of aperture {} in the message of aperture {}",
+            x.aperture, d.aperture
+        ));
+    }
+    d.detections
+        .iter()
+        .find(|x| !(x.x_m.is_finite() && x.y_m.is_finite()) || x.snr_db.is_nan())
+        .map(|x| {
+            format!(
+                "a detection at ({}, {}) m with SNR {} dB",
+                x.x_m, x.y_m, x.snr_db
+            )
+        })
+}
 
 /// Why `img` contradicts itself (`None`: consistent): a grid that is empty or larger than
 /// [`MAX_IMAGE_PIXELS`], a pixel count other than `nx × ny`, a marker outside the grid, a
@@ -120,10 +151,15 @@ impl Collector {
         None
     }
 
-    /// Adds the detections of one aperture.
+    /// Adds the detections of one aperture. Detections that contradict themselves
+    /// ([`detections_problem`]) are counted, logged and skipped ([`Added::Malformed`]).
     pub fn add_detections(&mut self, d: ApertureDetections) -> Added {
         if let Some(a) = self.check(d.mission_id, Some(d.aperture)) {
             return a;
+        }
+        if let Some(why) = detections_problem(&d, self.apertures) {
+            self.skip_malformed("detections", d.aperture, &why);
+            return Added::Malformed;
         }
         if self.detections.contains_key(&d.aperture) {
             self.duplicates += 1;
@@ -141,13 +177,7 @@ impl Collector {
             return Ok(a);
         }
         if let Some(why) = image_problem(img) {
-            self.malformed += 1;
-            let aperture = img.aperture;
-            if self.malformed <= LOUD_MALFORMED {
-                tracing::warn!(aperture, reason = %why, "malformed image skipped");
-            } else {
-                tracing::debug!(aperture, reason = %why, "malformed image skipped");
-            }
+            self.skip_malformed("image", img.aperture, &why);
             return Ok(Added::Malformed);
         }
         if self.images.contains_key(&img.aperture) {
@@ -157,6 +187,16 @@ impl Collector {
         write_image(&self.out.join("images"), img)?;
         self.images.insert(img.aperture, ());
         Ok(Added::New)
+    }
+
+    /// Counts and logs a malformed message (`what` of `aperture`), loudly for the first ones.
+    fn skip_malformed(&mut self, what: &str, aperture: u32, why: &str) {
+        self.malformed += 1;
+        if self.malformed <= LOUD_MALFORMED {
+            tracing::warn!(aperture, reason = %why, "malformed {what} skipped");
+        } else {
+            tracing::debug!(aperture, reason = %why, "malformed {what} skipped");
+        }
     }
 
     /// Adds the mission's metrics.
@@ -325,5 +365,64 @@ mod tests {
         );
         let msg = image_problem(&image(0, 4, 3, 11)).unwrap();
         assert_eq!(msg, "11 pixels for a grid of 4 × 3 = 12");
+    }
+
+    fn detections(aperture: u32, apertures: u32, at: &[(usize, f64, f64)]) -> ApertureDetections {
+        ApertureDetections {
+            mission_id: MissionId(7),
+            aperture,
+            apertures,
+            landmark: None,
+            landmark_detected: None,
+            landmark_snr_db: None,
+            detections: at
+                .iter()
+                .map(|&(a, x_m, snr_db)| crate::protocol::Detection {
+                    aperture: a,
+                    x_m,
+                    y_m: 1.0,
+                    snr_db,
+                    pixels: 3,
+                    truth_id: None,
+                    error_m: None,
+                })
+                .collect(),
+            false_alarms: 0,
+            process_s: 0.1,
+            processor: "p1".into(),
+        }
+    }
+
+    /// Detections that contradict themselves are counted and skipped; the aperture's
+    /// consistent detections that come after them are taken.
+    #[test]
+    fn malformed_detections_are_skipped_and_the_real_ones_still_count() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut c = Collector::new(MissionId(7), 2, dir.path()).unwrap();
+        for (bad, why) in [
+            (
+                detections(1, 3, &[]),
+                "3 apertures claimed for a mission of 2",
+            ),
+            (
+                detections(1, 2, &[(1, 5.0, 12.0), (0, 5.0, 12.0)]),
+                "a detection of aperture 0 in the message of aperture 1",
+            ),
+            (
+                detections(1, 2, &[(1, f64::INFINITY, 12.0)]),
+                "with SNR 12 dB",
+            ),
+            (detections(1, 2, &[(1, 5.0, f64::NAN)]), "with SNR NaN dB"),
+        ] {
+            let got = detections_problem(&bad, 2).unwrap();
+            assert!(got.contains(why), "{why:?} in {got}");
+            assert_eq!(c.add_detections(bad), Added::Malformed);
+        }
+        assert_eq!(c.malformed, 4);
+        assert!(c.detections(1).is_none());
+        let good = detections(1, 2, &[(1, 5.0, 12.0), (1, -3.0, f64::INFINITY)]);
+        assert_eq!(detections_problem(&good, 2), None);
+        assert_eq!(c.add_detections(good), Added::New);
+        assert_eq!(c.detections(1).unwrap().detections.len(), 2);
     }
 }
