@@ -23,6 +23,9 @@ pub struct Collector {
     detections: BTreeMap<u32, ApertureDetections>,
     images: BTreeMap<u32, ()>,
     metrics: Option<Metrics>,
+    /// Metrics received before every aperture's detections, held until they can be checked
+    /// against them (at most [`MAX_HELD_METRICS`], the oldest let go).
+    held_metrics: Vec<Metrics>,
     /// Messages received again (at-least-once delivery), dropped.
     pub duplicates: u64,
     /// Messages of other missions or apertures out of range, ignored.
@@ -31,6 +34,9 @@ pub struct Collector {
     /// `nx × ny`, a marker outside it, detections of another aperture), logged and skipped.
     pub malformed: u64,
 }
+
+/// Most metrics held before every aperture's detections are in.
+pub const MAX_HELD_METRICS: usize = 8;
 
 /// Malformed messages logged as warnings before the log turns quiet about them (the rest are
 /// counted and logged at debug level).
@@ -69,6 +75,50 @@ pub fn detections_problem(d: &ApertureDetections, apertures: usize) -> Option<St
                 x.x_m, x.y_m, x.snr_db
             )
         })
+}
+
+/// Why `metrics` of a mission of `apertures` apertures disagree with its `detections` (one
+/// message per aperture, all in): a summary per aperture is expected, each with the landmark,
+/// its verdict and the numbers of detections and false alarms of that aperture's message.
+pub fn metrics_problem(
+    metrics: &Metrics,
+    detections: &BTreeMap<u32, ApertureDetections>,
+    apertures: usize,
+) -> Option<String> {
+    if metrics.apertures.len() != apertures {
+        return Some(format!(
+            "{} aperture summaries for a mission of {apertures}",
+            metrics.apertures.len()
+        ));
+    }
+    for a in &metrics.apertures {
+        let Some(d) = u32::try_from(a.aperture)
+            .ok()
+            .and_then(|k| detections.get(&k))
+        else {
+            return Some(format!("a summary of aperture {} out of range", a.aperture));
+        };
+        let agree = a.landmark == d.landmark
+            && a.landmark_detected == d.landmark_detected
+            && a.detections == d.detections.len()
+            && a.false_alarms == d.false_alarms;
+        if !agree {
+            return Some(format!(
+                "aperture {}: landmark {:?} detected {:?}, {} detections, {} false alarms, \
+                 where its detections say landmark {:?} detected {:?}, {}, {}",
+                a.aperture,
+                a.landmark,
+                a.landmark_detected,
+                a.detections,
+                a.false_alarms,
+                d.landmark,
+                d.landmark_detected,
+                d.detections.len(),
+                d.false_alarms
+            ));
+        }
+    }
+    None
 }
 
 /// Why `img` contradicts itself (`None`: consistent): a grid that is empty or larger than
@@ -122,6 +172,8 @@ pub enum Added {
     Foreign,
     /// Contradicts itself: skipped.
     Malformed,
+    /// Held until it can be checked (metrics before every aperture's detections).
+    Held,
 }
 
 impl Collector {
@@ -137,6 +189,7 @@ impl Collector {
             detections: BTreeMap::new(),
             images: BTreeMap::new(),
             metrics: None,
+            held_metrics: Vec::new(),
             duplicates: 0,
             foreign: 0,
             malformed: 0,
@@ -166,6 +219,7 @@ impl Collector {
             return Added::Duplicate;
         }
         self.detections.insert(d.aperture, d);
+        self.settle_metrics();
         Added::New
     }
 
@@ -199,7 +253,10 @@ impl Collector {
         }
     }
 
-    /// Adds the mission's metrics.
+    /// Adds the mission's metrics. They are taken only when they agree with the detections
+    /// taken from the processor ([`metrics_problem`]): metrics that arrive before every
+    /// aperture's detections are held until then ([`Added::Held`]); metrics that contradict
+    /// themselves or the detections are counted, logged and skipped.
     pub fn add_metrics(&mut self, m: MissionMetrics) -> Added {
         if let Some(a) = self.check(m.mission_id, None) {
             return a;
@@ -208,8 +265,44 @@ impl Collector {
             self.duplicates += 1;
             return Added::Duplicate;
         }
-        self.metrics = Some(m.metrics);
-        Added::New
+        if m.apertures as usize != self.apertures {
+            let why = format!(
+                "{} apertures for a mission of {}",
+                m.apertures, self.apertures
+            );
+            self.skip_malformed("metrics", 0, &why);
+            return Added::Malformed;
+        }
+        if self.held_metrics.len() >= MAX_HELD_METRICS {
+            self.held_metrics.remove(0);
+        }
+        self.held_metrics.push(m.metrics);
+        self.settle_metrics();
+        if self.metrics.is_some() {
+            Added::New
+        } else if self.held_metrics.is_empty() {
+            Added::Malformed
+        } else {
+            Added::Held
+        }
+    }
+
+    /// Once every aperture's detections are in: takes the first held metrics that agree with
+    /// them; the others are skipped as malformed.
+    fn settle_metrics(&mut self) {
+        if self.metrics.is_some() || self.detections.len() < self.apertures {
+            return;
+        }
+        for m in std::mem::take(&mut self.held_metrics) {
+            if self.metrics.is_some() {
+                self.duplicates += 1;
+                continue;
+            }
+            match metrics_problem(&m, &self.detections, self.apertures) {
+                None => self.metrics = Some(m),
+                Some(why) => self.skip_malformed("metrics", 0, &why),
+            }
+        }
     }
 
     /// Apertures with both detections and image.
@@ -424,5 +517,98 @@ mod tests {
         assert_eq!(detections_problem(&good, 2), None);
         assert_eq!(c.add_detections(good), Added::New);
         assert_eq!(c.detections(1).unwrap().detections.len(), 2);
+    }
+
+    /// Metrics of a mission of `n` apertures whose summaries say `verdicts` (landmark 0
+    /// detected or not per aperture), no detections and no false alarms: the example's
+    /// metrics with their apertures replaced.
+    fn metrics(verdicts: &[Option<bool>]) -> MissionMetrics {
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/example/main-job/metrics.json");
+        let mut m: Metrics = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let template = m.apertures[0].clone();
+        m.apertures = verdicts
+            .iter()
+            .enumerate()
+            .map(|(k, v)| radar_sim::run::ApertureSummary {
+                aperture: k,
+                landmark: Some(0),
+                landmark_detected: *v,
+                detections: 0,
+                false_alarms: 0,
+                ..template.clone()
+            })
+            .collect();
+        MissionMetrics {
+            mission_id: MissionId(7),
+            apertures: verdicts.len() as u32,
+            metrics: m,
+        }
+    }
+
+    fn verdict(aperture: u32, detected: Option<bool>) -> ApertureDetections {
+        ApertureDetections {
+            landmark: Some(0),
+            landmark_detected: detected,
+            ..detections(aperture, 2, &[])
+        }
+    }
+
+    /// Metrics are taken only once they agree with every aperture's detections: forged
+    /// metrics that arrive first are held, then skipped; the processor's are taken, before
+    /// or after the detections; metrics of another aperture count are skipped at once.
+    #[test]
+    fn metrics_are_taken_only_when_they_agree_with_the_detections() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut c = Collector::new(MissionId(7), 2, dir.path()).unwrap();
+        // a forgery that claims every landmark detected, and one of 3 apertures
+        assert_eq!(
+            c.add_metrics(metrics(&[Some(true), Some(true)])),
+            Added::Held
+        );
+        assert_eq!(
+            c.add_metrics(metrics(&[Some(true), Some(true), Some(true)])),
+            Added::Malformed
+        );
+        assert!(!c.has_metrics());
+        assert_eq!(c.add_detections(verdict(0, Some(true))), Added::New);
+        assert!(!c.has_metrics());
+        // the last aperture's detections: the held forgery disagrees (aperture 1 missed)
+        assert_eq!(c.add_detections(verdict(1, Some(false))), Added::New);
+        assert!(!c.has_metrics());
+        assert_eq!(c.malformed, 2);
+        // the processor's own metrics agree
+        let real = metrics(&[Some(true), Some(false)]);
+        assert_eq!(c.add_metrics(real.clone()), Added::New);
+        assert_eq!(
+            c.metrics().unwrap().apertures[1].landmark_detected,
+            Some(false)
+        );
+        assert_eq!(c.add_metrics(real.clone()), Added::Duplicate);
+        // held before the detections, the processor's are taken when the detections come
+        let mut c = Collector::new(MissionId(7), 2, dir.path()).unwrap();
+        assert_eq!(
+            c.add_metrics(metrics(&[Some(true), Some(true)])),
+            Added::Held
+        );
+        assert_eq!(c.add_metrics(real), Added::Held);
+        c.add_detections(verdict(0, Some(true)));
+        c.add_detections(verdict(1, Some(false)));
+        assert!(c.has_metrics());
+        assert_eq!(
+            c.metrics().unwrap().apertures[1].landmark_detected,
+            Some(false)
+        );
+        assert_eq!(c.malformed, 1);
+        let why = metrics_problem(
+            &metrics(&[Some(true), Some(true)]).metrics,
+            &c.detections,
+            2,
+        )
+        .unwrap();
+        assert!(
+            why.starts_with("aperture 1: landmark Some(0) detected Some(true)"),
+            "{why}"
+        );
     }
 }

@@ -105,6 +105,9 @@ impl Session<'_> {
     fn receive(&mut self, id: MissionId, c: &mut Collected, p: &mut Progress) -> Result<bool> {
         let events = self.setup.events;
         let mut progressed = false;
+        // metrics are taken once every aperture's detections agree with them: perhaps with
+        // the detections that come now
+        let had_metrics = c.col.has_metrics();
         while let Some(d) = self.subs.detections.try_recv() {
             if self.senders.detections(&d.key, &d.message).is_err() {
                 c.col.foreign += 1;
@@ -139,9 +142,10 @@ impl Session<'_> {
             }
         }
         while let Some(m) = self.subs.metrics.try_recv() {
-            if c.col.add_metrics(m.message) == Added::New {
-                events.emit("metrics", &[]);
-            }
+            c.col.add_metrics(m.message);
+        }
+        if !had_metrics && c.col.has_metrics() {
+            events.emit("metrics", &[]);
         }
         while let Some(s) = self.subs.statuses.try_recv() {
             if s.message.mission_id != id || self.senders.status(&s.key, &s.message).is_err() {
