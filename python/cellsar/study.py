@@ -92,7 +92,9 @@ def run(
     client: Any = None,
 ) -> Dict[str, Any]:
     """Runs the runs of ``study`` not yet in ``out``'s table, then aggregates; returns counts
-    (``runs``, ``skipped`` (finished before), ``ran``, ``failed``) and timings."""
+    (``runs``, ``skipped`` (finished before), ``ran``, ``failed``) and timings: ``cluster_s``
+    (starting or reaching the cluster), ``runs_s`` (from the first submission to the last row)
+    and ``elapsed_s`` (both)."""
     from distributed import as_completed
 
     out = Path(out)
@@ -101,11 +103,13 @@ def run(
     table = Table(out, cols)
     todo = [r for r in runs if r.run_id not in table.done]
     t0 = time.perf_counter()
+    t_runs = t0
     failed = 0
     own = client is None
     if todo:
         if own:
             client = _client(scheduler, workers)
+        t_runs = time.perf_counter()
         try:
             futures = client.map(
                 execute,
@@ -136,8 +140,8 @@ def run(
                 client.close()
                 if cluster is not None:
                     cluster.close()
+    t_end = time.perf_counter()
     table.close()
-    elapsed = time.perf_counter() - t0
     from .study_stats import aggregate as _aggregate
 
     _aggregate(study, out)
@@ -146,7 +150,9 @@ def run(
         "skipped": len(runs) - len(todo),
         "ran": len(todo),
         "failed": failed,
-        "elapsed_s": elapsed,
+        "elapsed_s": t_end - t0,
+        "cluster_s": t_runs - t0,
+        "runs_s": t_end - t_runs,
     }
 
 
@@ -211,7 +217,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 2
     print(
         f"{study.name}: {summary['runs']} runs, {summary['skipped']} finished before, "
-        f"{summary['ran']} run now ({summary['failed']} failed) in {summary['elapsed_s']:.1f} s; "
+        f"{summary['ran']} run now ({summary['failed']} failed) in {summary['elapsed_s']:.1f} s "
+        f"({summary['cluster_s']:.1f} s starting the cluster); "
         f"table {Path(args.out) / 'results.parquet'}"
     )
     return 0
