@@ -15,5 +15,6 @@ Recording = _radar.Recording
 Result = _radar.Result
 simulate = _radar.simulate
 process = _radar.process
+check_scene = _radar.check_scene
 
-__all__ = ["Recording", "Result", "simulate", "process"]
+__all__ = ["Recording", "Result", "simulate", "process", "check_scene"]

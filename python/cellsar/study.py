@@ -54,7 +54,10 @@ def _client(scheduler: Optional[str], workers: Optional[int]) -> Any:
     from distributed import Client, LocalCluster
 
     if scheduler:
-        return Client(scheduler)
+        try:
+            return Client(scheduler, timeout=30)
+        except (OSError, TimeoutError, ValueError) as e:
+            raise StudyError(f"--scheduler: cannot reach {scheduler}: {e}") from None
     # worker processes inherit the environment: one native thread each
     for k in THREAD_ENV:
         os.environ[k] = "1"
@@ -106,11 +109,11 @@ def run(
     t_runs = t0
     failed = 0
     own = client is None
-    if todo:
-        if own:
+    try:
+        if todo and own:
             client = _client(scheduler, workers)
         t_runs = time.perf_counter()
-        try:
+        if todo:
             futures = client.map(
                 execute,
                 todo,
@@ -134,14 +137,15 @@ def run(
                 if time.monotonic() - last > PARQUET_EVERY_S:
                     write_parquet(table.csv_path, table.parquet_path, cols)
                     last = time.monotonic()
-        finally:
-            if own:
-                cluster = getattr(client, "cluster", None)
-                client.close()
-                if cluster is not None:
-                    cluster.close()
+    finally:
+        # also on Ctrl-C: the finished runs' table is complete, the study resumes from it
+        table.close()
+        if own and client is not None:
+            cluster = getattr(client, "cluster", None)
+            client.close()
+            if cluster is not None:
+                cluster.close()
     t_end = time.perf_counter()
-    table.close()
     from .study_stats import aggregate as _aggregate
 
     _aggregate(study, out)
@@ -215,6 +219,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except StudyError as e:
         print(f"cellsar-study: {e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(
+            f"cellsar-study: interrupted; the finished runs are in {Path(args.out) / 'results.csv'}: "
+            "run the same command again to resume",
+            file=sys.stderr,
+        )
+        return 130
     print(
         f"{study.name}: {summary['runs']} runs, {summary['skipped']} finished before, "
         f"{summary['ran']} run now ({summary['failed']} failed) in {summary['elapsed_s']:.1f} s "

@@ -375,19 +375,24 @@ def load(path: "str | Path") -> Study:
 
 
 def _check_missions(c: _Checker, s: Study) -> None:
-    """Builds the mission of every grid point of the first realisation, so that a wrong
-    mission path or value is refused before any run, naming the field."""
-    from . import Mission, MissionError
+    """Builds the mission and checks the scene of every grid point of the first realisation,
+    so that a wrong path or value is refused before any run, naming the field."""
+    from . import Mission, MissionError, RadarError
+    from .radar import check_scene
 
     seen = set()
     runs = s.runs()
     for run in runs[: max(1, len(runs) // s.realisations)]:
-        key = canonical(run.mission)
+        key = canonical([run.mission, run.scene])
         if key in seen:
             continue
         seen.add(key)
+        which = ", ".join(f"{k} = {v!r}" for k, v in run.values.items()) or "the base"
         try:
             Mission.from_dict(run.mission)
         except MissionError as e:
-            which = ", ".join(f"{k} = {v!r}" for k, v in run.values.items()) or "the base mission"
             raise StudyError(f"{c.path}: mission of {which}: {e}") from None
+        try:
+            check_scene(run.scene)
+        except RadarError as e:
+            raise StudyError(f"{c.path}: scene of {which}: {e}") from None

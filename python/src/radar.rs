@@ -421,11 +421,20 @@ pub fn process(
     Ok(out)
 }
 
+/// Checks a scene (None, a scene file path or a dict with its structure) as `simulate` reads
+/// it, without simulating: raises `RadarError` naming the table and key of a bad one.
+#[pyfunction]
+#[pyo3(signature = (scene = None))]
+pub fn check_scene(scene: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+    scene_from(scene).map(drop)
+}
+
 /// Registers `cellsar._cellsar.radar`'s classes and functions on `m`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyRecording>()?;
     m.add_class::<PyRadarResult>()?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(process, m)?)?;
+    m.add_function(wrap_pyfunction!(check_scene, m)?)?;
     Ok(())
 }

@@ -73,3 +73,31 @@ def test_table_of_another_study_refused(plan_study, tmp_path):
     )
     assert p.returncode == 2
     assert "results.csv: its columns are not this study's" in p.stderr
+
+
+def test_ctrl_c_leaves_a_complete_table(plan_study, tmp_path):
+    import pyarrow.parquet as pq
+
+    path = plan_study(realisations=8, spacings=(20, 40))
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [str(BIN / "cellsar-study"), str(path), "--out", str(out), "--workers", "1", "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if (out / "results.csv").exists() and len(rows(out)) >= 1:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "run the same command again to resume" in stderr
+    done = rows(out)
+    assert 1 <= len(done) < 16
+    # the Parquet table holds every finished run
+    assert sorted(pq.read_table(out / "results.parquet").column("run_id").to_pylist()) == sorted(
+        r["run_id"] for r in done
+    )

@@ -28,6 +28,14 @@ def write(tmp_path, text):
         ('[grid]\n"landmarks.spacing_m" = []\n', "`grid.landmarks.spacing_m`"),
         ('[grid]\n"wings.span_m" = [1]\n', "`grid.wings.span_m`"),
         ('[grid]\n"radar.tx_power_w" = [1]\n', "`grid.radar.tx_power_w`"),
+        (
+            'mode = "closed-loop"\n[grid]\n"radar.tx_powr_w" = [1.0]\n',
+            "tx_powr_w",
+        ),
+        (
+            'mode = "closed-loop"\n[grid]\n"objects.radius_m" = [-5.0]\n',
+            "radius_m",
+        ),
         ('[random]\n"params.altitude_m" = { gauss = [1, 2] }\n', "`random.params.altitude_m.gauss`"),
         ('[random]\n"params.altitude_m" = { uniform = [2, 1] }\n', "`random.params.altitude_m.uniform`"),
         ('[run]\nschema = "exact"\n', "`run.schema`"),
