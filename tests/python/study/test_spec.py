@@ -136,6 +136,11 @@ def test_shipped_studies_load():
     assert r.values == {"run.scheme": "paper", "landmarks.seed": 7}
     assert r.mission["landmarks"] == {"preset": "random", "spacing_m": 100, "seed": 7}
     assert r.options == {"resolution": "paper", "dynamics": "paper", "scheme": "paper"}
+    # the mission reproduce plans for realisation 7: the random preset alone, default parameters
+    ours = cellsar.Mission.from_dict(r.mission)
+    theirs = cellsar.Mission.from_dict({"landmarks": {"preset": "random", "spacing_m": 100, "seed": 7}})
+    assert (ours.params, ours.landmarks) == (theirs.params, theirs.landmarks)
+    assert ours.landmarks != cellsar.Mission.from_dict(runs[0].mission).landmarks
     detection = study.load(ROOT / "studies" / "detection.toml")
     runs = detection.runs()
     assert (detection.mode, len(runs)) == ("closed-loop", 200)
