@@ -145,3 +145,39 @@ def test_shipped_studies_load():
     runs = detection.runs()
     assert (detection.mode, len(runs)) == ("closed-loop", 200)
     assert runs[13].scene["radar"]["tx_power_w"] == 0.003 and runs[13].scene["objects"]["seed"] == 1
+
+
+def test_aggregates_of_random_draws_binned(tmp_path):
+    """Rows made here (energy = the drawn altitude) aggregate into 8 equal bins of the drawn
+    range, each with the mean of its own rows."""
+    from cellsar.study_run import empty_result
+    from cellsar.study_table import Table, columns
+
+    path = write(tmp_path, 'realisations = 40\n[random]\n"params.altitude_m" = { uniform = [80, 120] }\n')
+    s = study.load(path)
+    runs = s.runs()
+    out = tmp_path / "out"
+    table = Table(out, columns(s, runs))
+    for r in runs:
+        row = empty_result()
+        row.update(energy_j=r.values["params.altitude_m"], feasible=r.realisation % 2 == 0)
+        table.append(r, row)
+    table.close()
+    study.aggregate(s, out)
+    import csv
+
+    with open(out / "aggregates.csv", newline="") as f:
+        agg = list(csv.DictReader(f))
+    alts = sorted(r.values["params.altitude_m"] for r in runs)
+    lo, width = alts[0], (alts[-1] - alts[0]) / 8
+    assert len(agg) == 8
+    assert sum(int(a["runs"]) for a in agg) == 40
+    for a in agg:
+        centre = float(a["params.altitude_m"])
+        k = round((centre - lo) / width - 0.5)
+        mine = [h for h in alts if min(int((h - lo) / width), 7) == k]
+        assert int(a["runs"]) == len(mine)
+        assert float(a["energy_j_mean"]) == pytest.approx(sum(mine) / len(mine))
+    feasible = sum(int(a["runs"]) * float(a["feasible_p"]) for a in agg)
+    assert feasible == pytest.approx(20)
+    assert (out / "plot-energy_j-vs-params_altitude_m.png").exists()
