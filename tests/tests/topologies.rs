@@ -206,7 +206,7 @@ fn a_launcher_without_its_router_gives_up_after_the_peer_timeout() {
     ] {
         assert!(e.stderr.contains(needle), "{needle:?} in\n{}", e.stderr);
     }
-    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
+    assert!(shm_files(&format!("cs{}x", e.pid)).is_empty());
 }
 
 /// A launcher whose `--external processor` never comes gives up waiting for it after
@@ -227,11 +227,11 @@ fn a_launcher_gives_up_on_a_processor_that_never_comes() {
         "waiting for the processor to announce itself",
         "gave up waiting for the processor",
         "--peer-timeout-s 3 s",
-        "mode peer, connect [], listen [tcp/127.0.0.1:",
+        "mode peer, connect [], listen [unixsock-stream/",
     ] {
         assert!(e.stderr.contains(needle), "{needle:?} in\n{}", e.stderr);
     }
-    assert!(shm_files(&format!("cs{}_", e.pid)).is_empty());
+    assert!(shm_files(&format!("cs{}x", e.pid)).is_empty());
 }
 
 /// The planner, echo, processor and bridge, started with nobody to talk to, each say within

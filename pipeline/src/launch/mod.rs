@@ -5,9 +5,10 @@
 //!    exit code 2), and the mission's necessary conditions of feasibility
 //!    ([`FailureKind::Infeasible`], exit code 3). (The seconds options were checked when
 //!    parsed, into [`Seconds`].)
-//! 2. Chooses the Zenoh network ([`network`]): by default an isolated mesh on loopback (the
-//!    launcher listens on a free port, every child connects to it; no multicast, no router);
-//!    with `--router` a router child and every process its client; with Zenoh flags, the
+//! 2. Chooses the Zenoh network ([`network`]): by default the private mesh ([`private`]): the
+//!    launcher and every child peers on Unix sockets in a per-run directory of mode 0700, so
+//!    only the user who started the run can connect (no TCP, no multicast, no router); with
+//!    `--router` a router child on such a socket and every process its client; with Zenoh flags, the
 //!    launcher's flags, and children that connect to the launcher (or, for a client launcher,
 //!    to the same routers). Opening the launcher's session and waiting for the children are
 //!    bounded by `--peer-timeout-s`, and what it waits for is logged.
@@ -30,6 +31,7 @@ mod imaging;
 mod net;
 mod outputs;
 mod plan;
+mod private;
 mod session;
 mod shm;
 
@@ -50,8 +52,9 @@ use crate::protocol::{self, FrameLayout};
 use crate::services::process::MissionContext;
 use crate::supervise::{stop_all, ChildSpec, Supervised};
 use net::{free_port, open_with_retry};
-pub use net::{network, Net};
+pub use net::{network, Hub, Net};
 use outputs::Planned;
+pub use private::PrivateDir;
 use session::{Session, Setup};
 
 /// How IQ frames reach the processor.
@@ -235,9 +238,14 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
     tracing_subscriber::EnvFilter::try_new(&args.child_log)
         .map_err(|e| Failure::bad_input(anyhow!("--child-log {:?}: {e}", args.child_log)))?;
     args.zenoh.to_config().map_err(Failure::bad_input)?;
-    // every process's flags as the run would give them (any free port stands for the hub's)
+    // every process's flags as the run would give them (any free port and directory stand
+    // for the hub's)
+    let hub = Hub {
+        tcp_port: 7447,
+        private_dir: std::env::temp_dir().join("cellsar-mesh"),
+    };
     let net =
-        network(args.router, &args.zenoh, 7447).map_err(|e| Failure::bad_input(anyhow!(e)))?;
+        network(args.router, &args.zenoh, &hub).map_err(|e| Failure::bad_input(anyhow!(e)))?;
     for z in [Some(&net.launcher), Some(&net.child), net.router.as_ref()]
         .into_iter()
         .flatten()
@@ -372,7 +380,13 @@ fn launch(
         log: logs.join(format!("{role}.log")),
         rust_log: Some(args.child_log.clone()),
     };
-    let net = network(args.router, &args.zenoh, free_port()?).map_err(|e| anyhow!(e))?;
+    // the private mesh's sockets, removed with their directory when the run ends
+    let private_dir = PrivateDir::create()?;
+    let hub = Hub {
+        tcp_port: free_port()?,
+        private_dir: private_dir.path().to_path_buf(),
+    };
+    let net = network(args.router, &args.zenoh, &hub).map_err(|e| anyhow!(e))?;
     if let Some(router) = &net.router {
         let mut ra = vec!["router".to_string(), "--instance".into(), "router".into()];
         ra.extend(router.to_cli_args());

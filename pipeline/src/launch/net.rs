@@ -8,6 +8,8 @@ use anyhow::{Context, Result};
 use bridge::zconfig::{self, Mode, DEFAULT_LISTEN};
 use bridge::{NetError, ZenohArgs, ZenohNode};
 
+use super::private::{hub_socket, unix_endpoint};
+
 /// The Zenoh flags of the launcher, of its children and of its router child ([`network`]).
 pub struct Net {
     /// The launcher's own flags.
@@ -16,6 +18,37 @@ pub struct Net {
     pub child: ZenohArgs,
     /// The flags of the router child (`--router`), if any.
     pub router: Option<ZenohArgs>,
+    /// On the private mesh (no Zenoh flag, or `--router`): the directory of its Unix sockets,
+    /// where every peer child listens on a socket of its own ([`Net::child_listen`]); the
+    /// children's flags ([`Net::child`]) then have no listen endpoint.
+    pub private_dir: Option<PathBuf>,
+}
+
+impl Net {
+    /// The flags to add to the command line of the `n`-th child started (`role`): on the
+    /// private mesh of peers, `--listen` on a Unix socket of its own in the private directory
+    /// (so that the children find each other, and only the user's processes can connect);
+    /// nothing otherwise.
+    pub fn child_listen(&self, role: &str, n: usize) -> Vec<String> {
+        match (&self.private_dir, self.child.mode) {
+            (Some(dir), Some(Mode::Peer)) => vec![
+                "--listen".to_string(),
+                unix_endpoint(&dir.join(format!("{role}-{n}.sock"))),
+            ],
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// Where the launcher's mesh lives on this host: the loopback TCP port a peer or router
+/// launcher listens on when the user gave Zenoh flags but no listen endpoint, and the
+/// directory of the private mesh's Unix sockets (no Zenoh flag, or `--router`).
+pub struct Hub {
+    /// A free loopback TCP port.
+    pub tcp_port: u16,
+    /// A directory only this user may enter (mode 0700), e.g. a
+    /// [`PrivateDir`](super::private::PrivateDir)'s.
+    pub private_dir: PathBuf,
 }
 
 pub(super) fn free_port() -> Result<u16> {
@@ -34,15 +67,17 @@ fn user_gave_zenoh(z: &ZenohArgs) -> bool {
         || z.multicast_scouting
 }
 
-/// The Zenoh network of a run, from `--router` and the Zenoh flags; `hub_port` is a free
-/// loopback port for the launcher to listen on where the user gave it none. Every
-/// combination accepted here forms one mesh of the launcher and its children; one that
-/// cannot is refused, naming the flag (the launcher exits 2 before anything starts):
+/// The Zenoh network of a run, from `--router` and the Zenoh flags; `hub` says where the
+/// launcher listens where the user gave it no endpoint. Every combination accepted here forms
+/// one mesh of the launcher and its children; one that cannot is refused, naming the flag (the
+/// launcher exits 2 before anything starts):
 ///
-/// - no Zenoh flag: an isolated mesh on loopback, the launcher its hub;
-/// - `--router`: a router child on `hub_port`, the launcher and every child its clients
-///   (refused together with `-m`, `-e`, `-l`, `-c` or `--multicast-scouting`, which it
-///   would not use);
+/// - no Zenoh flag: the private mesh, the launcher its hub: every process a peer on Unix
+///   sockets in `hub.private_dir` (mode 0700, so only the user's own processes connect; the
+///   children's sockets: [`Net::child_listen`]);
+/// - `--router`: a router child on a Unix socket in `hub.private_dir`, the launcher and every
+///   child its clients (refused together with `-m`, `-e`, `-l`, `-c` or
+///   `--multicast-scouting`, which it would not use);
 /// - a client launcher (`-m client`, or a `-c` file in client mode): every child gets the
 ///   same flags and is a client of the same routers; refused when it has no router to
 ///   connect to (no `-e`, no connect endpoint in the file) and multicast scouting is off
@@ -50,15 +85,17 @@ fn user_gave_zenoh(z: &ZenohArgs) -> bool {
 ///   (a client cannot listen);
 /// - a peer or router launcher (also `--multicast-scouting` alone): it is the children's
 ///   hub. It listens where `-l` (or the `-c` file) says, or, when neither says, on
-///   `hub_port` of loopback; every child is a peer that connects to those endpoints (an
+///   `hub.tcp_port` of loopback; every child is a peer that connects to those endpoints (an
 ///   unspecified address becomes loopback) and to the launcher's own connect endpoints, and
 ///   listens on a free loopback port of its own so that the children find each other
 ///   (gossip) without multicast scouting. A listen endpoint with port 0 is refused (its port
 ///   cannot be told to the children: Zenoh reports the ports it bound only for non-loopback
 ///   addresses, in an unstable API). A `-c` file is passed on, so the children keep its
 ///   other settings.
-pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Result<Net, String> {
-    let hub = format!("tcp/127.0.0.1:{hub_port}");
+pub fn network(router: bool, user: &ZenohArgs, hub: &Hub) -> std::result::Result<Net, String> {
+    let private = hub_socket(&hub.private_dir);
+    let private_dir = Some(hub.private_dir.clone());
+    let hub = format!("tcp/127.0.0.1:{}", hub.tcp_port);
     if router {
         if let Some(flag) = zenoh_flag_given(user) {
             return Err(format!(
@@ -68,7 +105,7 @@ pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Re
         }
         let client = ZenohArgs {
             mode: Some(Mode::Client),
-            connect: vec![hub.clone()],
+            connect: vec![private.clone()],
             no_multicast_scouting: true,
             max_message_bytes: user.max_message_bytes,
             ..ZenohArgs::default()
@@ -78,8 +115,9 @@ pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Re
             child: client,
             router: Some(ZenohArgs {
                 max_message_bytes: user.max_message_bytes,
-                ..ZenohArgs::isolated(std::slice::from_ref(&hub), &[])
+                ..ZenohArgs::isolated(std::slice::from_ref(&private), &[])
             }),
+            private_dir,
         });
     }
     if !user_gave_zenoh(user) {
@@ -87,10 +125,12 @@ pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Re
             max_message_bytes: user.max_message_bytes,
             ..z
         };
+        // the children listen on sockets of their own (Net::child_listen), added per child
         return Ok(Net {
-            launcher: with_limit(ZenohArgs::isolated(std::slice::from_ref(&hub), &[])),
-            child: with_limit(ZenohArgs::isolated(&[DEFAULT_LISTEN.to_string()], &[hub])),
+            launcher: with_limit(ZenohArgs::isolated(std::slice::from_ref(&private), &[])),
+            child: with_limit(ZenohArgs::isolated(&[], &[private])),
             router: None,
+            private_dir,
         });
     }
     let config = user.to_config().map_err(|e| e.to_string())?;
@@ -115,6 +155,7 @@ pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Re
             launcher: user.clone(),
             child: user.clone(),
             router: None,
+            private_dir: None,
         });
     }
     // a peer or router launcher: the children's hub
@@ -169,6 +210,7 @@ pub fn network(router: bool, user: &ZenohArgs, hub_port: u16) -> std::result::Re
         launcher,
         child,
         router: None,
+        private_dir: None,
     })
 }
 
@@ -409,6 +451,14 @@ mod tests {
         assert!(e.contains("/nonexistent/x.json5"), "{e}");
     }
 
+    /// A hub for the tests (nothing is created).
+    fn test_hub() -> Hub {
+        Hub {
+            tcp_port: 17000,
+            private_dir: PathBuf::from("/run/user/0/cellsar-mesh-x"),
+        }
+    }
+
     fn flags(connect: &[&str], listen: &[&str], mode: Option<Mode>) -> ZenohArgs {
         ZenohArgs {
             mode,
@@ -423,46 +473,67 @@ mod tests {
     #[test]
     fn children_join_the_launchers_network() {
         let hub = "tcp/127.0.0.1:17000";
-        // no flag: the isolated mesh; the message limit is passed on
+        let private = "unixsock-stream//run/user/0/cellsar-mesh-x/hub.sock";
+        // no flag: the private mesh on Unix sockets; the message limit is passed on
         let n = network(
             false,
             &ZenohArgs {
                 max_message_bytes: Some(1 << 20),
                 ..ZenohArgs::default()
             },
-            17000,
+            &test_hub(),
         )
         .unwrap();
-        assert_eq!(n.launcher.listen, [hub]);
-        assert_eq!(n.child.connect, [hub]);
+        assert_eq!(n.launcher.listen, [private]);
+        assert_eq!(n.child.connect, [private]);
+        assert!(n.child.listen.is_empty());
         assert_eq!(n.child.max_message_bytes, Some(1 << 20));
+        // each child listens on a socket of its own, only there: no TCP listener
+        assert_eq!(
+            n.child_listen("echo", 3),
+            [
+                "--listen",
+                "unixsock-stream//run/user/0/cellsar-mesh-x/echo-3.sock"
+            ]
+        );
+        let mut echo = n.child.clone();
+        echo.listen = vec![n.child_listen("echo", 3)[1].clone()];
+        assert_eq!(
+            echo.to_config()
+                .unwrap()
+                .get_json("listen/endpoints")
+                .unwrap(),
+            r#"["unixsock-stream//run/user/0/cellsar-mesh-x/echo-3.sock"]"#
+        );
         // a peer or router launcher without -l: it listens on the hub, the children connect
         for mode in [None, Some(Mode::Peer), Some(Mode::Router)] {
             let user = ZenohArgs {
                 no_multicast_scouting: true,
                 ..flags(&["tcp/10.0.0.1:7447"], &[], mode)
             };
-            let n = network(false, &user, 17000).unwrap();
+            let n = network(false, &user, &test_hub()).unwrap();
             assert_eq!(n.launcher.listen, [hub], "{mode:?}");
             assert_eq!(n.launcher.mode, mode);
             assert_eq!(n.child.mode, Some(Mode::Peer));
             assert_eq!(n.child.connect, ["tcp/10.0.0.1:7447", hub], "{mode:?}");
             assert_eq!(n.child.listen, [DEFAULT_LISTEN]);
             assert!(n.child.no_multicast_scouting);
+            assert!(n.child_listen("echo", 0).is_empty());
         }
         // -l on every address: the children connect on loopback
-        let n = network(false, &flags(&[], &["tcp/0.0.0.0:7447"], None), 17000).unwrap();
+        let n = network(false, &flags(&[], &["tcp/0.0.0.0:7447"], None), &test_hub()).unwrap();
         assert_eq!(n.launcher.listen, ["tcp/0.0.0.0:7447"]);
         assert_eq!(n.child.connect, ["tcp/127.0.0.1:7447"]);
         // a client launcher: the children get the same flags
         let user = flags(&["tcp/127.0.0.1:7447"], &[], Some(Mode::Client));
-        let n = network(false, &user, 17000).unwrap();
+        let n = network(false, &user, &test_hub()).unwrap();
         assert_eq!((&n.launcher, &n.child), (&user, &user));
-        // --router: everyone a client of the router child
-        let n = network(true, &ZenohArgs::default(), 17000).unwrap();
-        assert_eq!(n.router.as_ref().unwrap().listen, [hub]);
-        assert_eq!(n.child.connect, [hub]);
+        // --router: everyone a client of the router child, on its Unix socket
+        let n = network(true, &ZenohArgs::default(), &test_hub()).unwrap();
+        assert_eq!(n.router.as_ref().unwrap().listen, [private]);
+        assert_eq!(n.child.connect, [private]);
         assert_eq!(n.launcher.mode, Some(Mode::Client));
+        assert!(n.child_listen("echo", 0).is_empty());
         for z in [&n.launcher, &n.child, n.router.as_ref().unwrap()] {
             z.to_config().unwrap();
         }
@@ -484,7 +555,7 @@ mod tests {
             config: Some(file.clone()),
             ..ZenohArgs::default()
         };
-        let n = network(false, &user, 17000).unwrap();
+        let n = network(false, &user, &test_hub()).unwrap();
         assert_eq!(n.launcher, user);
         assert_eq!(n.child.config.as_deref(), Some(file.as_path()));
         assert_eq!(n.child.mode, Some(Mode::Peer));
@@ -499,7 +570,7 @@ mod tests {
                 config: Some(bare),
                 ..ZenohArgs::default()
             },
-            17000,
+            &test_hub(),
         )
         .unwrap();
         assert_eq!(n.launcher.listen, ["tcp/127.0.0.1:17000"]);
@@ -560,7 +631,7 @@ mod tests {
             ),
         ];
         for (router, user, named) in cases {
-            let e = network(router, &user, 17000)
+            let e = network(router, &user, &test_hub())
                 .err()
                 .unwrap_or_else(|| panic!("{user:?} accepted"));
             for n in named {
@@ -568,7 +639,7 @@ mod tests {
             }
         }
         // a client without a router: refused, since multicast scouting is off by default ...
-        let e = network(false, &flags(&[], &[], Some(Mode::Client)), 17000)
+        let e = network(false, &flags(&[], &[], Some(Mode::Client)), &test_hub())
             .err()
             .unwrap();
         assert!(
@@ -581,7 +652,7 @@ mod tests {
             multicast_scouting: true,
             ..flags(&[], &[], Some(Mode::Client))
         };
-        let n = network(false, &user, 17000).unwrap();
+        let n = network(false, &user, &test_hub()).unwrap();
         assert!(n.launcher.multicast_scouting && n.child.multicast_scouting);
         assert_eq!(
             n.child
@@ -630,7 +701,7 @@ mod tests {
             ..ZenohArgs::default()
         };
         // a peer or router launcher (by its file, or by -m): refused
-        let e = network(false, &with(&peer), 17000).err().unwrap();
+        let e = network(false, &with(&peer), &test_hub()).err().unwrap();
         assert!(
             e.contains("peer.json5 (mode peer): with TLS settings"),
             "{e}"
@@ -642,7 +713,7 @@ mod tests {
                 mode: Some(Mode::Router),
                 ..with(&peer)
             },
-            17000,
+            &test_hub(),
         )
         .err()
         .unwrap();
@@ -652,10 +723,10 @@ mod tests {
             "plain-peer.json5",
             "{ mode: 'peer', listen: { endpoints: ['tcp/127.0.0.1:17447'] } }".into(),
         );
-        network(false, &with(&plain_peer), 17000).unwrap();
+        network(false, &with(&plain_peer), &test_hub()).unwrap();
         // a client launcher: each child it starts has its own secure file
         let user = with(&launcher);
-        let net = network(false, &user, 17000).unwrap();
+        let net = network(false, &user, &test_hub()).unwrap();
         let roles = ["planner", "echo", "bridge"];
         let own: Vec<(String, PathBuf)> = roles
             .iter()

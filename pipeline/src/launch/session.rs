@@ -176,7 +176,9 @@ impl<'a> Session<'a> {
         self.setup.stop.load(Ordering::Relaxed)
     }
 
-    fn start(&mut self, role: &str, args: Vec<String>) -> Result<()> {
+    fn start(&mut self, role: &str, mut args: Vec<String>) -> Result<()> {
+        // on the private mesh, a Unix socket of its own (children only grow: unique per start)
+        args.extend(self.setup.net.child_listen(role, self.children.len()));
         let args = match self.args().child_config.iter().find(|(r, _)| r == role) {
             Some((_, file)) => super::net::with_child_config(args, file),
             None => args,
