@@ -1,5 +1,6 @@
 //! The plan cache every process keeps: the plans it holds, answered to lookups and optionally
-//! stored in a directory.
+//! stored in a directory; bounded ([`MAX_HELD_PLANS`], [`MAX_HELD_PLAN_BYTES`]), the least
+//! recently used plan evicted first, from memory and from the directory.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -14,15 +15,18 @@ use bridge::zenoh::query::{Query, QueryTarget};
 use bridge::zenoh::Wait;
 use bridge::{MissionId, Refusal, RefusalKind, ZenohNode};
 
+use super::bounded::{Lru, MAX_HELD_PLANS, MAX_HELD_PLAN_BYTES};
 use super::{write_atomic, ServiceError};
 use crate::protocol::keys::ALL_PLANS;
 use crate::protocol::{Plan, PlanLookup, MAX_PLAN_BYTES};
 
 /// Plans held by a process, answered to `cellsar/*/plan` lookups (so a process that joins late
 /// or restarts gets the plans without re-planning; a lookup that is no [`PlanLookup`] gets a
-/// typed `bad_request` refusal), optionally persisted in a directory.
+/// typed `bad_request` refusal), optionally persisted in a directory. At most
+/// [`MAX_HELD_PLANS`] plans of [`MAX_HELD_PLAN_BYTES`] bytes (encoded) together are held: the
+/// least recently used (inserted or got) is evicted first, and its stored file removed.
 pub struct PlanCache {
-    plans: Arc<Mutex<BTreeMap<MissionId, Arc<Plan>>>>,
+    plans: Arc<Mutex<Lru<Arc<Plan>>>>,
     dir: Option<PathBuf>,
     malformed: Arc<std::sync::atomic::AtomicU64>,
     _queryable: bridge::zenoh::query::Queryable<()>,
@@ -32,32 +36,51 @@ impl PlanCache {
     /// Declares the lookup queryable on `cellsar/*/plan`; with `dir`, loads the plans stored
     /// there (unreadable files are logged and skipped) and stores new ones.
     pub fn new(node: &ZenohNode, dir: Option<&Path>) -> Result<Self, ServiceError> {
-        let plans: Arc<Mutex<BTreeMap<MissionId, Arc<Plan>>>> = Arc::default();
+        Self::with_bounds(node, dir, MAX_HELD_PLANS, MAX_HELD_PLAN_BYTES)
+    }
+
+    /// As [`PlanCache::new`], at most `max_plans` plans of `max_bytes` bytes together.
+    pub fn with_bounds(
+        node: &ZenohNode,
+        dir: Option<&Path>,
+        max_plans: usize,
+        max_bytes: usize,
+    ) -> Result<Self, ServiceError> {
+        let plans = Arc::new(Mutex::new(Lru::new(max_plans, max_bytes)));
         if let Some(d) = dir {
             std::fs::create_dir_all(d).map_err(|e| ServiceError::io(d, e))?;
-            let mut loaded = BTreeMap::new();
-            for entry in std::fs::read_dir(d)
+            // the oldest first, so that the most recently stored are those kept
+            let mut files: Vec<(std::time::SystemTime, PathBuf)> = std::fs::read_dir(d)
                 .map_err(|e| ServiceError::io(d, e))?
                 .flatten()
-            {
-                let path = entry.path();
-                if path.extension().and_then(|e| e.to_str()) != Some("plan") {
-                    continue;
-                }
-                match load_plan(&path) {
-                    Ok(p) => {
-                        loaded.insert(p.mission_id, Arc::new(p));
+                .map(|entry| entry.path())
+                .filter(|path| path.extension().and_then(|e| e.to_str()) == Some("plan"))
+                .map(|path| {
+                    let t = std::fs::metadata(&path)
+                        .and_then(|m| m.modified())
+                        .unwrap_or(std::time::UNIX_EPOCH);
+                    (t, path)
+                })
+                .collect();
+            files.sort();
+            let mut restored = 0usize;
+            if let Ok(mut held) = plans.lock() {
+                for (_, path) in files {
+                    match load_plan(&path) {
+                        Ok((p, bytes)) => {
+                            let evicted = held.insert(p.mission_id, Arc::new(p), bytes);
+                            remove_stored(d, &evicted);
+                            restored += 1;
+                        }
+                        Err(e) => {
+                            tracing::warn!(file = %path.display(), error = %e,
+                                "stored plan skipped")
+                        }
                     }
-                    Err(e) => {
-                        tracing::warn!(file = %path.display(), error = %e, "stored plan skipped")
-                    }
                 }
-            }
-            if !loaded.is_empty() {
-                tracing::info!(plans = loaded.len(), dir = %d.display(), "plans restored");
-            }
-            if let Ok(mut p) = plans.lock() {
-                *p = loaded;
+                if restored > 0 {
+                    tracing::info!(plans = held.len(), dir = %d.display(), "plans restored");
+                }
             }
         }
         let p = plans.clone();
@@ -87,23 +110,29 @@ impl PlanCache {
     /// (and answered to lookups) even when storing it fails; the error says why it was not
     /// stored.
     pub fn insert(&self, plan: Arc<Plan>) -> Result<(), ServiceError> {
-        if let Ok(mut p) = self.plans.lock() {
-            p.insert(plan.mission_id, plan.clone());
+        let bytes = envelope::encode(
+            plan.as_ref(),
+            Meta {
+                mission_id: plan.mission_id,
+                ..Meta::default()
+            },
+        )
+        .map_err(|error| ServiceError::Codec {
+            what: format!("plan {}", plan.mission_id),
+            error,
+        })?;
+        let evicted = match self.plans.lock() {
+            Ok(mut p) => p.insert(plan.mission_id, plan.clone(), bytes.len()),
+            Err(_) => Vec::new(),
+        };
+        if !evicted.is_empty() {
+            tracing::info!(evicted = evicted.len(), "least recently used plans let go");
         }
         if let Some(d) = &self.dir {
-            let bytes = envelope::encode(
-                plan.as_ref(),
-                Meta {
-                    mission_id: plan.mission_id,
-                    ..Meta::default()
-                },
-            )
-            .map_err(|error| ServiceError::Codec {
-                what: format!("plan {}", plan.mission_id),
-                error,
-            })?;
-            let path = d.join(format!("{}.plan", plan.mission_id));
-            write_atomic(&path, &bytes)?;
+            remove_stored(d, &evicted);
+            if !evicted.contains(&plan.mission_id) {
+                write_atomic(&stored_path(d, plan.mission_id), &bytes)?;
+            }
         }
         Ok(())
     }
@@ -111,13 +140,16 @@ impl PlanCache {
     /// Lets go of the plan of `id` (no longer answered to lookups; a stored copy stays).
     pub fn remove(&self, id: MissionId) {
         if let Ok(mut p) = self.plans.lock() {
-            p.remove(&id);
+            p.remove(id);
         }
     }
 
-    /// The plan of `id`, if held.
+    /// The plan of `id`, if held (now the most recently used).
     pub fn get(&self, id: MissionId) -> Option<Arc<Plan>> {
-        self.plans.lock().ok().and_then(|p| p.get(&id).cloned())
+        self.plans
+            .lock()
+            .ok()
+            .and_then(|mut p| p.get(id).map(|p| p.clone()))
     }
 
     /// Every plan held.
@@ -125,6 +157,14 @@ impl PlanCache {
         self.plans
             .lock()
             .map(|p| p.values().cloned().collect())
+            .unwrap_or_default()
+    }
+
+    /// How many plans are held, and their bytes (encoded).
+    pub fn held(&self) -> (usize, usize) {
+        self.plans
+            .lock()
+            .map(|p| (p.len(), p.bytes()))
             .unwrap_or_default()
     }
 
@@ -185,8 +225,25 @@ impl PlanCache {
     }
 }
 
+/// Where the plan of `id` is stored in `dir`.
+fn stored_path(dir: &Path, id: MissionId) -> PathBuf {
+    dir.join(format!("{id}.plan"))
+}
+
+/// Removes the stored plans of `ids` from `dir` (one already gone is no error).
+fn remove_stored(dir: &Path, ids: &[MissionId]) {
+    for id in ids {
+        let path = stored_path(dir, *id);
+        if let Err(e) = std::fs::remove_file(&path) {
+            if e.kind() != std::io::ErrorKind::NotFound {
+                tracing::warn!(file = %path.display(), error = %e, "evicted plan not removed");
+            }
+        }
+    }
+}
+
 fn answer_lookup(
-    plans: &Mutex<BTreeMap<MissionId, Arc<Plan>>>,
+    plans: &Mutex<Lru<Arc<Plan>>>,
     query: &Query,
     malformed: &std::sync::atomic::AtomicU64,
     log: &bridge::counters::BadPayloadLog,
@@ -236,8 +293,18 @@ fn answer_lookup(
     }
 }
 
-fn load_plan(path: &Path) -> Result<Plan, ServiceError> {
-    let bytes = std::fs::read(path).map_err(|e| ServiceError::io(path, e))?;
+/// A stored plan and its size in bytes.
+fn load_plan(path: &Path) -> Result<(Plan, usize), ServiceError> {
+    // no more than the largest plan accepted is read
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(
+            std::fs::File::open(path).map_err(|e| ServiceError::io(path, e))?,
+            (MAX_PLAN_BYTES + envelope::HEADER_LEN + 1) as u64,
+        ),
+        &mut bytes,
+    )
+    .map_err(|e| ServiceError::io(path, e))?;
     envelope::decode::<Plan>(
         &bytes,
         &DecodeLimits {
@@ -245,7 +312,7 @@ fn load_plan(path: &Path) -> Result<Plan, ServiceError> {
             verify_crc: true,
         },
     )
-    .map(|e| e.message)
+    .map(|e| (e.message, bytes.len()))
     .map_err(|error| ServiceError::Codec {
         what: path.display().to_string(),
         error,
@@ -320,5 +387,84 @@ mod tests {
         drop(cache);
         a.close().unwrap();
         b.close().unwrap();
+    }
+
+    /// The cache holds at most its bound of plans, the least recently used evicted first from
+    /// memory and from the state directory; a restart restores the most recently stored ones
+    /// within the bound and removes the rest.
+    #[test]
+    fn the_cache_and_its_directory_are_bounded_least_recently_used_first() {
+        use crate::protocol::PlanRequest;
+        use crate::services::plan::plan_request;
+        use planner::{MissionFile, NoObserver};
+        let node = ZenohNode::open(
+            ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[])
+                .to_config()
+                .unwrap(),
+            "test",
+            "bounded",
+        )
+        .unwrap();
+        let req = PlanRequest {
+            mission: MissionFile::from_toml_str(
+                "name = \"b\"\n[params]\nhorizon_s = 20.0\n[landmarks]\npoints = [{ x_m = \
+                 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }, { x_m = 0.0, y_m = 30.0, from_s = \
+                 10.0, to_s = 20.0 }]\n",
+            )
+            .unwrap(),
+            options: Default::default(),
+        };
+        let plan = plan_request(&req, "p", &mut NoObserver).unwrap();
+        let numbered = |n: u64| {
+            Arc::new(Plan {
+                mission_id: MissionId(n),
+                ..plan.clone()
+            })
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let stored = || {
+            let mut v: Vec<String> = std::fs::read_dir(dir.path())
+                .unwrap()
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        let file = |n: u64| format!("{}.plan", MissionId(n));
+        let cache = PlanCache::with_bounds(&node, Some(dir.path()), 3, usize::MAX).unwrap();
+        for n in 1..=3 {
+            cache.insert(numbered(n)).unwrap();
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        // 1 used again: 2 goes when 4 comes
+        assert!(cache.get(MissionId(1)).is_some());
+        cache.insert(numbered(4)).unwrap();
+        assert!(cache.get(MissionId(2)).is_none());
+        let (count, bytes) = cache.held();
+        assert_eq!(count, 3);
+        let mut want = vec![file(1), file(3), file(4)];
+        want.sort();
+        assert_eq!(stored(), want);
+        // bytes: room for two plans only
+        let one = bytes / 3;
+        drop(cache);
+        let cache = PlanCache::with_bounds(&node, None, 100, 2 * one).unwrap();
+        for n in 10..20 {
+            cache.insert(numbered(n)).unwrap();
+            assert!(cache.held().1 <= 2 * one);
+        }
+        assert_eq!(cache.held().0, 2);
+        drop(cache);
+        // a restart with a bound of 2 restores the two most recently stored (3, 4: 1 was
+        // stored first) and removes the other file
+        let cache = PlanCache::with_bounds(&node, Some(dir.path()), 2, usize::MAX).unwrap();
+        assert_eq!(cache.held().0, 2);
+        assert!(cache.get(MissionId(3)).is_some() && cache.get(MissionId(4)).is_some());
+        let mut want = vec![file(3), file(4)];
+        want.sort();
+        assert_eq!(stored(), want);
+        drop(cache);
+        node.close().unwrap();
     }
 }

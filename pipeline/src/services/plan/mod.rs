@@ -19,14 +19,15 @@
 //!
 //! - this file: the service ([`serve`]) and planning one request ([`plan_request`]);
 //! - `cache.rs`: the plan cache every process keeps ([`PlanCache`]);
+//! - `bounded.rs`: per-mission state bounded by count and bytes ([`Lru`]);
 //! - `status.rs`: the status board every service publishes on ([`StatusBoard`]);
 //! - `error.rs`: [`ServiceError`].
 
+mod bounded;
 mod cache;
 mod error;
 mod status;
 
-use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -34,7 +35,7 @@ use std::time::{Duration, Instant};
 
 use bridge::envelope::Meta;
 use bridge::net::{PublishOptions, SubscribeOptions};
-use bridge::{MissionId, ZenohArgs, ZenohNode};
+use bridge::{ZenohArgs, ZenohNode};
 use serde::{Deserialize, Serialize};
 
 use planner::driver::{plan_with_observer, IterationRecord, Observer, PlanOptions};
@@ -45,6 +46,7 @@ use crate::protocol::keys::{self as pkeys, PLAN as PLAN_KEY};
 use crate::protocol::{mission_id, Plan, PlanRequest, PlanSummary};
 
 pub use super::os::{stop_on_signals, write_atomic};
+pub use bounded::{Lru, MAX_HELD_PLANS, MAX_HELD_PLAN_BYTES, MAX_MISSION_PUBLISHERS};
 pub use cache::PlanCache;
 pub use error::ServiceError;
 pub use status::StatusBoard;
@@ -180,9 +182,11 @@ fn serve_on(
             ..SubscribeOptions::default()
         },
     )?;
-    let mut plan_pubs: HashMap<MissionId, bridge::net::TypedPublisher<Plan>> = HashMap::new();
-    let mut summary_pubs: HashMap<MissionId, bridge::net::TypedPublisher<PlanSummary>> =
-        HashMap::new();
+    // per-mission publishers, the least recently used undeclared beyond the bound
+    let mut plan_pubs: Lru<bridge::net::TypedPublisher<Plan>> =
+        Lru::with_count(MAX_MISSION_PUBLISHERS);
+    let mut summary_pubs: Lru<bridge::net::TypedPublisher<PlanSummary>> =
+        Lru::with_count(MAX_MISSION_PUBLISHERS);
     let mut report = ServeReport::default();
     let mut seq = 0u64;
     tracing::info!(key = PLAN_KEY, instance = %args.instance, session = %node.describe(),
@@ -275,32 +279,35 @@ fn publish_plan(
     node: &ZenohNode,
     plan: &Plan,
     meta: Meta,
-    plan_pubs: &mut HashMap<MissionId, bridge::net::TypedPublisher<Plan>>,
-    summary_pubs: &mut HashMap<MissionId, bridge::net::TypedPublisher<PlanSummary>>,
+    plan_pubs: &mut Lru<bridge::net::TypedPublisher<Plan>>,
+    summary_pubs: &mut Lru<bridge::net::TypedPublisher<PlanSummary>>,
 ) -> Result<(), ServiceError> {
     let id = plan.mission_id;
     let key = plan.key()?;
-    let p = match plan_pubs.entry(id) {
-        std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
-        std::collections::hash_map::Entry::Vacant(v) => v.insert(node.publisher::<Plan>(
+    if plan_pubs.get(id).is_none() {
+        let made = node.publisher::<Plan>(
             &key,
             PublishOptions {
                 mission_id: id,
                 ..PublishOptions::default()
             },
-        )?),
-    };
-    p.put_with(plan, meta)?;
-    if let std::collections::hash_map::Entry::Vacant(v) = summary_pubs.entry(id) {
-        v.insert(node.publisher::<PlanSummary>(
+        )?;
+        plan_pubs.insert(id, made, 0);
+    }
+    if let Some(p) = plan_pubs.get(id) {
+        p.put_with(plan, meta)?;
+    }
+    if summary_pubs.get(id).is_none() {
+        let made = node.publisher::<PlanSummary>(
             &pkeys::plan_summary(id)?,
             PublishOptions {
                 mission_id: id,
                 ..PublishOptions::json()
             },
-        )?);
+        )?;
+        summary_pubs.insert(id, made, 0);
     }
-    if let Some(p) = summary_pubs.get(&id) {
+    if let Some(p) = summary_pubs.get(id) {
         let s = PlanSummary {
             mission_id: id,
             mission: plan.summary.mission.clone(),

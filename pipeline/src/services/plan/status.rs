@@ -1,6 +1,5 @@
 //! The status board: each service's [`ServiceStatus`] per mission.
 
-use std::collections::HashMap;
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -8,16 +7,18 @@ use bridge::net::PublishOptions;
 use bridge::zenoh::qos::CongestionControl;
 use bridge::{MissionId, ZenohNode};
 
+use super::bounded::{Lru, MAX_MISSION_PUBLISHERS};
 use crate::protocol::keys as pkeys;
 use crate::protocol::ServiceStatus;
 
 /// Publishes [`ServiceStatus`] per mission (JSON, congestion control `Drop`: a frozen reader
-/// never stalls a service).
+/// never stalls a service). At most [`MAX_MISSION_PUBLISHERS`] publishers are kept, the least
+/// recently used undeclared first.
 pub struct StatusBoard {
     role: String,
     instance: String,
     started: Instant,
-    pubs: Mutex<HashMap<MissionId, bridge::net::TypedPublisher<ServiceStatus>>>,
+    pubs: Mutex<Lru<bridge::net::TypedPublisher<ServiceStatus>>>,
 }
 
 impl StatusBoard {
@@ -27,7 +28,7 @@ impl StatusBoard {
             role: role.to_string(),
             instance: instance.to_string(),
             started: Instant::now(),
-            pubs: Mutex::new(HashMap::new()),
+            pubs: Mutex::new(Lru::with_count(MAX_MISSION_PUBLISHERS)),
         }
     }
 
@@ -53,29 +54,31 @@ impl StatusBoard {
         let Ok(mut pubs) = self.pubs.lock() else {
             return;
         };
-        let p = match pubs.entry(status.mission_id) {
-            std::collections::hash_map::Entry::Occupied(o) => o.into_mut(),
-            std::collections::hash_map::Entry::Vacant(v) => {
-                let made = pkeys::status(status.mission_id, &self.role)
-                    .map_err(bridge::NetError::from)
-                    .and_then(|key| {
-                        node.publisher::<ServiceStatus>(
-                            &key,
-                            PublishOptions {
-                                mission_id: status.mission_id,
-                                congestion_control: CongestionControl::Drop,
-                                ..PublishOptions::json()
-                            },
-                        )
-                    });
-                match made {
-                    Ok(p) => v.insert(p),
-                    Err(e) => {
-                        tracing::warn!(error = %e, "status publisher");
-                        return;
-                    }
+        if pubs.get(status.mission_id).is_none() {
+            let made = pkeys::status(status.mission_id, &self.role)
+                .map_err(bridge::NetError::from)
+                .and_then(|key| {
+                    node.publisher::<ServiceStatus>(
+                        &key,
+                        PublishOptions {
+                            mission_id: status.mission_id,
+                            congestion_control: CongestionControl::Drop,
+                            ..PublishOptions::json()
+                        },
+                    )
+                });
+            match made {
+                Ok(p) => {
+                    pubs.insert(status.mission_id, p, 0);
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, "status publisher");
+                    return;
                 }
             }
+        }
+        let Some(p) = pubs.get(status.mission_id) else {
+            return;
         };
         if let Err(e) = p.put(status) {
             tracing::debug!(error = %e, "status not published");
