@@ -1,8 +1,22 @@
 //! How many missions a service holds at once: a peer that publishes plan after plan must not
 //! make a service hold (and work on) every one of them.
 
+use std::time::Duration;
+
 /// The default cap on the missions a radar service holds at once (`--max-missions`).
 pub const DEFAULT_MAX_MISSIONS: usize = 16;
+
+/// How long a held mission may go without progress (its plan or a frame of it arriving) before
+/// it may be dropped to make room for a new one: plans without frames (a peer's, or of a
+/// mission whose echo never comes) cannot fill the cap for good.
+pub const MISSION_IDLE_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// Whether a held mission may be dropped to make room for a new one: it is `done` (finished or
+/// given up), or it has had no progress for [`MISSION_IDLE_TIMEOUT`] (`since_progress`) and
+/// has no work queued or in progress (`busy`).
+pub fn droppable(done: bool, since_progress: Duration, busy: bool) -> bool {
+    done || (!busy && since_progress >= MISSION_IDLE_TIMEOUT)
+}
 
 /// What to do with a new mission, given those held.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,6 +78,31 @@ mod tests {
         assert_eq!(admit([false, false].into_iter(), 2), Admission::Refuse);
         // a cap of zero takes nothing
         assert_eq!(admit(std::iter::empty::<bool>(), 0), Admission::Refuse);
+    }
+
+    /// A full cap of missions that never got a frame refuses a new mission until they have
+    /// been idle for the time-out; then the oldest makes room.
+    #[test]
+    fn missions_without_progress_make_room_after_the_idle_time_out() {
+        let young = Duration::from_secs(5);
+        let old = MISSION_IDLE_TIMEOUT;
+        let held = |since: Duration| {
+            (0..DEFAULT_MAX_MISSIONS)
+                .map(move |_| droppable(false, since, false))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            admit(held(young).into_iter(), DEFAULT_MAX_MISSIONS),
+            Admission::Refuse
+        );
+        assert_eq!(
+            admit(held(old).into_iter(), DEFAULT_MAX_MISSIONS),
+            Admission::Evict(0)
+        );
+        // busy or done
+        assert!(!droppable(false, old * 10, true));
+        assert!(droppable(true, Duration::ZERO, true));
+        assert!(!droppable(false, old - Duration::from_millis(1), false));
     }
 
     #[test]

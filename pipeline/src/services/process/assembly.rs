@@ -98,6 +98,8 @@ pub(super) struct Run {
     pub(super) last_frame: Instant,
     /// When the plan arrived.
     pub(super) started: Instant,
+    /// When the mission last made progress: its plan or a frame of it arrived.
+    pub(super) last_progress: Instant,
 }
 
 impl Run {
@@ -118,6 +120,19 @@ impl Run {
             resolving: false,
             last_frame: Instant::now(),
             started: Instant::now(),
+            last_progress: Instant::now(),
         }
+    }
+
+    /// Whether the mission may be dropped to make room for another
+    /// ([`droppable`](crate::services::admission::droppable)): finished, given up, or held
+    /// without progress for [`MISSION_IDLE_TIMEOUT`](crate::services::admission::MISSION_IDLE_TIMEOUT)
+    /// with nothing queued or in the worker.
+    pub(super) fn droppable(&self) -> bool {
+        crate::services::admission::droppable(
+            self.metrics.is_some() || self.failed.is_some(),
+            self.last_progress.elapsed(),
+            !self.ready.is_empty() || self.in_worker.is_some(),
+        )
     }
 }

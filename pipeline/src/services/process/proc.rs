@@ -203,10 +203,7 @@ impl Proc<'_> {
                 "plan skipped: its mission id is not its content's");
             return;
         }
-        let droppable = self
-            .runs
-            .iter()
-            .map(|r| r.metrics.is_some() || r.failed.is_some());
+        let droppable = self.runs.iter().map(|r| r.droppable());
         match admit(droppable, self.args.max_missions) {
             Admission::Admit => {}
             Admission::Evict(i) => self.let_go(i),
@@ -323,6 +320,7 @@ impl Proc<'_> {
             return;
         }
         run.last_frame = Instant::now();
+        run.last_progress = run.last_frame;
         let target = match run.assembling.get_mut(&slot.aperture) {
             Some(a) => Some(a),
             None => match run.look.as_mut() {
