@@ -16,6 +16,11 @@ use crate::protocol::{keys, ApertureDetections, ServiceStatus};
 /// counted and logged at debug level).
 const LOUD_REFUSALS: u64 = 10;
 
+/// Most instances the launcher knows at once: peers decide how many liveliness tokens appear,
+/// so past this bound the instances whose tokens are gone are forgotten first, and a new
+/// instance is not recorded while every known one is still alive.
+pub const MAX_KNOWN_SENDERS: usize = 1024;
+
 /// The instances of each role seen alive in a run, and what was refused.
 #[derive(Debug, Default)]
 pub struct Senders {
@@ -24,14 +29,52 @@ pub struct Senders {
     pub refused: u64,
     refused_status: u64,
     refused_detections: u64,
+    unrecorded: u64,
 }
 
 impl Senders {
-    /// Records that `instance` of `role` announced itself (its liveliness token was seen).
-    pub fn saw(&mut self, role: &str, instance: &str) {
-        if !self.knows(role, instance) {
-            self.seen.insert((role.to_string(), instance.to_string()));
+    /// Records that `instance` of `role` announced itself (its liveliness token was seen),
+    /// within [`MAX_KNOWN_SENDERS`] (every known instance counted as still alive; see
+    /// [`Senders::saw_within`]).
+    pub fn saw(&mut self, role: &str, instance: &str) -> bool {
+        self.saw_within(role, instance, |_, _| true)
+    }
+
+    /// Records that `instance` of `role` announced itself; at [`MAX_KNOWN_SENDERS`] the known
+    /// instances that are no longer alive (`still_alive` tells) are forgotten first, and when
+    /// none is, the new one is not recorded (counted in [`Senders::unrecorded`], logged).
+    /// Returns whether it is known now.
+    pub fn saw_within(
+        &mut self,
+        role: &str,
+        instance: &str,
+        still_alive: impl Fn(&str, &str) -> bool,
+    ) -> bool {
+        if self.knows(role, instance) {
+            return true;
         }
+        if self.seen.len() >= MAX_KNOWN_SENDERS {
+            self.seen.retain(|(r, i)| still_alive(r, i));
+        }
+        if self.seen.len() >= MAX_KNOWN_SENDERS {
+            self.unrecorded += 1;
+            if self.unrecorded <= LOUD_REFUSALS {
+                tracing::warn!(
+                    role,
+                    instance,
+                    max = MAX_KNOWN_SENDERS,
+                    "instance not recorded: as many known instances as the bound are alive"
+                );
+            }
+            return false;
+        }
+        self.seen.insert((role.to_string(), instance.to_string()));
+        true
+    }
+
+    /// Instances not recorded because [`MAX_KNOWN_SENDERS`] known ones were alive.
+    pub fn unrecorded(&self) -> u64 {
+        self.unrecorded
     }
 
     /// Whether `instance` of `role` announced itself in this run.
@@ -147,5 +190,24 @@ mod tests {
         assert!(e.contains("\"e1\""), "{e}");
         assert!(s.detections(&key, &d("intruder")).is_err());
         assert_eq!(s.refused, 2);
+    }
+
+    /// A flood of announced instances keeps the known set within its bound: those whose
+    /// tokens are gone make room; with every known one alive, new ones are not recorded.
+    #[test]
+    fn known_instances_are_bounded_the_gone_forgotten_first() {
+        let mut s = Senders::default();
+        assert!(s.saw("processor", "p1"));
+        for n in 0..MAX_KNOWN_SENDERS * 3 {
+            s.saw("echo", &format!("e{n}"));
+            assert!(s.seen.len() <= MAX_KNOWN_SENDERS);
+        }
+        assert_eq!(s.unrecorded(), (MAX_KNOWN_SENDERS * 2 + 1) as u64);
+        assert!(s.knows("processor", "p1"));
+        // the flood's tokens gone: a new instance makes room, the live processor stays
+        let alive = |r: &str, i: &str| r == "processor" && i == "p1";
+        assert!(s.saw_within("processor", "p2", alive));
+        assert!(s.knows("processor", "p1") && s.knows("processor", "p2"));
+        assert_eq!(s.seen.len(), 2);
     }
 }

@@ -87,6 +87,8 @@ impl Session<'_> {
                 "status": subs.statuses.counters().snapshot()},
             "services": c.last_status,
             "events": self.setup.events.all(),
+            "events_dropped": self.setup.events.dropped(),
+            "unrecorded_senders": self.senders.unrecorded(),
         })
     }
 

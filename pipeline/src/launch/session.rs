@@ -272,7 +272,10 @@ impl<'a> Session<'a> {
         while let Some(e) = self.alive.next_event(std::time::Duration::ZERO) {
             if let Some((role, instance)) = keys::parse_alive(&e.key) {
                 if e.alive {
-                    self.senders.saw(role, instance);
+                    let alive = &self.alive;
+                    self.senders.saw_within(role, instance, |r, i| {
+                        keys::alive(r, i).is_ok_and(|k| alive.is_alive(&k))
+                    });
                 }
                 if !e.alive {
                     tracing::warn!(role, instance, "liveliness lost");
