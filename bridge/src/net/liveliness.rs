@@ -25,7 +25,7 @@ impl ZenohNode {
     /// Watches liveliness tokens matching `selector` (e.g. [`crate::keys::ALIVE_ALL`]), including
     /// the ones that exist already. At most [`MAX_QUEUED_EVENTS`] changes wait to be read.
     pub fn watch_liveliness(&self, selector: &str) -> Result<LivelinessWatcher, NetError> {
-        let alive = Arc::new(Mutex::new(BTreeSet::new()));
+        let alive = Arc::new(Mutex::new(AliveSet::default()));
         // bounded: peers decide how many events come; past the bound they are dropped (the
         // set of alive keys stays exact)
         let (tx, rx) = mpsc::sync_channel(MAX_QUEUED_EVENTS);
@@ -39,11 +39,7 @@ impl ZenohNode {
                 let key = sample.key_expr().as_str().to_string();
                 let is_alive = sample.kind() == SampleKind::Put;
                 if let Ok(mut set) = a.lock() {
-                    if is_alive {
-                        set.insert(key.clone());
-                    } else {
-                        set.remove(&key);
-                    }
+                    set.note(&key, is_alive);
                 }
                 let _ = tx.try_send(AliveEvent {
                     key,
@@ -101,22 +97,68 @@ pub struct AliveEvent {
     pub alive: bool,
 }
 
-/// Tracks liveliness tokens matching a selector.
+/// The keys alive, at most [`MAX_ALIVE_KEYS`] of [`MAX_ALIVE_KEY_BYTES`] together: peers
+/// decide how many tokens appear; past the bounds a new key is not recorded (counted).
+#[derive(Debug, Default)]
+struct AliveSet {
+    keys: BTreeSet<String>,
+    bytes: usize,
+    unrecorded: u64,
+}
+
+impl AliveSet {
+    /// Notes that `key` appeared (`alive`) or went away; returns whether it is recorded as
+    /// alive now.
+    fn note(&mut self, key: &str, alive: bool) -> bool {
+        if !alive {
+            if self.keys.remove(key) {
+                self.bytes -= key.len();
+            }
+            return false;
+        }
+        if self.keys.contains(key) {
+            return true;
+        }
+        if self.keys.len() >= MAX_ALIVE_KEYS || self.bytes + key.len() > MAX_ALIVE_KEY_BYTES {
+            self.unrecorded += 1;
+            if self.unrecorded == 1 {
+                tracing::warn!(
+                    key,
+                    "more liveliness tokens than {MAX_ALIVE_KEYS} keys or \
+                     {MAX_ALIVE_KEY_BYTES} bytes: new ones are not recorded"
+                );
+            }
+            return false;
+        }
+        self.bytes += key.len();
+        self.keys.insert(key.to_string());
+        true
+    }
+}
+
+/// Tracks liveliness tokens matching a selector (at most [`MAX_ALIVE_KEYS`] keys of
+/// [`MAX_ALIVE_KEY_BYTES`] together; past that, new ones are not recorded until others go).
 pub struct LivelinessWatcher {
     _subscriber: zenoh::pubsub::Subscriber<()>,
-    alive: Arc<Mutex<BTreeSet<String>>>,
+    alive: Arc<Mutex<AliveSet>>,
     events: Receiver<AliveEvent>,
 }
 
 impl LivelinessWatcher {
     /// The keys alive now.
     pub fn alive(&self) -> BTreeSet<String> {
-        self.alive.lock().map(|s| s.clone()).unwrap_or_default()
+        self.alive
+            .lock()
+            .map(|s| s.keys.clone())
+            .unwrap_or_default()
     }
 
     /// Whether `key` is alive now.
     pub fn is_alive(&self, key: &str) -> bool {
-        self.alive.lock().map(|s| s.contains(key)).unwrap_or(false)
+        self.alive
+            .lock()
+            .map(|s| s.keys.contains(key))
+            .unwrap_or(false)
     }
 
     /// Waits up to `timeout` for the next change.
@@ -139,5 +181,31 @@ impl LivelinessWatcher {
                 .events
                 .recv_timeout(left.min(Duration::from_millis(50)));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flood of tokens is recorded up to the bound; once some go, new ones are again.
+    #[test]
+    fn the_alive_set_is_bounded() {
+        let mut s = AliveSet::default();
+        for n in 0..MAX_ALIVE_KEYS + 100 {
+            s.note(&format!("cellsar/alive/echo/e{n}"), true);
+        }
+        assert_eq!(s.keys.len(), MAX_ALIVE_KEYS);
+        assert_eq!(s.unrecorded, 100);
+        assert!(!s.note("cellsar/alive/processor/p", true));
+        assert!(!s.note("cellsar/alive/echo/e0", false));
+        assert!(s.note("cellsar/alive/processor/p", true));
+        assert_eq!(s.bytes, s.keys.iter().map(String::len).sum::<usize>());
+        // bytes: one huge key at a time
+        let mut s = AliveSet::default();
+        let big = "k".repeat(MAX_ALIVE_KEY_BYTES / 2 + 1);
+        assert!(s.note(&format!("a{big}"), true));
+        assert!(!s.note(&format!("b{big}"), true));
+        assert!(s.bytes <= MAX_ALIVE_KEY_BYTES);
     }
 }
