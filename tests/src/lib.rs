@@ -148,6 +148,36 @@ pub fn run(cmd: &mut Command) {
     assert!(status.success(), "{cmd:?} failed: {status}");
 }
 
+/// `pip install ./python` into the test environment ([`python`]), with its console scripts, with
+/// maturin (from the environment) as the build backend, in the debug profile and in
+/// `target/python-package` (the package is its own workspace), so that a rebuild after a change
+/// is incremental; pip reinstalls the wheel every time (a few seconds when nothing changed).
+pub fn install_python_package() {
+    let python = python();
+    let venv_bin = python
+        .parent()
+        .expect("the venv's bin directory")
+        .to_path_buf();
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let mut paths = vec![venv_bin];
+    paths.extend(std::env::split_paths(&path));
+    run(Command::new(&python)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "--no-build-isolation",
+            "--force-reinstall",
+            "--no-deps",
+        ])
+        .arg(root().join("python"))
+        .env("PATH", std::env::join_paths(paths).expect("PATH"))
+        .env("CARGO_TARGET_DIR", target_dir().join("python-package"))
+        .env("MATURIN_PEP517_ARGS", "--profile dev"));
+}
+
 /// Runs `pytest -q DIR` in the test environment ([`python`]) from the repository root, with
 /// `env` set; panics when a test fails.
 pub fn pytest(dir: &Path, env: &[(&str, &Path)]) {

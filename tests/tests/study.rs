@@ -6,40 +6,10 @@
 //! killed in the middle of the study.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::process::Command;
-
-use harness::{pytest, root, run, target_dir};
-
-/// `pip install ./python` into the test environment (with its `cellsar-study` console script),
-/// with maturin (from the environment) as the build backend, in the debug profile.
-fn install_package() {
-    let python = harness::python();
-    let venv_bin = python
-        .parent()
-        .expect("the venv's bin directory")
-        .to_path_buf();
-    let path = std::env::var_os("PATH").unwrap_or_default();
-    let mut paths = vec![venv_bin];
-    paths.extend(std::env::split_paths(&path));
-    run(Command::new(&python)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "--no-build-isolation",
-            "--force-reinstall",
-            "--no-deps",
-        ])
-        .arg(root().join("python"))
-        .env("PATH", std::env::join_paths(paths).expect("PATH"))
-        .env("CARGO_TARGET_DIR", target_dir().join("python-package"))
-        .env("MATURIN_PEP517_ARGS", "--profile dev"));
-}
+use harness::{install_python_package, pytest, root};
 
 #[test]
 fn studies_on_dask() {
-    install_package();
+    install_python_package();
     pytest(&root().join("tests/python/study"), &[]);
 }
