@@ -219,10 +219,30 @@ mod tests {
     /// Sequence numbers chosen by a publisher (a peer) at the extremes: 0, u64::MAX, a wrap
     /// around to 0, and gaps that would overflow a plain sum: nothing panics, every frame is
     /// delivered, and the missed count saturates.
+    /// Removes the shared-memory files under a prefix when dropped: iceoryx2 leaves its global
+    /// management segment (`/dev/shm/<prefix>…global_mgmt`) behind after its last node.
+    struct ShmCleanup(String);
+
+    impl Drop for ShmCleanup {
+        fn drop(&mut self) {
+            let Ok(entries) = std::fs::read_dir("/dev/shm") else {
+                return;
+            };
+            for e in entries.flatten() {
+                if e.file_name().to_string_lossy().starts_with(&self.0) {
+                    let _ = std::fs::remove_file(e.path());
+                }
+            }
+        }
+    }
+
     #[test]
     fn extreme_sequence_numbers_saturate_the_missed_count() {
         let dir = tempfile::tempdir().unwrap();
-        let env = IoxEnv::isolated(dir.path(), &format!("bt{}_", std::process::id())).unwrap();
+        let prefix = format!("bt{}_", std::process::id());
+        // declared first, so dropped after every iceoryx2 object of the test
+        let _cleanup = ShmCleanup(prefix.clone());
+        let env = IoxEnv::isolated(dir.path(), &prefix).unwrap();
         let (node, _) = FrameNode::new(&env, "seq-extremes").unwrap();
         let spec = FrameServiceSpec {
             subscriber_buffer: 8,
