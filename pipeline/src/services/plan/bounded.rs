@@ -29,6 +29,9 @@ struct Entry<V> {
 /// Values per mission, at most `max_count` of them and `max_bytes` bytes together (the bytes
 /// of each are given when it is inserted); inserting beyond either evicts the least recently
 /// used (inserted or got) first.
+///
+/// Our own because the `lru` crate bounds by count only, not by a weight per entry; eviction
+/// scans for the oldest tick, O(n) over at most [`MAX_HELD_PLANS`]-sized sets.
 pub struct Lru<V> {
     entries: HashMap<MissionId, Entry<V>>,
     tick: u64,
