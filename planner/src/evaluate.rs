@@ -17,6 +17,9 @@ pub const FEASIBILITY_TOL: f64 = 1e-4;
 
 /// Which resolution requirement a plan must meet in every landmark slot. Its names are the
 /// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).
+/// Its `Default` (`Paper`) is what a stored result without the field was made with (serde
+/// reads old `summary.json` files with it); a new plan's default is
+/// [`crate::DEFAULT_RESOLUTION`].
 #[derive(
     Debug,
     Clone,
@@ -54,6 +57,10 @@ impl ResolutionMode {
 }
 
 /// Which vehicle model a plan is made for.
+///
+/// Its `Default` (`Paper`) is what a stored result without the field was made with (serde
+/// reads old `summary.json` files with it); a new plan's default is
+/// [`crate::DEFAULT_DYNAMICS`].
 ///
 /// Names are the same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS`.
 #[derive(

@@ -220,8 +220,9 @@ impl Mission {
     ///   (J the rotation by −90°, so the landmark lies H tan η away, where the sensing centre is);
     ///   where flying straight on at that velocity leaves the resolution cell of the first slot
     ///   wider than d_min, the velocity nearest to it (speed within [V_min, V_m], heading within a
-    ///   quarter turn, [`StartSearch`]) that keeps the landmark in view there with the cell
-    ///   ([`crate::geometry::ResolutionCell::worst_width_m`]) within d_min, when one exists. The
+    ///   quarter turn; the search is `mission::start::StartSearch`) that keeps the landmark in
+    ///   view there with the cell ([`crate::geometry::ResolutionCell::worst_width_m`]) within
+    ///   d_min, when one exists. The
     ///   first slot's velocity can differ from the start velocity by only a_max δ, so a start
     ///   velocity that cannot resolve it would leave that slot unresolved in every flyable plan.
     ///

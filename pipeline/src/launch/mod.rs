@@ -5,7 +5,7 @@
 //!    exit code 2), and the mission's necessary conditions of feasibility
 //!    ([`FailureKind::Infeasible`], exit code 3). (The seconds options were checked when
 //!    parsed, into [`Seconds`].)
-//! 2. Chooses the Zenoh network ([`network`]): by default the private mesh ([`private`]): the
+//! 2. Chooses the Zenoh network ([`network`]): by default the private mesh (module `private`): the
 //!    launcher and every child peers on Unix sockets in a per-run directory of mode 0700, so
 //!    only the user who started the run can connect (no TCP, no multicast, no router); with
 //!    `--router` a router child on such a socket and every process its client; with Zenoh flags, the
@@ -25,7 +25,7 @@
 //! 5. Stops every child (SIGTERM, then SIGKILL after a grace period) at the end, on SIGINT or
 //!    SIGTERM, or when a child keeps failing: one clean-up path for every ending, and an
 //!    `interrupted` event for every interrupted run (also while the Zenoh session opens).
-//!    Shared memory: only what this run made is removed ([`shm`]).
+//!    Shared memory: only what this run made is removed (module `shm`).
 
 mod imaging;
 mod net;

@@ -57,7 +57,7 @@ pub fn cell_margin(p: &crate::Params, q0: Point2<f64>, landmark: Point2<f64>) ->
 }
 
 /// Best effort plans the cell against this fraction of d_min. Its deficit model leaves out the
-/// position margin (see [`resolution_cell_constraints`]), so a step lands on the model's
+/// position margin (see `resolution_cell_constraints`), so a step lands on the model's
 /// boundary, which the true cell at the moved position slightly exceeds; planning 5 % inside
 /// d_min lands the true widths at or under it. On the default 30 m mission, from the
 /// least-energy plan: 0.97 leaves 15 slots unresolved after 40 cone programs, 0.95 the same 15
