@@ -7,7 +7,7 @@
 #   defaults: missions/default-30m.toml radar-sim/scenes/default.toml 1
 #
 # Output: one line per run (wall time, exit code) and the verdict of the comparison;
-# work files under ${OUT:-target/pipeline-bench}.
+# work files under ${OUT:-target/pipeline-bench}; binaries from ${CARGO_TARGET_DIR:-target}/release.
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 M=${1:-missions/default-30m.toml}
@@ -15,17 +15,18 @@ S=${2:-radar-sim/scenes/default.toml}
 R=${3:-1}
 shift $(( $# < 3 ? $# : 3 ))
 OUT=${OUT:-target/pipeline-bench}
+BIN=${CARGO_TARGET_DIR:-target}/release
 cargo build --release -q -p pipeline -p radar-sim || exit 1
 mkdir -p "$OUT"
 for i in $(seq 1 "$R"); do
   rm -rf "$OUT/closed-loop" "$OUT/pipeline"
   # wall, user and system CPU seconds (the launcher's include its reaped children)
   /usr/bin/time -f "%e %U %S" -o "$OUT/closed-loop.time" \
-    target/release/cellsar-radar-sim closed-loop "$M" --scene "$S" --out "$OUT/closed-loop" \
+    "$BIN"/cellsar-radar-sim closed-loop "$M" --scene "$S" --out "$OUT/closed-loop" \
     > "$OUT/closed-loop.log" 2>&1
   rc1=$?
   /usr/bin/time -f "%e %U %S" -o "$OUT/pipeline.time" \
-    target/release/cellsar run "$M" --scene "$S" --out "$OUT/pipeline" "$@" \
+    "$BIN"/cellsar run "$M" --scene "$S" --out "$OUT/pipeline" "$@" \
     > "$OUT/pipeline.log" 2>&1
   rc2=$?
   read -r w1 u1 s1 < <(tail -1 "$OUT/closed-loop.time")
