@@ -1,6 +1,7 @@
 //! `bench`: every participant as its own process, the paths measured side by side, the table.
 
 use super::*;
+use pipeline::certs::ROUTER_ROLE;
 
 pub(super) struct Proc {
     name: String,
@@ -118,19 +119,27 @@ impl TlsConfigs {
         let certs = dir.join("certs");
         pipeline::certs::make_certs(&pipeline::certs::CertsArgs {
             out: certs.clone(),
-            roles: vec![s("bridge-a"), s("bridge-b"), s("probe")],
+            roles: vec![s(ROUTER_ROLE), s("bridge-a"), s("bridge-b"), s("probe")],
             hosts: vec![s("127.0.0.1")],
             days: 1,
             force: true,
         })?;
         let ca = certs.join("ca.pem");
-        let write = |name: &str, side: &str, role: &str| -> Result<PathBuf> {
+        // `role` connects as a client with its own certificate; `listen`, if given, is where it
+        // also serves, with the router's (server) certificate. Zenoh's default listener is
+        // plain TCP, which a TLS configuration refuses, so every side names its listeners.
+        let write = |name: &str, role: &str, listen: &[&str]| -> Result<PathBuf> {
             let path = |p: &Path| serde_json::Value::String(p.display().to_string());
+            let server = ROUTER_ROLE;
             let text = format!(
-                "{{ mode: 'peer', transport: {{ link: {{ tls: {{ root_ca_certificate: {}, \
-                 {side}_private_key: {}, {side}_certificate: {}, enable_mtls: true, \
+                "{{ mode: 'peer', listen: {{ endpoints: {} }}, transport: {{ link: {{ tls: {{ \
+                 root_ca_certificate: {}, listen_private_key: {}, listen_certificate: {}, \
+                 connect_private_key: {}, connect_certificate: {}, enable_mtls: true, \
                  verify_name_on_connect: true }} }} }} }}",
+                serde_json::to_string(listen)?,
                 path(&ca),
+                path(&certs.join(format!("{server}.key"))),
+                path(&certs.join(format!("{server}.pem"))),
                 path(&certs.join(format!("{role}.key"))),
                 path(&certs.join(format!("{role}.pem"))),
             );
@@ -139,9 +148,11 @@ impl TlsConfigs {
             Ok(p)
         };
         Ok(TlsConfigs {
-            b: write("bridge-b.json5", "listen", "bridge-b")?,
-            a: write("bridge-a.json5", "connect", "bridge-a")?,
-            probe: write("probe.json5", "connect", "probe")?,
+            // bridge B's listener comes from its `-l` flag; bridge A serves too, so that the
+            // probe, which meets it through B's gossip, can reach it
+            b: write("bridge-b.json5", "bridge-b", &[])?,
+            a: write("bridge-a.json5", "bridge-a", &["tls/127.0.0.1:0"])?,
+            probe: write("probe.json5", "probe", &[])?,
         })
     }
 }
