@@ -16,13 +16,15 @@ use planner::PlanError;
 use radar_sim::RadarError;
 
 /// The failure of a planning error: an infeasible mission exits 3, a start trajectory that does
-/// not fit or a bad option 2, a solver failure or a time limit 1 (and any later variant 1).
+/// not fit, a bad option or a free altitude the scheme does not plan 2, a solver failure or a
+/// time limit 1 (and any later variant 1).
 pub fn plan_failure(e: PlanError) -> Failure {
     let kind = match &e {
         PlanError::Infeasible(_) => FailureKind::Infeasible,
         PlanError::InvalidInit(_)
         | PlanError::InvalidOption { .. }
-        | PlanError::OptionConflict(_) => FailureKind::BadInput,
+        | PlanError::OptionConflict(_)
+        | PlanError::AltitudeConflict { .. } => FailureKind::BadInput,
         PlanError::Solver { .. } | PlanError::TimeLimit { .. } => FailureKind::Runtime,
         _ => FailureKind::Runtime,
     };
@@ -50,6 +52,10 @@ mod tests {
             plan_failure(PlanError::InvalidInit("x".into())).exit_code(),
             BAD_INPUT
         );
+        let free = PlanError::AltitudeConflict {
+            scheme: planner::Scheme::Exact,
+        };
+        assert_eq!(plan_failure(free).exit_code(), BAD_INPUT);
         let limit = PlanError::TimeLimit {
             limit_s: 1.0,
             iterations: 2,

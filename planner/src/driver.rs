@@ -4,6 +4,7 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
+use crate::altitude::AltitudeMode;
 use crate::evaluate::{evaluate, ResolutionMode};
 use crate::geometry::{distance, Point2};
 use crate::init::{guidance_start_with, precheck_with};
@@ -77,6 +78,16 @@ fn run_plan(
     Ok(out)
 }
 
+/// Refuses a mission whose altitude mode no scheme plans ([`PlanError::AltitudeConflict`]).
+pub(crate) fn check_altitude(mission: &Mission, options: &PlanOptions) -> Result<(), PlanError> {
+    match mission.params().altitude {
+        AltitudeMode::Fixed => Ok(()),
+        AltitudeMode::Free => Err(PlanError::AltitudeConflict {
+            scheme: options.scheme,
+        }),
+    }
+}
+
 /// [`run_plan`] with its clock started at `started`.
 fn run_plan_from(
     started: Instant,
@@ -86,6 +97,7 @@ fn run_plan_from(
     stop: Option<&AtomicBool>,
 ) -> Result<PlanResult, PlanError> {
     options.validate()?;
+    check_altitude(mission, options)?;
     if options.scheme == Scheme::Exact
         && options.resolution == ResolutionMode::General
         && !options.strict_resolution

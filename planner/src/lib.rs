@@ -15,6 +15,7 @@
 //! A pure library: no networking, no command line, no plotting (those live in the `pipeline`
 //! crate, which also holds the `cellsar-planner` binary).
 
+pub mod altitude;
 pub mod dmin;
 pub mod driver;
 pub mod evaluate;
@@ -32,6 +33,7 @@ pub mod summary;
 pub mod tradeoff;
 pub mod trajectory;
 
+pub use altitude::AltitudeMode;
 pub use driver::{
     plan, plan_with_observer, plan_with_stop, IterationRecord, NoObserver, Observer,
     OptionConflict, OptionName, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason,

@@ -328,6 +328,17 @@ impl Mission {
             max_accel_mps2
         );
         o.start_velocity_mps = p.start_velocity_mps;
+        if p.altitude != d.altitude {
+            o.altitude = Some(p.altitude);
+        }
+        o.min_altitude_m = p.min_altitude_m;
+        o.max_altitude_m = p.max_altitude_m;
+        if p.max_climb_mps != d.max_climb_mps {
+            o.max_climb_mps = Some(p.max_climb_mps);
+        }
+        if p.max_descent_mps != d.max_descent_mps {
+            o.max_descent_mps = Some(p.max_descent_mps);
+        }
         MissionFile {
             name: Some(self.name.clone()),
             params: o,

@@ -6,6 +6,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::altitude::{AltitudeMode, DEFAULT_MAX_CLIMB_MPS, DEFAULT_MAX_DESCENT_MPS};
+
 /// Speed of light in vacuum, m/s.
 pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 
@@ -85,6 +87,23 @@ pub struct Params {
     /// [`crate::Mission::start_velocity_mps`] (at rest, unless the first landmark comes too soon
     /// to reach the azimuth speed from rest).
     pub start_velocity_mps: Option<[f64; 2]>,
+    /// `fixed` (default: the whole mission at `altitude_m`) or `free` (an altitude per slot
+    /// within [`Params::min_altitude_m`, `max_altitude_m`] from `altitude_m` at the start;
+    /// [`crate::altitude`]).
+    #[serde(default)]
+    pub altitude: AltitudeMode,
+    /// Least altitude of a `free` mission, m (required with `free`, refused with `fixed`).
+    #[serde(default)]
+    pub min_altitude_m: Option<f64>,
+    /// Greatest altitude of a `free` mission, m (required with `free`, refused with `fixed`).
+    #[serde(default)]
+    pub max_altitude_m: Option<f64>,
+    /// Largest climb rate of a `free` mission, m/s. Default 3 m/s: PX4's `MPC_Z_VEL_MAX_UP`.
+    #[serde(default = "crate::altitude::default_max_climb_mps")]
+    pub max_climb_mps: f64,
+    /// Largest descent rate of a `free` mission, m/s. Default 1 m/s: PX4's `MPC_Z_VEL_MAX_DN`.
+    #[serde(default = "crate::altitude::default_max_descent_mps")]
+    pub max_descent_mps: f64,
 }
 
 /// Standard gravity, m/s².
@@ -126,6 +145,11 @@ impl Default for Params {
             uav_mass_kg: 2.0,
             max_accel_mps2: default_max_accel_mps2(),
             start_velocity_mps: None,
+            altitude: AltitudeMode::Fixed,
+            min_altitude_m: None,
+            max_altitude_m: None,
+            max_climb_mps: DEFAULT_MAX_CLIMB_MPS,
+            max_descent_mps: DEFAULT_MAX_DESCENT_MPS,
         }
     }
 }
@@ -159,6 +183,11 @@ pub struct ParamsOverride {
     pub uav_mass_kg: Option<f64>,
     pub max_accel_mps2: Option<f64>,
     pub start_velocity_mps: Option<[f64; 2]>,
+    pub altitude: Option<AltitudeMode>,
+    pub min_altitude_m: Option<f64>,
+    pub max_altitude_m: Option<f64>,
+    pub max_climb_mps: Option<f64>,
+    pub max_descent_mps: Option<f64>,
 }
 
 /// Which values a scalar parameter may take.
@@ -193,6 +222,11 @@ macro_rules! scalar_fields {
                 if let Some(v) = o.start_m { self.start_m = v; }
                 if let Some(v) = o.bs_m { self.bs_m = v; }
                 if let Some(v) = o.start_velocity_mps { self.start_velocity_mps = Some(v); }
+                if let Some(v) = o.altitude { self.altitude = v; }
+                if let Some(v) = o.min_altitude_m { self.min_altitude_m = Some(v); }
+                if let Some(v) = o.max_altitude_m { self.max_altitude_m = Some(v); }
+                if let Some(v) = o.max_climb_mps { self.max_climb_mps = v; }
+                if let Some(v) = o.max_descent_mps { self.max_descent_mps = v; }
             }
         }
     };
@@ -347,7 +381,7 @@ impl Params {
                 reason: format!("gives {slots} slots, more than the supported {MAX_SLOTS}"),
             });
         }
-        Ok(())
+        crate::altitude::validate(self)
     }
 
     /// Number of slots T_w = T / δ.

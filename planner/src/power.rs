@@ -1,5 +1,6 @@
 //! Rotary-wing propulsion power (paper eq. `speed`, after Zeng et al. 2019) and the pieces the
-//! convex schemes use: the induced-power auxiliary variable of eq. (mu) and its SCA surrogates.
+//! convex schemes use: the induced-power auxiliary variable of eq. (mu) and its SCA surrogates;
+//! and its extension to climbing and descending flight ([`PowerModel::power_3d_w`]).
 
 use crate::Params;
 
@@ -18,6 +19,8 @@ pub struct PowerModel {
     pub induced_velocity_mps: f64,
     /// ½ d_f ρ s A, the coefficient of V³ (W s³/m³).
     pub parasite_coeff: f64,
+    /// Weight W = m g of the vehicle, N (the climb power only: [`PowerModel::climb_w`]).
+    pub weight_n: f64,
 }
 
 impl PowerModel {
@@ -33,6 +36,7 @@ impl PowerModel {
                 * p.air_density_kgpm3
                 * p.rotor_solidity
                 * p.rotor_disc_area_m2,
+            weight_n: p.uav_mass_kg * crate::params::STANDARD_GRAVITY_MPS2,
         }
     }
 
@@ -68,6 +72,33 @@ impl PowerModel {
     /// Total propulsion power P(V), W.
     pub fn power_w(&self, speed_mps: f64) -> f64 {
         self.blade_w(speed_mps) + self.induced_w(speed_mps) + self.parasite_w(speed_mps)
+    }
+
+    /// The extra power of a vertical rate `climb_mps` (v_z, up positive), W:
+    /// W v_z when climbing, 0 when descending or level.
+    ///
+    /// W v_z is the rate at which the vehicle gains potential energy, the work-energy form of the
+    /// rotary-wing model in three dimensions (Zeng, Xu, Zhang, IEEE TWC 2019: the energy of a
+    /// flight adds m g (h_end − h_start) to ∫ P(V) dt). It is a lower bound of the extra power of
+    /// any climb and close to it in forward flight (V ≫ v0, the induced velocity then small);
+    /// near hover momentum theory gives less (about W v_z / 2 for v_z ≪ v0, the induced velocity
+    /// falling as the climb adds inflow), so there it overstates the cost.
+    ///
+    /// Descent is given no credit: a multirotor's motors do not recover the potential energy
+    /// (the work-energy form's −W |v_z| would be a regenerative brake it does not have), and the
+    /// level power is an upper bound of the power in a slow descent (less induced power as the
+    /// descent opposes the inflow). Descent rates near v0 (the vortex-ring state) are outside
+    /// the model; the default limit `max_descent_mps` = 1 m/s is far below v0 = 5.4 m/s.
+    pub fn climb_w(&self, climb_mps: f64) -> f64 {
+        self.weight_n * climb_mps.max(0.0)
+    }
+
+    /// Propulsion power of flight at horizontal speed `speed_mps` and vertical rate `climb_mps`
+    /// (up positive), W: P(V, v_z) = P(V) + W max(v_z, 0) ([`PowerModel::climb_w`] states the
+    /// model and its limits). Convex in (V, v_z) where P(V) is, so the convex schemes can use it.
+    /// Equal to [`PowerModel::power_w`] in level flight and in descent.
+    pub fn power_3d_w(&self, speed_mps: f64, climb_mps: f64) -> f64 {
+        self.power_w(speed_mps) + self.climb_w(climb_mps)
     }
 
     /// Hover power P0 + P1, W.
@@ -190,7 +221,48 @@ mod tests {
         }
     }
 
+    /// Closed forms of the climb extension: W = m g; level flight and descent cost P(V); a climb
+    /// at v_z costs W v_z more.
+    #[test]
+    fn climb_power_closed_forms() {
+        let m = model();
+        assert!((m.weight_n - 2.0 * 9.80665).abs() < 1e-12);
+        for v in [0.0, 7.07, 18.1, 50.0] {
+            assert_eq!(m.power_3d_w(v, 0.0), m.power_w(v));
+            assert_eq!(m.power_3d_w(v, -1.0), m.power_w(v));
+            // PX4's default climb limit of 3 m/s: 3 × 19.613 = 58.84 W more
+            assert!((m.power_3d_w(v, 3.0) - m.power_w(v) - 58.839_9).abs() < 1e-9);
+        }
+    }
+
     proptest! {
+        /// Over any vertical profile with the horizontal speeds fixed, the energy above level
+        /// flight is W times the total height climbed (descents free): a climb from H to H + Δ
+        /// costs exactly W Δ whichever rates it takes.
+        #[test]
+        fn climb_energy_is_weight_times_height_climbed(
+            rates in proptest::collection::vec(-1.0f64..3.0, 1..50), slot_s in 0.1f64..2.0,
+        ) {
+            let m = model();
+            let extra: f64 = rates
+                .iter()
+                .map(|&vz| (m.power_3d_w(18.0, vz) - m.power_w(18.0)) * slot_s)
+                .sum();
+            let climbed: f64 = rates.iter().map(|&vz| vz.max(0.0) * slot_s).sum();
+            prop_assert!((extra - m.weight_n * climbed).abs() <= 1e-9 * (1.0 + extra.abs()));
+        }
+
+        /// P(V, v_z) is convex along any segment (midpoint inequality) in the speed range where
+        /// P(V) is convex (above the speed of least power) and in v_z everywhere.
+        #[test]
+        fn power_3d_is_midpoint_convex(
+            v1 in 18.2f64..50.0, v2 in 18.2f64..50.0, z1 in -1.0f64..3.0, z2 in -1.0f64..3.0,
+        ) {
+            let m = model();
+            let mid = m.power_3d_w(0.5 * (v1 + v2), 0.5 * (z1 + z2));
+            prop_assert!(mid <= 0.5 * (m.power_3d_w(v1, z1) + m.power_3d_w(v2, z2)) + 1e-9);
+        }
+
         /// The tangent of eq. (eq.q) lies below x² + y²/v0² everywhere and touches it at the point.
         #[test]
         fn eq_q_tangent_is_a_global_lower_bound(

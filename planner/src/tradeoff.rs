@@ -73,6 +73,7 @@ pub fn tradeoff_with_observer(
         ..options.clone()
     };
     options.validate()?;
+    crate::driver::check_altitude(mission, &options)?;
     let basis = BestEffortBasis::new(
         mission,
         &options,

@@ -54,6 +54,17 @@ pub enum PlanError {
         /// The vehicle model asked for.
         dynamics: crate::evaluate::Dynamics,
     },
+    /// A mission with `altitude = "free"` given to a scheme that plans at one altitude (every
+    /// scheme, until per-slot altitudes are planned): refused rather than planned at the fixed
+    /// altitude `altitude_m`.
+    #[error(
+        "mission parameter `altitude` = \"free\": the scheme {scheme} plans at the fixed \
+         altitude `altitude_m` only, not per-slot altitudes (set altitude = \"fixed\")"
+    )]
+    AltitudeConflict {
+        /// The scheme.
+        scheme: super::Scheme,
+    },
     /// An option is out of range.
     #[error("option `{field}` = {value}: {reason}")]
     InvalidOption {

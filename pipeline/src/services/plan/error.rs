@@ -87,7 +87,8 @@ impl ServiceError {
                 error:
                     PlanError::InvalidInit(_)
                     | PlanError::InvalidOption { .. }
-                    | PlanError::OptionConflict(_),
+                    | PlanError::OptionConflict(_)
+                    | PlanError::AltitudeConflict { .. },
                 ..
             } => RefusalKind::BadRequest,
             ServiceError::Plan {
