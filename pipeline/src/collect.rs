@@ -406,6 +406,7 @@ mod tests {
             spacing_m: 0.5,
             multilook: (0..pixels).map(|i| 1.0 + i as f32).collect(),
             markers: vec![(1, 2)],
+            processor: "p1".into(),
         }
     }
 
@@ -543,6 +544,7 @@ mod tests {
             mission_id: MissionId(7),
             apertures: verdicts.len() as u32,
             metrics: m,
+            processor: "p1".into(),
         }
     }
 

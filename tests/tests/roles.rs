@@ -1,14 +1,18 @@
 //! A hostile peer on the launcher's own mesh (loopback, no authentication): it forges a
-//! processor status `{role: "processor", state: "failed"}`, detections of every aperture
-//! under an instance name of its own, and an image of aperture 0 whose pixel count is not
-//! `nx × ny`, before and during a normal run; it also answers the launcher's plan request at
-//! once with a plan of another mission, and publishes that plan under a mission id its content
-//! does not give. A malformed image is counted and skipped, never fatal, and the aperture's
-//! real image still counts; the forged plan reply is skipped and the planner's taken; the echo
-//! and the processor skip the published plan whose id they recompute. The launcher accepts
-//! statuses and detections only from the instances that announced themselves in their role
-//! (liveliness), so the run neither aborts nor takes a forged result: it completes with the
-//! closed loop's detections, and the forgeries are counted as foreign.
+//! processor status `{role: "processor", state: "failed"}`, detections of every aperture,
+//! well-formed images of every aperture and the mission's metrics with another `pd` (agreeing
+//! with the real detections: the closed loop's, the same mission's), all under an instance name
+//! of its own, and an image of aperture 0 whose pixel count is not `nx × ny` under the live
+//! processor's instance, before and during a normal run; it also answers the launcher's plan
+//! request at once with a plan of another mission, and publishes that plan under a mission id
+//! its content does not give. A malformed image is counted and skipped, never fatal, and the
+//! aperture's real image still counts; the forged plan reply is skipped and the planner's taken;
+//! the echo and the processor skip the published plan whose id they recompute. The launcher
+//! accepts statuses, detections, images and metrics only from the instances that announced
+//! themselves in their role (liveliness), so the run neither aborts nor takes a forged result:
+//! it completes with the closed loop's detections, images and metrics, and the forgeries are
+//! counted as foreign. The same holds when the forger announces itself alive as another role
+//! (the echo) under the instance name its forgeries claim.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -16,13 +20,35 @@ use std::time::Duration;
 
 use harness::pipeline::*;
 
-#[test]
-fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
-    const H: f64 = 30.0;
+const H: f64 = 30.0;
+
+/// Starts a forger in `d` (forging every 5 ms for up to 600 s, with `extra` flags) listening
+/// on a loopback endpoint, and a run of [`H`] s that connects to it; returns both once the
+/// run ended, after checking that it succeeded with the reference outputs, and the launcher's
+/// log.
+fn run_against_forger(d: &std::path::Path, extra: &[&str]) -> (Service, Launch, String) {
     let reference = reference(H);
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
     let hub = format!("tcp/127.0.0.1:{}", harness::free_port());
+    let template = reference.join("processed/metrics.json");
+    let mut args: Vec<String> = [
+        "forge",
+        "--duration-s",
+        "600",
+        "--interval-ms",
+        "5",
+        "--forge-results",
+        "--metrics-template",
+        &template.display().to_string(),
+        "-m",
+        "peer",
+        "-l",
+        &hub,
+        "--no-multicast-scouting",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    args.extend(extra.iter().map(|s| s.to_string()));
     // the forger listens first and the launcher connects to it, so that the forger is on the
     // mesh before the run plans (a run of this length is over in about 2 s)
     let forger = Service::start_exe_in(
@@ -30,20 +56,7 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
         &harness::bin("cellsar-bridge-bench"),
         "forger",
         d,
-        &[
-            "forge".into(),
-            "--duration-s".into(),
-            "600".into(),
-            "--interval-ms".into(),
-            "5".into(),
-            "--malformed-images".into(),
-            "--forge-plans".into(),
-            "-m".into(),
-            "peer".into(),
-            "-l".into(),
-            hub.clone(),
-            "--no-multicast-scouting".into(),
-        ],
+        &args,
     );
     forger.wait_for_log("READY", Duration::from_secs(60));
     let mut l = Launch::start(d, H, &["-e", &hub, "--no-multicast-scouting"]);
@@ -54,7 +67,28 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
         l.stderr_tail(),
         forger.log_text()
     );
+    // neither the forged images nor the forged metrics displaced the real ones
     assert_same_as_reference(&l.out, &reference);
+    let log = std::fs::read_to_string(d.join("launcher.err")).unwrap();
+    let p = l.pipeline_json();
+    let refused = &p["collector"]["refused_by_kind"];
+    for kind in ["status", "detections", "images", "metrics"] {
+        assert!(refused[kind].as_u64().unwrap() > 0, "{kind}: {refused}");
+    }
+    for kind in ["image", "metrics"] {
+        assert!(
+            log.contains(&format!("foreign {kind} skipped")),
+            "{kind}:\n{log}"
+        );
+    }
+    (forger, l, log)
+}
+
+#[test]
+fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (forger, l, log) = run_against_forger(d, &["--malformed-images", "--forge-plans"]);
     assert!(
         forger.log_text().contains("forging for mission"),
         "{}",
@@ -73,7 +107,6 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
         "{}",
         p["collector"]
     );
-    let log = std::fs::read_to_string(d.join("launcher.err")).unwrap();
     assert!(
         log.contains("foreign status skipped"),
         "{}\n{log}",
@@ -113,6 +146,24 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
         );
     }
     assert!(!log.contains("gave up the mission"), "{log}");
+}
+
+/// A forger alive as the echo, whose forgeries claim its own (echo) instance: its images,
+/// metrics, detections and processor statuses are refused as another role's, and the run ends
+/// with the reference outputs.
+#[test]
+fn forged_images_and_metrics_from_another_role_are_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let (forger, _l, log) = run_against_forger(
+        dir.path(),
+        &["--announce-as", "echo", "--instance", "intruder-echo"],
+    );
+    assert!(
+        log.contains(r#"from processor "intruder-echo", which never announced itself"#),
+        "{log}"
+    );
+    let report = forger.log_text();
+    assert!(report.contains("forging for mission"), "{report}");
 }
 
 /// The launcher's own mesh (no Zenoh flag) is private to the user who started the run: every

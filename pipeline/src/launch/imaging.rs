@@ -1,5 +1,6 @@
 //! Step 2 of a run: collecting every aperture's detections and image and the mission's
-//! metrics as the processor publishes them, showing progress, and asking the processor again
+//! metrics as the processor publishes them (each only from a processor instance that announced
+//! itself, [`crate::senders::Senders`]), showing progress, and asking the processor again
 //! for results that it finished but that did not arrive here.
 
 use std::collections::BTreeMap;
@@ -137,11 +138,19 @@ impl Session<'_> {
             }
         }
         while let Some(img) = self.subs.images.try_recv() {
+            if self.senders.image(&img.key, &img.message).is_err() {
+                c.col.foreign += 1;
+                continue;
+            }
             if c.col.add_image(&img.message)? == Added::New {
                 progressed = true;
             }
         }
         while let Some(m) = self.subs.metrics.try_recv() {
+            if self.senders.metrics(&m.key, &m.message).is_err() {
+                c.col.foreign += 1;
+                continue;
+            }
             c.col.add_metrics(m.message);
         }
         if !had_metrics && c.col.has_metrics() {

@@ -80,7 +80,7 @@ impl Session<'_> {
             "aperture_done_s": c.aperture_done_s,
             "restarts": self.restarts(),
             "collector": {"duplicates": c.col.duplicates, "foreign": c.col.foreign, "malformed": c.col.malformed, "resend_requests": c.resend_requests,
-                "refused_senders": self.senders.refused, "refused_plans": self.refused_plans,
+                "refused_senders": self.senders.refused, "refused_by_kind": self.senders.refused_by_kind(), "refused_plans": self.refused_plans,
                 "detections": subs.detections.counters().snapshot(),
                 "images": subs.images.counters().snapshot(),
                 "metrics": subs.metrics.counters().snapshot(),

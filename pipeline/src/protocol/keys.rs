@@ -11,9 +11,10 @@
 //!                                   when the bridge carries them
 //! cellsar/<m>/echo/request          queryable of the echo: ApertureRequest -> RequestAck
 //! cellsar/<m>/frames                FrameInfo per frame sent (droppable)
-//! cellsar/<m>/detections            ApertureDetections per aperture (JSON)
-//! cellsar/<m>/image/<n>             ApertureImage of aperture n
-//! cellsar/<m>/metrics               MissionMetrics when every aperture is done
+//! cellsar/<m>/detections            ApertureDetections per aperture (JSON), naming the processor
+//! cellsar/<m>/image/<n>             ApertureImage of aperture n, naming the processor
+//! cellsar/<m>/metrics               MissionMetrics when every aperture is done, naming the
+//!                                   processor
 //! cellsar/<m>/results               queryable of the processor: ResultRequest -> ResultAck
 //! ```
 //! `<m>` is the mission id, 16 hex digits ([`super::plan::mission_id`]).

@@ -213,12 +213,17 @@ pub struct ApertureImage {
     pub multilook: Vec<f32>,
     /// Detection markers (column, row).
     pub markers: Vec<(u32, u32)>,
+    /// Processor instance that made the image (its liveliness token
+    /// `cellsar/alive/processor/<instance>`): the launcher takes images only from a processor
+    /// instance it saw alive, as it takes detections.
+    pub processor: String,
 }
 
 impl Message for ApertureImage {
     const KIND: u16 = 0x0305;
     const NAME: &'static str = "radar.aperture_image";
-    const SCHEMA_VERSION: u16 = 1;
+    /// 2: the image names the processor instance that made it (`processor`).
+    const SCHEMA_VERSION: u16 = 2;
 }
 
 /// The mission's processing metrics (`cellsar/<mission>/metrics`), as `metrics.json` of
@@ -231,6 +236,10 @@ pub struct MissionMetrics {
     pub apertures: u32,
     /// The metrics.
     pub metrics: Metrics,
+    /// Processor instance that publishes them (its liveliness token
+    /// `cellsar/alive/processor/<instance>`): the launcher takes metrics only from a processor
+    /// instance it saw alive, as it takes detections.
+    pub processor: String,
 }
 
 impl Message for MissionMetrics {
@@ -239,7 +248,8 @@ impl Message for MissionMetrics {
     /// 2: the metrics of the physics review (direct-path suppression and the residual over the
     /// predicted floor instead of `dpi_reduction_db`, per-object Pd, pixel-level and
     /// Euler-characteristic false-alarm designs, resolution pairs with one definition).
-    const SCHEMA_VERSION: u16 = 2;
+    /// 3: the metrics name the processor instance that publishes them (`processor`).
+    const SCHEMA_VERSION: u16 = 3;
 }
 
 /// Ask the processor to publish the results of some apertures again (and the metrics); sent as

@@ -105,8 +105,9 @@ impl Message for StoredOutcome {
     const NAME: &'static str = "radar.stored_outcome";
     /// 2: the outcome nests its tally and no longer repeats the aperture index (a version-1
     /// file in a state directory is ignored, and that aperture processed again). 3: the tally
-    /// carries the physics review's metrics (an older file is ignored the same way).
-    const SCHEMA_VERSION: u16 = 3;
+    /// carries the physics review's metrics (an older file is ignored the same way). 4: the
+    /// image names its processor instance (`radar.aperture_image` 2).
+    const SCHEMA_VERSION: u16 = 4;
 }
 
 /// The pulse as `cellsar-radar-sim simulate` writes it to `pulses.csv` and `process` reads it
@@ -220,6 +221,9 @@ impl ProcContext {
                 spacing_m: r.grid.spacing_m,
                 multilook: r.multilook,
                 markers,
+                // named when published (an outcome restored after a restart is published
+                // under the processor's instance of now)
+                processor: String::new(),
             },
             process_s: t0.elapsed().as_secs_f64(),
         })

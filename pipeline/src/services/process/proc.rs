@@ -620,6 +620,7 @@ impl Proc<'_> {
                     mission_id: id,
                     apertures: run.outcomes.len() as u32,
                     metrics,
+                    processor: self.args.instance.clone(),
                 };
                 if let Some(d) = &run.dir {
                     if let Err(e) = store_metrics(d, &mm) {

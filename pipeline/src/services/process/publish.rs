@@ -34,6 +34,13 @@ const MAX_UNKNOWN_MISSING: usize = 4096;
 impl Proc<'_> {
     /// Publishes aperture `k` of mission `i`: its detections and its image.
     pub(super) fn publish_outcome(&mut self, i: usize, k: usize) {
+        // the image names this instance (one restored from the state directory may have been
+        // made by an instance before a restart)
+        if let Some(o) = self.runs[i].outcomes.get_mut(&k) {
+            if o.image.processor != self.args.instance {
+                o.image.processor.clone_from(&self.args.instance);
+            }
+        }
         let run = &self.runs[i];
         let id = run.ctx.base.mission_id;
         let Some(o) = run.outcomes.get(&k) else {
@@ -98,6 +105,11 @@ impl Proc<'_> {
 
     /// Publishes the metrics of mission `i`, once done.
     pub(super) fn publish_metrics(&mut self, i: usize) {
+        if let Some(m) = self.runs[i].metrics.as_mut() {
+            if m.processor != self.args.instance {
+                m.processor.clone_from(&self.args.instance);
+            }
+        }
         let run = &self.runs[i];
         let id = run.ctx.base.mission_id;
         let Some(m) = &run.metrics else { return };

@@ -1,11 +1,21 @@
 //! `forge`: a hostile peer of the pipeline. It learns the mission ids from the keys it may
 //! see (plans, statuses) and, for each, keeps publishing a forged processor status
 //! `{role: "processor", state: "failed"}` and forged detections of every aperture (one
-//! detection far off the scene at `FORGED_X_M`), under an instance name of its own; with
-//! `--malformed-images`, also an image of aperture 0 (which every mission has) whose pixel
-//! count is not `nx × ny`; with `--forge-plans`, it answers every plan request at once with
-//! a plan of another mission (planned when it starts), and publishes that plan under a mission
-//! id its content does not give (`FORGED_PLAN_ID`).
+//! detection far off the scene at `FORGED_X_M`), under an instance name of its own.
+//!
+//! - `--malformed-images`: also an image of aperture 0 (which every mission has) whose pixel
+//!   count is not `nx × ny`, claiming the live processor's instance (liveliness tokens are
+//!   public on a plain mesh, so it passes the sender check and meets the consistency check);
+//! - `--forge-plans`: it answers every plan request at once with a plan of another mission
+//!   (planned when it starts), and publishes that plan under a mission id its content does not
+//!   give (`FORGED_PLAN_ID`);
+//! - `--forge-results`: well-formed images of every aperture (`FORGED_IMAGE_PX` square, one
+//!   marker) under its own instance name and, with `--metrics-template` (the `metrics.json` of
+//!   the same mission, say the closed loop's), those metrics claiming `pd` = `FORGED_PD`: they
+//!   agree with the real detections (same per-aperture verdicts and counts), so only the
+//!   sender check tells them from the real ones;
+//! - `--announce-as <role>`: its liveliness token is `cellsar/alive/<role>/<--instance>`, so
+//!   the forged messages claim an instance that is alive, in another role.
 
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
@@ -17,17 +27,29 @@ use bridge::zenoh::sample::Sample;
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohArgs};
 use pipeline::protocol::{
-    keys, ApertureDetections, ApertureImage, Detection, Plan, PlanRequest, ServiceStatus,
+    keys, ApertureDetections, ApertureImage, Detection, MissionMetrics, Plan, PlanRequest,
+    ServiceStatus,
 };
 use serde::Serialize;
 
 use super::{ready, report, tools::z_node};
+
+mod flood;
 
 /// The mission id the published forged plan claims (its content gives another).
 pub(super) const FORGED_PLAN_ID: MissionId = MissionId(0x5eed_5eed_5eed_5eed);
 
 /// x of the forged detection, m: far from any scene's landmarks.
 pub(super) const FORGED_X_M: f64 = 987_654.0;
+
+/// The liveliness keys of processors, up to the instance.
+const PROCESSOR_ALIVE: &str = "cellsar/alive/processor/";
+
+/// Side of a forged well-formed image, pixels.
+pub(super) const FORGED_IMAGE_PX: u32 = 8;
+
+/// The detection probability forged metrics claim.
+pub(super) const FORGED_PD: f64 = 0.123_456;
 
 /// The flags of `forge`.
 #[derive(clap::Args, Debug, Clone)]
@@ -50,6 +72,20 @@ pub(super) struct ForgeArgs {
     /// Also answer every plan request (cellsar/plan) at once with a plan of another mission.
     #[arg(long)]
     forge_plans: bool,
+    /// Also publish well-formed images of every aperture (and metrics, with
+    /// --metrics-template) under the forged instance name.
+    #[arg(long)]
+    forge_results: bool,
+    /// metrics.json of the same mission to forge metrics from (pd replaced); with
+    /// --forge-results.
+    #[arg(long)]
+    metrics_template: Option<std::path::PathBuf>,
+    /// Announce the forger alive as this role with the forged instance name (default: role
+    /// "forge", instance "forge-<pid>").
+    #[arg(long)]
+    announce_as: Option<String>,
+    #[command(flatten)]
+    flood: flood::FloodArgs,
     #[command(flatten)]
     zenoh: ZenohArgs,
 }
@@ -60,8 +96,10 @@ struct ForgeReport {
     statuses: u64,
     detections: u64,
     images: u64,
+    metrics: u64,
     plans: u64,
     errors: u64,
+    flood: flood::Flooded,
 }
 
 /// A plan of a mission of its own ("forged"), for answering plan requests.
@@ -94,24 +132,87 @@ fn mission_of(key: &str) -> Option<MissionId> {
 struct Forger {
     status: TypedPublisher<ServiceStatus>,
     detections: TypedPublisher<ApertureDetections>,
-    images: Vec<TypedPublisher<ApertureImage>>,
+    /// (aperture, publisher, image).
+    images: Vec<(u32, TypedPublisher<ApertureImage>, ApertureImage)>,
+    metrics: Option<TypedPublisher<MissionMetrics>>,
+}
+
+/// An image of aperture `k`: with `malformed`, 8 × 8 pixels announced and 63 sent; otherwise
+/// a consistent [`FORGED_IMAGE_PX`]-square image with one marker.
+fn forged_image(id: MissionId, k: u32, malformed: bool, instance: &str) -> ApertureImage {
+    let n = FORGED_IMAGE_PX;
+    let pixels = (n * n) as usize - usize::from(malformed);
+    ApertureImage {
+        mission_id: id,
+        aperture: k,
+        nx: n,
+        ny: n,
+        centre_m: [FORGED_X_M, 0.0],
+        spacing_m: 1.0,
+        multilook: vec![1.0e3; pixels],
+        markers: if malformed { Vec::new() } else { vec![(1, 1)] },
+        processor: instance.to_string(),
+    }
+}
+
+/// The metrics of `template` (a `metrics.json` of the same mission, so its per-aperture
+/// summaries agree with the real detections) for mission `id`, claiming [`FORGED_PD`].
+fn forged_metrics(
+    template: &radar_sim::run::Metrics,
+    id: MissionId,
+    instance: &str,
+) -> MissionMetrics {
+    MissionMetrics {
+        mission_id: id,
+        apertures: template.apertures.len() as u32,
+        metrics: radar_sim::run::Metrics {
+            pd: FORGED_PD,
+            ..template.clone()
+        },
+        processor: instance.to_string(),
+    }
 }
 
 pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
-    let node = z_node(&a.zenoh, "forge")?;
+    let node = match &a.announce_as {
+        Some(role) => bridge::ZenohNode::open(a.zenoh.to_config()?, role, &a.instance)?,
+        None => z_node(&a.zenoh, "forge")?,
+    };
+    let template: Option<radar_sim::run::Metrics> = match &a.metrics_template {
+        Some(p) => Some(serde_json::from_str(&std::fs::read_to_string(p).map_err(
+            |e| anyhow::anyhow!("--metrics-template {}: {e}", p.display()),
+        )?)?),
+        None => None,
+    };
+    let base_plan = if a.forge_plans || a.flood.flood_plans > 0 {
+        Some(forged_plan()?)
+    } else {
+        None
+    };
+    let flood_plans = base_plan
+        .as_ref()
+        .map(|p| flood::plans(p, &a.flood))
+        .unwrap_or_default();
+    // not the missions of its own plans
+    let own: Arc<BTreeSet<MissionId>> = Arc::new(
+        flood_plans
+            .iter()
+            .map(|p| p.mission_id)
+            .chain([FORGED_PLAN_ID])
+            .collect(),
+    );
     let seen: Arc<Mutex<BTreeSet<MissionId>>> = Arc::default();
     // whatever the router lets through: plans (the echo's certificate may read them) or
     // statuses (anyone on a plain mesh)
     let mut subs = Vec::new();
     for sel in [keys::ALL_PLANS, keys::ALL_STATUS] {
         let s = seen.clone();
+        let own = own.clone();
         subs.push(
             node.session()
                 .declare_subscriber(sel)
                 .callback(move |sample: Sample| {
-                    // not the mission of its own forged plan
-                    let id =
-                        mission_of(sample.key_expr().as_str()).filter(|id| *id != FORGED_PLAN_ID);
+                    let id = mission_of(sample.key_expr().as_str()).filter(|id| !own.contains(id));
                     if let (Some(id), Ok(mut s)) = (id, s.lock()) {
                         s.insert(id);
                     }
@@ -120,10 +221,9 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
                 .map_err(|e| anyhow::anyhow!("subscribing to {sel}: {e}"))?,
         );
     }
-    let plans = if a.forge_plans {
+    let plans = if let (true, Some(plan)) = (a.forge_plans, base_plan) {
         let q =
             node.queryable::<PlanRequest>(keys::PLAN, bridge::net::SubscribeOptions::default())?;
-        let plan = forged_plan()?;
         let wrong_id = Plan {
             mission_id: FORGED_PLAN_ID,
             ..plan.clone()
@@ -139,9 +239,12 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     } else {
         None
     };
+    let alive = node.watch_liveliness(&format!("{PROCESSOR_ALIVE}*"))?;
     ready();
-    let mut forgers: Vec<(MissionId, Forger)> = Vec::new();
     let mut r = ForgeReport::default();
+    flood::publish_plans(&node, &flood_plans, &mut r.flood)?;
+    drop(flood_plans);
+    let mut forgers: Vec<(MissionId, Forger)> = Vec::new();
     let end = Instant::now() + a.duration_s.duration();
     while Instant::now() < end {
         if let Some((q, plan, publisher, wrong_id)) = &plans {
@@ -170,80 +273,51 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
                     mission_id: id,
                     ..PublishOptions::json()
                 };
+                let bin = PublishOptions {
+                    mission_id: id,
+                    ..PublishOptions::default()
+                };
                 let mut images = Vec::new();
                 if a.malformed_images {
-                    let o = PublishOptions {
-                        mission_id: id,
-                        ..PublishOptions::default()
-                    };
-                    images.push(node.publisher(&keys::image(id, 0)?, o)?);
+                    let img = forged_image(id, 0, true, &a.instance);
+                    images.push((0, node.publisher(&keys::image(id, 0)?, bin)?, img));
                 }
+                if a.forge_results {
+                    for k in 0..a.apertures {
+                        let img = forged_image(id, k, false, &a.instance);
+                        let key = keys::image(id, k as usize)?;
+                        images.push((k, node.publisher(&key, bin)?, img));
+                    }
+                }
+                let metrics = if a.forge_results && template.is_some() {
+                    Some(node.publisher(&keys::metrics(id)?, bin)?)
+                } else {
+                    None
+                };
                 forgers.push((
                     id,
                     Forger {
                         status: node.publisher(&keys::status(id, "processor")?, opts)?,
                         detections: node.publisher(&keys::detections(id)?, opts)?,
                         images,
+                        metrics,
                     },
                 ));
             }
         }
+        // the malformed images (each forger's first) claim a live processor's instance
+        let live = alive.alive();
+        let live = live.iter().find_map(|k| k.strip_prefix(PROCESSOR_ALIVE));
+        if let (Some(p), true) = (live, a.malformed_images) {
+            for (_, f) in forgers.iter_mut() {
+                if let Some((_, _, img)) = f.images.first_mut() {
+                    img.processor = p.to_string();
+                }
+            }
+        }
         for (id, f) in &forgers {
-            let status = ServiceStatus {
-                role: "processor".into(),
-                instance: a.instance.clone(),
-                mission_id: *id,
-                state: "failed".into(),
-                message: "forged".into(),
-                ..ServiceStatus::default()
-            };
-            match f.status.put(&status) {
-                Ok(_) => r.statuses += 1,
-                Err(_) => r.errors += 1,
-            }
-            for k in 0..a.apertures {
-                let d = ApertureDetections {
-                    mission_id: *id,
-                    aperture: k,
-                    apertures: a.apertures,
-                    landmark: None,
-                    landmark_detected: Some(true),
-                    landmark_snr_db: None,
-                    detections: vec![Detection {
-                        aperture: k as usize,
-                        x_m: FORGED_X_M,
-                        y_m: 0.0,
-                        snr_db: 99.0,
-                        pixels: 1,
-                        truth_id: None,
-                        error_m: None,
-                    }],
-                    false_alarms: 0,
-                    process_s: 0.0,
-                    processor: a.instance.clone(),
-                };
-                match f.detections.put(&d) {
-                    Ok(_) => r.detections += 1,
-                    Err(_) => r.errors += 1,
-                }
-            }
-            for (k, p) in f.images.iter().enumerate() {
-                // 8 × 8 pixels announced, 63 sent
-                let img = ApertureImage {
-                    mission_id: *id,
-                    aperture: k as u32,
-                    nx: 8,
-                    ny: 8,
-                    centre_m: [0.0, 0.0],
-                    spacing_m: 1.0,
-                    multilook: vec![1.0; 63],
-                    markers: Vec::new(),
-                };
-                match p.put(&img) {
-                    Ok(_) => r.images += 1,
-                    Err(_) => r.errors += 1,
-                }
-            }
+            forge_round(*id, f, a, template.as_ref(), &mut r);
+            flood::flood_queries(&node, *id, &a.flood, &mut r.flood);
         }
         std::thread::sleep(Duration::from_millis(a.interval_ms));
     }
@@ -252,4 +326,65 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     report(&r)?;
     node.close()?;
     Ok(())
+}
+
+/// One round of forgeries for mission `id`: a failed processor status, detections of every
+/// aperture, the images and the metrics that `f` forges.
+fn forge_round(
+    id: MissionId,
+    f: &Forger,
+    a: &ForgeArgs,
+    template: Option<&radar_sim::run::Metrics>,
+    r: &mut ForgeReport,
+) {
+    let status = ServiceStatus {
+        role: "processor".into(),
+        instance: a.instance.clone(),
+        mission_id: id,
+        state: "failed".into(),
+        message: "forged".into(),
+        ..ServiceStatus::default()
+    };
+    match f.status.put(&status) {
+        Ok(_) => r.statuses += 1,
+        Err(_) => r.errors += 1,
+    }
+    for k in 0..a.apertures {
+        let d = ApertureDetections {
+            mission_id: id,
+            aperture: k,
+            apertures: a.apertures,
+            landmark: None,
+            landmark_detected: Some(true),
+            landmark_snr_db: None,
+            detections: vec![Detection {
+                aperture: k as usize,
+                x_m: FORGED_X_M,
+                y_m: 0.0,
+                snr_db: 99.0,
+                pixels: 1,
+                truth_id: None,
+                error_m: None,
+            }],
+            false_alarms: 0,
+            process_s: 0.0,
+            processor: a.instance.clone(),
+        };
+        match f.detections.put(&d) {
+            Ok(_) => r.detections += 1,
+            Err(_) => r.errors += 1,
+        }
+    }
+    for (_, p, img) in &f.images {
+        match p.put(img) {
+            Ok(_) => r.images += 1,
+            Err(_) => r.errors += 1,
+        }
+    }
+    if let (Some(p), Some(t)) = (&f.metrics, template) {
+        match p.put(&forged_metrics(t, id, &a.instance)) {
+            Ok(_) => r.metrics += 1,
+            Err(_) => r.errors += 1,
+        }
+    }
 }
