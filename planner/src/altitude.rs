@@ -83,6 +83,18 @@ pub fn bounds_m(p: &Params) -> (f64, f64) {
     }
 }
 
+/// The parameters of a slot flown at altitude `altitude_m` (`H_t`): `p` with `altitude_m` set
+/// to it and the sensing radius of the same antenna there, `sensing_radius_m` · H_t / H
+/// (r_s = λ_c H / (2 W_a cos² η) scales with the altitude: paper-notes erratum 5). Everything
+/// the geometry derives from H (the centre offset H tan η, V_min, the resolutions and the
+/// cell) then follows H_t.
+pub fn params_at(p: &Params, altitude_m: f64) -> Params {
+    let mut at = p.clone();
+    at.sensing_radius_m = p.sensing_radius_m * (altitude_m / p.altitude_m);
+    at.altitude_m = altitude_m;
+    at
+}
+
 /// Checks the altitude settings of `p` (its `altitude_m` already checked); the error names the
 /// field: the rates finite and > 0; with `free` both bounds present, finite, > 0 and
 /// min ≤ `altitude_m` ≤ max; with `fixed` no bounds (they would be silently unused).

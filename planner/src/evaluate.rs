@@ -164,6 +164,14 @@ pub struct SlotEval {
     /// Acceleration into this slot, ‖v_t − v_{t−1}‖ / δ with v_0 the start velocity, m/s².
     #[serde(default)]
     pub accel_mps2: f64,
+    /// Altitude H_t at the end of the slot, m: the mission's `altitude_m` unless a profile is
+    /// evaluated ([`evaluate_with_altitudes`]); 0 in results stored before the field.
+    #[serde(default)]
+    pub z_m: f64,
+    /// Vertical rate of the slot, (H_t − H_{t−1}) / δ with H_0 = `altitude_m`, m/s (up
+    /// positive; 0 at a fixed altitude).
+    #[serde(default)]
+    pub climb_mps: f64,
 }
 
 /// The largest violation of each constraint over the slots it applies to (0 = satisfied).
@@ -183,6 +191,13 @@ pub struct Violations {
     /// counted in feasibility only under [`Dynamics::Vehicle`]), m/s².
     #[serde(default)]
     pub accel_mps2: f64,
+    /// max over all slots of the altitude outside [`min_altitude_m`, `max_altitude_m`] (the
+    /// mission's `altitude_m` for both at a fixed altitude), m.
+    #[serde(default)]
+    pub altitude_m: f64,
+    /// max over all slots of (v_z − `max_climb_mps`)⁺ and (−v_z − `max_descent_mps`)⁺, m/s.
+    #[serde(default)]
+    pub climb_mps: f64,
 }
 
 impl Violations {
@@ -192,6 +207,12 @@ impl Violations {
             && self.min_speed_mps <= tol
             && self.max_speed_mps <= tol
             && self.range_paper_m <= tol
+    }
+
+    /// True when the altitude bounds and the climb and descent rates hold within `tol` (always
+    /// for a trajectory at the mission's fixed altitude).
+    pub fn altitude_ok(&self, tol: f64) -> bool {
+        self.altitude_m <= tol && self.climb_mps <= tol
     }
 }
 
@@ -222,12 +243,17 @@ pub struct Evaluation {
     /// The acceleration limit the violation is measured against, m/s².
     #[serde(default)]
     pub accel_limit_mps2: f64,
+    /// Altitude at the start H_0 (the mission's `altitude_m`), m; 0 in results stored before
+    /// the field.
+    #[serde(default)]
+    pub start_altitude_m: f64,
 }
 
 impl Evaluation {
-    /// True when every constraint of (p2) holds on the exact geometry within [`FEASIBILITY_TOL`].
+    /// True when every constraint of (p2) holds on the exact geometry within [`FEASIBILITY_TOL`],
+    /// and the altitude bounds and rates ([`Violations::altitude_ok`]).
     pub fn is_feasible(&self) -> bool {
-        self.violations.p2_ok(FEASIBILITY_TOL)
+        self.violations.p2_ok(FEASIBILITY_TOL) && self.violations.altitude_ok(FEASIBILITY_TOL)
     }
 
     /// [`Evaluation::is_feasible`], plus, under [`ResolutionMode::General`], the worst width of
@@ -260,12 +286,53 @@ impl Evaluation {
     }
 }
 
-/// Evaluates `traj` against `mission` on the exact geometry.
+/// An altitude profile that does not fit its trajectory.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("altitude profile: {got} altitudes for a trajectory of {expected} slots")]
+pub struct AltitudeProfileError {
+    /// The trajectory's number of slots.
+    pub expected: usize,
+    /// The number of altitudes given.
+    pub got: usize,
+}
+
+/// Evaluates `traj` against `mission` on the exact geometry, at the mission's altitude
+/// `altitude_m` in every slot.
 pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
+    evaluate_profile(mission, traj, None)
+}
+
+/// Evaluates `traj` with the altitude H_t = `altitudes_m[t − 1]` in slot t (H_0 = the mission's
+/// `altitude_m`): every quantity that depends on H takes the slot's (the sensing centre
+/// H_t tan η ahead of the track's normal, the sensing radius `sensing_radius_m` H_t /
+/// `altitude_m` of the same antenna (paper-notes erratum 5), V_min, the paper's and the
+/// general resolutions and cell), the power is [`PowerModel::power_3d_w`] at the slot's climb
+/// rate, and the altitude bounds and rates are checked ([`Violations::altitude_m`],
+/// [`Violations::climb_mps`]). A profile at `altitude_m` throughout gives [`evaluate`]'s result.
+pub fn evaluate_with_altitudes(
+    mission: &Mission,
+    traj: &Trajectory,
+    altitudes_m: &[f64],
+) -> Result<Evaluation, AltitudeProfileError> {
+    if altitudes_m.len() != traj.slots() {
+        return Err(AltitudeProfileError {
+            expected: traj.slots(),
+            got: altitudes_m.len(),
+        });
+    }
+    Ok(evaluate_profile(mission, traj, Some(altitudes_m)))
+}
+
+/// [`evaluate_with_altitudes`], `None` for the mission's altitude in every slot.
+fn evaluate_profile(
+    mission: &Mission,
+    traj: &Trajectory,
+    altitudes_m: Option<&[f64]>,
+) -> Evaluation {
     let p = mission.params();
     let model = PowerModel::new(p);
-    let offset = p.centre_offset_m();
-    let v_min = p.min_speed_mps();
+    let (lowest_m, highest_m) = crate::altitude::bounds_m(p);
+    let mut prev_z = p.altitude_m;
     let headings = traj.headings_rad();
     let mut slots = Vec::with_capacity(traj.slots());
     let mut viol = Violations::default();
@@ -285,9 +352,28 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         max_accel = max_accel.max(accel);
         let speed = Vector2::from(vel).length();
         let heading = headings[t - 1];
-        let centre = sensing_centre_m(pos, heading, offset);
+        let z = altitudes_m
+            .and_then(|a| a.get(t - 1).copied())
+            .unwrap_or(p.altitude_m);
+        let climb = (z - prev_z) / p.slot_s;
+        prev_z = z;
+        viol.altitude_m = viol.altitude_m.max(lowest_m - z).max(z - highest_m);
+        viol.climb_mps = viol
+            .climb_mps
+            .max(climb - p.max_climb_mps)
+            .max(-climb - p.max_descent_mps);
+        // the slot's parameters: the mission's own at its altitude (bit for bit the fixed plans)
+        let at_z;
+        let ps = if z == p.altitude_m {
+            p
+        } else {
+            at_z = crate::altitude::params_at(p, z);
+            &at_z
+        };
+        let v_min = ps.min_speed_mps();
+        let centre = sensing_centre_m(pos, heading, ps.centre_offset_m());
         let landmark = mission.target_m(t);
-        let power = model.power_w(speed);
+        let power = model.power_3d_w(speed, climb);
         let slot_energy = power * p.slot_s;
         energy += slot_energy;
         min_speed = min_speed.min(speed);
@@ -301,13 +387,13 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         } else {
             (heading_unit(heading) * 1e-12).into()
         };
-        let cell = ResolutionCell::new(p, pos, cell_vel, sensed);
-        let range_paper = range_resolution_paper_m(p, centre);
-        let az_paper = azimuth_resolution_paper_m(p, speed);
+        let cell = ResolutionCell::new(ps, pos, cell_vel, sensed);
+        let range_paper = range_resolution_paper_m(ps, centre);
+        let az_paper = azimuth_resolution_paper_m(ps, speed);
         let centre_error = landmark.map(|g| distance(&Point2::from(g), &Point2::from(centre)));
-        let in_view = centre_error.is_none_or(|e| e <= p.sensing_radius_m);
+        let in_view = centre_error.is_none_or(|e| e <= ps.sensing_radius_m);
         if let Some(e) = centre_error {
-            viol.sensing_m = viol.sensing_m.max(e - p.sensing_radius_m);
+            viol.sensing_m = viol.sensing_m.max(e - ps.sensing_radius_m);
             viol.min_speed_mps = viol.min_speed_mps.max(v_min - speed);
             viol.range_paper_m = viol.range_paper_m.max(range_paper - p.d_min_m);
             viol.worst_width_m = viol.worst_width_m.max(cell.worst_width_m - p.d_min_m);
@@ -337,14 +423,16 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
             energy_j: energy,
             range_resolution_paper_m: range_paper,
             azimuth_resolution_paper_m: az_paper,
-            range_resolution_general_m: range_resolution_general_m(p, pos, sensed),
-            bistatic_angle_rad: bistatic_angle_rad(p, pos, sensed),
+            range_resolution_general_m: range_resolution_general_m(ps, pos, sensed),
+            bistatic_angle_rad: bistatic_angle_rad(ps, pos, sensed),
             grad_norm: cell.grad_norm,
             psi_rad: cell.psi_rad,
             along_track_width_m: cell.along_track_width_m,
             cross_track_width_m: cell.cross_track_width_m,
             worst_width_m: cell.worst_width_m,
             accel_mps2: accel,
+            z_m: z,
+            climb_mps: climb,
         });
     }
     viol.accel_mps2 = (max_accel - p.max_accel_mps2).max(0.0);
@@ -356,6 +444,8 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         &mut viol.range_paper_m,
         &mut viol.worst_width_m,
         &mut viol.accel_mps2,
+        &mut viol.altitude_m,
+        &mut viol.climb_mps,
     ] {
         if v.is_nan() {
             *v = f64::INFINITY;
@@ -377,6 +467,7 @@ pub fn evaluate(mission: &Mission, traj: &Trajectory) -> Evaluation {
         slots_blind: blind,
         max_accel_mps2: max_accel,
         accel_limit_mps2: p.max_accel_mps2,
+        start_altitude_m: p.altitude_m,
     }
 }
 

@@ -192,7 +192,7 @@ impl Summary {
 }
 
 /// The columns of `trajectory.csv`.
-pub const TRAJECTORY_COLUMNS: &str = "t_s,x_m,y_m,speed_mps,heading_rad,xc_m,yc_m,landmark_x_m,landmark_y_m,in_view,centre_error_m,power_w,energy_j,range_resolution_paper_m,range_resolution_general_m,azimuth_resolution_m,bistatic_angle_deg,grad_norm,psi_rad,along_track_width_m,cross_track_width_m,worst_width_m,accel_mps2";
+pub const TRAJECTORY_COLUMNS: &str = "t_s,x_m,y_m,speed_mps,heading_rad,xc_m,yc_m,landmark_x_m,landmark_y_m,in_view,centre_error_m,power_w,energy_j,range_resolution_paper_m,range_resolution_general_m,azimuth_resolution_m,bistatic_angle_deg,grad_norm,psi_rad,along_track_width_m,cross_track_width_m,worst_width_m,accel_mps2,z_m,climb_mps";
 
 /// A number of a CSV table as Rust's `{}` prints it (shortest round trip, `1` for 1.0), NaN as
 /// `nan`: the csv crate's own float format (ryu: `1.0`, `1e20`) would change the published
@@ -242,11 +242,13 @@ struct TrajectoryRow {
     cross_track_width_m: CsvNum,
     worst_width_m: CsvNum,
     accel_mps2: CsvNum,
+    z_m: CsvNum,
+    climb_mps: CsvNum,
 }
 
 impl TrajectoryRow {
-    /// The start at t = 0: position and zero energy, the rest undefined.
-    fn start(start_m: [f64; 2]) -> Self {
+    /// The start at t = 0: position, altitude and zero energy, the rest undefined.
+    fn start(start_m: [f64; 2], start_altitude_m: f64) -> Self {
         let nan = CsvNum(f64::NAN);
         TrajectoryRow {
             t_s: CsvNum(0.0),
@@ -272,6 +274,8 @@ impl TrajectoryRow {
             cross_track_width_m: nan,
             worst_width_m: nan,
             accel_mps2: nan,
+            z_m: CsvNum(start_altitude_m),
+            climb_mps: nan,
         }
     }
 
@@ -302,6 +306,8 @@ impl TrajectoryRow {
             cross_track_width_m: CsvNum(e.cross_track_width_m),
             worst_width_m: CsvNum(e.worst_width_m),
             accel_mps2: CsvNum(e.accel_mps2),
+            z_m: CsvNum(e.z_m),
+            climb_mps: CsvNum(e.climb_mps),
         }
     }
 }
@@ -311,7 +317,10 @@ pub fn trajectory_csv(result: &PlanResult) -> Result<String, csv::Error> {
     let mut w = csv::Writer::from_writer(Vec::with_capacity(
         200 * (result.evaluation.slots.len() + 2),
     ));
-    w.serialize(TrajectoryRow::start(result.trajectory.start_m))?;
+    w.serialize(TrajectoryRow::start(
+        result.trajectory.start_m,
+        result.evaluation.start_altitude_m,
+    ))?;
     for e in &result.evaluation.slots {
         w.serialize(TrajectoryRow::slot(e))?;
     }
@@ -348,10 +357,12 @@ mod tests {
     #[test]
     fn the_header_is_the_documented_columns_and_the_start_row_is_unchanged() {
         let mut w = csv::Writer::from_writer(Vec::new());
-        w.serialize(TrajectoryRow::start([-12.5, 3.0])).unwrap();
+        w.serialize(TrajectoryRow::start([-12.5, 3.0], 1000.0))
+            .unwrap();
         let text = String::from_utf8(w.into_inner().unwrap()).unwrap();
-        let start =
-            "-12.5,3,nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,nan,nan,nan";
+        // the columns before z_m as they were; the start altitude, and no climb rate
+        let start = "-12.5,3,nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,\
+                     nan,nan,nan,1000,nan";
         assert_eq!(text, format!("{TRAJECTORY_COLUMNS}\n0,{start}\n"));
     }
 

@@ -183,6 +183,10 @@ impl Trajectory {
                 .ok_or_else(|| err("header".into(), format!("missing column `{name}`")))
         };
         let (ct, cx, cy) = (col("t_s")?, col("x_m")?, col("y_m")?);
+        // an altitude column (`trajectory.csv`'s z_m) must hold one altitude: a 2-D track
+        // cannot carry a varying one, and dropping it would fly another trajectory
+        let cz = cols.iter().position(|c| c == "z_m");
+        let mut first_z: Option<f64> = None;
         let mut start = start_m;
         let mut pos = Vec::with_capacity(slots);
         for record in rd.records() {
@@ -213,6 +217,23 @@ impl Trajectory {
                 Ok(v)
             };
             let (t, x, y) = (get(ct, "t_s")?, get(cx, "x_m")?, get(cy, "y_m")?);
+            if let Some(cz) = cz {
+                let z = get(cz, "z_m")?;
+                match first_z {
+                    None => first_z = Some(z),
+                    Some(z0) if z != z0 => {
+                        return Err(err(
+                            format!("line {line}, column z_m"),
+                            format!(
+                                "altitude {z} m differs from the first row's {z0} m: a \
+                                 trajectory with a varying altitude (altitude = \"free\") is \
+                                 not read as a 2-D track"
+                            ),
+                        ))
+                    }
+                    Some(_) => {}
+                }
+            }
             if t.abs() < 1e-9 && pos.is_empty() {
                 start = [x, y];
                 continue;
@@ -323,5 +344,20 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("empty file"), "{e}");
+    }
+
+    #[test]
+    fn a_constant_altitude_column_is_read_and_a_varying_one_refused() {
+        let flat = "t_s,x_m,y_m,z_m\n0,1,2,1000\n0.5,3,4,1000\n1.0,5,6,1000\n";
+        let tr = Trajectory::from_csv_str(flat, "x.csv", 0.5, 2, [0.0, 0.0]).unwrap();
+        assert_eq!(tr.pos_m, vec![[3.0, 4.0], [5.0, 6.0]]);
+        let climbing = flat.replace("5,6,1000", "5,6,1001.5");
+        let e = Trajectory::from_csv_str(&climbing, "x.csv", 0.5, 2, [0.0, 0.0])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 4, column z_m") && e.contains("altitude = \"free\""),
+            "{e}"
+        );
     }
 }

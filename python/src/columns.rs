@@ -32,6 +32,8 @@ fn slot_value(name: &str, e: &SlotEval) -> Option<f64> {
         "cross_track_width_m" => e.cross_track_width_m,
         "worst_width_m" => e.worst_width_m,
         "accel_mps2" => e.accel_mps2,
+        "z_m" => e.z_m,
+        "climb_mps" => e.climb_mps,
         _ => return None,
     })
 }
@@ -59,7 +61,10 @@ pub fn column(name: &str, ev: &Evaluation, start_m: [f64; 2]) -> Option<Vec<f64>
         return None;
     }
     let mut v = Vec::with_capacity(ev.slots.len() + 1);
-    v.push(start_value(name, start_m));
+    v.push(match name {
+        "z_m" => ev.start_altitude_m,
+        _ => start_value(name, start_m),
+    });
     for e in &ev.slots {
         v.push(slot_value(name, e)?);
     }
