@@ -6,8 +6,8 @@
 //! - `z-pub` / `z-sub`: publish / consume the same frames on a plain Zenoh key;
 //! - `z-flood`: send malformed and oversized frame payloads on a Zenoh key (each one checked
 //!   to be rejected by this crate's own decoder before it is sent);
-//! - `forge`: a hostile peer publishing a forged processor status and forged detections for
-//!   every mission it learns of.
+//! - `forge`: a hostile peer publishing a forged processor status, detections, images and
+//!   metrics for every mission it learns of, forged plans, and floods of plans and queries.
 //!
 //! `bench` runs them as child processes: the iceoryx2 hand-off (latency, throughput) for each
 //! frame size, then a plain Zenoh publisher/subscriber against the path through two
@@ -181,7 +181,7 @@ enum Cmd {
         #[command(flatten)]
         zenoh: ZenohArgs,
     },
-    /// Publish a forged processor status and forged detections (a hostile peer).
+    /// Forge statuses, results and plans, and flood plans and queries (a hostile peer).
     Forge(forge::ForgeArgs),
     /// Run the benchmark and print a Markdown table.
     Bench(BenchArgs),

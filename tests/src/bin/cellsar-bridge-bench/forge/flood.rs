@@ -39,6 +39,8 @@ pub(in super::super) struct FloodArgs {
 pub(super) struct Flooded {
     /// Plans of distinct missions published.
     pub plans: u64,
+    /// Bytes of one of them, encoded (as on the wire).
+    pub plan_bytes: u64,
     /// Queries sent.
     pub queries: u64,
     /// Queries answered with a reply of the expected type.
@@ -70,6 +72,7 @@ pub(super) fn publish_plans(node: &ZenohNode, plans: &[Plan], r: &mut Flooded) -
         )?;
         publisher.put(p)?;
         r.plans += 1;
+        r.plan_bytes = bridge::envelope::encode(p, bridge::Meta::default())?.len() as u64;
     }
     Ok(())
 }
