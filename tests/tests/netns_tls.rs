@@ -6,8 +6,9 @@
 //! - The pipeline completes over mutual TLS with the same detections as the closed loop
 //!   (router, launcher with planner, echo and bridge in namespace A, each child with its own
 //!   role's certificate; the processor in namespace B), while a peer holding the echo's valid
-//!   certificate forges processor status and detections from namespace B: the router drops
-//!   them, so none reaches the collector.
+//!   certificate forges processor status, detections, images and metrics from namespace B
+//!   (and keeps asking the processor for every result again): the router drops the
+//!   forgeries, so none reaches the collector.
 //! - A client without a certificate, one with a certificate of another CA, and a plain-TCP
 //!   client cannot open a session with the router; the same client with a certificate of the
 //!   deployment can (so the refusals are the certificates', not a broken set-up).
@@ -138,6 +139,7 @@ fn pipeline_over_mutual_tls_with_access_control() {
         ],
     );
     // a peer with the echo's valid certificate forging the processor's status and results
+    // (detections, images, metrics), and asking for results again and again
     let mut forger = Service::start_exe_in(
         &hosts.in_b(),
         &harness::bin("cellsar-bridge-bench"),
@@ -147,6 +149,14 @@ fn pipeline_over_mutual_tls_with_access_control() {
             "forge".into(),
             "--duration-s".into(),
             "600".into(),
+            "--forge-results".into(),
+            "--metrics-template".into(),
+            reference
+                .join("processed/metrics.json")
+                .display()
+                .to_string(),
+            "--malformed-images".into(),
+            "--flood-queries".into(),
             "-c".into(),
             role("echo"),
         ],
@@ -220,7 +230,8 @@ fn pipeline_over_mutual_tls_with_access_control() {
         .lines()
         .filter(|l| l.contains("Using cached result") && l.contains("is unauthorized to Put"))
         .collect();
-    for key in ["detections", "status/processor"] {
+    let forged = ["detections", "status/processor", "image/0", "metrics"];
+    for key in forged {
         let on = format!("(ingress) on cellsar/{id}/{key}");
         assert!(
             denied_puts.iter().any(|l| l.ends_with(&on)),
@@ -230,7 +241,10 @@ fn pipeline_over_mutual_tls_with_access_control() {
     // and nothing else: every role could put what the pipeline needs
     let others: Vec<&&str> = denied_puts
         .iter()
-        .filter(|l| !l.ends_with("/detections") && !l.ends_with("/status/processor"))
+        .filter(|l| {
+            !forged.iter().any(|k| l.ends_with(&format!("/{k}")))
+                && !l.contains(&format!("(ingress) on cellsar/{id}/image/"))
+        })
         .collect();
     assert!(others.is_empty(), "{others:#?}");
 }
