@@ -27,7 +27,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, Optional, Sequence
 
 from .study_run import THREAD_ENV, execute
 from .study_spec import Run, Study, StudyError, load
@@ -48,16 +48,22 @@ def _failed_row(error: BaseException) -> Dict[str, Any]:
     return row
 
 
-def _client(scheduler: Optional[str], workers: Optional[int]) -> Any:
-    """A Dask client: of the scheduler at ``scheduler``, or of a new local cluster of
-    ``workers`` processes (one thread each; default: one per core)."""
+#: How long reaching a ``--scheduler`` may take by default, seconds (Dask's own default).
+SCHEDULER_TIMEOUT_S = 30.0
+
+
+def _client(scheduler: Optional[str], workers: Optional[int], timeout_s: float) -> Any:
+    """A Dask client: of the scheduler at ``scheduler`` (reached within ``timeout_s``), or of a
+    new local cluster of ``workers`` processes (one thread each; default: one per core)."""
     from distributed import Client, LocalCluster
 
     if scheduler:
         try:
-            return Client(scheduler, timeout=30)
+            return Client(scheduler, timeout=timeout_s)
         except (OSError, TimeoutError, ValueError) as e:
-            raise StudyError(f"--scheduler: cannot reach {scheduler}: {e}") from None
+            raise StudyError(
+                f"--scheduler: cannot reach {scheduler} within {timeout_s:g} s: {e}"
+            ) from None
     # worker processes inherit the environment: one native thread each
     for k in THREAD_ENV:
         os.environ[k] = "1"
@@ -71,19 +77,35 @@ def _client(scheduler: Optional[str], workers: Optional[int]) -> Any:
     return Client(cluster)
 
 
-def _start_progress(futures: List[Any]) -> None:
-    """Dask's text progress bar, drawn on stderr from a thread beside the result loop."""
-    import threading
+class _Progress:
+    """A one-line progress bar on stderr, drawn from the result loop as runs finish: done and
+    total, failed, elapsed time and the time left at the rate so far. Ours rather than Dask's
+    text bar, which reads a feed from the scheduler that closing the local cluster cancels
+    mid-read (the scheduler then logs a CancelledError traceback)."""
 
-    from distributed.diagnostics.progressbar import progress
+    WIDTH = 30
+    EVERY_S = 0.2
 
-    def show() -> None:
-        try:
-            progress(futures, notebook=False, multi=False)
-        except Exception:  # the bar is decoration: never fail a study for it
-            pass
+    def __init__(self, total: int) -> None:
+        self.total = total
+        self.t0 = time.monotonic()
+        self.drawn = -1.0
 
-    threading.Thread(target=show, daemon=True, name="study-progress").start()
+    def update(self, done: int, failed: int, final: bool = False) -> None:
+        now = time.monotonic()
+        if not final and now - self.drawn < self.EVERY_S:
+            return
+        self.drawn = now
+        elapsed = now - self.t0
+        filled = self.WIDTH * done // max(self.total, 1)
+        left = elapsed / done * (self.total - done) if done else float("nan")
+        line = (
+            f"[{'#' * filled}{' ' * (self.WIDTH - filled)}] {done}/{self.total} runs"
+            f" ({failed} failed), {elapsed:.1f} s"
+            + (f", about {left:.0f} s left" if done and not final else "")
+        )
+        sys.stderr.write("\r" + line + ("\n" if final else ""))
+        sys.stderr.flush()
 
 
 def run(
@@ -93,11 +115,13 @@ def run(
     workers: Optional[int] = None,
     show_progress: bool = False,
     client: Any = None,
+    scheduler_timeout_s: float = SCHEDULER_TIMEOUT_S,
 ) -> Dict[str, Any]:
     """Runs the runs of ``study`` not yet in ``out``'s table, then aggregates; returns counts
     (``runs``, ``skipped`` (finished before), ``ran``, ``failed``) and timings: ``cluster_s``
     (starting or reaching the cluster), ``runs_s`` (from the first submission to the last row)
-    and ``elapsed_s`` (both)."""
+    and ``elapsed_s`` (both). A ``scheduler`` not reached within ``scheduler_timeout_s`` is a
+    :class:`StudyError` naming it."""
     from distributed import as_completed
 
     out = Path(out)
@@ -109,9 +133,10 @@ def run(
     t_runs = t0
     failed = 0
     own = client is None
+    bar = None
     try:
         if todo and own:
-            client = _client(scheduler, workers)
+            client = _client(scheduler, workers, scheduler_timeout_s)
         t_runs = time.perf_counter()
         if todo:
             futures = client.map(
@@ -123,9 +148,9 @@ def run(
             )
             by_key = {f.key: r for f, r in zip(futures, todo)}
             if show_progress:
-                _start_progress(futures)
+                bar = _Progress(len(todo))
             last = time.monotonic()
-            for fut in as_completed(futures):
+            for done, fut in enumerate(as_completed(futures), start=1):
                 r: Run = by_key[fut.key]
                 try:
                     row = fut.result()
@@ -134,6 +159,8 @@ def run(
                 failed += row["status"] != "ok"
                 table.append(r, row)
                 fut.release()
+                if bar is not None:
+                    bar.update(done, failed, final=done == len(todo))
                 if time.monotonic() - last > PARQUET_EVERY_S:
                     write_parquet(table.csv_path, table.parquet_path, cols)
                     last = time.monotonic()
@@ -182,6 +209,13 @@ def _parser() -> argparse.ArgumentParser:
         help="a Dask scheduler's address (tcp://HOST:8786); default: a local cluster",
     )
     p.add_argument(
+        "--scheduler-timeout-s",
+        type=float,
+        default=SCHEDULER_TIMEOUT_S,
+        metavar="S",
+        help=f"how long reaching --scheduler may take, seconds (default {SCHEDULER_TIMEOUT_S:g})",
+    )
+    p.add_argument(
         "--workers",
         type=int,
         metavar="N",
@@ -202,6 +236,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         if args.workers is not None and args.workers < 1:
             raise StudyError(f"--workers: expected at least 1, got {args.workers}")
+        if not args.scheduler_timeout_s > 0:
+            raise StudyError(
+                f"--scheduler-timeout-s: expected a positive number, got {args.scheduler_timeout_s}"
+            )
         if args.workers is not None and args.scheduler:
             raise StudyError("--workers: only for the local cluster, not with --scheduler")
         study = load(args.study)
@@ -215,6 +253,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             scheduler=args.scheduler,
             workers=args.workers,
             show_progress=not args.quiet,
+            scheduler_timeout_s=args.scheduler_timeout_s,
         )
     except StudyError as e:
         print(f"cellsar-study: {e}", file=sys.stderr)

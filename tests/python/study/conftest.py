@@ -80,3 +80,24 @@ def thread_env():
     for k in ("RAYON_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         env[k] = "1"
     return env
+
+
+SHM = Path("/dev/shm")
+
+
+@pytest.fixture(scope="session", autouse=True)
+def remove_leaked_semaphores():
+    """Removes the POSIX semaphores (`/dev/shm/sem.mp-*`) that appeared during the session.
+
+    Python's multiprocessing (Dask's local cluster, `dask worker`'s nanny) names its semaphores
+    there, and its resource tracker unlinks them when the process that made them ends. The
+    tests that SIGKILL a process group kill that tracker too, so those names would outlive the
+    test run. Only names absent at the start are removed."""
+    before = set(SHM.glob("sem.mp-*")) if SHM.is_dir() else set()
+    yield
+    if SHM.is_dir():
+        for p in set(SHM.glob("sem.mp-*")) - before:
+            try:
+                p.unlink()
+            except OSError:
+                pass

@@ -93,3 +93,27 @@ def test_scheduler_and_two_workers_one_killed(plan_study, tmp_path):
             except subprocess.TimeoutExpired:
                 p.kill()
                 p.wait(timeout=30)
+
+
+def test_unreachable_scheduler_is_refused_naming_it(plan_study, tmp_path):
+    """A scheduler address where nothing answers: exit 2 within the given time-out, the message
+    naming the flag and the address; a non-positive time-out is refused naming its flag."""
+    import socket
+
+    from conftest import cli
+
+    with socket.socket() as s:  # a loopback port that was free a moment ago: nothing listens
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    path = plan_study(realisations=1, spacings=(20,))
+    t0 = time.monotonic()
+    p = cli(path, "--out", tmp_path / "out", "--scheduler", address,
+            "--scheduler-timeout-s", "2", "--quiet", check=False)
+    elapsed = time.monotonic() - t0
+    assert p.returncode == 2, p.stderr
+    assert "--scheduler" in p.stderr and address in p.stderr and "2 s" in p.stderr, p.stderr
+    assert elapsed < 25, f"took {elapsed:.1f} s with a 2 s time-out"
+    p = cli(path, "--out", tmp_path / "out", "--scheduler", address,
+            "--scheduler-timeout-s", "0", check=False)
+    assert p.returncode == 2 and "--scheduler-timeout-s" in p.stderr, p.stderr

@@ -4,7 +4,6 @@ carries the radar's detections."""
 
 import csv
 import math
-from pathlib import Path
 
 import cellsar
 import pyarrow.parquet as pq
