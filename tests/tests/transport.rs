@@ -1604,3 +1604,45 @@ fn bridge_rejects_bad_configuration() {
     }
     let _ = IoxEnv::default_env();
 }
+
+/// The benchmark of what TLS costs the bridge (BENCHMARKS.md) runs under the deployment's
+/// rules: bridge B serves with the router's certificate, the others are clients with role
+/// certificates and no plain listener. A short run of every network path delivers every frame.
+#[test]
+fn the_tls_benchmark_runs_and_delivers_every_frame() {
+    assert!(
+        bridge_exe().exists(),
+        "cellsar-bridge is built next to the bench"
+    );
+    let out = std::process::Command::new(bench_exe())
+        .args([
+            "bench",
+            "--sizes-mib",
+            "1",
+            "--frames",
+            "3",
+            "--repeats",
+            "1",
+            "--tls",
+            "--only-network",
+        ])
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("run cellsar-bridge-bench");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "bench --tls failed: {}\n{stdout}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for path in ["zenoh", "bridge", "bridge-tls"] {
+        for mode in ["latency", "throughput"] {
+            let row = stdout
+                .lines()
+                .find(|l| l.starts_with(&format!("| {path} | {mode} |")))
+                .unwrap_or_else(|| panic!("no {path} {mode} row in:\n{stdout}"));
+            assert!(row.contains("| 3/3 |"), "{path} {mode} lost frames: {row}");
+        }
+    }
+}
