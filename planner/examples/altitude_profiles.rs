@@ -3,7 +3,9 @@
 //! descend from `altitude_m` at the mission's descent limit to a floor and hold it
 //! ([`planner::evaluate::evaluate_with_altitudes`]). Descent costs no energy in the power model
 //! ([`planner::PowerModel::climb_w`]), so each profile's energy is the plan's; the table shows
-//! what the lower altitude does to the constraints along the unchanged track.
+//! what the lower altitude does to the constraints along the unchanged track. The first line
+//! gives the floor T min_V P(V) that no plan at any altitudes goes below (the climb power is
+//! never negative), which bounds what free altitude can save.
 //!
 //! `cargo run --release -p planner --example altitude_profiles -- MISSION.toml [FLOOR_M ...]`
 //! (floors default to 900 800 700 600 m; the mission is evaluated with `altitude = "free"`
@@ -27,11 +29,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let started = Instant::now();
     let result = plan(&mission, &PlanOptions::least_energy())?;
+    // no plan, at any altitudes, costs less than T min_V P(V): P(V, v_z) ≥ P(V)
+    let model = planner::PowerModel::new(mission.params());
+    let floor_j = mission.slots() as f64
+        * mission.params().slot_s
+        * model.min_power(mission.params().max_speed_mps).1;
     println!(
-        "{}: fixed-altitude plan in {:.2} s, {:.1} J",
+        "{}: fixed-altitude plan in {:.2} s, {:.1} J; floor of any 3-D plan T min P(V) = {:.1} J",
         mission.name(),
         started.elapsed().as_secs_f64(),
-        result.evaluation.energy_j
+        result.evaluation.energy_j,
+        floor_j
     );
     // the same mission with its altitude free down to the lowest floor (the bounds checked)
     let mut free = mission.params().clone();
