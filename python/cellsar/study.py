@@ -27,7 +27,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Dict, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence
 
 from .study_run import THREAD_ENV, execute
 from .study_spec import Run, Study, StudyError, load
@@ -77,35 +77,35 @@ def _client(scheduler: Optional[str], workers: Optional[int], timeout_s: float) 
     return Client(cluster)
 
 
-class _Progress:
-    """A one-line progress bar on stderr, drawn from the result loop as runs finish: done and
-    total, failed, elapsed time and the time left at the rate so far. Ours rather than Dask's
-    text bar, which reads a feed from the scheduler that closing the local cluster cancels
-    mid-read (the scheduler then logs a CancelledError traceback)."""
+#: How often Dask's progress bar polls the scheduler, seconds.
+PROGRESS_INTERVAL_S = 0.1
 
-    WIDTH = 30
-    EVERY_S = 0.2
 
-    def __init__(self, total: int) -> None:
-        self.total = total
-        self.t0 = time.monotonic()
-        self.drawn = -1.0
+def _start_progress(futures: List[Any]) -> Any:
+    """Dask's text progress bar, drawn on stderr from a thread beside the result loop; returns
+    the thread."""
+    import threading
 
-    def update(self, done: int, failed: int, final: bool = False) -> None:
-        now = time.monotonic()
-        if not final and now - self.drawn < self.EVERY_S:
-            return
-        self.drawn = now
-        elapsed = now - self.t0
-        filled = self.WIDTH * done // max(self.total, 1)
-        left = elapsed / done * (self.total - done) if done else float("nan")
-        line = (
-            f"[{'#' * filled}{' ' * (self.WIDTH - filled)}] {done}/{self.total} runs"
-            f" ({failed} failed), {elapsed:.1f} s"
-            + (f", about {left:.0f} s left" if done and not final else "")
-        )
-        sys.stderr.write("\r" + line + ("\n" if final else ""))
-        sys.stderr.flush()
+    from distributed.diagnostics.progressbar import progress
+
+    def show() -> None:
+        try:
+            progress(futures, notebook=False, multi=False, interval=f"{PROGRESS_INTERVAL_S}s")
+        except Exception:  # the bar is decoration: never fail a study for it
+            pass
+
+    thread = threading.Thread(target=show, daemon=True, name="study-progress")
+    thread.start()
+    return thread
+
+
+def _stop_progress(thread: Any) -> None:
+    """Lets the progress bar end before the local cluster closes. The bar closes its end of the
+    scheduler's feed when every run is done, and the feed ends at its next poll; closing the
+    cluster before that cancels the feed mid-sleep, and the scheduler logs a CancelledError
+    traceback."""
+    thread.join(timeout=5.0)
+    time.sleep(5 * PROGRESS_INTERVAL_S)
 
 
 def run(
@@ -148,9 +148,9 @@ def run(
             )
             by_key = {f.key: r for f, r in zip(futures, todo)}
             if show_progress:
-                bar = _Progress(len(todo))
+                bar = _start_progress(futures)
             last = time.monotonic()
-            for done, fut in enumerate(as_completed(futures), start=1):
+            for fut in as_completed(futures):
                 r: Run = by_key[fut.key]
                 try:
                     row = fut.result()
@@ -159,8 +159,6 @@ def run(
                 failed += row["status"] != "ok"
                 table.append(r, row)
                 fut.release()
-                if bar is not None:
-                    bar.update(done, failed, final=done == len(todo))
                 if time.monotonic() - last > PARQUET_EVERY_S:
                     write_parquet(table.csv_path, table.parquet_path, cols)
                     last = time.monotonic()
@@ -168,6 +166,8 @@ def run(
         # also on Ctrl-C: the finished runs' table is complete, the study resumes from it
         table.close()
         if own and client is not None:
+            if bar is not None:
+                _stop_progress(bar)
             cluster = getattr(client, "cluster", None)
             client.close()
             if cluster is not None:
