@@ -105,8 +105,8 @@ impl Senders {
     pub fn status(&mut self, key: &str, s: &ServiceStatus) -> Result<(), String> {
         let why = match keys::status_role(key) {
             None => Some(format!("{key} is no status key")),
-            Some(r) if r != s.role => Some(format!("role {:?} on the key of {r}", s.role)),
-            Some(_) if !self.knows(&s.role, &s.instance) => Some(format!(
+            Some(r) if r != s.role.as_str() => Some(format!("role {} on the key of {r}", s.role)),
+            Some(_) if !self.knows(s.role.as_str(), &s.instance) => Some(format!(
                 "{} {:?} never announced itself",
                 s.role, s.instance
             )),
@@ -202,14 +202,15 @@ impl Senders {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::protocol::Role;
     use bridge::MissionId;
 
     fn status(role: &str, instance: &str) -> ServiceStatus {
         ServiceStatus {
-            role: role.into(),
+            role: role.parse().unwrap(),
             instance: instance.into(),
             mission_id: MissionId(1),
-            state: "failed".into(),
+            state: crate::protocol::ServiceState::Failed,
             ..ServiceStatus::default()
         }
     }
@@ -217,7 +218,7 @@ mod tests {
     #[test]
     fn a_status_must_come_from_a_known_instance_of_its_role_on_its_key() {
         let mut s = Senders::default();
-        let key = keys::status(MissionId(1), "processor").unwrap();
+        let key = keys::status(MissionId(1), Role::Processor).unwrap();
         // nobody announced yet
         assert!(s.status(&key, &status("processor", "p1")).is_err());
         s.saw("processor", "p1");
@@ -226,7 +227,7 @@ mod tests {
         // another instance, another role's instance claiming the processor, the wrong key
         assert!(s.status(&key, &status("processor", "intruder")).is_err());
         assert!(s.status(&key, &status("processor", "e1")).is_err());
-        let echo_key = keys::status(MissionId(1), "echo").unwrap();
+        let echo_key = keys::status(MissionId(1), Role::Echo).unwrap();
         assert!(s.status(&echo_key, &status("processor", "p1")).is_err());
         assert!(s.status(&echo_key, &status("echo", "e1")).is_ok());
         assert!(s.status("cellsar/x", &status("echo", "e1")).is_err());

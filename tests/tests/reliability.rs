@@ -419,7 +419,11 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     flood_put(&node, &pkeys::detections(m).unwrap(), 0x0304);
     flood_put(&node, &pkeys::image(m, 0).unwrap(), 0x0305);
     flood_put(&node, &pkeys::metrics(m).unwrap(), 0x0306);
-    flood_put(&node, &pkeys::status(m, "processor").unwrap(), 0x0110);
+    flood_put(
+        &node,
+        &pkeys::status(m, pipeline::protocol::Role::Processor).unwrap(),
+        0x0110,
+    );
     // messages above Zenoh's reassembly limit, to the processor and to the launcher
     flood_huge(&node, &pkeys::echo(m).unwrap());
     flood_huge(&node, &pkeys::detections(m).unwrap());

@@ -14,7 +14,7 @@ use serde_json::json;
 
 use super::session::Session;
 use crate::collect::{Added, Collector};
-use crate::protocol::{self, ResultAck, ResultRequest, ServiceStatus};
+use crate::protocol::{self, ResultAck, ResultRequest, Role, ServiceState, ServiceStatus};
 
 /// What the collection gathered.
 pub(super) struct Collected {
@@ -161,26 +161,26 @@ impl Session<'_> {
                 continue;
             }
             let s = s.message;
-            if s.role == "processor" && s.state == "failed" {
+            if s.role == Role::Processor && s.state == ServiceState::Failed {
                 bail!("the processor gave up the mission: {}", s.message);
             }
             events.emit(
                 "status",
                 &[
-                    ("role", s.role.clone().into()),
-                    ("state", s.state.clone().into()),
+                    ("role", s.role.as_str().into()),
+                    ("state", s.state.as_str().into()),
                     ("done", s.done.into()),
                     ("counters", json!(s.counters)),
                 ],
             );
-            if s.role == "processor" {
+            if s.role == Role::Processor {
                 for k in &s.done_items {
                     p.first_seen_done
                         .entry(*k as u32)
                         .or_insert_with(Instant::now);
                 }
             }
-            c.last_status.insert(s.role.clone(), s);
+            c.last_status.insert(s.role.to_string(), s);
         }
         Ok(progressed)
     }
@@ -202,7 +202,7 @@ impl Session<'_> {
             && c.col.done() == c.col.apertures
             && c.last_status
                 .get("processor")
-                .is_some_and(|s| s.state == "done");
+                .is_some_and(|s| s.state == ServiceState::Done);
         if stale.is_empty() && !want_metrics {
             return Ok(());
         }

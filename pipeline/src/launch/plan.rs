@@ -13,7 +13,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::plan_refusal;
 use super::session::Session;
-use crate::protocol::{self, Plan, PlanRequest, PlanRequestOptions, MAX_PLAN_BYTES};
+use crate::protocol::{self, Plan, PlanRequest, PlanRequestOptions, Role, MAX_PLAN_BYTES};
 
 /// Why `plan` does not answer `request` (`None`: it does): a plan of another mission or with
 /// other options than those asked for, or whose mission id is not the one computed from its
@@ -208,7 +208,7 @@ impl Session<'_> {
             self.check_time("planning")?;
             self.tick()?;
             while let Some(s) = self.subs.statuses.try_recv() {
-                if s.message.role == "planner" {
+                if s.message.role == Role::Planner {
                     spinner.set_message(s.message.message.clone());
                 }
             }

@@ -22,6 +22,8 @@
 use bridge::keys::{mission, KeyError};
 use bridge::MissionId;
 
+use super::Role;
+
 /// Key of the plan queryable.
 pub const PLAN: &str = "cellsar/plan";
 /// Selector of every mission's plan (plan lookups by late joiners).
@@ -50,11 +52,8 @@ pub fn plan_summary(id: MissionId) -> Result<String, KeyError> {
     mission(id, "plan/summary")
 }
 /// `cellsar/<m>/status/<role>`.
-pub fn status(id: MissionId, role: &str) -> Result<String, KeyError> {
-    mission(
-        id,
-        &format!("status/{}", bridge::keys::chunk("role", role)?),
-    )
+pub fn status(id: MissionId, role: Role) -> Result<String, KeyError> {
+    mission(id, &format!("status/{role}"))
 }
 /// `cellsar/<m>/echo`: the IQ frame service (iceoryx2) and its Zenoh key.
 pub fn echo(id: MissionId) -> Result<String, KeyError> {
@@ -119,14 +118,13 @@ mod tests {
         m(ALL_DETECTIONS, detections(id).unwrap());
         m(ALL_IMAGES, image(id, 3).unwrap());
         m(ALL_METRICS, metrics(id).unwrap());
-        m(ALL_STATUS, status(id, "echo").unwrap());
+        m(ALL_STATUS, status(id, Role::Echo).unwrap());
         assert_eq!(image(id, 3).unwrap(), "cellsar/00000000000000ff/image/3");
         assert_eq!(
             echo_route_out(id).unwrap(),
             "cellsar/00000000000000ff/echo@out"
         );
-        assert!(status(id, "a/b").is_err());
-        assert_eq!(status_role(&status(id, "echo").unwrap()), Some("echo"));
+        assert_eq!(status_role(&status(id, Role::Echo).unwrap()), Some("echo"));
         for bad in [
             "cellsar/1/status",
             "cellsar/1/status/a/b",

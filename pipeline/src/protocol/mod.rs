@@ -6,7 +6,8 @@
 //!
 //! - [`keys`]: the key space;
 //! - [`plan`]: plan requests, plans, lookups, summaries, the mission id;
-//! - [`status`]: the status every service publishes;
+//! - [`status`]: the status every service publishes, and its states;
+//! - [`role`]: the roles of a deployment;
 //! - [`radar`]: aperture requests, frame info, detections, images, metrics, result requests;
 //! - [`layout`]: the frame sequence numbers of a mission (a pure function of the mission, so a
 //!   re-sent frame keeps its number).
@@ -15,6 +16,7 @@ pub mod keys;
 pub mod layout;
 pub mod plan;
 pub mod radar;
+pub mod role;
 pub mod status;
 
 pub use layout::{FrameLayout, FrameSlot};
@@ -23,4 +25,5 @@ pub use plan::{
     MAX_PLAN_BYTES,
 };
 pub use radar::*;
-pub use status::ServiceStatus;
+pub use role::{Role, UnknownRole};
+pub use status::{ServiceState, ServiceStatus};

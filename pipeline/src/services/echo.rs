@@ -29,7 +29,7 @@ use radar_sim::track::PulseMeta;
 use super::admission::{admit, Admission, DEFAULT_MAX_MISSIONS};
 use super::process::MissionContext;
 use super::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
-use crate::protocol::{ApertureRequest, FrameInfo, FrameSlot, RequestAck};
+use crate::protocol::{ApertureRequest, FrameInfo, FrameSlot, RequestAck, Role, ServiceState};
 
 /// Flags of `cellsar-radar-sim echo`.
 #[derive(clap::Args, Debug, Clone)]
@@ -118,7 +118,8 @@ pub fn run_echo(args: &EchoArgs, stop: &AtomicBool) -> ServiceResult<EchoReport>
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
     let config = args.zenoh.to_config()?;
-    let Some(node) = ZenohNode::open_until(config, "echo", &args.instance, stop)? else {
+    let Some(node) = ZenohNode::open_until(config, Role::Echo.as_str(), &args.instance, stop)?
+    else {
         return Ok(EchoReport::default());
     };
     let r = Echo::new(args, scene, limits, &node, &env).and_then(|mut e| e.run(stop));
@@ -165,7 +166,7 @@ impl<'a> Echo<'a> {
             node,
             frames,
             cache: PlanCache::new(node, None)?,
-            board: StatusBoard::new("echo", &args.instance),
+            board: StatusBoard::new(Role::Echo, &args.instance),
             missions: HashMap::new(),
             queue: VecDeque::new(),
             report: EchoReport::default(),
@@ -231,13 +232,13 @@ impl<'a> Echo<'a> {
                 let bad = plans.counters().snapshot().malformed
                     + requests.counters().snapshot().malformed
                     + self.cache.malformed();
-                self.publish_status("running", bad);
+                self.publish_status(ServiceState::Running, bad);
             }
         }
         let bad = plans.counters().snapshot().malformed
             + requests.counters().snapshot().malformed
             + self.cache.malformed();
-        self.publish_status("stopping", bad);
+        self.publish_status(ServiceState::Stopping, bad);
         let c = plans.counters().snapshot();
         let q = requests.counters().snapshot();
         tracing::info!(
@@ -545,7 +546,7 @@ impl<'a> Echo<'a> {
         Ok(())
     }
 
-    fn publish_status(&self, state: &str, malformed: u64) {
+    fn publish_status(&self, state: ServiceState, malformed: u64) {
         for (id, m) in &self.missions {
             let mut s = self.board.status(*id, state);
             s.total = m.ctx.layout.total_frames();

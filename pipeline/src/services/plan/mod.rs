@@ -43,7 +43,7 @@ use planner::Mission;
 use planner::Summary;
 
 use crate::protocol::keys::{self as pkeys, PLAN as PLAN_KEY};
-use crate::protocol::{mission_id, Plan, PlanRequest, PlanSummary};
+use crate::protocol::{mission_id, Plan, PlanRequest, PlanSummary, Role, ServiceState};
 
 pub use super::os::{stop_on_signals, write_atomic};
 pub use bounded::{Lru, MAX_HELD_PLANS, MAX_HELD_PLAN_BYTES, MAX_MISSION_PUBLISHERS};
@@ -158,7 +158,8 @@ pub fn plan_request_within(
 /// empty report.
 pub fn serve(args: &ServeArgs, stop: &AtomicBool) -> Result<ServeReport, ServiceError> {
     let config = args.zenoh.to_config()?;
-    let Some(node) = ZenohNode::open_until(config, "planner", &args.instance, stop)? else {
+    let Some(node) = ZenohNode::open_until(config, Role::Planner.as_str(), &args.instance, stop)?
+    else {
         return Ok(ServeReport::default());
     };
     let report = serve_on(&node, args, stop);
@@ -174,7 +175,7 @@ fn serve_on(
     stop: &AtomicBool,
 ) -> Result<ServeReport, ServiceError> {
     let cache = PlanCache::new(node, args.state_dir.as_deref())?;
-    let board = StatusBoard::new("planner", &args.instance);
+    let board = StatusBoard::new(Role::Planner, &args.instance);
     let requests = node.queryable::<PlanRequest>(
         PLAN_KEY,
         SubscribeOptions {
@@ -243,7 +244,7 @@ fn serve_on(
                 drop(q);
                 report.plans += 1;
                 publish_plan(node, &plan, meta, &mut plan_pubs, &mut summary_pubs)?;
-                let mut s = board.status(plan.mission_id, "planned");
+                let mut s = board.status(plan.mission_id, ServiceState::Planned);
                 s.done = plan.result.iterations as u64;
                 s.total = s.done;
                 s.counters.insert("plans".into(), report.plans);
@@ -352,7 +353,7 @@ fn plan_in_thread(
             let _ = done_tx.send(plan_request_within(&req, &instance, time_limit_s, &mut obs));
         })
         .map_err(|e| ServiceError::Internal(format!("starting the planning thread: {e}")))?;
-    let mut status = board.status(provisional, "planning");
+    let mut status = board.status(provisional, ServiceState::Planning);
     status.message = "planning".into();
     board.publish(node, &status);
     loop {

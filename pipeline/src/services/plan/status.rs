@@ -9,13 +9,13 @@ use bridge::{MissionId, ZenohNode};
 
 use super::bounded::{Lru, MAX_MISSION_PUBLISHERS};
 use crate::protocol::keys as pkeys;
-use crate::protocol::ServiceStatus;
+use crate::protocol::{Role, ServiceState, ServiceStatus};
 
 /// Publishes [`ServiceStatus`] per mission (JSON, congestion control `Drop`: a frozen reader
 /// never stalls a service). At most [`MAX_MISSION_PUBLISHERS`] publishers are kept, the least
 /// recently used undeclared first.
 pub struct StatusBoard {
-    role: String,
+    role: Role,
     instance: String,
     started: Instant,
     pubs: Mutex<Lru<bridge::net::TypedPublisher<ServiceStatus>>>,
@@ -23,9 +23,9 @@ pub struct StatusBoard {
 
 impl StatusBoard {
     /// A board for `role`/`instance`.
-    pub fn new(role: &str, instance: &str) -> Self {
+    pub fn new(role: Role, instance: &str) -> Self {
         StatusBoard {
-            role: role.to_string(),
+            role,
             instance: instance.to_string(),
             started: Instant::now(),
             pubs: Mutex::new(Lru::with_count(MAX_MISSION_PUBLISHERS)),
@@ -33,12 +33,12 @@ impl StatusBoard {
     }
 
     /// A status with role, instance, mission and uptime filled in.
-    pub fn status(&self, mission_id: MissionId, state: &str) -> ServiceStatus {
+    pub fn status(&self, mission_id: MissionId, state: ServiceState) -> ServiceStatus {
         ServiceStatus {
-            role: self.role.clone(),
+            role: self.role,
             instance: self.instance.clone(),
             mission_id,
-            state: state.to_string(),
+            state,
             uptime_s: self.uptime_s(),
             ..Default::default()
         }
@@ -55,7 +55,7 @@ impl StatusBoard {
             return;
         };
         if pubs.get(status.mission_id).is_none() {
-            let made = pkeys::status(status.mission_id, &self.role)
+            let made = pkeys::status(status.mission_id, self.role)
                 .map_err(bridge::NetError::from)
                 .and_then(|key| {
                     node.publisher::<ServiceStatus>(

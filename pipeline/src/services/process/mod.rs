@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::args::IqLimitArgs;
 use crate::protocol::keys as pkeys;
+use crate::protocol::Role;
 use crate::services::admission::DEFAULT_MAX_MISSIONS;
 use crate::services::plan::{PlanCache, StatusBoard};
 use crate::services::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
@@ -149,7 +150,8 @@ pub fn run_processor(args: &ProcessArgs, stop: &AtomicBool) -> ServiceResult<Pro
     let scene = SceneFile::from_path(&args.scene)?;
     let env = args.iox.env()?;
     let config = args.zenoh.to_config()?;
-    let Some(node) = ZenohNode::open_until(config, "processor", &args.instance, stop)? else {
+    let Some(node) = ZenohNode::open_until(config, Role::Processor.as_str(), &args.instance, stop)?
+    else {
         return Ok(ProcessReport::default());
     };
     let r = serve(args, limits, &scene, &node, &env, stop);
@@ -232,7 +234,7 @@ fn serve(
             scene,
             node,
             cache: PlanCache::new(node, None)?,
-            board: StatusBoard::new("processor", &args.instance),
+            board: StatusBoard::new(Role::Processor, &args.instance),
             runs: Vec::new(),
             publishers: Publishers::default(),
             report: ProcessReport::default(),

@@ -11,7 +11,7 @@ use super::context::detections_message;
 use super::proc::Proc;
 use crate::protocol::keys as pkeys;
 use crate::protocol::{
-    ApertureDetections, ApertureImage, MissionMetrics, ResultAck, ResultRequest,
+    ApertureDetections, ApertureImage, MissionMetrics, ResultAck, ResultRequest, ServiceState,
 };
 use crate::services::admission::requested_apertures;
 use crate::services::radar::ServiceError;
@@ -189,11 +189,11 @@ impl Proc<'_> {
         for run in &self.runs {
             let id = run.ctx.base.mission_id;
             let state = if run.metrics.is_some() {
-                "done"
+                ServiceState::Done
             } else if run.failed.is_some() {
-                "failed"
+                ServiceState::Failed
             } else {
-                "running"
+                ServiceState::Running
             };
             let mut s = self.board.status(id, state);
             s.total = run.ctx.base.apertures.len() as u64;

@@ -297,7 +297,10 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
                 forgers.push((
                     id,
                     Forger {
-                        status: node.publisher(&keys::status(id, "processor")?, opts)?,
+                        status: node.publisher(
+                            &keys::status(id, pipeline::protocol::Role::Processor)?,
+                            opts,
+                        )?,
                         detections: node.publisher(&keys::detections(id)?, opts)?,
                         images,
                         metrics,
@@ -338,10 +341,10 @@ fn forge_round(
     r: &mut ForgeReport,
 ) {
     let status = ServiceStatus {
-        role: "processor".into(),
+        role: pipeline::protocol::Role::Processor,
         instance: a.instance.clone(),
         mission_id: id,
-        state: "failed".into(),
+        state: pipeline::protocol::ServiceState::Failed,
         message: "forged".into(),
         ..ServiceStatus::default()
     };
