@@ -177,3 +177,38 @@ fn no_flag_downgrades_the_tls_deployment() {
     refused(&a, "enables neither TLS nor access control");
     assert!(!out.exists(), "a refused run created its output directory");
 }
+
+/// Every configuration of the mutual-TLS deployment, as Zenoh reads it, requires client
+/// certificates, checks the router's name, and closes a link when its certificate expires
+/// (the promises of `docs/deployment.md`, "Secure deployment across hosts").
+#[test]
+fn every_tls_configuration_requires_certificates_and_closes_expired_links() {
+    let dir = root().join("pipeline/deploy/tls");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let f = e.unwrap().path();
+        if f.extension().is_none_or(|e| e != "json5") {
+            continue;
+        }
+        let config = bridge::ZenohArgs {
+            config: Some(f.clone()),
+            ..Default::default()
+        }
+        .to_config()
+        .unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        for key in ["enable_mtls", "close_link_on_expiration"] {
+            let got = config
+                .get_json(&format!("transport/link/tls/{key}"))
+                .unwrap();
+            assert_eq!(got, "true", "{}: {key}", f.display());
+        }
+        if !f.ends_with("router.json5") {
+            let got = config
+                .get_json("transport/link/tls/verify_name_on_connect")
+                .unwrap();
+            assert_eq!(got, "true", "{}: verify_name_on_connect", f.display());
+        }
+        n += 1;
+    }
+    assert_eq!(n, 6, "the router's and five roles' configurations");
+}
