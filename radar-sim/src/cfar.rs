@@ -24,7 +24,7 @@ mod detector;
 mod model;
 mod stats;
 
-pub use cluster::{cluster, components, Detection};
+pub use cluster::{cluster, cluster_with_outside, components, outside_peaks, Detection};
 pub use detector::{ca_cfar, CfarMap, CfarParams};
 pub use model::{ResponseModel, MODEL_CELL_MARGIN, MODEL_SCALE_MARGIN};
 pub use stats::{

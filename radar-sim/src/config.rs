@@ -38,7 +38,9 @@ mod radar;
 
 pub use nr::{NrConfig, NR_PREFIX};
 pub use objects::ObjectsConfig;
-pub use processing::{CancellerKind, ProcessingConfig, RangeFilter, Weighting};
+pub use processing::{
+    CancellerKind, ProcessingConfig, RangeFilter, Weighting, GUARD_BAND_PIXEL_FACTOR,
+};
 pub use radar::{BsAntennaConfig, Modulation, MotionModel, RadarConfig};
 
 /// Boltzmann constant, J/K.

@@ -80,10 +80,31 @@ pub fn cluster(
     aperture: usize,
     model: Option<&ResponseModel>,
 ) -> Vec<Detection> {
+    cluster_with_outside(img, map, grid, &[], merge_radius_m, aperture, model)
+}
+
+/// [`cluster`] with the peaks `outside` the grid (ground position, image value on the same
+/// scale), found in a guard band imaged around it ([`outside_peaks`]): they take part in the
+/// strongest-first pass as any peak, suppressing the grid's peaks within the merge radius and
+/// those no higher than their predicted response, but are no detections. A response of an
+/// object beyond the grid's edge is thus that object's, and its skirt and sidelobes inside
+/// the grid are edited against it.
+pub fn cluster_with_outside(
+    img: &[f32],
+    map: &CfarMap,
+    grid: &Grid,
+    outside: &[([f64; 2], f64)],
+    merge_radius_m: f64,
+    aperture: usize,
+    model: Option<&ResponseModel>,
+) -> Vec<Detection> {
     let (nx, ny) = (grid.nx, grid.ny);
+    if img.len() != nx * ny || map.hits.len() != nx * ny || map.noise.len() != nx * ny {
+        return Vec::new();
+    }
     let (label, sizes) = components(&map.hits, nx, ny);
     // peaks: exceeding local maxima (equal values: the lower index is the maximum)
-    let mut peaks: Vec<usize> = (0..nx * ny)
+    let peaks: Vec<usize> = (0..nx * ny)
         .filter(|&i| {
             if !map.hits[i] {
                 return false;
@@ -110,14 +131,31 @@ pub fn cluster(
             true
         })
         .collect();
-    peaks.sort_by(|a, b| img[*b].total_cmp(&img[*a]).then(a.cmp(b)));
+    // the grid's peaks (Ok: pixel index) and the outside ones (Err: index into `outside`),
+    // strongest first
+    let mut all: Vec<(f64, std::result::Result<usize, usize>)> = peaks
+        .iter()
+        .map(|&i| (img[i] as f64, Ok(i)))
+        .chain(
+            outside
+                .iter()
+                .enumerate()
+                .filter(|(_, (_, v))| v.is_finite())
+                .map(|(k, (_, v))| (*v, Err(k))),
+        )
+        .collect();
+    all.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     let r = merge_radius_m.max(grid.spacing_m);
     let mut taken: Vec<([f64; 2], f64)> = Vec::new();
     let mut out = Vec::new();
-    for i in peaks {
-        let (xu, yu) = (i % nx, i / nx);
-        let pos = [grid.x(xu), grid.y(yu)];
-        let v = img[i] as f64;
+    for (v, which) in all {
+        let (pos, noise) = match which {
+            Ok(i) => (
+                [grid.x(i % nx), grid.y(i / nx)],
+                map.noise[i].max(0.0) as f64,
+            ),
+            Err(k) => (outside[k].0, 0.0),
+        };
         let near = taken
             .iter()
             .any(|(q, _)| (q[0] - pos[0]).hypot(q[1] - pos[1]) <= r);
@@ -129,11 +167,15 @@ pub fn cluster(
                 .iter()
                 .map(|(q, qv)| (qv * m.envelope([pos[0] - q[0], pos[1] - q[1]])).sqrt())
                 .sum();
-            if v <= SIDELOBE_MARGIN * (amp * amp + map.noise[i].max(0.0) as f64) {
+            if v <= SIDELOBE_MARGIN * (amp * amp + noise) {
                 continue;
             }
         }
         taken.push((pos, v));
+        let Ok(i) = which else {
+            continue;
+        };
+        let (xu, yu) = (i % nx, i / nx);
         if xu == 0 || yu == 0 || xu + 1 == nx || yu + 1 == ny {
             continue;
         }
@@ -158,5 +200,49 @@ pub fn cluster(
         });
     }
     out.sort_by(|a, b| b.snr_db.total_cmp(&a.snr_db));
+    out
+}
+
+/// The peaks of `band` (an image on `band_grid`, the guard band: a coarser grid around
+/// `grid`) that lie outside `grid` and reach `threshold`: local maxima of their 8 neighbours,
+/// as (ground position, value), for [`cluster_with_outside`]. An `band` that is not
+/// `band_grid`'s gives none.
+pub fn outside_peaks(
+    band: &[f32],
+    band_grid: &Grid,
+    grid: &Grid,
+    threshold: f64,
+) -> Vec<([f64; 2], f64)> {
+    let (nx, ny) = (band_grid.nx, band_grid.ny);
+    if band.len() != nx * ny || nx < 3 || ny < 3 {
+        return Vec::new();
+    }
+    let half_x = (grid.nx as f64 - 1.0) / 2.0 * grid.spacing_m;
+    let half_y = (grid.ny as f64 - 1.0) / 2.0 * grid.spacing_m;
+    let mut out = Vec::new();
+    for y in 1..ny - 1 {
+        for x in 1..nx - 1 {
+            let i = y * nx + x;
+            let v = band[i];
+            if v.is_nan() || (v as f64) < threshold {
+                continue;
+            }
+            let pos = [band_grid.x(x), band_grid.y(y)];
+            if (pos[0] - grid.centre_m[0]).abs() <= half_x
+                && (pos[1] - grid.centre_m[1]).abs() <= half_y
+            {
+                continue;
+            }
+            let is_max = (-1..=1i64).all(|dy| {
+                (-1..=1i64).all(|dx| {
+                    let j = ((y as i64 + dy) as usize) * nx + (x as i64 + dx) as usize;
+                    j == i || band[j] < v || (band[j] == v && j > i)
+                })
+            });
+            if is_max {
+                out.push((pos, v as f64));
+            }
+        }
+    }
     out
 }

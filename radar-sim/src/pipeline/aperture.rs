@@ -53,21 +53,42 @@ impl Processor {
         let grid = self.setup.grid(ap);
         let pc = &self.setup.scene.processing;
         let ppl = ap.pulses_per_look;
-        let c = self.compress(&grid, pulses, iq, ppl, Some(ap.centre_m), false)?;
+        // the guard band (coarser, around the grid): the range windows cover it too
+        let band_grid = self.setup.guard_grid(ap);
+        let c = self.compress(
+            band_grid.as_ref().unwrap_or(&grid),
+            pulses,
+            iq,
+            ppl,
+            Some(ap.centre_m),
+            false,
+        )?;
         let noise_var = self.look_noise_var(ppl);
         let mut multilook = vec![0f32; grid.pixels()];
+        let mut band = vec![0f32; band_grid.as_ref().map_or(0, Grid::pixels)];
         let mut looks = Vec::new();
+        let s = (1.0 / (noise_var * ap.looks as f64)) as f32;
         for l in 0..ap.looks {
             let img = self.image_look(&grid, &c, l * ppl..(l + 1) * ppl)?;
-            let s = (1.0 / (noise_var * ap.looks as f64)) as f32;
             for (o, v) in multilook.iter_mut().zip(&img) {
                 *o += v.norm_sqr() * s;
             }
             if pc.save_complex {
                 looks.push(img);
             }
+            if let Some(bg) = &band_grid {
+                let img = self.image_look(bg, &c, l * ppl..(l + 1) * ppl)?;
+                for (o, v) in band.iter_mut().zip(&img) {
+                    *o += v.norm_sqr() * s;
+                }
+            }
         }
-        let det = self.detect(ap, pulses, &multilook)?;
+        let det = self.detect(
+            ap,
+            pulses,
+            &multilook,
+            band_grid.as_ref().map(|g| (g, band.as_slice())),
+        )?;
         let echo_power_w = self.echo_power_w(objects, pulses);
         let floor_w =
             echo_power_w + self.noise_power_w() * c.cancel.noise_retained(self.setup.num.fft_size);

@@ -1,6 +1,9 @@
 //! CFAR detection on the multilook image ([`Processor::detect`]).
 
-use crate::cfar::{ca_cfar, cluster, CfarParams, Detection, ResponseModel};
+use crate::backproject::Grid;
+use crate::cfar::{
+    ca_alpha, ca_cfar, cluster_with_outside, outside_peaks, CfarParams, Detection, ResponseModel,
+};
 use crate::error::{RadarError, Result};
 use crate::track::{Aperture, PulseMeta};
 use crate::waveform::C_MPS;
@@ -113,12 +116,16 @@ impl Processor {
 
     /// CFAR detection and clustering on the multilook image of aperture `ap` (mean over its
     /// looks of |I|² / per-look noise variance), with the guard and coherence area of the
-    /// predicted cell at the image centre, mid-aperture.
+    /// predicted cell at the image centre, mid-aperture. `band`: the multilook image of the
+    /// guard band ([`super::RadarSetup::guard_grid`], on the same scale), whose peaks outside
+    /// the grid above the CFAR threshold of the image-wide floor suppress the grid's skirts and
+    /// sidelobes of objects beyond its edge ([`cluster_with_outside`]).
     pub fn detect(
         &self,
         ap: &Aperture,
         pulses: &[PulseMeta],
         multilook: &[f32],
+        band: Option<(&Grid, &[f32])>,
     ) -> Result<Detected> {
         let grid = self.setup.grid(ap);
         if multilook.len() != grid.pixels() || pulses.is_empty() {
@@ -180,10 +187,19 @@ impl Processor {
         };
         let model = ResponseModel::new(per_look, pc.range_weighting, pc.azimuth_weighting);
         let d_min = self.setup.params.d_min_m;
-        let detections = cluster(
+        let outside = match band {
+            Some((bg, img)) => {
+                let threshold = ca_alpha(cfar.pfa, map.median_cells.max(1.0), cfar.looks)
+                    * map.floor.max(f64::MIN_POSITIVE);
+                outside_peaks(img, bg, &grid, threshold)
+            }
+            None => Vec::new(),
+        };
+        let detections = cluster_with_outside(
             multilook,
             &map,
             &grid,
+            &outside,
             pc.cluster_radius_m.unwrap_or(d_min / 2.0),
             ap.index,
             Some(&model),

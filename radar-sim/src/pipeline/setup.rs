@@ -119,4 +119,19 @@ impl RadarSetup {
             self.scene.processing.pixel_m,
         )
     }
+
+    /// The guard band's grid of aperture `ap`: the image grid and the band around it
+    /// (`processing.guard_band_m`), at [`crate::config::GUARD_BAND_PIXEL_FACTOR`] times the
+    /// image's pixel spacing; `None` with the band off.
+    pub fn guard_grid(&self, ap: &Aperture) -> Option<Grid> {
+        let pc = &self.scene.processing;
+        let band = pc.guard_band_width_m();
+        (band > 0.0).then(|| {
+            Grid::square(
+                ap.centre_m,
+                pc.grid_half_m + band,
+                pc.pixel_m * crate::config::GUARD_BAND_PIXEL_FACTOR as f64,
+            )
+        })
+    }
 }

@@ -123,7 +123,7 @@ pub fn pair_detections(
         .collect();
     let gate = m.params().d_min_m / 2.0;
     let count = |ml: &[f32]| -> (usize, usize) {
-        let d = proc.detect(ap, &pulses, ml).unwrap().detections;
+        let d = proc.detect(ap, &pulses, ml, None).unwrap().detections;
         let near: Vec<_> = d
             .into_iter()
             .filter(|x| (x.x_m - centre[0]).hypot(x.y_m - centre[1]) < 30.0)
