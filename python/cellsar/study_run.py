@@ -34,6 +34,7 @@ RESULT_COLUMNS = (
     ("feasible", "bool"),
     ("unresolved_windows", "float64"),
     ("pd", "float64"),
+    ("pd_all", "float64"),
     ("strong_objects", "float64"),
     ("detected_objects", "float64"),
     ("false_alarms", "float64"),
@@ -93,6 +94,7 @@ def execute(run: Run) -> Dict[str, Any]:
             row["radar_s"] = time.perf_counter() - t1
             m = result.metrics
             row["pd"] = _number(m.get("pd"))
+            row["pd_all"] = _number(m.get("pd_all"))
             strong = _number(m.get("strong_objects"))
             row["strong_objects"] = strong
             row["detected_objects"] = (

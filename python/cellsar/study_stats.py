@@ -17,7 +17,14 @@ from .study_table import CSV, columns, read
 #: The two-sided 95 % normal quantile.
 Z95 = 1.959963984540054
 #: Metrics averaged with a Student-t interval.
-MEANS = ("energy_j", "unresolved_windows", "false_alarms", "position_error_m", "run_s")
+MEANS = (
+    "energy_j",
+    "unresolved_windows",
+    "pd_all",
+    "false_alarms",
+    "position_error_m",
+    "run_s",
+)
 #: Bins of a parameter drawn at random.
 RANDOM_BINS = 8
 AGGREGATES = "aggregates.csv"

@@ -90,6 +90,7 @@ def test_closed_loop_run_has_detections(tmp_path):
     (row,) = rows(out)
     assert row["status"] == "ok", row["error"]
     assert 0.0 <= float(row["pd"]) <= 1.0
+    assert 0.0 <= float(row["pd_all"]) <= 1.0
     assert float(row["strong_objects"]) > 0
     assert float(row["detected_objects"]) == round(float(row["pd"]) * float(row["strong_objects"]))
     assert math.isfinite(float(row["false_alarms"]))
@@ -97,3 +98,4 @@ def test_closed_loop_run_has_detections(tmp_path):
     with open(out / "aggregates.csv", newline="") as f:
         (agg,) = list(csv.DictReader(f))
     assert float(agg["pd_p"]) == pytest.approx(float(row["pd"]))
+    assert float(agg["pd_all_mean"]) == pytest.approx(float(row["pd_all"]))

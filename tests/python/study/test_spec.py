@@ -144,7 +144,7 @@ def test_shipped_studies_load():
     detection = study.load(ROOT / "studies" / "detection.toml")
     runs = detection.runs()
     assert (detection.mode, len(runs)) == ("closed-loop", 200)
-    assert runs[13].scene["radar"]["tx_power_w"] == 0.003 and runs[13].scene["objects"]["seed"] == 1
+    assert runs[13].scene["radar"]["tx_power_w"] == 0.02 and runs[13].scene["objects"]["seed"] == 1
 
 
 def test_aggregates_of_random_draws_binned(tmp_path):
