@@ -150,6 +150,22 @@ fn a_hostile_peer_of_every_kind_leaves_the_run_exact_and_bounded() {
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
     assert_same_as_reference(&l.out, &reference);
     assert!(echo.stop(Duration::from_secs(20)).success());
+    // the echo, started by hand, outlived the launcher's clean-up of the run's segments
+    let iox: Vec<&str> = net["iox"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    if let Some(prefix) = iox
+        .windows(2)
+        .find(|w| w[0] == "--iox-prefix")
+        .map(|w| w[1])
+    {
+        for f in shm_files(prefix) {
+            let _ = std::fs::remove_file(format!("/dev/shm/{f}"));
+        }
+    }
     let p = l.pipeline_json();
     eprintln!("collector: {}", p["collector"]);
     eprintln!("hostile suite: {:.1} s", started.elapsed().as_secs_f64());
