@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use nix::sys::signal::Signal;
 
-use crate::events::Events;
+use crate::events::{Event, Events};
 
 /// Environment variable with the launcher's pid, set for every child.
 pub const PARENT_ENV: &str = "CELLSAR_LAUNCHER_PID";
@@ -158,14 +158,11 @@ impl Supervised {
             error,
         })?;
         let pid = child.id();
-        events.emit(
-            "child_started",
-            &[
-                ("role", self.spec.role.clone().into()),
-                ("pid", pid.into()),
-                ("restarts", self.restarts.into()),
-            ],
-        );
+        events.emit(&Event::ChildStarted {
+            role: self.spec.role.clone(),
+            pid,
+            restarts: self.restarts,
+        });
         tracing::info!(role = %self.spec.role, pid, "started");
         self.child = Some(child);
         Ok(pid)
@@ -192,13 +189,10 @@ impl Supervised {
                     self.failures += 1;
                     let st = describe(status);
                     tracing::warn!(role = %self.spec.role, status = %st, "child exited");
-                    events.emit(
-                        "child_exited",
-                        &[
-                            ("role", self.spec.role.clone().into()),
-                            ("status", st.clone().into()),
-                        ],
-                    );
+                    events.emit(&Event::ChildExited {
+                        role: self.spec.role.clone(),
+                        status: st.clone(),
+                    });
                     self.last_exit = Some(st.clone());
                     if self.failures > max_restarts {
                         return Err(SuperviseError::KeepsFailing {
@@ -225,14 +219,11 @@ impl Supervised {
                 self.restart_at = None;
                 self.restarts += 1;
                 let pid = self.spawn(events)?;
-                events.emit(
-                    "child_restarted",
-                    &[
-                        ("role", self.spec.role.clone().into()),
-                        ("pid", pid.into()),
-                        ("restarts", self.restarts.into()),
-                    ],
-                );
+                events.emit(&Event::ChildRestarted {
+                    role: self.spec.role.clone(),
+                    pid,
+                    restarts: self.restarts,
+                });
                 return Ok(Some(ChildEvent::Restarted {
                     role: self.spec.role.clone(),
                     pid,
@@ -289,10 +280,10 @@ pub fn stop_all(children: &mut [Supervised], grace: Duration, events: &Events) {
     let deadline = Instant::now() + grace;
     for c in children.iter_mut() {
         if let Some(st) = c.reap(deadline) {
-            events.emit(
-                "child_stopped",
-                &[("role", c.spec.role.clone().into()), ("status", st.into())],
-            );
+            events.emit(&Event::ChildStopped {
+                role: c.spec.role.clone(),
+                status: st,
+            });
         }
     }
 }

@@ -10,10 +10,10 @@ use anyhow::{bail, Result};
 use bridge::net::QueryOptions;
 use bridge::MissionId;
 use indicatif::{ProgressBar, ProgressStyle};
-use serde_json::json;
 
 use super::session::Session;
 use crate::collect::{Added, Collector};
+use crate::events::Event;
 use crate::protocol::{self, ResultAck, ResultRequest, Role, ServiceState, ServiceStatus};
 
 /// What the collection gathered.
@@ -79,10 +79,10 @@ impl Session<'_> {
                 let done = c.col.done();
                 if done as u64 > p.bar.position() {
                     c.aperture_done_s.push(p.started.elapsed().as_secs_f64());
-                    self.setup.events.emit(
-                        "aperture",
-                        &[("done", done.into()), ("total", apertures.into())],
-                    );
+                    self.setup.events.emit(&Event::Aperture {
+                        done,
+                        total: apertures,
+                    });
                 }
                 p.bar.set_position(done as u64);
             }
@@ -127,13 +127,10 @@ impl Session<'_> {
                             None => "-",
                         }
                     ));
-                    events.emit(
-                        "detections",
-                        &[
-                            ("aperture", k.into()),
-                            ("count", dm.detections.len().into()),
-                        ],
-                    );
+                    events.emit(&Event::Detections {
+                        aperture: k,
+                        count: dm.detections.len(),
+                    });
                 }
             }
         }
@@ -154,7 +151,7 @@ impl Session<'_> {
             c.col.add_metrics(m.message);
         }
         if !had_metrics && c.col.has_metrics() {
-            events.emit("metrics", &[]);
+            events.emit(&Event::Metrics);
         }
         while let Some(s) = self.subs.statuses.try_recv() {
             if s.message.mission_id != id || self.senders.status(&s.key, &s.message).is_err() {
@@ -164,15 +161,12 @@ impl Session<'_> {
             if s.role == Role::Processor && s.state == ServiceState::Failed {
                 bail!("the processor gave up the mission: {}", s.message);
             }
-            events.emit(
-                "status",
-                &[
-                    ("role", s.role.as_str().into()),
-                    ("state", s.state.as_str().into()),
-                    ("done", s.done.into()),
-                    ("counters", json!(s.counters)),
-                ],
-            );
+            events.emit(&Event::Status {
+                role: s.role,
+                state: s.state,
+                done: s.done,
+                counters: s.counters.clone(),
+            });
             if s.role == Role::Processor {
                 for k in &s.done_items {
                     p.first_seen_done
@@ -207,13 +201,10 @@ impl Session<'_> {
             return Ok(());
         }
         c.resend_requests += 1;
-        self.setup.events.emit(
-            "resend_request",
-            &[
-                ("apertures", json!(stale)),
-                ("metrics", want_metrics.into()),
-            ],
-        );
+        self.setup.events.emit(&Event::ResendRequest {
+            apertures: stale.clone(),
+            metrics: want_metrics,
+        });
         let req = ResultRequest {
             mission_id: id,
             apertures: stale,

@@ -44,9 +44,8 @@ use anyhow::{anyhow, Context, Result};
 use bridge::flags::{self, Seconds};
 use bridge::{FrameServiceSpec, IoxArgs, Message, NetError, Refusal, RefusalKind, ZenohArgs};
 use radar_sim::config::SceneFile;
-use serde_json::json;
 
-use crate::events::Events;
+use crate::events::{Event, Events};
 use crate::exit::{Failure, FailureKind};
 use crate::protocol::{self, FrameLayout};
 use crate::services::process::MissionContext;
@@ -392,14 +391,11 @@ fn launch(
         ra.extend(router.to_cli_args());
         children.push(Supervised::start(spec("router", ra), &events)?);
     }
-    events.emit(
-        "network",
-        &[
-            ("launcher", json!(net.launcher.to_cli_args())),
-            ("children", json!(net.child.to_cli_args())),
-            ("iox", json!(iox.to_cli_args())),
-        ],
-    );
+    events.emit(&Event::Network {
+        launcher: net.launcher.to_cli_args(),
+        children: net.child.to_cli_args(),
+        iox: iox.to_cli_args(),
+    });
     // 3.-5. the run on the launcher's Zenoh session; then one clean-up, however it ended
     // (SIGINT/SIGTERM while the session opens included)
     let (node, result) = match open_with_retry(&net.launcher, &stop, args.peer_timeout_s.duration())
@@ -426,7 +422,7 @@ fn launch(
         Err(e) => (None, Err(e)),
     };
     if matches!(result, Ok(Outcome::Interrupted)) {
-        events.emit("interrupted", &[]);
+        events.emit(&Event::Interrupted);
     }
     stop_all(&mut children, Duration::from_secs(10), &events);
     if let Some(node) = node {
@@ -467,16 +463,13 @@ fn run_on(mut s: Session<'_>, mission: &planner::Mission) -> Result<Outcome> {
         ctx.layout.total_frames(),
         ctx.layout.frame_pulses()
     ));
-    s.setup.events.emit(
-        "planned",
-        &[
-            ("mission_id", id.to_string().into()),
-            ("apertures", n.into()),
-            ("frames", ctx.layout.total_frames().into()),
-            ("frame_pulses", ctx.layout.frame_pulses().into()),
-            ("plan_s", plan_s.into()),
-        ],
-    );
+    s.setup.events.emit(&Event::Planned {
+        mission_id: id.to_string(),
+        apertures: n,
+        frames: ctx.layout.total_frames(),
+        frame_pulses: ctx.layout.frame_pulses(),
+        plan_s,
+    });
     s.start_bridge(id)?;
     let collected = s.collect(id, n)?;
     if collected.interrupted {

@@ -10,6 +10,7 @@ use serde_json::{json, Value};
 use super::imaging::Collected;
 use super::session::Session;
 use super::Outcome;
+use crate::events::Event;
 use crate::protocol::Plan;
 use crate::services::os::write_file_atomic;
 use crate::services::process::MissionContext;
@@ -46,13 +47,10 @@ impl Session<'_> {
         let n = planned.ctx.apertures.len();
         write_report_md(out, resolved, plan, &report, &widths, &pipeline, n)?;
         self.print_summary(&report, wall_s);
-        self.setup.events.emit(
-            "done",
-            &[
-                ("wall_s", wall_s.into()),
-                ("all_in_view_detected", report.all_in_view_detected.into()),
-            ],
-        );
+        self.setup.events.emit(&Event::Done {
+            wall_s,
+            all_in_view_detected: report.all_in_view_detected,
+        });
         if !report.all_in_view_detected {
             self.say(&missed_landmarks(resolved, &widths, &report));
         }

@@ -13,6 +13,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::plan_refusal;
 use super::session::Session;
+use crate::events::Event;
 use crate::protocol::{self, Plan, PlanRequest, PlanRequestOptions, Role, MAX_PLAN_BYTES};
 
 /// Why `plan` does not answer `request` (`None`: it does): a plan of another mission or with
@@ -138,17 +139,14 @@ impl Session<'_> {
     fn refuse_plan(&mut self, planner: &str, why: &str) {
         self.refused_plans += 1;
         tracing::warn!(planner, reason = %why, "a plan reply that does not answer the request skipped");
-        self.setup.events.emit(
-            "plan_refused",
-            &[("planner", planner.into()), ("reason", why.into())],
-        );
+        self.setup.events.emit(&Event::PlanRefused {
+            planner: planner.into(),
+            reason: why.into(),
+        });
     }
 
     fn retry_event(&self, attempt: u32, error: String) {
-        self.setup.events.emit(
-            "plan_retry",
-            &[("attempt", attempt.into()), ("error", error.into())],
-        );
+        self.setup.events.emit(&Event::PlanRetry { attempt, error });
     }
 
     /// Waits for a planner's token; `false` when interrupted.

@@ -14,7 +14,7 @@ use bridge::{keys, IoxArgs, MissionId, ZenohNode};
 
 use super::net::Net;
 use super::{RunArgs, Transport};
-use crate::events::Events;
+use crate::events::{Event, Events};
 use crate::protocol::{self, ApertureDetections, ApertureImage, MissionMetrics, ServiceStatus};
 use crate::senders::Senders;
 use crate::services::wait::WaitLog;
@@ -147,16 +147,13 @@ impl<'a> Session<'a> {
                 waited_s = w.waited.as_secs(),
                 "waiting for {what} ({until})"
             );
-            self.setup.events.emit(
-                "waiting",
-                &[
-                    ("for", what.into()),
-                    ("session", self.node.describe().into()),
-                    ("routers", routers.into()),
-                    ("peers", peers.into()),
-                    ("waited_s", w.waited.as_secs().into()),
-                ],
-            );
+            self.setup.events.emit(&Event::Waiting {
+                waiting_for: what.into(),
+                session: self.node.describe().to_string(),
+                routers,
+                peers,
+                waited_s: w.waited.as_secs(),
+            });
         }
         Ok(())
     }
@@ -280,14 +277,11 @@ impl<'a> Session<'a> {
                 if !e.alive {
                     tracing::warn!(role, instance, "liveliness lost");
                 }
-                self.setup.events.emit(
-                    "alive",
-                    &[
-                        ("role", role.into()),
-                        ("instance", instance.into()),
-                        ("alive", e.alive.into()),
-                    ],
-                );
+                self.setup.events.emit(&Event::Alive {
+                    role: role.into(),
+                    instance: instance.into(),
+                    alive: e.alive,
+                });
             }
         }
         Ok(())
