@@ -4,16 +4,87 @@
 
 use std::path::Path;
 
+use std::collections::BTreeMap;
+
 use anyhow::{anyhow, Result};
-use serde_json::{json, Value};
+use bridge::CounterSnapshot;
+use serde::Serialize;
+use serde_json::Value;
 
 use super::imaging::Collected;
 use super::session::Session;
 use super::Outcome;
 use crate::events::Event;
-use crate::protocol::Plan;
+use crate::protocol::{Plan, ServiceStatus};
+use crate::senders::Refused;
 use crate::services::os::write_file_atomic;
 use crate::services::process::MissionContext;
+
+/// `pipeline.json`: how a run went, beside its outputs.
+#[derive(Debug, Serialize)]
+pub struct PipelineJson {
+    /// The mission's name.
+    pub mission: String,
+    /// Its id.
+    pub mission_id: String,
+    /// Its apertures.
+    pub apertures: usize,
+    /// Its IQ frames.
+    pub frames: u64,
+    /// Pulses per frame.
+    pub frame_pulses: usize,
+    /// `iox` or `zenoh` (`--transport`).
+    pub transport: String,
+    /// Whether the launcher started a router (`--router`).
+    pub router: bool,
+    /// Wall time of the run, s.
+    pub wall_s: f64,
+    /// Seconds from the plan request to the plan.
+    pub plan_s: f64,
+    /// Seconds the collection took.
+    pub imaging_s: f64,
+    /// Seconds from the start of the collection to each new aperture.
+    pub aperture_done_s: Vec<f64>,
+    /// Restarts of each local child, by role.
+    pub restarts: BTreeMap<String, u32>,
+    /// What the collection took, skipped and refused.
+    pub collector: CollectorJson,
+    /// The last status of each service, by role.
+    pub services: BTreeMap<String, ServiceStatus>,
+    /// The events kept (the first and the latest).
+    pub events: Vec<Value>,
+    /// Events between those kept, dropped.
+    pub events_dropped: u64,
+    /// Instances not recorded because as many known ones were alive.
+    pub unrecorded_senders: u64,
+}
+
+/// The collector's counters in `pipeline.json`.
+#[derive(Debug, Serialize)]
+pub struct CollectorJson {
+    /// Messages received again, dropped.
+    pub duplicates: u64,
+    /// Messages of other missions, out of range or refused as foreign.
+    pub foreign: u64,
+    /// Messages that contradict themselves, skipped.
+    pub malformed: u64,
+    /// Requests to publish results again.
+    pub resend_requests: u64,
+    /// Messages refused as foreign (wrong key, unknown sender).
+    pub refused_senders: u64,
+    /// The same, by kind.
+    pub refused_by_kind: Refused,
+    /// Plan replies that did not answer the request.
+    pub refused_plans: u64,
+    /// The detections subscriber's counters.
+    pub detections: CounterSnapshot,
+    /// The images subscriber's counters.
+    pub images: CounterSnapshot,
+    /// The metrics subscriber's counters.
+    pub metrics: CounterSnapshot,
+    /// The status subscriber's counters.
+    pub status: CounterSnapshot,
+}
 
 /// What the run knows once the plan came.
 pub(super) struct Planned<'p> {
@@ -45,6 +116,7 @@ impl Session<'_> {
         )?;
         let widths = window_worst_widths_m(resolved, &plan.result.evaluation);
         let n = planned.ctx.apertures.len();
+        let pipeline = serde_json::to_value(&pipeline)?;
         write_report_md(out, resolved, plan, &report, &widths, &pipeline, n)?;
         self.print_summary(&report, wall_s);
         self.setup.events.emit(&Event::Done {
@@ -61,33 +133,40 @@ impl Session<'_> {
         })
     }
 
-    fn pipeline_json(&self, planned: &Planned<'_>, c: &Collected, wall_s: f64) -> Value {
+    fn pipeline_json(&self, planned: &Planned<'_>, c: &Collected, wall_s: f64) -> PipelineJson {
         let args = self.args();
         let subs = &self.subs;
-        json!({
-            "mission": planned.mission.name(),
-            "mission_id": planned.plan.mission_id.to_string(),
-            "apertures": planned.ctx.apertures.len(),
-            "frames": planned.ctx.layout.total_frames(),
-            "frame_pulses": planned.ctx.layout.frame_pulses(),
-            "transport": format!("{:?}", args.transport).to_lowercase(),
-            "router": args.router,
-            "wall_s": wall_s,
-            "plan_s": planned.plan_s,
-            "imaging_s": c.imaging_s,
-            "aperture_done_s": c.aperture_done_s,
-            "restarts": self.restarts(),
-            "collector": {"duplicates": c.col.duplicates, "foreign": c.col.foreign, "malformed": c.col.malformed, "resend_requests": c.resend_requests,
-                "refused_senders": self.senders.refused, "refused_by_kind": self.senders.refused_by_kind(), "refused_plans": self.refused_plans,
-                "detections": subs.detections.counters().snapshot(),
-                "images": subs.images.counters().snapshot(),
-                "metrics": subs.metrics.counters().snapshot(),
-                "status": subs.statuses.counters().snapshot()},
-            "services": c.last_status,
-            "events": self.setup.events.all(),
-            "events_dropped": self.setup.events.dropped(),
-            "unrecorded_senders": self.senders.unrecorded(),
-        })
+        PipelineJson {
+            mission: planned.mission.name().to_string(),
+            mission_id: planned.plan.mission_id.to_string(),
+            apertures: planned.ctx.apertures.len(),
+            frames: planned.ctx.layout.total_frames(),
+            frame_pulses: planned.ctx.layout.frame_pulses(),
+            transport: format!("{:?}", args.transport).to_lowercase(),
+            router: args.router,
+            wall_s,
+            plan_s: planned.plan_s,
+            imaging_s: c.imaging_s,
+            aperture_done_s: c.aperture_done_s.clone(),
+            restarts: self.restarts(),
+            collector: CollectorJson {
+                duplicates: c.col.duplicates,
+                foreign: c.col.foreign,
+                malformed: c.col.malformed,
+                resend_requests: c.resend_requests,
+                refused_senders: self.senders.refused,
+                refused_by_kind: self.senders.refused_by_kind(),
+                refused_plans: self.refused_plans,
+                detections: subs.detections.counters().snapshot(),
+                images: subs.images.counters().snapshot(),
+                metrics: subs.metrics.counters().snapshot(),
+                status: subs.statuses.counters().snapshot(),
+            },
+            services: c.last_status.clone(),
+            events: self.setup.events.all(),
+            events_dropped: self.setup.events.dropped(),
+            unrecorded_senders: self.senders.unrecorded(),
+        }
     }
 
     fn print_summary(&self, report: &radar_sim::run::LoopReport, wall_s: f64) {
