@@ -136,12 +136,16 @@ impl Trajectory {
     }
 
     /// Reads a CSV file with at least the columns `t_s,x_m,y_m`, one row per slot, optionally with
-    /// the start as a row at t = 0. `start_m` is used when no t = 0 row is present.
+    /// the start as a row at t = 0. `start_m` is used when no t = 0 row is present. An altitude
+    /// column `z_m` (as `trajectory.csv` has) must hold the mission's `altitude_m` in every row:
+    /// a 2-D track is flown at that altitude, so a file made for another altitude, or with a
+    /// varying one, is refused rather than flown at the wrong height.
     pub fn from_csv_path(
         path: &Path,
         slot_s: f64,
         slots: usize,
         start_m: [f64; 2],
+        altitude_m: f64,
     ) -> Result<Self, TrajectoryError> {
         let shown = path.display().to_string();
         let text = crate::files::read_text_bounded(path, crate::files::MAX_INPUT_FILE_BYTES)
@@ -149,7 +153,7 @@ impl Trajectory {
                 path: shown.clone(),
                 error,
             })?;
-        Self::from_csv_str(&text, &shown, slot_s, slots, start_m)
+        Self::from_csv_str(&text, &shown, slot_s, slots, start_m, altitude_m)
     }
 
     /// Parses CSV text (see [`Trajectory::from_csv_path`]); `name` is used in error messages.
@@ -159,6 +163,7 @@ impl Trajectory {
         slot_s: f64,
         slots: usize,
         start_m: [f64; 2],
+        altitude_m: f64,
     ) -> Result<Self, TrajectoryError> {
         let err = |location: String, reason: String| TrajectoryError::Format {
             path: name.to_string(),
@@ -183,10 +188,11 @@ impl Trajectory {
                 .ok_or_else(|| err("header".into(), format!("missing column `{name}`")))
         };
         let (ct, cx, cy) = (col("t_s")?, col("x_m")?, col("y_m")?);
-        // an altitude column (`trajectory.csv`'s z_m) must hold one altitude: a 2-D track
-        // cannot carry a varying one, and dropping it would fly another trajectory
+        // an altitude column (`trajectory.csv`'s z_m) must hold the mission's altitude: a 2-D
+        // track cannot carry a varying one, and dropping it would fly another trajectory
         let cz = cols.iter().position(|c| c == "z_m");
         let mut first_z: Option<f64> = None;
+        let altitude_tol_m = 1e-6 * altitude_m.abs().max(1.0);
         let mut start = start_m;
         let mut pos = Vec::with_capacity(slots);
         for record in rd.records() {
@@ -220,6 +226,15 @@ impl Trajectory {
             if let Some(cz) = cz {
                 let z = get(cz, "z_m")?;
                 match first_z {
+                    None if (z - altitude_m).abs() > altitude_tol_m => {
+                        return Err(err(
+                            format!("line {line}, column z_m"),
+                            format!(
+                                "altitude {z} m, but the mission flies at altitude_m = \
+                                 {altitude_m} m: the track was made for another altitude"
+                            ),
+                        ))
+                    }
                     None => first_z = Some(z),
                     Some(z0) if z != z0 => {
                         return Err(err(
@@ -322,25 +337,25 @@ mod tests {
     #[test]
     fn csv_round_trip_and_errors() {
         let text = "t_s,x_m,y_m\n0,1,2\n0.5,3,4\n1.0,5,6\n";
-        let tr = Trajectory::from_csv_str(text, "x.csv", 0.5, 2, [0.0, 0.0]).unwrap();
+        let tr = Trajectory::from_csv_str(text, "x.csv", 0.5, 2, [0.0, 0.0], 1000.0).unwrap();
         assert_eq!(tr.start_m, [1.0, 2.0]);
         assert_eq!(tr.pos_m, vec![[3.0, 4.0], [5.0, 6.0]]);
-        let e = Trajectory::from_csv_str(text, "x.csv", 0.5, 3, [0.0, 0.0])
+        let e = Trajectory::from_csv_str(text, "x.csv", 0.5, 3, [0.0, 0.0], 1000.0)
             .unwrap_err()
             .to_string();
         assert!(e.contains("3 slots"), "{e}");
         let bad = "t_s,x_m,y_m\n0.5,3,oops\n";
-        let e = Trajectory::from_csv_str(bad, "x.csv", 0.5, 1, [0.0, 0.0])
+        let e = Trajectory::from_csv_str(bad, "x.csv", 0.5, 1, [0.0, 0.0], 1000.0)
             .unwrap_err()
             .to_string();
         assert!(e.contains("line 2, column y_m"), "{e}");
         // comments and blank lines keep the line numbers of the file
         let commented = "# a plan\nt_s,x_m,y_m\n\n0.5,3,4\n# note\n1.5,5,6\n";
-        let e = Trajectory::from_csv_str(commented, "x.csv", 0.5, 2, [0.0, 0.0])
+        let e = Trajectory::from_csv_str(commented, "x.csv", 0.5, 2, [0.0, 0.0], 1000.0)
             .unwrap_err()
             .to_string();
         assert!(e.contains("line 6, column t_s"), "{e}");
-        let e = Trajectory::from_csv_str("", "x.csv", 0.5, 1, [0.0, 0.0])
+        let e = Trajectory::from_csv_str("", "x.csv", 0.5, 1, [0.0, 0.0], 1000.0)
             .unwrap_err()
             .to_string();
         assert!(e.contains("empty file"), "{e}");
@@ -349,15 +364,26 @@ mod tests {
     #[test]
     fn a_constant_altitude_column_is_read_and_a_varying_one_refused() {
         let flat = "t_s,x_m,y_m,z_m\n0,1,2,1000\n0.5,3,4,1000\n1.0,5,6,1000\n";
-        let tr = Trajectory::from_csv_str(flat, "x.csv", 0.5, 2, [0.0, 0.0]).unwrap();
+        let tr = Trajectory::from_csv_str(flat, "x.csv", 0.5, 2, [0.0, 0.0], 1000.0).unwrap();
         assert_eq!(tr.pos_m, vec![[3.0, 4.0], [5.0, 6.0]]);
         let climbing = flat.replace("5,6,1000", "5,6,1001.5");
-        let e = Trajectory::from_csv_str(&climbing, "x.csv", 0.5, 2, [0.0, 0.0])
+        let e = Trajectory::from_csv_str(&climbing, "x.csv", 0.5, 2, [0.0, 0.0], 1000.0)
             .unwrap_err()
             .to_string();
         assert!(
             e.contains("line 4, column z_m") && e.contains("altitude = \"free\""),
             "{e}"
         );
+        // a constant altitude other than the mission's: made for another mission
+        let e = Trajectory::from_csv_str(flat, "x.csv", 0.5, 2, [0.0, 0.0], 1200.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 2, column z_m") && e.contains("altitude_m = 1200 m"),
+            "{e}"
+        );
+        // within the reader's tolerance (1e-6 relative) it is the same altitude
+        let near = flat.replace(",1000\n", ",1000.0005\n");
+        Trajectory::from_csv_str(&near, "x.csv", 0.5, 2, [0.0, 0.0], 1000.0).unwrap();
     }
 }

@@ -244,8 +244,14 @@ fn init_trajectory(mission: &planner::Mission, init: &Bound<'_, PyAny>) -> PyRes
     }
     if let Ok(path) = init.extract::<PathBuf>() {
         let p = mission.params();
-        return Trajectory::from_csv_path(&path, p.slot_s, mission.slots(), p.start_m)
-            .map_err(|e| PyValueError::new_err(cellsar_error::error_chain(&e)));
+        return Trajectory::from_csv_path(
+            &path,
+            p.slot_s,
+            mission.slots(),
+            p.start_m,
+            p.altitude_m,
+        )
+        .map_err(|e| PyValueError::new_err(cellsar_error::error_chain(&e)));
     }
     if let Ok(pair) = init.cast::<PyTuple>() {
         if pair.len() == 2 {

@@ -352,6 +352,7 @@ fn pair_along_the_major_axis_merges_along_the_old_best_effort_and_separates_alon
         p.slot_s,
         m.slots(),
         p.start_m,
+        p.altitude_m,
     )
     .unwrap();
     let old_ev = evaluate(&m, &old);

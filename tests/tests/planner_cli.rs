@@ -377,3 +377,46 @@ fn every_example_mission_loads() {
         }
     }
 }
+
+/// A plan's trajectory.csv carries its altitude (`z_m`): evaluating it as a track of a mission
+/// at another altitude is refused (exit 2, naming the column and the mission's altitude_m)
+/// rather than flying the track at the wrong height; at the plan's own altitude it evaluates.
+#[test]
+fn a_trajectory_made_for_another_altitude_exits_2() {
+    let d = tmp("altitude");
+    let mission = repo().join("missions/explicit.toml");
+    let o = bin()
+        .arg("plan")
+        .arg(&mission)
+        .arg("--out")
+        .arg(d.join("plan"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let trajectory = d.join("plan/trajectory.csv");
+    let evaluate = |mission: &std::path::Path| {
+        bin()
+            .arg("evaluate")
+            .arg(mission)
+            .arg("--trajectory")
+            .arg(&trajectory)
+            .output()
+            .unwrap()
+    };
+    let o = evaluate(&mission);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let higher = d.join("higher.toml");
+    let text = std::fs::read_to_string(&mission).unwrap();
+    std::fs::write(
+        &higher,
+        text.replacen("[params]\n", "[params]\naltitude_m = 1200.0\n", 1),
+    )
+    .unwrap();
+    let o = evaluate(&higher);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("column z_m") && stderr.contains("altitude_m = 1200 m"),
+        "{stderr}"
+    );
+}

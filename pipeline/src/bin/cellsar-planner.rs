@@ -238,7 +238,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let p = m.params();
             let init = match init {
                 Some(path) => Some(
-                    Trajectory::from_csv_path(&path, p.slot_s, m.slots(), p.start_m)
+                    Trajectory::from_csv_path(&path, p.slot_s, m.slots(), p.start_m, p.altitude_m)
                         .map_err(bad)?,
                 ),
                 None => None,
@@ -291,8 +291,14 @@ fn run(cli: Cli) -> Result<(), Failure> {
         } => {
             let m = Mission::from_path(&mission).map_err(bad)?;
             let p = m.params();
-            let tr = Trajectory::from_csv_path(&trajectory, p.slot_s, m.slots(), p.start_m)
-                .map_err(bad)?;
+            let tr = Trajectory::from_csv_path(
+                &trajectory,
+                p.slot_s,
+                m.slots(),
+                p.start_m,
+                p.altitude_m,
+            )
+            .map_err(bad)?;
             let ev = evaluate(&m, &tr);
             let json = serde_json::json!({
                 "energy_j": ev.energy_j,

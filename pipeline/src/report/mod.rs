@@ -208,6 +208,7 @@ pub fn read_plan_dir(dir: &Path) -> Result<(Mission, Trajectory), ReportError> {
         p.slot_s,
         mission.slots(),
         p.start_m,
+        p.altitude_m,
     )?;
     Ok((mission, traj))
 }
