@@ -4,7 +4,8 @@
 //! reports, and the binaries `cellsar`, `cellsar-planner` and `cellsar-radar-sim`. The maths
 //! lives in the `planner` and `radar-sim` crates, the transport in `bridge`.
 //!
-//! - [`protocol`]: every message and key expression of the pipeline, defined once;
+//! - [`protocol`]: every message and key expression of the pipeline, defined once (the
+//!   `cellsar-protocol` crate, which a client uses without this crate's apps);
 //! - [`services`]: the plan service, the echo simulator and the processor;
 //! - [`launch`]: `cellsar run`, the pipeline as supervised processes (network set-up,
 //!   children, plan, collection, outputs); [`supervise`]: child processes (start, restart
@@ -30,7 +31,8 @@ pub mod collect;
 pub mod events;
 pub mod exit;
 pub mod launch;
-pub mod protocol;
+/// The wire protocol (the `cellsar-protocol` crate, re-exported under its old path).
+pub use cellsar_protocol as protocol;
 pub mod report;
 pub mod roles;
 pub mod senders;
