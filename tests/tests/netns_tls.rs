@@ -8,7 +8,13 @@
 //!   role's certificate; the processor in namespace B), while a peer holding the echo's valid
 //!   certificate forges processor status, detections, images and metrics from namespace B
 //!   (and keeps asking the processor for every result again): the router drops the
-//!   forgeries, so none reaches the collector.
+//!   forgeries, so none reaches the collector. That peer also declares the liveliness token of
+//!   a processor (`cellsar/alive/processor/intruder`): the router denies it, as every role may
+//!   declare only its own, so the launcher never counts it as a processor. A second peer holds
+//!   a certificate of the deployment's CA whose common name is not a role (`stranger`): its
+//!   session opens, but it can neither put (status, detections, images, metrics, a plan), nor
+//!   get (results, apertures, plans), nor declare a liveliness token, a queryable that the
+//!   launcher's plan request reaches, or a subscriber that receives anything.
 //! - A client without a certificate, one with a certificate of another CA, and a plain-TCP
 //!   client cannot open a session with the router; the same client with a certificate of the
 //!   deployment can (so the refusals are the certificates', not a broken set-up).
@@ -28,18 +34,70 @@ use harness::trials::Test;
 
 /// `cellsar certs --out DIR --host HOST` (every default role); the directory.
 fn make_certs(dir: &Path, name: &str, host: &str) -> PathBuf {
+    make_certs_with(dir, name, host, &[])
+}
+
+/// [`make_certs`] with certificates of `extra` common names too (signed by the same CA).
+fn make_certs_with(dir: &Path, name: &str, host: &str, extra: &[&str]) -> PathBuf {
     let out = dir.join(name);
-    let o = Command::new(exe())
-        .args(["certs", "--out"])
-        .arg(&out)
-        .args(["--host", host])
-        .output()
-        .unwrap();
+    let mut c = Command::new(exe());
+    c.args(["certs", "--out"]).arg(&out).args(["--host", host]);
+    if !extra.is_empty() {
+        for role in pipeline::certs::DEFAULT_ROLES.iter().chain(extra) {
+            c.args(["--role", role]);
+        }
+    }
+    let o = c.output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for role in pipeline::certs::DEFAULT_ROLES {
+    for role in pipeline::certs::DEFAULT_ROLES.iter().chain(extra) {
         assert!(out.join(format!("{role}.pem")).is_file(), "{role}");
     }
     out
+}
+
+/// The common name of a certificate of the deployment's CA that is not a role.
+const STRANGER: &str = "stranger";
+
+/// The mission the stranger forges for from the start (it may see none: the router lets
+/// nothing reach it); the launcher's subscribers take every mission's keys, so its forgeries
+/// would reach the collector all the same.
+const STRANGER_MISSION: &str = "00000000c0ffee00";
+
+/// The `forge progress` reports in a forger's log, oldest first.
+fn forge_progress(log: &str) -> Vec<serde_json::Value> {
+    log.lines()
+        .filter_map(|l| l.split_once("forge progress ").map(|(_, j)| j))
+        .map(|j| serde_json::from_str(j).unwrap())
+        .collect()
+}
+
+/// A progress report of forger `s` made after this call (waits for it, bounded): what it
+/// did and received up to now.
+fn next_progress(s: &Service) -> serde_json::Value {
+    let before = forge_progress(&s.log_text()).len();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        if let Some(r) = forge_progress(&s.log_text()).into_iter().nth(before) {
+            return r;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{}: no progress report within 30 s:\n{}",
+            s.name,
+            s.log_text()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// The Zenoh id a forger logged.
+fn forge_zid(log: &str) -> String {
+    log.lines()
+        .find_map(|l| {
+            l.split_once("forge zid ")
+                .map(|(_, z)| z.trim().to_string())
+        })
+        .unwrap_or_else(|| panic!("no zid logged:\n{log}"))
 }
 
 /// What the router logs of its access control: every decision (trace), so that a test sees
@@ -109,12 +167,22 @@ fn pipeline_over_mutual_tls_with_access_control() {
     let reference = reference(H);
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let certs = make_certs(d, "certs", &hosts.ip_a);
+    let certs = make_certs_with(d, "certs", &hosts.ip_a, &[STRANGER]);
     let role = |r: &str| config(d, &format!("tls/{r}.json5"), &hosts.ip_a, Some(&certs));
+    // the stranger's configuration: a client's, presenting the stranger's certificate
+    let stranger_cfg = d.join("stranger.json5");
+    let text = std::fs::read_to_string(role("processor")).unwrap();
+    assert!(text.contains("processor.pem") && text.contains("processor.key"));
+    std::fs::write(
+        &stranger_cfg,
+        text.replace("processor.pem", &format!("{STRANGER}.pem"))
+            .replace("processor.key", &format!("{STRANGER}.key")),
+    )
+    .unwrap();
     // every process's log, printed if the test fails (the router's access-control decisions,
     // the launcher's and its children's logs)
     let _logs = LogsOnFailure::new(
-        ["router", "processor", "forger"]
+        ["router", "processor", "forger", "stranger"]
             .iter()
             .map(|n| d.join(format!("{n}.log")))
             .chain([d.join("launcher.err")])
@@ -138,8 +206,13 @@ fn pipeline_over_mutual_tls_with_access_control() {
             role("processor"),
         ],
     );
+    let metrics_template = reference
+        .join("processed/metrics.json")
+        .display()
+        .to_string();
     // a peer with the echo's valid certificate forging the processor's status and results
-    // (detections, images, metrics), and asking for results again and again
+    // (detections, images, metrics), and asking for results again and again, announced as a
+    // processor (a liveliness token of another role than its certificate's)
     let mut forger = Service::start_exe_in(
         &hosts.in_b(),
         &harness::bin("cellsar-bridge-bench"),
@@ -151,18 +224,48 @@ fn pipeline_over_mutual_tls_with_access_control() {
             "600".into(),
             "--forge-results".into(),
             "--metrics-template".into(),
-            reference
-                .join("processed/metrics.json")
-                .display()
-                .to_string(),
+            metrics_template.clone(),
             "--malformed-images".into(),
             "--flood-queries".into(),
+            "--announce-as".into(),
+            "processor".into(),
             "-c".into(),
             role("echo"),
         ],
     );
-    // on the mesh before the run plans, so that it learns the mission
+    // a peer with a certificate of the deployment's CA whose common name is no role: it
+    // forges everything the echo's forger does, answers plan requests, asks for results,
+    // apertures and plans, watches for processors, subscribes to plans and statuses, and
+    // declares a processor's liveliness token
+    let mut stranger = Service::start_exe_in(
+        &hosts.in_b(),
+        &harness::bin("cellsar-bridge-bench"),
+        STRANGER,
+        d,
+        &[
+            "forge".into(),
+            "--duration-s".into(),
+            "600".into(),
+            "--instance".into(),
+            STRANGER.into(),
+            "--announce-as".into(),
+            "processor".into(),
+            "--mission".into(),
+            STRANGER_MISSION.into(),
+            "--forge-results".into(),
+            "--metrics-template".into(),
+            metrics_template,
+            "--malformed-images".into(),
+            "--forge-plans".into(),
+            "--flood-queries".into(),
+            "-c".into(),
+            stranger_cfg.display().to_string(),
+        ],
+    );
+    // on the mesh before the run plans, so that the forger learns the mission (and the
+    // stranger's queryable could answer the launcher's plan request)
     forger.wait_for_log("READY", Duration::from_secs(60));
+    stranger.wait_for_log("READY", Duration::from_secs(60));
     let child_config = |r: &str| format!("{r}={}", role(r));
     let (planner, echo, bridge) = (
         child_config("planner"),
@@ -190,6 +293,21 @@ fn pipeline_over_mutual_tls_with_access_control() {
         ],
     );
     let st = l.finish(Duration::from_secs(240));
+    // first what the ACL's promises are about (checked before the run's result, which a
+    // broken promise may spoil): neither the echo's forger nor the stranger was ever taken
+    // for a processor, the router denied their tokens (every role may declare only its own;
+    // a non-role nothing), and the stranger could do nothing at all
+    let log = router.log_text();
+    assert_stranger_did_nothing(&next_progress(&stranger), &stranger.log_text(), &log);
+    let alive = l.named("alive");
+    for impostor in ["intruder", STRANGER] {
+        assert!(
+            !alive.iter().any(|e| e["instance"] == impostor),
+            "{impostor} seen alive: {alive:#?}"
+        );
+    }
+    let token = "is unauthorized to Liveliness Token (ingress) on cellsar/alive/processor/intruder";
+    assert!(log.contains(token), "no {token:?}:\n{log}");
     assert!(
         st.success(),
         "{st:?}\n{}\nforger:\n{}",
@@ -214,9 +332,16 @@ fn pipeline_over_mutual_tls_with_access_control() {
         forger.log_text()
     );
     assert!(forger.child.try_wait().unwrap().is_none(), "forger exited");
+    assert!(
+        stranger.child.try_wait().unwrap().is_none(),
+        "stranger exited"
+    );
     let p = l.pipeline_json();
     assert_eq!(p["collector"]["foreign"], 0, "{p}");
     assert_eq!(p["collector"]["refused_senders"], 0, "{p}");
+    // no plan reply but the planner's reached the launcher (the stranger answers every plan
+    // request it gets)
+    assert_eq!(p["collector"]["refused_plans"], 0, "{p}");
     let launcher_log = std::fs::read_to_string(d.join("launcher.err")).unwrap();
     assert!(
         !launcher_log.contains("foreign status skipped"),
@@ -226,6 +351,7 @@ fn pipeline_over_mutual_tls_with_access_control() {
     // is logged per message; one computed when a key is declared is not)
     let id = p["mission_id"].as_str().unwrap();
     let log = router.log_text();
+    let stranger_zid = forge_zid(&stranger.log_text());
     let denied_puts: Vec<&str> = log
         .lines()
         .filter(|l| l.contains("Using cached result") && l.contains("is unauthorized to Put"))
@@ -241,12 +367,46 @@ fn pipeline_over_mutual_tls_with_access_control() {
     // and nothing else: every role could put what the pipeline needs
     let others: Vec<&&str> = denied_puts
         .iter()
+        .filter(|l| !l.contains(&stranger_zid))
         .filter(|l| {
             !forged.iter().any(|k| l.ends_with(&format!("/{k}")))
                 && !l.contains(&format!("(ingress) on cellsar/{id}/image/"))
         })
         .collect();
     assert!(others.is_empty(), "{others:#?}");
+}
+
+/// The stranger (a certificate of the deployment's CA whose common name is not a role) opened
+/// a session and tried everything, and nothing went through: its subscribers received nothing,
+/// no query of its was answered, it saw no processor alive (the real one's token was there),
+/// and the router took it for no subject and denied it by default. `r` is its progress
+/// report made after the run, `forge_log` its log, `router_log` the router's (access control at
+/// trace level).
+fn assert_stranger_did_nothing(r: &serde_json::Value, forge_log: &str, router_log: &str) {
+    // it tried: statuses, detections, images, metrics and plans put, queries sent
+    for k in ["statuses", "detections", "images", "metrics", "plans"] {
+        assert!(r[k].as_u64().unwrap() > 0, "{k}: {r}");
+    }
+    assert!(r["flood"]["queries"].as_u64().unwrap() > 0, "{r}");
+    // and got nothing: no sample, no answer, no processor seen
+    assert_eq!(r["received"], 0, "{r}");
+    assert_eq!(r["flood"]["answered"], 0, "{r}");
+    assert_eq!(r["processors_seen"], 0, "{r}");
+    // the router: no subject, so denied by default; never an authorisation
+    let zid = forge_zid(forge_log);
+    let subjectless = format!(
+        "{zid} did not match any configured ACL subject. Default permission `Deny` will be \
+         applied on all messages"
+    );
+    assert!(
+        router_log.contains(&subjectless),
+        "no {subjectless:?}:\n{router_log}"
+    );
+    let allowed: Vec<&str> = router_log
+        .lines()
+        .filter(|l| l.contains(&zid) && l.contains(" is authorized to "))
+        .collect();
+    assert!(allowed.is_empty(), "{allowed:#?}");
 }
 
 /// A client of the TLS router with `tls` settings (none: plain TCP), started in namespace B

@@ -15,7 +15,14 @@
 //!   agree with the real detections (same per-aperture verdicts and counts), so only the
 //!   sender check tells them from the real ones;
 //! - `--announce-as <role>`: its liveliness token is `cellsar/alive/<role>/<--instance>`, so
-//!   the forged messages claim an instance that is alive, in another role.
+//!   the forged messages claim an instance that is alive, in another role;
+//! - `--mission <id>`: it forges for this mission from the start, without having to see it (a
+//!   peer that the router lets see nothing).
+//!
+//! It logs its session's Zenoh id (`forge zid <zid>`, so that a test can pick its lines out of
+//! a router's log) and, every [`PROGRESS_EVERY`], what it did and received so far (`forge
+//! progress <json>`, the report's fields): the samples its subscribers got and the processors
+//! it saw alive tell what a router let reach it.
 
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
@@ -51,6 +58,9 @@ pub(super) const FORGED_IMAGE_PX: u32 = 8;
 /// The detection probability forged metrics claim.
 pub(super) const FORGED_PD: f64 = 0.123_456;
 
+/// How often the forger logs its progress.
+const PROGRESS_EVERY: Duration = Duration::from_secs(2);
+
 /// The flags of `forge`.
 #[derive(clap::Args, Debug, Clone)]
 pub(super) struct ForgeArgs {
@@ -84,6 +94,9 @@ pub(super) struct ForgeArgs {
     /// "forge", instance "forge-<pid>").
     #[arg(long)]
     announce_as: Option<String>,
+    /// Forge for this mission (16 hexadecimal digits) from the start, besides those it sees.
+    #[arg(long, value_parser = parse_mission)]
+    mission: Option<MissionId>,
     #[command(flatten)]
     flood: flood::FloodArgs,
     #[command(flatten)]
@@ -99,7 +112,17 @@ struct ForgeReport {
     metrics: u64,
     plans: u64,
     errors: u64,
+    /// Samples its subscribers (plans, statuses) received about missions other than its own
+    /// (those of its forged and flooded plans and `--mission`, which it publishes itself: a
+    /// session receives its own publications).
+    received: u64,
+    /// The most processors other than itself it saw alive at once (liveliness).
+    processors_seen: usize,
     flood: flood::Flooded,
+}
+
+fn parse_mission(s: &str) -> Result<MissionId, String> {
+    MissionId::parse_hex(s).map_err(|e| e.to_string())
 }
 
 /// A plan of a mission of its own ("forged"), for answering plan requests.
@@ -201,18 +224,29 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
             .chain([FORGED_PLAN_ID])
             .collect(),
     );
-    let seen: Arc<Mutex<BTreeSet<MissionId>>> = Arc::default();
+    // nor, for what it received, the mission it was given
+    let published: BTreeSet<MissionId> = own.iter().copied().chain(a.mission).collect();
+    eprintln!("forge zid {}", node.session().zid());
+    let seen: Arc<Mutex<BTreeSet<MissionId>>> =
+        Arc::new(Mutex::new(a.mission.into_iter().collect()));
+    let received = Arc::new(std::sync::atomic::AtomicU64::new(0));
     // whatever the router lets through: plans (the echo's certificate may read them) or
     // statuses (anyone on a plain mesh)
     let mut subs = Vec::new();
     for sel in [keys::ALL_PLANS, keys::ALL_STATUS] {
         let s = seen.clone();
         let own = own.clone();
+        let received = received.clone();
+        let published = published.clone();
         subs.push(
             node.session()
                 .declare_subscriber(sel)
                 .callback(move |sample: Sample| {
-                    let id = mission_of(sample.key_expr().as_str()).filter(|id| !own.contains(id));
+                    let m = mission_of(sample.key_expr().as_str());
+                    if m.is_none_or(|m| !published.contains(&m)) {
+                        received.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    }
+                    let id = m.filter(|id| !own.contains(id));
                     if let (Some(id), Ok(mut s)) = (id, s.lock()) {
                         s.insert(id);
                     }
@@ -246,6 +280,7 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     drop(flood_plans);
     let mut forgers: Vec<(MissionId, Forger)> = Vec::new();
     let end = Instant::now() + a.duration_s.duration();
+    let mut progress = Instant::now();
     while Instant::now() < end {
         if let Some((q, plan, publisher, wrong_id)) = &plans {
             match publisher.put(wrong_id) {
@@ -309,7 +344,13 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
             }
         }
         // the malformed images (each forger's first) claim a live processor's instance
-        let live = alive.alive();
+        // not itself, announced as a processor
+        let live: Vec<String> = alive
+            .alive()
+            .into_iter()
+            .filter(|k| k.strip_prefix(PROCESSOR_ALIVE) != Some(a.instance.as_str()))
+            .collect();
+        r.processors_seen = r.processors_seen.max(live.len());
         let live = live.iter().find_map(|k| k.strip_prefix(PROCESSOR_ALIVE));
         if let (Some(p), true) = (live, a.malformed_images) {
             for (_, f) in forgers.iter_mut() {
@@ -322,9 +363,16 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
             forge_round(*id, f, a, template.as_ref(), &mut r);
             flood::flood_queries(&node, *id, &a.flood, &mut r.flood);
         }
+        r.missions = forgers.len();
+        r.received = received.load(std::sync::atomic::Ordering::Relaxed);
+        if progress.elapsed() >= PROGRESS_EVERY {
+            eprintln!("forge progress {}", serde_json::to_string(&r)?);
+            progress = Instant::now();
+        }
         std::thread::sleep(Duration::from_millis(a.interval_ms));
     }
     r.missions = forgers.len();
+    r.received = received.load(std::sync::atomic::Ordering::Relaxed);
     drop(subs);
     report(&r)?;
     node.close()?;
