@@ -48,8 +48,9 @@ enum Command {
     Bridge(BridgeArgs),
     /// A plain Zenoh router (what `zenohd` does without plugins).
     Router(RouterArgs),
-    /// Make a test CA and one certificate and key per role for a deployment with mutual TLS
-    /// (pipeline/deploy/tls/): DIR/ca.pem, ca.key, <role>.pem, <role>.key.
+    /// Make a test CA, the router's server certificate and a client certificate per role, with
+    /// their keys, for a deployment with mutual TLS (pipeline/deploy/tls/): DIR/ca.pem, ca.key,
+    /// and ROLE.pem, ROLE.key for each role.
     Certs(pipeline::certs::CertsArgs),
 }
 
