@@ -11,7 +11,7 @@
 //! needs 4 * (2 + 1) + 0 + 1 = 13 samples (416 MB at 32 MB); size it to the real fan-out.
 //!
 //! A full subscriber buffer never blocks a publisher: delivery to that subscriber is skipped
-//! and counted ([`Counters::snapshot`]`.dropped` of the publisher), and the subscriber sees
+//! and counted ([`Counters::snapshot`](crate::counters::Counters::snapshot)`.dropped` of the publisher), and the subscriber sees
 //! the gap in the sequence numbers (`missed`).
 //!
 //! Stale resources of dead processes are removed when a [`FrameNode`] is created (and again

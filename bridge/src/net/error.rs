@@ -72,7 +72,7 @@ pub enum NetError {
         /// The error text of the reply.
         message: String,
     },
-    /// A queryable refused the request with a typed [`Refusal`] ([`IncomingQuery::refuse`]).
+    /// A queryable refused the request with a typed [`Refusal`] ([`IncomingQuery::refuse`](crate::net::queryable::IncomingQuery::refuse)).
     #[error("query {key:?} refused ({}): {}", refusal.kind, refusal.message)]
     Refused {
         /// Key expression.

@@ -19,12 +19,12 @@
 //!
 //! Multicast scouting is off unless `--multicast-scouting` is given or a `--config` file sets
 //! `scouting.multicast.enabled` itself (Zenoh's own default is on): a process joins only the
-//! peers and routers it is told about ([`scouting`] module).
+//! peers and routers it is told about (module `scouting`).
 //!
 //! Once a `--config` file enables TLS or access control, nothing may downgrade it: a non-`tls/`
 //! endpoint (of `-e`, `-l` or the file), multicast scouting, a client that does not check the
 //! router's name, or one that connects to a name a public CA may certify are refused, naming
-//! the flag or the file's setting ([`secure`] module, [`ConfigError::Downgrade`]).
+//! the flag or the file's setting (module `secure`, [`ConfigError::Downgrade`]).
 //!
 //! Every configuration built here bounds what a peer can make this process allocate: Zenoh
 //! reassembles a fragmented message in memory before anyone sees it, up to
