@@ -41,18 +41,26 @@ fn expect_exit(l: &mut Launch, reference: &std::path::Path) {
 
 /// Kills `role` with SIGKILL once the first aperture is in, checks that the others kept
 /// running, that liveliness reported the loss, that the role was restarted and that the run
-/// completes with the closed loop's outputs.
+/// completes with the closed loop's outputs, leaving none of its iceoryx2 frame files (which
+/// existed when the role was killed, once frames flowed) in `/dev/shm`.
 fn kill_mid_mission(role: &str, extra: &[&str]) -> Launch {
     let reference = reference(H);
     let dir = tempfile::tempdir().unwrap();
     let mut args = vec!["--window", "1", "--strict"];
     args.extend_from_slice(extra);
     let mut l = Launch::start(dir.path(), H, &args);
+    let net = l.event("network", Duration::from_secs(60));
+    let iox: Vec<String> = serde_json::from_value(net["iox"].clone()).unwrap();
+    let prefix = iox[iox.iter().position(|a| a == "--iox-prefix").unwrap() + 1].clone();
     l.event("planned", Duration::from_secs(120));
     if role != "planner" {
         l.wait_for("the first aperture", Duration::from_secs(120), |e| {
             e["event"] == "aperture" && e["done"] == 1
         });
+        assert!(
+            !shm_files(&prefix).is_empty(),
+            "no frame files while imaging"
+        );
     }
     let victim = l.pid(role);
     let others: Vec<(String, u32)> = ["planner", "echo", "processor", "bridge", "router"]
@@ -81,6 +89,8 @@ fn kill_mid_mission(role: &str, extra: &[&str]) -> Launch {
         );
     }
     expect_exit(&mut l, &reference);
+    let left = shm_files(&prefix);
+    assert!(left.is_empty(), "{role} killed: left {left:?}");
     let exits: Vec<Value> = l.named("child_exited");
     assert_eq!(exits.len(), 1, "{exits:?}");
     assert!(exits[0]["status"].as_str().unwrap().contains("signal 9"));
