@@ -1,15 +1,18 @@
 //! Hosts emulated with Linux network namespaces (two namespaces joined by a veth pair, or one
-//! with multicast on its loopback for the tests of multicast scouting), and the deployment
-//! configurations of `pipeline/deploy/` adapted to them.
+//! with multicast on its loopback for the tests of multicast scouting), the deployment
+//! configurations of `pipeline/deploy/` adapted to them, the certificates of a secure
+//! deployment (`cellsar certs`), and what a hostile peer (`cellsar-bridge-bench forge`) logs.
 //!
 //! Needs `ip` (iproute2) and the right to create network namespaces (root or CAP_NET_ADMIN):
 //! [`unavailable`] says why they cannot be made; the tests that need them are run by
 //! [`crate::trials`], which shows them as ignored there.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
 
+use crate::pipeline::{exe, Service};
 use crate::root;
 
 /// The namespaces of a test, deleted (with their veth ends) on drop.
@@ -159,4 +162,66 @@ pub fn config(dir: &Path, name: &str, router: &str, certs: Option<&Path>) -> Str
     let p = dir.join(name.replace('/', "-"));
     std::fs::write(&p, text).unwrap();
     p.display().to_string()
+}
+
+// ---- the secure deployment (`pipeline/deploy/tls/`) and its hostile peers ----
+
+/// `cellsar certs --out DIR --host HOST` (every default role); the directory.
+pub fn make_certs(dir: &Path, name: &str, host: &str) -> PathBuf {
+    make_certs_with(dir, name, host, &[])
+}
+
+/// [`make_certs`] with certificates of `extra` common names too (signed by the same CA).
+pub fn make_certs_with(dir: &Path, name: &str, host: &str, extra: &[&str]) -> PathBuf {
+    let out = dir.join(name);
+    let mut c = Command::new(exe());
+    c.args(["certs", "--out"]).arg(&out).args(["--host", host]);
+    if !extra.is_empty() {
+        for role in pipeline::certs::DEFAULT_ROLES.iter().chain(extra) {
+            c.args(["--role", role]);
+        }
+    }
+    let o = c.output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for role in pipeline::certs::DEFAULT_ROLES.iter().chain(extra) {
+        assert!(out.join(format!("{role}.pem")).is_file(), "{role}");
+    }
+    out
+}
+
+/// The `forge progress` reports in a forger's log, oldest first.
+pub fn forge_progress(log: &str) -> Vec<serde_json::Value> {
+    log.lines()
+        .filter_map(|l| l.split_once("forge progress ").map(|(_, j)| j))
+        .map(|j| serde_json::from_str(j).unwrap())
+        .collect()
+}
+
+/// A progress report of forger `s` made after this call (waits for it, bounded): what it
+/// did and received up to now.
+pub fn next_progress(s: &Service) -> serde_json::Value {
+    let before = forge_progress(&s.log_text()).len();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        if let Some(r) = forge_progress(&s.log_text()).into_iter().nth(before) {
+            return r;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{}: no progress report within 30 s:\n{}",
+            s.name,
+            s.log_text()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// The Zenoh id a forger logged.
+pub fn forge_zid(log: &str) -> String {
+    log.lines()
+        .find_map(|l| {
+            l.split_once("forge zid ")
+                .map(|(_, z)| z.trim().to_string())
+        })
+        .unwrap_or_else(|| panic!("no zid logged:\n{log}"))
 }

@@ -24,36 +24,14 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
-use harness::netns::{config, two_namespaces, TwoHosts};
+use harness::netns::{
+    config, forge_zid, make_certs, make_certs_with, next_progress, two_namespaces, TwoHosts,
+};
 use harness::pipeline::*;
 use harness::trials::Test;
-
-/// `cellsar certs --out DIR --host HOST` (every default role); the directory.
-fn make_certs(dir: &Path, name: &str, host: &str) -> PathBuf {
-    make_certs_with(dir, name, host, &[])
-}
-
-/// [`make_certs`] with certificates of `extra` common names too (signed by the same CA).
-fn make_certs_with(dir: &Path, name: &str, host: &str, extra: &[&str]) -> PathBuf {
-    let out = dir.join(name);
-    let mut c = Command::new(exe());
-    c.args(["certs", "--out"]).arg(&out).args(["--host", host]);
-    if !extra.is_empty() {
-        for role in pipeline::certs::DEFAULT_ROLES.iter().chain(extra) {
-            c.args(["--role", role]);
-        }
-    }
-    let o = c.output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for role in pipeline::certs::DEFAULT_ROLES.iter().chain(extra) {
-        assert!(out.join(format!("{role}.pem")).is_file(), "{role}");
-    }
-    out
-}
 
 /// The common name of a certificate of the deployment's CA that is not a role.
 const STRANGER: &str = "stranger";
@@ -62,43 +40,6 @@ const STRANGER: &str = "stranger";
 /// nothing reach it); the launcher's subscribers take every mission's keys, so its forgeries
 /// would reach the collector all the same.
 const STRANGER_MISSION: &str = "00000000c0ffee00";
-
-/// The `forge progress` reports in a forger's log, oldest first.
-fn forge_progress(log: &str) -> Vec<serde_json::Value> {
-    log.lines()
-        .filter_map(|l| l.split_once("forge progress ").map(|(_, j)| j))
-        .map(|j| serde_json::from_str(j).unwrap())
-        .collect()
-}
-
-/// A progress report of forger `s` made after this call (waits for it, bounded): what it
-/// did and received up to now.
-fn next_progress(s: &Service) -> serde_json::Value {
-    let before = forge_progress(&s.log_text()).len();
-    let deadline = Instant::now() + Duration::from_secs(30);
-    loop {
-        if let Some(r) = forge_progress(&s.log_text()).into_iter().nth(before) {
-            return r;
-        }
-        assert!(
-            Instant::now() < deadline,
-            "{}: no progress report within 30 s:\n{}",
-            s.name,
-            s.log_text()
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
-}
-
-/// The Zenoh id a forger logged.
-fn forge_zid(log: &str) -> String {
-    log.lines()
-        .find_map(|l| {
-            l.split_once("forge zid ")
-                .map(|(_, z)| z.trim().to_string())
-        })
-        .unwrap_or_else(|| panic!("no zid logged:\n{log}"))
-}
 
 /// What the router logs of its access control: every decision (trace), so that a test sees
 /// what the router denied.
@@ -161,6 +102,74 @@ fn wait_for_log(s: &mut Service, text: &str, timeout: Duration) {
     }
 }
 
+/// The processor of the deployment in namespace B, with its role's configuration `cfg`.
+fn start_processor(hosts: &TwoHosts, dir: &Path, cfg: &str) -> Service {
+    let args = [
+        "process",
+        "--frames",
+        "zenoh",
+        "--scene",
+        &scene().display().to_string(),
+        "--resend-after-s",
+        "2",
+        "-c",
+        cfg,
+    ]
+    .map(String::from);
+    Service::start_in(&hosts.in_b(), "processor", dir, &args)
+}
+
+/// `cellsar-bridge-bench forge` in namespace B for 600 s with the client configuration `cfg`
+/// and the flags `extra`, logging to `name`; on the mesh (READY) before it returns, so that it
+/// is there before the run plans.
+fn start_forger(hosts: &TwoHosts, dir: &Path, name: &str, cfg: &str, extra: &[&str]) -> Service {
+    let args: Vec<String> = ["forge", "--duration-s", "600", "-c", cfg]
+        .iter()
+        .chain(extra)
+        .map(|a| a.to_string())
+        .collect();
+    let s = Service::start_exe_in(
+        &hosts.in_b(),
+        &harness::bin("cellsar-bridge-bench"),
+        name,
+        dir,
+        &args,
+    );
+    s.wait_for_log("READY", Duration::from_secs(60));
+    s
+}
+
+/// The launcher in namespace A (`role(r)`: role r's configuration) with the planner, the echo
+/// and the bridge as children, each with its role's configuration; the processor external.
+fn launch_over_tls(hosts: &TwoHosts, dir: &Path, h: f64, role: &dyn Fn(&str) -> String) -> Launch {
+    let child_config = |r: &str| format!("{r}={}", role(r));
+    let (planner, echo, bridge) = (
+        child_config("planner"),
+        child_config("echo"),
+        child_config("bridge"),
+    );
+    let launcher = role("launcher");
+    Launch::start_in(
+        &hosts.in_a(),
+        dir,
+        h,
+        &[
+            "--transport",
+            "zenoh",
+            "--external",
+            "processor",
+            "-c",
+            &launcher,
+            "--child-config",
+            &planner,
+            "--child-config",
+            &echo,
+            "--child-config",
+            &bridge,
+        ],
+    )
+}
+
 fn pipeline_over_mutual_tls_with_access_control() {
     let hosts = two_namespaces();
     const H: f64 = 30.0;
@@ -190,22 +199,7 @@ fn pipeline_over_mutual_tls_with_access_control() {
         vec![d.join("out/logs")],
     );
     let router = start_router(&hosts, d, &certs);
-    let _processor = Service::start_in(
-        &hosts.in_b(),
-        "processor",
-        d,
-        &[
-            "process".into(),
-            "--frames".into(),
-            "zenoh".into(),
-            "--scene".into(),
-            scene().display().to_string(),
-            "--resend-after-s".into(),
-            "2".into(),
-            "-c".into(),
-            role("processor"),
-        ],
-    );
+    let _processor = start_processor(&hosts, d, &role("processor"));
     let metrics_template = reference
         .join("processed/metrics.json")
         .display()
@@ -213,85 +207,46 @@ fn pipeline_over_mutual_tls_with_access_control() {
     // a peer with the echo's valid certificate forging the processor's status and results
     // (detections, images, metrics), and asking for results again and again, announced as a
     // processor (a liveliness token of another role than its certificate's)
-    let mut forger = Service::start_exe_in(
-        &hosts.in_b(),
-        &harness::bin("cellsar-bridge-bench"),
-        "forger",
+    let mut forger = start_forger(
+        &hosts,
         d,
+        "forger",
+        &role("echo"),
         &[
-            "forge".into(),
-            "--duration-s".into(),
-            "600".into(),
-            "--forge-results".into(),
-            "--metrics-template".into(),
-            metrics_template.clone(),
-            "--malformed-images".into(),
-            "--flood-queries".into(),
-            "--announce-as".into(),
-            "processor".into(),
-            "-c".into(),
-            role("echo"),
+            "--forge-results",
+            "--metrics-template",
+            &metrics_template,
+            "--malformed-images",
+            "--flood-queries",
+            "--announce-as",
+            "processor",
         ],
     );
     // a peer with a certificate of the deployment's CA whose common name is no role: it
     // forges everything the echo's forger does, answers plan requests, asks for results,
     // apertures and plans, watches for processors, subscribes to plans and statuses, and
     // declares a processor's liveliness token
-    let mut stranger = Service::start_exe_in(
-        &hosts.in_b(),
-        &harness::bin("cellsar-bridge-bench"),
+    let mut stranger = start_forger(
+        &hosts,
+        d,
         STRANGER,
-        d,
+        &stranger_cfg.display().to_string(),
         &[
-            "forge".into(),
-            "--duration-s".into(),
-            "600".into(),
-            "--instance".into(),
-            STRANGER.into(),
-            "--announce-as".into(),
-            "processor".into(),
-            "--mission".into(),
-            STRANGER_MISSION.into(),
-            "--forge-results".into(),
-            "--metrics-template".into(),
-            metrics_template,
-            "--malformed-images".into(),
-            "--forge-plans".into(),
-            "--flood-queries".into(),
-            "-c".into(),
-            stranger_cfg.display().to_string(),
-        ],
-    );
-    // on the mesh before the run plans, so that the forger learns the mission (and the
-    // stranger's queryable could answer the launcher's plan request)
-    forger.wait_for_log("READY", Duration::from_secs(60));
-    stranger.wait_for_log("READY", Duration::from_secs(60));
-    let child_config = |r: &str| format!("{r}={}", role(r));
-    let (planner, echo, bridge) = (
-        child_config("planner"),
-        child_config("echo"),
-        child_config("bridge"),
-    );
-    let launcher = role("launcher");
-    let mut l = Launch::start_in(
-        &hosts.in_a(),
-        d,
-        H,
-        &[
-            "--transport",
-            "zenoh",
-            "--external",
+            "--instance",
+            STRANGER,
+            "--announce-as",
             "processor",
-            "-c",
-            &launcher,
-            "--child-config",
-            &planner,
-            "--child-config",
-            &echo,
-            "--child-config",
-            &bridge,
+            "--mission",
+            STRANGER_MISSION,
+            "--forge-results",
+            "--metrics-template",
+            &metrics_template,
+            "--malformed-images",
+            "--forge-plans",
+            "--flood-queries",
         ],
     );
+    let mut l = launch_over_tls(&hosts, d, H, &role);
     let st = l.finish(Duration::from_secs(240));
     // first what the ACL's promises are about (checked before the run's result, which a
     // broken promise may spoil): neither the echo's forger nor the stranger was ever taken
@@ -407,6 +362,132 @@ fn assert_stranger_did_nothing(r: &serde_json::Value, forge_log: &str, router_lo
         .filter(|l| l.contains(&zid) && l.contains(" is authorized to "))
         .collect();
     assert!(allowed.is_empty(), "{allowed:#?}");
+}
+
+/// Forgers holding the processor's and the planner's certificates, each doing what the ACL
+/// lets its role do and what it does not, while the pipeline runs over mutual TLS:
+///
+/// - with the processor's certificate (instance `intruder-p`, announced as a planner): its
+///   planner token, its plan under a wrong id and its answers to plan requests are denied by
+///   the router; the processor's failed status, detections and (malformed) images it may put
+///   reach the launcher, which refuses them (no processor of that instance is alive);
+/// - with the planner's certificate (instance `intruder-q`, announced as a processor): its
+///   processor token and its status, detections, images and metrics are denied; the plan it
+///   may publish under a wrong id reaches the echo and the processor, which skip it (the id is
+///   not its content's), and its answer to the launcher's plan request (another mission) is
+///   skipped as not answering the request.
+///
+/// The run ends with the closed loop's outputs.
+fn forgers_with_the_processors_and_the_planners_certificates() {
+    let hosts = two_namespaces();
+    const H: f64 = 30.0;
+    let reference = reference(H);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let certs = make_certs(d, "certs", &hosts.ip_a);
+    let role = |r: &str| config(d, &format!("tls/{r}.json5"), &hosts.ip_a, Some(&certs));
+    let _logs = LogsOnFailure::new(
+        ["router", "processor", "forger-p", "forger-q"]
+            .iter()
+            .map(|n| d.join(format!("{n}.log")))
+            .chain([d.join("launcher.err")])
+            .collect(),
+        vec![d.join("out/logs")],
+    );
+    let router = start_router(&hosts, d, &certs);
+    let _processor = start_processor(&hosts, d, &role("processor"));
+    let forged = ["--forge-plans", "--malformed-images"];
+    let mut by_processor = start_forger(
+        &hosts,
+        d,
+        "forger-p",
+        &role("processor"),
+        &[
+            &forged[..],
+            &["--instance", "intruder-p", "--announce-as", "planner"],
+        ]
+        .concat(),
+    );
+    let mut by_planner = start_forger(
+        &hosts,
+        d,
+        "forger-q",
+        &role("planner"),
+        &[
+            &forged[..],
+            &["--instance", "intruder-q", "--announce-as", "processor"],
+            &["--forge-results", "--metrics-template"],
+            &[reference.join("processed/metrics.json").to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    let mut l = launch_over_tls(&hosts, d, H, &role);
+    let st = l.finish(Duration::from_secs(240));
+    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, &reference);
+    for f in [&mut by_processor, &mut by_planner] {
+        assert!(f.child.try_wait().unwrap().is_none(), "{} exited", f.name);
+    }
+    let (p_log, q_log) = (by_processor.log_text(), by_planner.log_text());
+    let id = l.pipeline_json()["mission_id"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let log = router.log_text();
+    let denied = |zid: &str, what: &str, key: &str| {
+        let line = log.lines().find(|l| {
+            l.contains(zid) && l.contains(&format!("is unauthorized to {what}")) && l.ends_with(key)
+        });
+        assert!(line.is_some(), "{zid}: no denied {what} on {key}:\n{log}");
+    };
+    // each declared the other role's token: denied, never counted by the launcher
+    let (p_zid, q_zid) = (forge_zid(&p_log), forge_zid(&q_log));
+    denied(
+        &p_zid,
+        "Liveliness Token",
+        "cellsar/alive/planner/intruder-p",
+    );
+    denied(
+        &q_zid,
+        "Liveliness Token",
+        "cellsar/alive/processor/intruder-q",
+    );
+    let alive = l.named("alive");
+    assert!(
+        !alive
+            .iter()
+            .any(|e| e["instance"].as_str().unwrap().starts_with("intruder")),
+        "{alive:#?}"
+    );
+    // the processor's certificate may not publish a plan nor answer a plan request
+    let wrong_plan = "cellsar/5eed5eed5eed5eed/plan";
+    denied(&p_zid, "Put", wrong_plan);
+    assert!(!p_log.contains("answered a plan request"), "{p_log}");
+    // the planner's certificate may not publish a processor's status or results
+    for key in ["detections", "status/processor", "image/0", "metrics"] {
+        denied(&q_zid, "Put", &format!("cellsar/{id}/{key}"));
+    }
+    // what their certificates allow reached its consumers and was refused there: the
+    // processor forger's status, detections and images by the launcher's sender check; the
+    // planner forger's plan reply by the launcher, its plan under a wrong id by the echo and
+    // the processor
+    let c = &l.pipeline_json()["collector"];
+    assert!(c["refused_senders"].as_u64().unwrap() > 0, "{c}");
+    assert!(q_log.contains("answered a plan request"), "{q_log}");
+    assert!(c["refused_plans"].as_u64().unwrap() >= 1, "{c}");
+    let launcher_log = l.stderr_text();
+    assert!(
+        launcher_log.contains("foreign status skipped"),
+        "{launcher_log}"
+    );
+    assert!(l
+        .log("echo")
+        .contains("plan skipped: its mission id is not its content's"));
+    let processor_log = std::fs::read_to_string(d.join("processor.log")).unwrap();
+    assert!(
+        processor_log.contains("plan skipped: its mission id is not its content's"),
+        "{processor_log}"
+    );
 }
 
 /// A client of the TLS router with `tls` settings (none: plain TCP), started in namespace B
@@ -584,6 +665,10 @@ fn main() {
         Test::netns(
             "strangers_cannot_open_a_session_with_the_tls_router",
             strangers_cannot_open_a_session_with_the_tls_router,
+        ),
+        Test::netns(
+            "forgers_with_the_processors_and_the_planners_certificates",
+            forgers_with_the_processors_and_the_planners_certificates,
         ),
         Test::netns(
             "clients_refuse_a_router_that_is_not_the_deployments",

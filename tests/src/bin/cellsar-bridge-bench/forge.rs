@@ -8,7 +8,8 @@
 //!   public on a plain mesh, so it passes the sender check and meets the consistency check);
 //! - `--forge-plans`: it answers every plan request at once with a plan of another mission
 //!   (planned when it starts), and publishes that plan under a mission id its content does not
-//!   give (`FORGED_PLAN_ID`);
+//!   give (`FORGED_PLAN_ID`); it learns the requested mission's id too (a peer that may answer
+//!   plan requests but see no plan);
 //! - `--forge-results`: well-formed images of every aperture (`FORGED_IMAGE_PX` square, one
 //!   marker) under its own instance name and, with `--metrics-template` (the `metrics.json` of
 //!   the same mission, say the closed loop's), those metrics claiming `pd` = `FORGED_PD`: they
@@ -34,8 +35,8 @@ use bridge::zenoh::sample::Sample;
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohArgs};
 use pipeline::protocol::{
-    keys, ApertureDetections, ApertureImage, Detection, MissionMetrics, Plan, PlanRequest,
-    ServiceStatus,
+    keys, mission_id, ApertureDetections, ApertureImage, Detection, MissionMetrics, Plan,
+    PlanRequest, ServiceStatus,
 };
 use serde::Serialize;
 
@@ -288,6 +289,10 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
                 Err(_) => r.errors += 1,
             }
             while let Some(request) = q.recv_timeout(Duration::ZERO) {
+                let asked = mission_id(&request.request.mission, &request.request.options);
+                if let Ok(mut s) = seen.lock() {
+                    s.insert(asked);
+                }
                 match request.reply(plan, bridge::Meta::default()) {
                     Ok(()) => {
                         r.plans += 1;
