@@ -6,7 +6,9 @@
 //! checks that files with it exist while frames flow (so that their absence afterwards means
 //! something). A `kill -9` of each child, with the run ending normally, is in
 //! `tests/tests/reliability.rs` (`kill9_*`); SIGINT before or while waiting for the planner and
-//! the runs that fail or time out are in `tests/tests/system.rs`.
+//! the runs that fail or time out are in `tests/tests/system.rs`. A run started by another test
+//! binary at the moment this file's killed run is checked would remove its files first; `cargo
+//! test` runs test binaries one after the other.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -17,6 +19,10 @@ use harness::{running, signal, Signal};
 
 /// 6 apertures of the small scene.
 const H: f64 = 60.0;
+
+/// The tests of this file one at a time: a run that starts removes the files of runs whose
+/// launcher is dead, those a test killed on purpose too.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// The run's iceoryx2 prefix, from its `network` event.
 fn run_prefix(l: &mut Launch) -> String {
@@ -58,6 +64,7 @@ fn all_gone(pids: &[(String, u32)]) {
 /// 130 and leaves no frame file.
 #[test]
 fn sigint_to_the_launcher_with_a_frozen_echo_leaves_no_frame_files() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
     let mut l = Launch::start(dir.path(), H, &["--window", "1"]);
     let prefix = run_prefix(&mut l);
@@ -84,6 +91,7 @@ fn sigint_to_the_launcher_with_a_frozen_echo_leaves_no_frame_files() {
 /// own when it ends.
 #[test]
 fn a_run_killed_as_a_whole_is_cleaned_up_by_the_next_run() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let reference = reference(H);
     let dir = tempfile::tempdir().unwrap();
     let mut l = Launch::start(dir.path(), H, &["--window", "1"]);
