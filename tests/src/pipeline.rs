@@ -29,6 +29,27 @@ pub fn scene() -> PathBuf {
     root().join("tests/data/small-scene.toml")
 }
 
+/// The arguments of `cellsar echo` started by hand on the test scene, joining the launcher's
+/// network as its own children do: the `children` and `iox` flags of its `network` event.
+pub fn echo_args(network: &Value) -> Vec<String> {
+    let mut args = vec![
+        "echo".to_string(),
+        "--scene".to_string(),
+        scene().display().to_string(),
+    ];
+    for key in ["children", "iox"] {
+        let flags = network[key]
+            .as_array()
+            .unwrap_or_else(|| panic!("the network event has no `{key}` list: {network}"));
+        args.extend(flags.iter().map(|v| {
+            v.as_str()
+                .unwrap_or_else(|| panic!("`{key}` holds a non-string: {v}"))
+                .to_string()
+        }));
+    }
+    args
+}
+
 /// `cellsar-radar-sim closed-loop` on the same inputs, in this process (same library calls),
 /// cached per horizon: `<dir>/processed/{detections.csv,metrics.json,...}`, `<dir>/report.json`.
 pub fn reference(horizon_s: f64) -> PathBuf {

@@ -132,19 +132,7 @@ fn a_hostile_peer_of_every_kind_leaves_the_run_exact_and_bounded() {
         );
     }
     // now the echo: the run completes with the closed loop's outputs
-    let mut ea: Vec<String> = vec![
-        "echo".into(),
-        "--scene".into(),
-        scene().display().to_string(),
-    ];
-    for v in net["children"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .chain(net["iox"].as_array().unwrap())
-    {
-        ea.push(v.as_str().unwrap().to_string());
-    }
+    let ea = echo_args(&net);
     let mut echo = Service::start("echo", d, &ea);
     let st = l.finish(Duration::from_secs(300));
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());

@@ -445,19 +445,7 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     }
     // now the echo, flooded as soon as it is up (while the mission runs)
     let net = l.event("network", Duration::from_secs(1));
-    let mut ea: Vec<String> = vec![
-        "echo".into(),
-        "--scene".into(),
-        scene().display().to_string(),
-    ];
-    for v in net["children"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .chain(net["iox"].as_array().unwrap())
-    {
-        ea.push(v.as_str().unwrap().to_string());
-    }
+    let ea = echo_args(&net);
     let mut echo = Service::start("echo", dir.path(), &ea);
     // its first status: its loop runs, every endpoint is declared
     l.wait_for("the echo's status", Duration::from_secs(30), |e| {

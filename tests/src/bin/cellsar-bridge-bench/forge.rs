@@ -92,7 +92,7 @@ pub(super) struct ForgeArgs {
     #[arg(long)]
     metrics_template: Option<std::path::PathBuf>,
     /// Announce the forger alive as this role with the forged instance name (default: role
-    /// "forge", instance "forge-<pid>").
+    /// "forge", instance "forge-PID").
     #[arg(long)]
     announce_as: Option<String>,
     /// Forge for this mission (16 hexadecimal digits) from the start, besides those it sees.
