@@ -530,6 +530,20 @@ impl LogsOnFailure {
             tail_lines: 400,
         }
     }
+
+    /// The logs of a deployment run in `dir` as the network tests lay it out: `<name>.log` of
+    /// each process started by hand, the launcher's `launcher.err`, and its children's logs in
+    /// `out/logs`.
+    pub fn of_run(dir: &Path, processes: &[&str]) -> Self {
+        Self::new(
+            processes
+                .iter()
+                .map(|n| dir.join(format!("{n}.log")))
+                .chain([dir.join("launcher.err")])
+                .collect(),
+            vec![dir.join("out/logs")],
+        )
+    }
 }
 
 impl Drop for LogsOnFailure {

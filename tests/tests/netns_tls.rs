@@ -190,14 +190,7 @@ fn pipeline_over_mutual_tls_with_access_control() {
     .unwrap();
     // every process's log, printed if the test fails (the router's access-control decisions,
     // the launcher's and its children's logs)
-    let _logs = LogsOnFailure::new(
-        ["router", "processor", "forger", "stranger"]
-            .iter()
-            .map(|n| d.join(format!("{n}.log")))
-            .chain([d.join("launcher.err")])
-            .collect(),
-        vec![d.join("out/logs")],
-    );
+    let _logs = LogsOnFailure::of_run(d, &["router", "processor", "forger", "stranger"]);
     let router = start_router(&hosts, d, &certs);
     let _processor = start_processor(&hosts, d, &role("processor"));
     let metrics_template = reference
@@ -386,14 +379,7 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
     let d = dir.path();
     let certs = make_certs(d, "certs", &hosts.ip_a);
     let role = |r: &str| config(d, &format!("tls/{r}.json5"), &hosts.ip_a, Some(&certs));
-    let _logs = LogsOnFailure::new(
-        ["router", "processor", "forger-p", "forger-q"]
-            .iter()
-            .map(|n| d.join(format!("{n}.log")))
-            .chain([d.join("launcher.err")])
-            .collect(),
-        vec![d.join("out/logs")],
-    );
+    let _logs = LogsOnFailure::of_run(d, &["router", "processor", "forger-p", "forger-q"]);
     let router = start_router(&hosts, d, &certs);
     let _processor = start_processor(&hosts, d, &role("processor"));
     let forged = ["--forge-plans", "--malformed-images"];
