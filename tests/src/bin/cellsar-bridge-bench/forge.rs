@@ -17,6 +17,7 @@
 //!   sender check tells them from the real ones;
 //! - `--announce-as <role>`: its liveliness token is `cellsar/alive/<role>/<--instance>`, so
 //!   the forged messages claim an instance that is alive, in another role;
+//! - `--flood-plan-requests N` and the other floods: see `flood.rs`;
 //! - `--mission <id>`: it forges for this mission from the start, without having to see it (a
 //!   peer that the router lets see nothing).
 //!
@@ -126,20 +127,24 @@ fn parse_mission(s: &str) -> Result<MissionId, String> {
     MissionId::parse_hex(s).map_err(|e| e.to_string())
 }
 
-/// A plan of a mission of its own ("forged"), for answering plan requests.
-fn forged_plan() -> Result<Plan> {
+/// A plan request of a mission of its own ("forged"), small and well-formed.
+fn forged_request() -> Result<PlanRequest> {
     let mission = planner::MissionFile::from_toml_str(
         "name = \"forged\"\n[params]\nhorizon_s = 20.0\n[landmarks]\npoints = [{ x_m = 0.0, \
          y_m = 0.0, from_s = 0.0, to_s = 10.0 }, { x_m = 0.0, y_m = 30.0, from_s = 10.0, to_s = \
          20.0 }]\n",
     )
     .map_err(|e| anyhow::anyhow!("the forged mission: {e}"))?;
-    let req = PlanRequest {
+    Ok(PlanRequest {
         mission,
         options: Default::default(),
-    };
+    })
+}
+
+/// A plan of a mission of its own ("forged"), for answering plan requests.
+fn forged_plan() -> Result<Plan> {
     Ok(pipeline::services::plan::plan_request(
-        &req,
+        &forged_request()?,
         "intruder",
         &mut planner::NoObserver,
     )?)
@@ -202,6 +207,8 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
         Some(role) => bridge::ZenohNode::open(a.zenoh.to_config()?, role, &a.instance)?,
         None => z_node(&a.zenoh, "forge")?,
     };
+    // shared with the flood of plan requests' thread
+    let node = Arc::new(node);
     let template: Option<radar_sim::run::Metrics> = match &a.metrics_template {
         Some(p) => Some(serde_json::from_str(&std::fs::read_to_string(p).map_err(
             |e| anyhow::anyhow!("--metrics-template {}: {e}", p.display()),
@@ -277,10 +284,18 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     let alive = node.watch_liveliness(&format!("{PROCESSOR_ALIVE}*"))?;
     ready();
     let mut r = ForgeReport::default();
+    let end = Instant::now() + a.duration_s.duration();
+    let requests = if a.flood.flood_plan_requests > 0 {
+        let (node, base, flood) = (node.clone(), forged_request()?, a.flood.clone());
+        Some(std::thread::spawn(move || {
+            flood::plan_requests(&node, &base, &flood, end)
+        }))
+    } else {
+        None
+    };
     flood::publish_plans(&node, &flood_plans, &mut r.flood)?;
     drop(flood_plans);
     let mut forgers: Vec<(MissionId, Forger)> = Vec::new();
-    let end = Instant::now() + a.duration_s.duration();
     let mut progress = Instant::now();
     while Instant::now() < end {
         if let Some((q, plan, publisher, wrong_id)) = &plans {
@@ -378,9 +393,16 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     }
     r.missions = forgers.len();
     r.received = received.load(std::sync::atomic::Ordering::Relaxed);
+    if let Some(h) = requests {
+        r.flood.plan_requests = h
+            .join()
+            .map_err(|_| anyhow::anyhow!("the flood of plan requests panicked"))?;
+    }
     drop(subs);
     report(&r)?;
-    node.close()?;
+    Arc::try_unwrap(node)
+        .map_err(|_| anyhow::anyhow!("the Zenoh session is still shared at the end"))?
+        .close()?;
     Ok(())
 }
 
