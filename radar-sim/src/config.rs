@@ -25,17 +25,23 @@
 //!
 //! [processing]         # canceller, range filter, backprojection grid, CFAR
 //! canceller = "eca-b"
+//!
+//! [clutter]            # optional: constant-γ ground clutter under the objects (off by default)
+//! enabled = true
+//! terrain = "farmland"
 //! ```
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{RadarError, Result};
 
+mod clutter;
 mod nr;
 mod objects;
 mod processing;
 mod radar;
 
+pub use clutter::{ClutterConfig, Terrain, MAX_SCATTERERS_PER_CELL};
 pub use nr::{NrConfig, NR_PREFIX};
 pub use objects::ObjectsConfig;
 pub use processing::{
@@ -76,6 +82,9 @@ pub struct SceneFile {
     pub radar: RadarConfig,
     /// `[processing]`.
     pub processing: ProcessingConfig,
+    /// `[clutter]` (left out when serialised at its defaults: clutter off).
+    #[serde(skip_serializing_if = "ClutterConfig::is_default")]
+    pub clutter: ClutterConfig,
 }
 
 fn finite(field: &str, v: f64) -> Result<()> {
@@ -129,6 +138,7 @@ impl SceneFile {
         self.objects.validate()?;
         self.radar.validate()?;
         self.processing.validate()?;
+        self.clutter.validate()?;
         let profile = self.radar.fft_size.saturating_mul(self.processing.upsample);
         if profile > MAX_PROFILE_SAMPLES {
             return Err(RadarError::config(

@@ -17,6 +17,7 @@ pub mod antenna;
 pub mod backproject;
 pub mod cancel;
 pub mod cfar;
+pub mod clutter;
 pub mod compress;
 pub mod config;
 pub mod cputime;

@@ -46,6 +46,8 @@ pub fn simulate_limited(
     let objects = setup.objects(mission)?;
     let track = PlannedTrack::new(traj.clone(), mission.params().altitude_m);
     let synth = setup.synthesizer(objects.clone())?;
+    // ground clutter (`[clutter]`): synthesised with the objects, not part of the truth
+    let clutter = crate::clutter::GroundClutter::for_run(&setup, &track, &aps)?;
     mkdir(&out.join("iq"))?;
     let spp = synth.samples_per_pulse();
     let sample_bytes = crate::limits::IQ_SAMPLE_BYTES as usize;
@@ -60,9 +62,13 @@ pub fn simulate_limited(
         let (truth, warning) = aperture_truth(&setup, &synth, &objects, ap, &pulses);
         truths.push(truth);
         warnings.extend(warning);
+        let cluttered = match &clutter {
+            Some(c) => Some(c.synthesizer(&setup, &objects, ap, &pulses)?),
+            None => None,
+        };
         let mut w = NpyWriter::create(&iq_path(out, ap.index), NpyType::C8, &[pulses.len(), spp])?;
         crate::pipeline::synthesize_frames(
-            &synth,
+            cluttered.as_ref().unwrap_or(&synth),
             &pulses,
             frame_pulses,
             Components::ALL,
