@@ -54,6 +54,18 @@ where
         .try_map(|name| name.parse::<E>())
 }
 
+/// The clap value parser of a flag that names a role ([`crate::protocol::Role`]), restricted to
+/// `roles`: their names (as on the wire) are clap's possible values, so another name, or a
+/// role the flag does not take, is refused with the flag's name and the list, and `--help`
+/// lists them.
+pub fn role_parser(
+    roles: &'static [crate::protocol::Role],
+) -> impl clap::builder::TypedValueParser<Value = crate::protocol::Role> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(roles.iter().map(|r| r.as_str()))
+        .try_map(|name| name.parse::<crate::protocol::Role>())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -96,6 +108,32 @@ mod tests {
             e.contains("--resolution") && e.contains("paper, general"),
             "{e}"
         );
+    }
+
+    #[derive(Parser, Debug)]
+    struct RoleFlags {
+        #[arg(long, value_parser = role_parser(&crate::protocol::Role::CHILDREN))]
+        external: Vec<crate::protocol::Role>,
+    }
+
+    /// Every role the flag takes parses to itself; a role it does not take and a name that
+    /// is no role are refused naming the flag and the roles it takes.
+    #[test]
+    fn a_role_flag_takes_its_roles_only() {
+        use crate::protocol::Role;
+        for r in Role::CHILDREN {
+            let f = RoleFlags::try_parse_from(["x", "--external", r.as_str()]).unwrap();
+            assert_eq!(f.external, [r]);
+        }
+        for bad in ["launcher", "router", "Echo", "forge"] {
+            let e = RoleFlags::try_parse_from(["x", "--external", bad])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("--external") && e.contains("planner, echo, processor, bridge"),
+                "{bad}: {e}"
+            );
+        }
     }
 
     #[test]

@@ -13,12 +13,18 @@
 //! cannot serve as the router. Keys are ECDSA P-256, PKCS#8 PEM, mode 0600. Every file is
 //! written atomically (a unique temporary file, synced, renamed), and nothing is written when
 //! one of the files exists already, unless `--force`.
+//!
+//! `--role` takes roles only ([`Role`], the router's included), so that a misspelt role is
+//! refused rather than certified under a name the access control never matches; a
+//! certificate for a common name that is no role (a client the router must deny everything
+//! to, as the tests' `stranger`) is asked for explicitly with `--extra-name`.
 
 use std::fs::{File, Permissions};
 use std::io::Write;
 use std::os::unix::fs::PermissionsExt;
 use std::path::{Path, PathBuf};
 
+use crate::protocol::Role;
 use rcgen::{
     BasicConstraints, CertificateParams, DnType, ExtendedKeyUsagePurpose, IsCa, Issuer, KeyPair,
     KeyUsagePurpose,
@@ -26,17 +32,17 @@ use rcgen::{
 
 /// The roles `cellsar certs` makes certificates for by default: the router and every process
 /// of the pipeline (`launcher` is `cellsar run`, the collector of the results).
-pub const DEFAULT_ROLES: [&str; 6] = [
-    "router",
-    "planner",
-    "echo",
-    "processor",
-    "bridge",
-    "launcher",
+pub const DEFAULT_ROLES: [Role; 6] = [
+    Role::Router,
+    Role::Planner,
+    Role::Echo,
+    Role::Processor,
+    Role::Bridge,
+    Role::Launcher,
 ];
 
 /// The role whose certificate is the router's: a server certificate for the `--host` names.
-pub const ROUTER_ROLE: &str = "router";
+pub const ROUTER_ROLE: Role = Role::Router;
 
 /// The host names of the router's certificate when no `--host` is given.
 pub const DEFAULT_HOSTS: [&str; 2] = ["localhost", "127.0.0.1"];
@@ -52,8 +58,13 @@ pub struct CertsArgs {
     pub out: PathBuf,
     /// A role to make a certificate for (its common name; repeatable)
     /// [default: router, planner, echo, processor, bridge, launcher].
-    #[arg(long = "role", value_name = "ROLE")]
-    pub roles: Vec<String>,
+    #[arg(long = "role", value_name = "ROLE", value_parser = crate::args::role_parser(&Role::ALL))]
+    pub roles: Vec<Role>,
+    /// Also a client certificate whose common name is NAME, no role (repeatable): an identity
+    /// the access control of `pipeline/deploy/tls/router.json5` matches to no subject, so the
+    /// router denies it everything (e.g. to test that); the roles are made as without it.
+    #[arg(long = "extra-name", value_name = "NAME")]
+    pub extra_names: Vec<String>,
     /// A host name or IP address of the router's certificate (repeatable): the address or
     /// name clients connect to, one no public CA may certify (a private, loopback or
     /// link-local address, or a name under .internal, .localhost, .test, .local or
@@ -118,29 +129,43 @@ struct Output {
     mode: u32,
 }
 
-/// The roles to make (the default set when none is given), each checked as a key chunk (it is
-/// the common name the ACL matches and a file name) and given once.
-fn roles(args: &CertsArgs) -> Result<Vec<String>, CertsError> {
-    let given: Vec<String> = if args.roles.is_empty() {
-        DEFAULT_ROLES.iter().map(|r| r.to_string()).collect()
+/// The common names to certify: the roles (the default set when none is given), each given
+/// once, then the extra names, each a key chunk (the common name the ACL matches, and a file
+/// name), neither a role's name nor the CA's file name, and given once.
+fn common_names(args: &CertsArgs) -> Result<Vec<String>, CertsError> {
+    let roles: &[Role] = if args.roles.is_empty() {
+        &DEFAULT_ROLES
     } else {
-        args.roles.clone()
+        &args.roles
     };
     let mut out: Vec<String> = Vec::new();
-    for r in given {
+    for r in roles {
+        if out.iter().any(|o| o == r.as_str()) {
+            return Err(CertsError::Flag {
+                flag: "--role",
+                value: r.to_string(),
+                reason: "given twice".into(),
+            });
+        }
+        out.push(r.to_string());
+    }
+    for n in &args.extra_names {
         let bad = |reason: String| CertsError::Flag {
-            flag: "--role",
-            value: r.clone(),
+            flag: "--extra-name",
+            value: n.clone(),
             reason,
         };
-        bridge::keys::chunk("role", &r).map_err(|e| bad(e.reason.to_string()))?;
-        if r == "ca" {
+        bridge::keys::chunk("extra name", n).map_err(|e| bad(e.reason.to_string()))?;
+        if n.parse::<Role>().is_ok() {
+            return Err(bad(format!("is a role: give --role {n}")));
+        }
+        if n == "ca" {
             return Err(bad("is the CA's file name".into()));
         }
-        if out.contains(&r) {
+        if out.contains(n) {
             return Err(bad("given twice".into()));
         }
-        out.push(r);
+        out.push(n.clone());
     }
     Ok(out)
 }
@@ -184,14 +209,14 @@ fn router_hosts(args: &CertsArgs) -> Result<Vec<String>, CertsError> {
     Ok(hosts)
 }
 
-/// The parameters of `role`'s certificate: the router's a server certificate for `hosts`,
-/// every other role's a client certificate without host names.
+/// The parameters of the certificate of common name `role`: the router's a server certificate
+/// for `hosts`, every other one a client certificate without host names.
 fn leaf_params(
     role: &str,
     hosts: &[String],
     validity: (time::OffsetDateTime, time::OffsetDateTime),
 ) -> Result<CertificateParams, CertsError> {
-    let router = role == ROUTER_ROLE;
+    let router = role == ROUTER_ROLE.as_str();
     let names = if router { hosts.to_vec() } else { Vec::new() };
     let mut p = CertificateParams::new(names).map_err(|e| CertsError::Flag {
         flag: "--host",
@@ -213,7 +238,7 @@ fn leaf_params(
 
 /// Makes the CA and every role's certificate and key in memory (nothing written yet).
 fn make_all(args: &CertsArgs) -> Result<Vec<Output>, CertsError> {
-    let roles = roles(args)?;
+    let roles = common_names(args)?;
     let validity = validity(args.days)?;
     let hosts = router_hosts(args)?;
     let cert_err = |what: &str| {
@@ -329,7 +354,8 @@ mod tests {
     fn args(dir: &Path) -> CertsArgs {
         CertsArgs {
             out: dir.to_path_buf(),
-            roles: vec!["router".into(), "echo".into()],
+            roles: vec![Role::Router, Role::Echo],
+            extra_names: vec![],
             hosts: vec!["10.0.0.1".into(), "router.cellsar.internal".into()],
             days: 30,
             force: false,
@@ -484,7 +510,7 @@ mod tests {
         let ca_before = std::fs::read(dir.path().join("ca.pem")).unwrap();
         // one file of the set exists: nothing is written
         let mut b = a.clone();
-        b.roles = vec!["planner".into(), "echo".into()];
+        b.roles = vec![Role::Planner, Role::Echo];
         let e = make_certs(&b).unwrap_err();
         assert!(matches!(e, CertsError::Exists(_)), "{e}");
         assert!(e.to_string().contains("--force"), "{e}");
@@ -500,21 +526,51 @@ mod tests {
     #[test]
     fn bad_flags_are_named() {
         let dir = tempfile::tempdir().unwrap();
-        for (roles, hosts, days, flag) in [
-            (vec!["a/b"], vec![], 1, "--role"),
-            (vec!["ca"], vec![], 1, "--role"),
-            (vec!["echo", "echo"], vec![], 1, "--role"),
-            (vec!["echo"], vec![], 0, "--days"),
-            (vec!["echo"], vec![], MAX_DAYS + 1, "--days"),
+        use Role::{Echo, Router};
+        for (roles, extra, hosts, days, flag) in [
             (
+                vec![Echo, Echo],
+                vec![],
+                vec![],
+                1,
+                "--role \"echo\": given twice",
+            ),
+            (vec![Echo], vec!["a/b"], vec![], 1, "--extra-name \"a/b\""),
+            (vec![Echo], vec!["ca"], vec![], 1, "--extra-name \"ca\""),
+            (
+                vec![],
+                vec!["echo"],
+                vec![],
+                1,
+                "--extra-name \"echo\": is a role",
+            ),
+            (
+                vec![],
                 vec!["router"],
+                vec![],
+                1,
+                "--extra-name \"router\": is a role",
+            ),
+            (
+                vec![Echo],
+                vec!["x", "x"],
+                vec![],
+                1,
+                "--extra-name \"x\": given twice",
+            ),
+            (vec![Echo], vec![], vec![], 0, "--days"),
+            (vec![Echo], vec![], vec![], MAX_DAYS + 1, "--days"),
+            (
+                vec![Router],
+                vec![],
                 vec!["8.8.8.8"],
                 1,
                 "--host \"8.8.8.8\": a public",
             ),
-            (vec!["echo"], vec!["router.example.com"], 1, "--host"),
+            (vec![Echo], vec![], vec!["router.example.com"], 1, "--host"),
             (
-                vec!["router"],
+                vec![Router],
+                vec![],
                 vec!["10.0.0.1", "[2001:db8::1]"],
                 1,
                 "--host",
@@ -522,7 +578,8 @@ mod tests {
         ] {
             let a = CertsArgs {
                 out: dir.path().join("x"),
-                roles: roles.into_iter().map(String::from).collect(),
+                roles,
+                extra_names: extra.into_iter().map(String::from).collect(),
                 hosts: hosts.into_iter().map(String::from).collect(),
                 days,
                 force: false,
@@ -539,6 +596,7 @@ mod tests {
         let a = CertsArgs {
             out: dir.path().join("certs"),
             roles: vec![],
+            extra_names: vec![],
             hosts: vec![],
             days: 1,
             force: false,
@@ -558,5 +616,57 @@ mod tests {
                 .verify_is_valid_for_subject_name(&ServerName::try_from(h).unwrap())
                 .is_err());
         }
+    }
+
+    /// An extra name is a client certificate of the CA whose common name is that name (no
+    /// host name, no server use), made besides the default roles; the roles' flag parses the
+    /// roles only (`cellsar certs --role stranger` is refused by clap, naming the roles).
+    #[test]
+    fn extra_names_are_client_certificates_besides_the_roles() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = CertsArgs {
+            out: dir.path().join("certs"),
+            roles: vec![],
+            extra_names: vec!["stranger".into()],
+            hosts: vec![],
+            days: 1,
+            force: false,
+        };
+        let written = make_certs(&a).unwrap();
+        assert_eq!(written.len(), 2 + 2 * (DEFAULT_ROLES.len() + 1));
+        let ca = der(&a.out.join("ca.pem"));
+        let anchor = webpki::anchor_from_trusted_cert(&ca).unwrap();
+        let leaf = der(&a.out.join("stranger.pem"));
+        verify(&leaf, &anchor, webpki::KeyUsage::client_auth()).unwrap();
+        assert!(verify(&leaf, &anchor, webpki::KeyUsage::server_auth()).is_err());
+        let (_, x) = x509_parser::parse_x509_certificate(&leaf).unwrap();
+        let cns: Vec<&str> = x
+            .subject()
+            .iter_common_name()
+            .map(|c| c.as_str().unwrap())
+            .collect();
+        assert_eq!(cns, ["stranger"]);
+        assert!(x.subject_alternative_name().unwrap().is_none());
+        for r in DEFAULT_ROLES {
+            assert!(a.out.join(format!("{r}.pem")).is_file(), "{r}");
+        }
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            certs: CertsArgs,
+        }
+        use clap::Parser as _;
+        let e = Cli::try_parse_from(["certs", "--out", "x", "--role", "stranger"])
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("--role")
+                && e.contains("planner, echo, processor, bridge, launcher, router"),
+            "{e}"
+        );
+        let c = Cli::try_parse_from(["certs", "--out", "x", "--role", "router", "--role", "echo"])
+            .unwrap();
+        assert_eq!(c.certs.roles, [Role::Router, Role::Echo]);
     }
 }

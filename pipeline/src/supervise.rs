@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use nix::sys::signal::Signal;
 
 use crate::events::{Event, Events};
+use crate::protocol::Role;
 
 /// Environment variable with the launcher's pid, set for every child.
 pub const PARENT_ENV: &str = "CELLSAR_LAUNCHER_PID";
@@ -76,7 +77,7 @@ pub enum SuperviseError {
 #[derive(Debug, Clone)]
 pub struct ChildSpec {
     /// Role (planner, echo, processor, bridge, router).
-    pub role: String,
+    pub role: Role,
     /// Executable.
     pub exe: PathBuf,
     /// Arguments.
@@ -153,13 +154,13 @@ impl Supervised {
         }
         cmd.env(PARENT_ENV, std::process::id().to_string());
         let child = cmd.spawn().map_err(|error| SuperviseError::Spawn {
-            role: self.spec.role.clone(),
+            role: self.spec.role.to_string(),
             exe: self.spec.exe.display().to_string(),
             error,
         })?;
         let pid = child.id();
         events.emit(&Event::ChildStarted {
-            role: self.spec.role.clone(),
+            role: self.spec.role.to_string(),
             pid,
             restarts: self.restarts,
         });
@@ -190,13 +191,13 @@ impl Supervised {
                     let st = describe(status);
                     tracing::warn!(role = %self.spec.role, status = %st, "child exited");
                     events.emit(&Event::ChildExited {
-                        role: self.spec.role.clone(),
+                        role: self.spec.role.to_string(),
                         status: st.clone(),
                     });
                     self.last_exit = Some(st.clone());
                     if self.failures > max_restarts {
                         return Err(SuperviseError::KeepsFailing {
-                            role: self.spec.role.clone(),
+                            role: self.spec.role.to_string(),
                             failures: self.failures,
                             last: st,
                             log: self.spec.log.display().to_string(),
@@ -204,7 +205,7 @@ impl Supervised {
                     }
                     self.restart_at = Some(Instant::now() + backoff);
                     return Ok(Some(ChildEvent::Exited {
-                        role: self.spec.role.clone(),
+                        role: self.spec.role.to_string(),
                         status: st,
                     }));
                 }
@@ -220,12 +221,12 @@ impl Supervised {
                 self.restarts += 1;
                 let pid = self.spawn(events)?;
                 events.emit(&Event::ChildRestarted {
-                    role: self.spec.role.clone(),
+                    role: self.spec.role.to_string(),
                     pid,
                     restarts: self.restarts,
                 });
                 return Ok(Some(ChildEvent::Restarted {
-                    role: self.spec.role.clone(),
+                    role: self.spec.role.to_string(),
                     pid,
                     restarts: self.restarts,
                 }));
@@ -281,7 +282,7 @@ pub fn stop_all(children: &mut [Supervised], grace: Duration, events: &Events) {
     for c in children.iter_mut() {
         if let Some(st) = c.reap(deadline) {
             events.emit(&Event::ChildStopped {
-                role: c.spec.role.clone(),
+                role: c.spec.role.to_string(),
                 status: st,
             });
         }

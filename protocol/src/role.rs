@@ -37,6 +37,16 @@ impl Role {
         Role::Router,
     ];
 
+    /// The roles of the processes `cellsar run` starts as its children, and so the roles that
+    /// may run elsewhere instead (`--external`) or be given a Zenoh configuration of their own
+    /// (`--child-config`): the planner, the echo, the processor and the bridge.
+    pub const CHILDREN: [Role; 4] = [Role::Planner, Role::Echo, Role::Processor, Role::Bridge];
+
+    /// Whether the role is one of [`Role::CHILDREN`].
+    pub fn is_child(self) -> bool {
+        Role::CHILDREN.contains(&self)
+    }
+
     /// The role's name, as in keys and on the wire.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -88,6 +98,9 @@ mod tests {
             assert_eq!(r.as_str().parse::<Role>().unwrap(), r);
         }
         assert!(serde_json::from_str::<Role>("\"forge\"").is_err());
+        let children: Vec<Role> = Role::ALL.into_iter().filter(|r| r.is_child()).collect();
+        assert_eq!(children, Role::CHILDREN);
+        assert!(!Role::Launcher.is_child() && !Role::Router.is_child());
         let e = "Echo".parse::<Role>().unwrap_err();
         assert!(e.to_string().starts_with("\"Echo\" is no role"), "{e}");
     }

@@ -171,20 +171,20 @@ pub fn make_certs(dir: &Path, name: &str, host: &str) -> PathBuf {
     make_certs_with(dir, name, host, &[])
 }
 
-/// [`make_certs`] with certificates of `extra` common names too (signed by the same CA).
+/// [`make_certs`] with client certificates of `extra` common names that are no role too
+/// (signed by the same CA; `--extra-name`).
 pub fn make_certs_with(dir: &Path, name: &str, host: &str, extra: &[&str]) -> PathBuf {
     let out = dir.join(name);
     let mut c = Command::new(exe());
     c.args(["certs", "--out"]).arg(&out).args(["--host", host]);
-    if !extra.is_empty() {
-        for role in pipeline::certs::DEFAULT_ROLES.iter().chain(extra) {
-            c.args(["--role", role]);
-        }
+    for n in extra {
+        c.args(["--extra-name", n]);
     }
     let o = c.output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for role in pipeline::certs::DEFAULT_ROLES.iter().chain(extra) {
-        assert!(out.join(format!("{role}.pem")).is_file(), "{role}");
+    let roles = pipeline::certs::DEFAULT_ROLES.map(|r| r.as_str());
+    for n in roles.iter().chain(extra) {
+        assert!(out.join(format!("{n}.pem")).is_file(), "{n}");
     }
     out
 }

@@ -47,7 +47,7 @@ use radar_sim::config::SceneFile;
 
 use crate::events::{Event, Events};
 use crate::exit::{Failure, FailureKind};
-use crate::protocol::{self, FrameLayout};
+use crate::protocol::{self, FrameLayout, Role};
 use crate::services::process::MissionContext;
 use crate::supervise::{stop_all, ChildSpec, Supervised};
 use net::{free_port, open_with_retry};
@@ -115,13 +115,13 @@ pub struct RunArgs {
     pub router: bool,
     /// Do not start this role (planner, echo, processor, bridge): it runs elsewhere (another
     /// host, a container) and is found on the Zenoh network. Repeatable.
-    #[arg(long = "external", value_name = "ROLE", value_parser = ["planner", "echo", "processor", "bridge"])]
-    pub external: Vec<String>,
+    #[arg(long = "external", value_name = "ROLE", value_parser = crate::args::role_parser(&Role::CHILDREN))]
+    pub external: Vec<Role>,
     /// The Zenoh configuration file of the children of one role, instead of the launcher's
     /// `-c` (`ROLE=FILE`, ROLE one of planner, echo, processor, bridge): a deployment with a
     /// certificate per role (`pipeline/deploy/tls/`). Repeatable.
     #[arg(long = "child-config", value_name = "ROLE=FILE", value_parser = net::parse_child_config)]
-    pub child_config: Vec<(String, PathBuf)>,
+    pub child_config: Vec<(Role, PathBuf)>,
     /// Restarts allowed per child before the run is given up.
     #[arg(long, default_value_t = 5)]
     pub max_restarts: u32,
@@ -252,11 +252,10 @@ pub fn check_inputs(args: &RunArgs) -> Result<planner::Mission, Failure> {
         z.to_config().map_err(Failure::bad_input)?;
     }
     // with TLS or access control, each child the launcher starts has a configuration of its own
-    let local = |r: &str| !args.external.iter().any(|e| e == r);
-    let started: Vec<&str> = ["planner", "echo", "processor", "bridge"]
+    let started: Vec<Role> = Role::CHILDREN
         .into_iter()
-        .filter(|r| local(r))
-        .filter(|r| *r != "bridge" || args.transport == Transport::Zenoh || args.bridge)
+        .filter(|r| !args.external.contains(r))
+        .filter(|r| *r != Role::Bridge || args.transport == Transport::Zenoh || args.bridge)
         .collect();
     net::check_secure_children(&args.zenoh, &net.child, &started, &args.child_config)
         .map_err(|e| Failure::bad_input(anyhow!(e)))?;
@@ -372,8 +371,8 @@ fn launch(
         args.iox.clone()
     };
     let mut children: Vec<Supervised> = Vec::new();
-    let spec = |role: &str, a: Vec<String>| ChildSpec {
-        role: role.to_string(),
+    let spec = |role: Role, a: Vec<String>| ChildSpec {
+        role,
         exe: exe.clone(),
         args: a,
         log: logs.join(format!("{role}.log")),
@@ -389,7 +388,7 @@ fn launch(
     if let Some(router) = &net.router {
         let mut ra = vec!["router".to_string(), "--instance".into(), "router".into()];
         ra.extend(router.to_cli_args());
-        children.push(Supervised::start(spec("router", ra), &events)?);
+        children.push(Supervised::start(spec(Role::Router, ra), &events)?);
     }
     events.emit(&Event::Network {
         launcher: net.launcher.to_cli_args(),

@@ -9,6 +9,7 @@ use bridge::zconfig::{self, Mode, DEFAULT_LISTEN};
 use bridge::{NetError, ZenohArgs, ZenohNode};
 
 use super::private::{hub_socket, unix_endpoint};
+use crate::protocol::Role;
 
 /// The Zenoh flags of the launcher, of its children and of its router child ([`network`]).
 pub struct Net {
@@ -29,7 +30,7 @@ impl Net {
     /// private mesh of peers, `--listen` on a Unix socket of its own in the private directory
     /// (so that the children find each other, and only the user's processes can connect);
     /// nothing otherwise.
-    pub fn child_listen(&self, role: &str, n: usize) -> Vec<String> {
+    pub fn child_listen(&self, role: Role, n: usize) -> Vec<String> {
         match (&self.private_dir, self.child.mode) {
             (Some(dir), Some(Mode::Peer)) => vec![
                 "--listen".to_string(),
@@ -277,21 +278,20 @@ fn reachable_endpoint(listen: &str, source: &str) -> std::result::Result<String,
     Ok(format!("{proto}/{host}:{port}{meta}"))
 }
 
-/// The roles whose children `--child-config` configures.
-const CHILD_ROLES: [&str; 4] = ["planner", "echo", "processor", "bridge"];
-
 /// clap value parser of `--child-config ROLE=FILE`: a child role and a Zenoh configuration
 /// file that Zenoh reads (checked now, so that a bad file is refused before anything starts).
-pub fn parse_child_config(s: &str) -> std::result::Result<(String, PathBuf), String> {
-    let (role, file) = s
+pub fn parse_child_config(s: &str) -> std::result::Result<(Role, PathBuf), String> {
+    let (name, file) = s
         .split_once('=')
         .ok_or_else(|| format!("{s:?}: expected ROLE=FILE, e.g. echo=deploy/tls/echo.json5"))?;
-    if !CHILD_ROLES.contains(&role) {
-        return Err(format!(
-            "{role:?}: the role must be one of {}",
-            CHILD_ROLES.join(", ")
-        ));
-    }
+    let role = name
+        .parse::<Role>()
+        .ok()
+        .filter(|r| r.is_child())
+        .ok_or_else(|| {
+            let names: Vec<&str> = Role::CHILDREN.iter().map(|r| r.as_str()).collect();
+            format!("{name:?}: the role must be one of {}", names.join(", "))
+        })?;
     let file = PathBuf::from(file);
     ZenohArgs {
         config: Some(file.clone()),
@@ -299,7 +299,7 @@ pub fn parse_child_config(s: &str) -> std::result::Result<(String, PathBuf), Str
     }
     .to_config()
     .map_err(|e| cellsar_error::error_chain(&e))?;
-    Ok((role.to_string(), file))
+    Ok((role, file))
 }
 
 /// In a run whose `-c` file enables TLS or access control, every child the launcher starts
@@ -310,8 +310,8 @@ pub fn parse_child_config(s: &str) -> std::result::Result<(String, PathBuf), Str
 pub fn check_secure_children(
     user: &ZenohArgs,
     child: &ZenohArgs,
-    started: &[&str],
-    child_config: &[(String, PathBuf)],
+    started: &[Role],
+    child_config: &[(Role, PathBuf)],
 ) -> std::result::Result<(), String> {
     let Some(why) = user.secured_by().map_err(|e| e.to_string())? else {
         return Ok(());
@@ -440,7 +440,7 @@ mod tests {
         let ok = dir.path().join("echo.json5");
         std::fs::write(&ok, "{ mode: 'client' }").unwrap();
         let (role, file) = parse_child_config(&format!("echo={}", ok.display())).unwrap();
-        assert_eq!((role.as_str(), file.as_path()), ("echo", ok.as_path()));
+        assert_eq!((role, file.as_path()), (Role::Echo, ok.as_path()));
         assert!(parse_child_config("echo")
             .unwrap_err()
             .contains("ROLE=FILE"));
@@ -490,14 +490,14 @@ mod tests {
         assert_eq!(n.child.max_message_bytes, Some(1 << 20));
         // each child listens on a socket of its own, only there: no TCP listener
         assert_eq!(
-            n.child_listen("echo", 3),
+            n.child_listen(Role::Echo, 3),
             [
                 "--listen",
                 "unixsock-stream//run/user/0/cellsar-mesh-x/echo-3.sock"
             ]
         );
         let mut echo = n.child.clone();
-        echo.listen = vec![n.child_listen("echo", 3)[1].clone()];
+        echo.listen = vec![n.child_listen(Role::Echo, 3)[1].clone()];
         assert_eq!(
             echo.to_config()
                 .unwrap()
@@ -518,7 +518,7 @@ mod tests {
             assert_eq!(n.child.connect, ["tcp/10.0.0.1:7447", hub], "{mode:?}");
             assert_eq!(n.child.listen, [DEFAULT_LISTEN]);
             assert!(n.child.no_multicast_scouting);
-            assert!(n.child_listen("echo", 0).is_empty());
+            assert!(n.child_listen(Role::Echo, 0).is_empty());
         }
         // -l on every address: the children connect on loopback
         let n = network(false, &flags(&[], &["tcp/0.0.0.0:7447"], None), &test_hub()).unwrap();
@@ -533,7 +533,7 @@ mod tests {
         assert_eq!(n.router.as_ref().unwrap().listen, [private]);
         assert_eq!(n.child.connect, [private]);
         assert_eq!(n.launcher.mode, Some(Mode::Client));
-        assert!(n.child_listen("echo", 0).is_empty());
+        assert!(n.child_listen(Role::Echo, 0).is_empty());
         for z in [&n.launcher, &n.child, n.router.as_ref().unwrap()] {
             z.to_config().unwrap();
         }
@@ -727,10 +727,10 @@ mod tests {
         // a client launcher: each child it starts has its own secure file
         let user = with(&launcher);
         let net = network(false, &user, &test_hub()).unwrap();
-        let roles = ["planner", "echo", "bridge"];
-        let own: Vec<(String, PathBuf)> = roles
+        let roles = [Role::Planner, Role::Echo, Role::Bridge];
+        let own: Vec<(Role, PathBuf)> = roles
             .iter()
-            .map(|r| (r.to_string(), client(&format!("{r}.json5"))))
+            .map(|r| (*r, client(&format!("{r}.json5"))))
             .collect();
         check_secure_children(&user, &net.child, &roles, &own).unwrap();
         // one missing: named, with the flag to give

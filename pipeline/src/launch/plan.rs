@@ -102,7 +102,7 @@ impl Session<'_> {
             // before its exit was seen). Every other failure, and an external planner's, is
             // bounded by these attempts; all by --plan-timeout-s.
             let supervised =
-                self.local("planner") && matches!(answer, Err(NetError::NoReply { .. }));
+                self.local(Role::Planner) && matches!(answer, Err(NetError::NoReply { .. }));
             let retries_left = supervised || attempt < 1 + self.args().max_restarts;
             match answer {
                 Ok(plan) => return Ok(Some(plan)),
@@ -151,7 +151,7 @@ impl Session<'_> {
 
     /// Waits for a planner's token; `false` when interrupted.
     fn wait_for_planner(&mut self, clock: &PlanClock) -> Result<bool> {
-        let what = if self.local("planner") {
+        let what = if self.local(Role::Planner) {
             "the planner to announce itself (cellsar/alive/planner/*; see logs/planner.log)"
         } else {
             "an external planner to announce itself (cellsar/alive/planner/*)"
@@ -164,7 +164,7 @@ impl Session<'_> {
             }
             self.check_time("waiting for the planner")?;
             if clock.left().is_zero() {
-                return Err(self.no_plan(if self.local("planner") {
+                return Err(self.no_plan(if self.local(Role::Planner) {
                     "the planner did not announce itself (see logs/planner.log)"
                 } else {
                     "no planner announced itself (cellsar/alive/planner/*): start \

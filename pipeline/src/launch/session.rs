@@ -15,7 +15,9 @@ use bridge::{keys, IoxArgs, MissionId, ZenohNode};
 use super::net::Net;
 use super::{RunArgs, Transport};
 use crate::events::{Event, Events};
-use crate::protocol::{self, ApertureDetections, ApertureImage, MissionMetrics, ServiceStatus};
+use crate::protocol::{
+    self, ApertureDetections, ApertureImage, MissionMetrics, Role, ServiceStatus,
+};
 use crate::senders::Senders;
 use crate::services::wait::WaitLog;
 use crate::supervise::{ChildSpec, Supervised};
@@ -35,7 +37,7 @@ pub(super) struct Setup<'a> {
     /// Set by SIGINT/SIGTERM.
     pub stop: &'a AtomicBool,
     /// How a child of a role is started.
-    pub spec: &'a dyn Fn(&str, Vec<String>) -> ChildSpec,
+    pub spec: &'a dyn Fn(Role, Vec<String>) -> ChildSpec,
     /// When the run started.
     pub wall: Instant,
 }
@@ -164,8 +166,8 @@ impl<'a> Session<'a> {
     }
 
     /// Whether the launcher starts `role` itself (not `--external`).
-    pub fn local(&self, role: &str) -> bool {
-        !self.args().external.iter().any(|r| r == role)
+    pub fn local(&self, role: Role) -> bool {
+        !self.args().external.contains(&role)
     }
 
     /// Whether SIGINT/SIGTERM asked the run to stop.
@@ -173,10 +175,10 @@ impl<'a> Session<'a> {
         self.setup.stop.load(Ordering::Relaxed)
     }
 
-    fn start(&mut self, role: &str, mut args: Vec<String>) -> Result<()> {
+    fn start(&mut self, role: Role, mut args: Vec<String>) -> Result<()> {
         // on the private mesh, a Unix socket of its own (children only grow: unique per start)
         args.extend(self.setup.net.child_listen(role, self.children.len()));
-        let args = match self.args().child_config.iter().find(|(r, _)| r == role) {
+        let args = match self.args().child_config.iter().find(|(r, _)| *r == role) {
             Some((_, file)) => super::net::with_child_config(args, file),
             None => args,
         };
@@ -228,9 +230,9 @@ impl<'a> Session<'a> {
         processor.extend(zenoh);
         processor.extend(iox);
         for (role, a) in [
-            ("planner", planner),
-            ("echo", echo),
-            ("processor", processor),
+            (Role::Planner, planner),
+            (Role::Echo, echo),
+            (Role::Processor, processor),
         ] {
             if self.local(role) {
                 self.start(role, a)?;
@@ -243,7 +245,7 @@ impl<'a> Session<'a> {
     /// Zenoh (`--transport zenoh`) or `--bridge` asks for it.
     pub fn start_bridge(&mut self, id: MissionId) -> Result<()> {
         let args = self.args();
-        if !((args.transport == Transport::Zenoh || args.bridge) && self.local("bridge")) {
+        if !((args.transport == Transport::Zenoh || args.bridge) && self.local(Role::Bridge)) {
             return Ok(());
         }
         let mut a = vec![
@@ -255,7 +257,7 @@ impl<'a> Session<'a> {
         ];
         a.extend(self.setup.net.child.to_cli_args());
         a.extend(self.setup.iox.to_cli_args());
-        self.start("bridge", a)
+        self.start(Role::Bridge, a)
     }
 
     /// One step of supervision: restarts children that died (within `--max-restarts`; an
@@ -289,26 +291,26 @@ impl<'a> Session<'a> {
 
     /// Whether a planner's liveliness token is up.
     pub fn planner_alive(&self) -> bool {
-        self.role_alive("planner")
+        self.role_alive(Role::Planner)
     }
 
     /// Whether a liveliness token of `role` is up.
-    pub fn role_alive(&self, role: &str) -> bool {
+    pub fn role_alive(&self, role: Role) -> bool {
         self.alive
             .alive()
             .iter()
-            .any(|k| keys::parse_alive(k).is_some_and(|(r, _)| r == role))
+            .any(|k| keys::parse_alive(k).is_some_and(|(r, _)| r == role.as_str()))
     }
 
     /// The first of the roles imaging needs (the echo, the processor, and the bridge with
     /// `--transport zenoh`) whose liveliness token is not up, as the launcher says it waits
     /// for it.
     pub fn missing_peer(&self) -> Option<String> {
-        let mut roles = vec!["echo", "processor"];
+        let mut roles = vec![Role::Echo, Role::Processor];
         if self.args().transport == Transport::Zenoh {
-            roles.push("bridge");
+            roles.push(Role::Bridge);
         }
-        roles.into_iter().find(|r| !self.role_alive(r)).map(|r| {
+        roles.into_iter().find(|r| !self.role_alive(*r)).map(|r| {
             let how = if self.local(r) {
                 format!("see logs/{r}.log")
             } else {
@@ -335,7 +337,7 @@ impl<'a> Session<'a> {
     pub fn restarts(&self) -> std::collections::BTreeMap<String, u32> {
         self.children
             .iter()
-            .map(|c| (c.spec.role.clone(), c.restarts))
+            .map(|c| (c.spec.role.to_string(), c.restarts))
             .collect()
     }
 

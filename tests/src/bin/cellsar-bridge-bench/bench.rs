@@ -119,7 +119,8 @@ impl TlsConfigs {
         let certs = dir.join("certs");
         pipeline::certs::make_certs(&pipeline::certs::CertsArgs {
             out: certs.clone(),
-            roles: vec![s(ROUTER_ROLE), s("bridge-a"), s("bridge-b"), s("probe")],
+            roles: vec![ROUTER_ROLE],
+            extra_names: vec![s("bridge-a"), s("bridge-b"), s("probe")],
             hosts: vec![s("127.0.0.1")],
             days: 1,
             force: true,
