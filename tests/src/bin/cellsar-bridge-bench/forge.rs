@@ -18,6 +18,8 @@
 //! - `--announce-as <role>`: its liveliness token is `cellsar/alive/<role>/<--instance>`, so
 //!   the forged messages claim an instance that is alive, in another role;
 //! - `--flood-plan-requests N` and the other floods: see `flood.rs`;
+//! - `--forge-iq`: wrong IQ frames on the echo keys (what the bridge's certificate may put):
+//!   see `iq.rs`;
 //! - `--mission <id>`: it forges for this mission from the start, without having to see it (a
 //!   peer that the router lets see nothing).
 //!
@@ -44,6 +46,7 @@ use serde::Serialize;
 use super::{ready, report, tools::z_node};
 
 mod flood;
+mod iq;
 
 /// The mission id the published forged plan claims (its content gives another).
 pub(super) const FORGED_PLAN_ID: MissionId = MissionId(0x5eed_5eed_5eed_5eed);
@@ -102,6 +105,8 @@ pub(super) struct ForgeArgs {
     #[command(flatten)]
     flood: flood::FloodArgs,
     #[command(flatten)]
+    iq: iq::IqArgs,
+    #[command(flatten)]
     zenoh: ZenohArgs,
 }
 
@@ -121,6 +126,7 @@ struct ForgeReport {
     /// The most processors other than itself it saw alive at once (liveliness).
     processors_seen: usize,
     flood: flood::Flooded,
+    iq: iq::IqForged,
 }
 
 fn parse_mission(s: &str) -> Result<MissionId, String> {
@@ -382,6 +388,7 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
         for (id, f) in &forgers {
             forge_round(*id, f, a, template.as_ref(), &mut r);
             flood::flood_queries(&node, *id, &a.flood, &mut r.flood);
+            iq::forge_round(&node, *id, &a.instance, &a.iq, &mut r.iq);
         }
         r.missions = forgers.len();
         r.received = received.load(std::sync::atomic::Ordering::Relaxed);
