@@ -369,8 +369,9 @@ fn wait_log_lines(s: &Service, marker: &str, n: usize) {
 const FLOOD_PEAK_BOUND: u64 = 64 * MIB;
 
 /// A peer that makes the planner publish plan after plan cannot make the processor or the echo
-/// hold more than `--max-missions` missions; a result request cannot make the processor answer
-/// or publish more than the mission has.
+/// take on any mission nobody asked for, nor hold more than `--max-missions` of those asked
+/// for; a result request cannot make the processor answer or publish more than the mission
+/// has.
 #[test]
 fn plan_and_request_floods_are_bounded() {
     let w = World::new();
@@ -385,18 +386,24 @@ fn plan_and_request_floods_are_bounded() {
         .collect();
     let ids: std::collections::BTreeSet<_> = plans.iter().map(|p| p.mission_id).collect();
     assert_eq!(ids.len(), 5, "five distinct missions");
-    // no echo: the first two missions stay in progress, the other three are refused
-    wait_log_lines(&p, "plan refused", 3);
+    let settled = |s: &Service| {
+        s.log_text()
+            .lines()
+            .filter(|l| l.contains("plan received") || l.contains("plan refused"))
+            .count()
+    };
+    // published, but asked for by nobody: taken on by nobody
+    std::thread::sleep(Duration::from_secs(1));
+    assert_eq!(settled(&p), 0, "{}", p.log_text());
 
-    // duplicated apertures: answered once; an unknown mission: the answer stays bounded
-    let ask = |id, apertures: Vec<u32>| {
+    let ask = |id, apertures: Vec<u32>, metrics: bool| {
         c.node
             .query_one::<_, pipeline::protocol::ResultAck>(
                 &pkeys::results(id).unwrap(),
                 &pipeline::protocol::ResultRequest {
                     mission_id: id,
                     apertures,
-                    metrics: true,
+                    metrics,
                 },
                 &QueryOptions {
                     timeout: Duration::from_secs(10),
@@ -406,17 +413,32 @@ fn plan_and_request_floods_are_bounded() {
             .unwrap()
             .message
     };
+    // asked for one after the other (no echo): the first two missions stay in progress, the
+    // other three are refused
+    for (i, plan) in plans.iter().enumerate() {
+        ask(plan.mission_id, Vec::new(), false);
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while settled(&p) <= i {
+            assert!(Instant::now() < deadline, "{}", p.log_text());
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+    wait_log_lines(&p, "plan refused", 3);
+
+    // duplicated apertures: answered once; an unknown mission: the answer stays bounded
     let held = plans[0].mission_id;
-    let ack = ask(held, vec![0; 100_000]);
+    let ack = ask(held, vec![0; 100_000], true);
     assert_eq!(ack.missing, vec![0], "duplicates asked once");
     assert!(ack.republished.is_empty() && !ack.metrics);
+    // (asked for again: refused again, a fourth time)
     let refused = plans[4].mission_id;
-    let ack = ask(refused, (0..100_000).collect());
+    let ack = ask(refused, (0..100_000).collect(), true);
     assert_eq!(
         ack.missing.len(),
         4096,
         "an unknown mission's answer is capped"
     );
+    wait_log_lines(&p, "plan refused", 4);
     // what the flood made the processor hold at its peak: the two missions it keeps, and one
     // request of 100 000 apertures (400 kB) with its answer
     memory.assert_peak_within(
@@ -432,7 +454,7 @@ fn plan_and_request_floods_are_bounded() {
     let log = p.log_text();
     assert_eq!(
         counter(&log, "final_counters=true", "plans_refused"),
-        Some(3),
+        Some(4),
         "{log}"
     );
     assert_eq!(
@@ -446,8 +468,30 @@ fn plan_and_request_floods_are_bounded() {
         "{log}"
     );
 
-    // an echo that joins now learns the five plans and keeps the two it took last
+    // an echo that joins now takes on none of the five plans until asked; asked for each (an
+    // aperture out of range: refused, nothing queued), it keeps the two it took last
     let mut e = w.start_with("echo", &["--max-missions", "2"]);
+    e.wait_for_log("echo ready", Duration::from_secs(60));
+    c.wait_alive("echo");
+    assert_eq!(settled(&e), 0, "{}", e.log_text());
+    for plan in &plans {
+        let r = c.node.query_one::<_, pipeline::protocol::RequestAck>(
+            &pkeys::echo_request(plan.mission_id).unwrap(),
+            &pipeline::protocol::ApertureRequest {
+                mission_id: plan.mission_id,
+                aperture: 1_000_000,
+                look: None,
+                frame_pulses: 1,
+                requester: "test".into(),
+            },
+            &QueryOptions {
+                timeout: Duration::from_secs(10),
+                ..QueryOptions::default()
+            },
+        );
+        let err = r.expect_err("an aperture out of range is refused");
+        assert!(err.to_string().contains("does not exist"), "{err}");
+    }
     wait_log_lines(&e, "mission let go", 3);
     assert!(
         e.stop(Duration::from_secs(20)).success(),

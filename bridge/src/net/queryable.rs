@@ -165,6 +165,12 @@ impl<Req> IncomingQuery<Req> {
         &self.key
     }
 
+    /// The value of parameter `name` of the query's selector (`key?name=value;...`), as the
+    /// querier wrote it (nothing vouches for it).
+    pub fn parameter(&self, name: &str) -> Option<&str> {
+        self.query.parameters().get(name)
+    }
+
     /// Sends a reply (in the request's format).
     pub fn reply<Rep: Message>(&self, reply: &Rep, meta: Meta) -> Result<(), NetError> {
         let bytes = self

@@ -1,7 +1,10 @@
 //! Step 2 of a run: collecting every aperture's detections and image and the mission's
 //! metrics as the processor publishes them (each only from a processor instance that announced
 //! itself, [`crate::senders::Senders`]), showing progress, and asking the processor again
-//! for results that it finished but that did not arrive here.
+//! for results that it finished but that did not arrive here. The processor takes on only
+//! the missions it is asked results of: the collection asks at once, and again every 2 s
+//! while no processor status of the mission came for [`UNATTENDED`] (a processor that joins
+//! late or restarts).
 
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
@@ -15,6 +18,10 @@ use super::session::Session;
 use crate::collect::{Added, Collector};
 use crate::events::Event;
 use crate::protocol::{self, ResultAck, ResultRequest, Role, ServiceState, ServiceStatus};
+
+/// How long without a processor status of the mission before the collection asks for the
+/// mission again (the processor publishes one every `--status-interval-s`, default 1 s).
+const UNATTENDED: Duration = Duration::from_secs(3);
 
 /// What the collection gathered.
 pub(super) struct Collected {
@@ -39,6 +46,8 @@ struct Progress {
     last_resend: Instant,
     /// When the processor first said that it finished each aperture.
     first_seen_done: BTreeMap<u32, Instant>,
+    /// When the last processor status of the mission came.
+    processor_seen: Option<Instant>,
 }
 
 impl Session<'_> {
@@ -54,8 +63,12 @@ impl Session<'_> {
         let mut p = Progress {
             bar,
             started: Instant::now(),
-            last_resend: Instant::now(),
+            // the mission is asked for at once
+            last_resend: Instant::now()
+                .checked_sub(Duration::from_secs(2))
+                .unwrap_or_else(Instant::now),
             first_seen_done: BTreeMap::new(),
+            processor_seen: None,
         };
         let mut c = Collected {
             col: Collector::new(id, apertures, self.setup.out)?,
@@ -168,6 +181,7 @@ impl Session<'_> {
                 counters: s.counters.clone(),
             });
             if s.role == Role::Processor {
+                p.processor_seen = Some(Instant::now());
                 for k in &s.done_items {
                     p.first_seen_done
                         .entry(*k as u32)
@@ -180,7 +194,8 @@ impl Session<'_> {
     }
 
     /// Asks the processor again for results it has but that did not arrive here: apertures it
-    /// finished 2 s ago or more, and the metrics once it is done.
+    /// finished 2 s ago or more, and the metrics once it is done; asks for the mission (an
+    /// empty request, which the processor takes on) while no processor attends to it.
     fn ask_again(&mut self, id: MissionId, c: &mut Collected, p: &Progress) -> Result<()> {
         let stale: Vec<u32> = c
             .col
@@ -197,14 +212,17 @@ impl Session<'_> {
             && c.last_status
                 .get("processor")
                 .is_some_and(|s| s.state == ServiceState::Done);
-        if stale.is_empty() && !want_metrics {
+        let unattended = p.processor_seen.is_none_or(|t| t.elapsed() >= UNATTENDED);
+        if stale.is_empty() && !want_metrics && !unattended {
             return Ok(());
         }
-        c.resend_requests += 1;
-        self.setup.events.emit(&Event::ResendRequest {
-            apertures: stale.clone(),
-            metrics: want_metrics,
-        });
+        if !stale.is_empty() || want_metrics {
+            c.resend_requests += 1;
+            self.setup.events.emit(&Event::ResendRequest {
+                apertures: stale.clone(),
+                metrics: want_metrics,
+            });
+        }
         let req = ResultRequest {
             mission_id: id,
             apertures: stale,

@@ -1,7 +1,10 @@
 //! Step 1 of a run: the plan. Waits for a planner's liveliness token, asks it for the plan and
-//! waits for the answer, together at most `--plan-timeout-s`; a busy planner or one that does
-//! not answer is asked again (at most `--max-restarts` more times); SIGINT/SIGTERM at any
-//! moment ends the run as interrupted.
+//! waits for the answer, together at most `--plan-timeout-s`; a busy planner (its request
+//! queue full, or this launcher's place in it taken) is asked again after a bounded, jittered
+//! pause ([`busy_pause`]) until `--plan-timeout-s`; one that does not answer is asked again at
+//! most `--max-restarts` more times; SIGINT/SIGTERM at any moment ends the run as interrupted.
+//! The request names this launcher (`cellsar/plan?requester=<Zenoh session id>`), so that the
+//! planner serves it in turn with other requesters'.
 
 use std::time::{Duration, Instant};
 
@@ -15,6 +18,7 @@ use super::plan_refusal;
 use super::session::Session;
 use crate::events::Event;
 use crate::protocol::{self, Plan, PlanRequest, PlanRequestOptions, Role, MAX_PLAN_BYTES};
+use crate::services::plan::REQUESTER_PARAMETER;
 
 /// Why `plan` does not answer `request` (`None`: it does): a plan of another mission or with
 /// other options than those asked for, or whose mission id is not the one computed from its
@@ -30,6 +34,31 @@ pub(super) fn plan_mismatch(request: &PlanRequest, plan: &Plan) -> Option<String
         return Some("a plan with other options than those asked for".to_string());
     }
     plan.id_problem()
+}
+
+/// The shortest and the longest pause before asking a busy planner again: the pause doubles
+/// from the first to the second with each busy answer in a row.
+const BUSY_PAUSE: (Duration, Duration) = (Duration::from_millis(100), Duration::from_millis(1600));
+
+/// The pause before asking a busy planner again after `busy` busy answers in a row (1 or
+/// more): `BUSY_PAUSE.0 × 2^(busy-1)`, at most `BUSY_PAUSE.1`, times a factor in [0.5, 1.0)
+/// from `jitter` (any value: its low 16 bits are used), so that launchers that were refused
+/// together do not ask again together.
+pub(super) fn busy_pause(busy: u32, jitter: u64) -> Duration {
+    let base = BUSY_PAUSE
+        .0
+        .saturating_mul(1u32 << busy.saturating_sub(1).min(16))
+        .min(BUSY_PAUSE.1);
+    let f = 0.5 + 0.5 * ((jitter & 0xffff) as f64 / 65536.0);
+    base.mul_f64(f)
+}
+
+/// A fresh random value for [`busy_pause`] (std's per-hasher random keys; no dependency).
+fn jitter() -> u64 {
+    use std::hash::{BuildHasher, Hasher};
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u128(Instant::now().elapsed().as_nanos());
+    h.finish()
 }
 
 /// The time left for the plan.
@@ -88,6 +117,9 @@ impl Session<'_> {
         spinner: &ProgressBar,
     ) -> Result<Option<Plan>> {
         let mut attempt = 0u32;
+        // failures other than busy answers: bounded by --max-restarts
+        let mut failures = 0u32;
+        let mut busy_in_a_row = 0u32;
         loop {
             attempt += 1;
             if !self.wait_for_planner(clock)? {
@@ -96,26 +128,24 @@ impl Session<'_> {
             let Some(answer) = self.ask_once(request, clock, spinner)? else {
                 return Ok(None);
             };
-            // a local planner that is gone (no reply) is bounded by its supervisor
-            // (--max-restarts), whose verdict names the cause: counting its deaths here too
-            // raced it (the third start of a planner that dies at start could fail the query
-            // before its exit was seen). Every other failure, and an external planner's, is
-            // bounded by these attempts; all by --plan-timeout-s.
-            let supervised =
-                self.local(Role::Planner) && matches!(answer, Err(NetError::NoReply { .. }));
-            let retries_left = supervised || attempt < 1 + self.args().max_restarts;
             match answer {
                 Ok(plan) => return Ok(Some(plan)),
-                // a busy planner (its request queue full) is asked again, as one that did not
-                // answer
-                Err(NetError::Refused { refusal, .. })
-                    if refusal.kind == RefusalKind::Busy
-                        && !clock.left().is_zero()
-                        && retries_left =>
-                {
-                    tracing::warn!(message = %refusal.message, attempt, "the planner is busy; asking again");
+                // a busy planner (its request queue full, or this launcher's request still
+                // queued) is asked again until --plan-timeout-s: a peer flooding it with
+                // requests cannot use up --max-restarts
+                Err(NetError::Refused { refusal, .. }) if refusal.kind == RefusalKind::Busy => {
+                    busy_in_a_row += 1;
+                    let pause = busy_pause(busy_in_a_row, jitter());
+                    if clock.left() <= pause {
+                        return Err(self.no_plan(&format!(
+                            "the planner stayed busy ({}; asked {attempt} times)",
+                            refusal.message
+                        )));
+                    }
+                    tracing::warn!(message = %refusal.message, attempt, pause_ms = pause.as_millis() as u64,
+                        "the planner is busy; asking again");
                     self.retry_event(attempt, refusal.message.clone());
-                    std::thread::sleep(Duration::from_millis(500));
+                    self.pause(pause)?;
                 }
                 Err(e @ (NetError::Refused { .. } | NetError::Remote { .. })) => {
                     return Err(plan_refusal(e))
@@ -125,14 +155,40 @@ impl Session<'_> {
                         anyhow::Error::new(e).context(self.no_plan("the planner did not answer"))
                     )
                 }
-                Err(e) if retries_left => {
+                Err(e) => {
+                    busy_in_a_row = 0;
+                    failures += 1;
+                    // a local planner that is gone (no reply) is bounded by its supervisor
+                    // (--max-restarts), whose verdict names the cause: counting its deaths
+                    // here too raced it (the third start of a planner that dies at start
+                    // could fail the query before its exit was seen). Every other failure,
+                    // and an external planner's, is bounded by these attempts; all by
+                    // --plan-timeout-s.
+                    let supervised =
+                        self.local(Role::Planner) && matches!(e, NetError::NoReply { .. });
+                    if !supervised && failures > self.args().max_restarts {
+                        return Err(e).context("asking the planner for the plan");
+                    }
                     tracing::warn!(error = %e, attempt, "no plan; asking again");
                     self.retry_event(attempt, e.to_string());
                     std::thread::sleep(Duration::from_millis(200));
                 }
-                Err(e) => return Err(e).context("asking the planner for the plan"),
             }
         }
+    }
+
+    /// Waits `d` before asking again, the run's clock and signals still watched.
+    fn pause(&mut self, d: Duration) -> Result<()> {
+        let until = Instant::now() + d;
+        while Instant::now() < until && !self.stopped() {
+            self.tick()?;
+            std::thread::sleep(
+                until
+                    .saturating_duration_since(Instant::now())
+                    .min(Duration::from_millis(20)),
+            );
+        }
+        Ok(())
     }
 
     /// Counts, logs and reports a plan reply that does not answer the request.
@@ -186,8 +242,14 @@ impl Session<'_> {
         clock: &PlanClock,
         spinner: &ProgressBar,
     ) -> Result<Option<Result<Plan, NetError>>> {
-        let mut query = self.node.start_query::<PlanRequest, Plan>(
+        let selector = format!(
+            "{}?{}={}",
             protocol::keys::PLAN,
+            REQUESTER_PARAMETER,
+            self.node.session().zid()
+        );
+        let mut query = self.node.start_query::<PlanRequest, Plan>(
+            &selector,
             request,
             &QueryOptions {
                 timeout: clock.left(),
@@ -242,6 +304,25 @@ mod tests {
                 ..PlanRequestOptions::default()
             },
         }
+    }
+
+    /// The pause before asking a busy planner again doubles from 50-100 ms to 0.8-1.6 s, and
+    /// the jitter spreads it over half its range.
+    #[test]
+    fn busy_pauses_are_bounded_and_jittered() {
+        let ms = |busy, jitter| busy_pause(busy, jitter).as_secs_f64() * 1e3;
+        assert_eq!(ms(1, 0), 50.0);
+        assert!((ms(1, 0xffff) - 100.0).abs() < 0.01);
+        assert_eq!(ms(2, 0), 100.0);
+        assert_eq!(ms(5, 0), 800.0);
+        for busy in [6, 7, 100, u32::MAX] {
+            assert_eq!(ms(busy, 0), 800.0);
+            assert!(ms(busy, u64::MAX) < 1600.0);
+        }
+        // only the low 16 bits count
+        assert_eq!(ms(3, 0x1_0000), ms(3, 0));
+        let spread: Vec<f64> = (0..8).map(|j| ms(4, j * 8192)).collect();
+        assert!(spread.windows(2).all(|w| w[1] > w[0]), "{spread:?}");
     }
 
     /// The planner's plan answers its request; one of another mission, with other options,

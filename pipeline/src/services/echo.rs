@@ -1,5 +1,8 @@
 //! `cellsar-radar-sim echo`: synthesises the frames of the apertures that processors ask for
-//! and publishes them on the iceoryx2 frame service `cellsar/<mission>/echo`.
+//! and publishes them on the iceoryx2 frame service `cellsar/<mission>/echo`. It takes on a
+//! mission only when a processor asks for one of its apertures (looking its plan up,
+//! `cellsar/<m>/plan`), not every plan that is published: plans made for others (a peer
+//! flooding the planner with requests) cannot crowd out the missions being processed.
 
 use std::collections::{HashMap, VecDeque};
 use std::path::PathBuf;
@@ -50,9 +53,10 @@ pub struct EchoArgs {
     /// Requests the echo queues at most (more are refused as busy).
     #[arg(long, default_value_t = 64)]
     pub max_queue: usize,
-    /// Missions held at once: at the cap, a new plan replaces the mission least recently asked
-    /// for that has no request queued (it is taken up again if a processor asks for it), and
-    /// is refused while every held mission has requests queued.
+    /// Missions held at once (each taken on when a processor first asks for it): at the cap, a
+    /// new one replaces the mission least recently asked for that has no request queued (it
+    /// is taken up again if a processor asks for it), and is refused while every held mission
+    /// has requests queued.
     #[arg(long, default_value_t = DEFAULT_MAX_MISSIONS, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=4096))]
     pub max_missions: usize,
     /// Limits on a mission's IQ and on one aperture's memory (a plan above them is refused).
@@ -183,14 +187,13 @@ impl<'a> Echo<'a> {
             },
         )?;
         let plan_wait = format!(
-            "a plan ({}: published by a planner, or held by any process)",
-            pkeys::ALL_PLANS
+            "a plan ({}) of a mission that a processor asks apertures of ({}): no other is \
+             taken on",
+            pkeys::ALL_PLANS,
+            pkeys::ALL_ECHO_REQUESTS
         );
         let mut waits = super::wait::WaitLog::default();
         waits.waiting_for(self.node, Some(&plan_wait));
-        for p in PlanCache::plans_known_at_start(self.node) {
-            self.add_plan(p);
-        }
         tracing::info!(instance = %self.args.instance, "echo ready");
         let interval = self.args.status_interval_s.duration();
         let mut last_status = Instant::now();
@@ -201,9 +204,9 @@ impl<'a> Echo<'a> {
         while !stop.load(Ordering::Relaxed) {
             let waiting = self.missions.is_empty().then_some(plan_wait.as_str());
             waits.waiting_for(self.node, waiting);
-            while let Some(p) = plans.try_recv() {
-                self.add_plan(p.message);
-            }
+            // published plans are not taken on (a processor's request is, handle_request);
+            // the subscription only counts the malformed ones
+            while plans.try_recv().is_some() {}
             let status_due = self.missions.len() != known_missions;
             known_missions = self.missions.len();
             let wait = if self.queue.is_empty() {
@@ -353,7 +356,8 @@ impl<'a> Echo<'a> {
     fn handle_request(&mut self, q: IncomingQuery<ApertureRequest>) {
         let r = q.request.clone();
         if !self.missions.contains_key(&r.mission_id) {
-            // a processor may know a plan that this echo (just restarted) has not seen yet
+            // a mission is taken on when a processor first asks for it (or asks again after
+            // this echo restarted or let it go)
             if let Ok(key) = pkeys::plan(r.mission_id) {
                 if let Ok(found) = PlanCache::lookup(self.node, &key, Duration::from_millis(1500)) {
                     for p in found {

@@ -20,16 +20,18 @@
 //! - this file: the service ([`serve`]) and planning one request ([`plan_request`]);
 //! - `cache.rs`: the plan cache every process keeps ([`PlanCache`]);
 //! - `bounded.rs`: per-mission state bounded by count and bytes ([`Lru`]);
+//! - `fair.rs`: the request queue, fair across requesters ([`FairQueue`]);
 //! - `status.rs`: the status board every service publishes on ([`StatusBoard`]);
 //! - `error.rs`: [`ServiceError`].
 
 mod bounded;
 mod cache;
 mod error;
+mod fair;
 mod status;
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -49,6 +51,10 @@ pub use super::os::{stop_on_signals, write_atomic};
 pub use bounded::{Lru, MAX_HELD_PLANS, MAX_HELD_PLAN_BYTES, MAX_MISSION_PUBLISHERS};
 pub use cache::PlanCache;
 pub use error::ServiceError;
+pub use fair::{
+    requester_of, FairQueue, Full, MAX_QUEUED_PER_REQUESTER, MAX_QUEUED_REQUESTS,
+    MAX_REQUESTER_BYTES, REQUESTER_PARAMETER,
+};
 pub use status::StatusBoard;
 
 /// The default wall-time limit of one plan request, s (`--plan-time-limit-s`): the paper's
@@ -87,6 +93,10 @@ pub struct ServeReport {
     pub errors: u64,
     /// Malformed requests (counted by the queryable).
     pub malformed: u64,
+    /// Requests refused as busy: the queue full, or their requester's place in it taken
+    /// ([`MAX_QUEUED_REQUESTS`], [`MAX_QUEUED_PER_REQUESTER`]).
+    #[serde(default)]
+    pub busy: u64,
     /// Plans that could not be saved to the state directory (still answered and published).
     pub state_errors: u64,
 }
@@ -174,15 +184,61 @@ fn serve_on(
     args: &ServeArgs,
     stop: &AtomicBool,
 ) -> Result<ServeReport, ServiceError> {
-    let cache = PlanCache::new(node, args.state_dir.as_deref())?;
-    let board = StatusBoard::new(Role::Planner, &args.instance);
+    // the queryable's own queue is only a hand-over: a thread moves each request at once
+    // into the fair queue, which decides what is refused as busy
     let requests = node.queryable::<PlanRequest>(
         PLAN_KEY,
         SubscribeOptions {
-            capacity: 16,
+            capacity: 64,
             ..SubscribeOptions::default()
         },
     )?;
+    let queue = fair::SharedQueue::new(MAX_QUEUED_REQUESTS, MAX_QUEUED_PER_REQUESTER);
+    let busy = AtomicU64::new(0);
+    let done = AtomicBool::new(false);
+    let (queue, busy, done) = (&queue, &busy, &done);
+    let report = std::thread::scope(|scope| {
+        let taker = std::thread::Builder::new()
+            .name("plan-requests".into())
+            .spawn_scoped(scope, move || {
+                fair::take_requests(requests, queue, busy, done)
+            })
+            .map_err(|e| ServiceError::Internal(format!("starting the request thread: {e}")));
+        let (report, taker) = match taker {
+            Ok(t) => (answer_requests(node, args, queue, stop), Some(t)),
+            Err(e) => (Err(e), None),
+        };
+        done.store(true, Ordering::Relaxed);
+        let malformed = taker.and_then(|t| t.join().ok()).unwrap_or_default();
+        report.map(|r| ServeReport {
+            malformed: r.malformed + malformed,
+            busy: busy.load(Ordering::Relaxed),
+            ..r
+        })
+    });
+    let report = report?;
+    tracing::info!(
+        plans = report.plans,
+        cached = report.cached,
+        errors = report.errors,
+        busy = report.busy,
+        malformed = report.malformed,
+        state_errors = report.state_errors,
+        final_counters = true,
+        "plan service stopping"
+    );
+    Ok(report)
+}
+
+/// Answers the requests of `queue`, each in turn, until `stop` is set.
+fn answer_requests(
+    node: &ZenohNode,
+    args: &ServeArgs,
+    queue: &fair::SharedQueue<bridge::net::IncomingQuery<PlanRequest>>,
+    stop: &AtomicBool,
+) -> Result<ServeReport, ServiceError> {
+    let cache = PlanCache::new(node, args.state_dir.as_deref())?;
+    let board = StatusBoard::new(Role::Planner, &args.instance);
     // per-mission publishers, the least recently used undeclared beyond the bound
     let mut plan_pubs: Lru<bridge::net::TypedPublisher<Plan>> =
         Lru::with_count(MAX_MISSION_PUBLISHERS);
@@ -195,7 +251,7 @@ fn serve_on(
     let mut waits = super::wait::WaitLog::default();
     let waiting = format!("a plan request on {PLAN_KEY}");
     while !stop.load(Ordering::Relaxed) {
-        let Some(q) = requests.recv_timeout(Duration::from_millis(100)) else {
+        let Some((requester, q)) = queue.pop_timeout(Duration::from_millis(100)) else {
             // nobody asked yet: say so (a client that cannot reach this planner is the usual cause)
             if report.plans + report.errors == 0 {
                 waits.waiting_for(node, Some(&waiting));
@@ -203,6 +259,7 @@ fn serve_on(
             continue;
         };
         waits.waiting_for(node, None);
+        tracing::debug!(requester = %requester, "plan request taken up");
         let req = q.request.clone();
         let cached = Mission::from_file_struct(&req.mission)
             .ok()
@@ -263,16 +320,7 @@ fn serve_on(
             }
         }
     }
-    report.malformed = requests.counters().snapshot().malformed + cache.malformed();
-    tracing::info!(
-        plans = report.plans,
-        cached = report.cached,
-        errors = report.errors,
-        malformed = report.malformed,
-        state_errors = report.state_errors,
-        final_counters = true,
-        "plan service stopping"
-    );
+    report.malformed = cache.malformed();
     Ok(report)
 }
 

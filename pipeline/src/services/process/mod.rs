@@ -1,5 +1,5 @@
-//! `cellsar-radar-sim process-service`: pulls the apertures of each planned mission from the
-//! echo, processes them one at a time (cancellation, compression, backprojection, CFAR,
+//! `cellsar-radar-sim process-service`: pulls the apertures of each mission that a client
+//! asks results of (a launcher collecting them) from the echo, processes them one at a time (cancellation, compression, backprojection, CFAR,
 //! scoring) and publishes detections, images and, at the end, the mission's metrics; the same
 //! numbers as `cellsar-radar-sim process` on the recording of the same mission.
 //!
@@ -9,7 +9,8 @@
 //! - `work.rs`: the worker and requester threads;
 //! - `assembly.rs`, `proc.rs`: the service loop and its state (missions, assemblies);
 //! - `publish.rs`: what it publishes (detections, images, metrics, status);
-//! - `store.rs`: the state directory.
+//! - `store.rs`: the state directory;
+//! - `wanted.rs`: which missions it takes on (those a client asks results of).
 
 mod assembly;
 mod context;
@@ -17,6 +18,7 @@ mod proc;
 mod publish;
 mod receive;
 mod store;
+mod wanted;
 mod work;
 
 use std::path::PathBuf;
@@ -245,6 +247,7 @@ fn serve(
             malformed: 0,
             echo_unanswered: None,
             waits: Default::default(),
+            wanted: Default::default(),
             frames_over_zenoh: args.frames == FrameSource::Zenoh,
         };
         let result = p.run(stop, &inbox, &loss);

@@ -18,9 +18,10 @@ use super::context::{fold_metrics, ApertureOutcome, MissionContext, ProcContext}
 use super::publish::Publishers;
 use super::receive::{FrameLoss, RawFrame, ReceiverCmd};
 use super::store::{restore, store, store_metrics};
+use super::wanted::Wanted;
 use super::work::{Job, JobResult, RequestDone, RequestJob};
 use super::{ProcessArgs, ProcessReport};
-use crate::protocol::keys::{self as pkeys, ALL_PLANS};
+use crate::protocol::keys as pkeys;
 use crate::protocol::{MissionMetrics, Plan, ResultRequest};
 use crate::services::admission::{admit, Admission};
 use crate::services::plan::{PlanCache, StatusBoard};
@@ -74,6 +75,8 @@ pub(super) struct Proc<'a> {
     pub(super) echo_unanswered: Option<MissionId>,
     /// Says what the service waits for.
     pub(super) waits: WaitLog,
+    /// The missions asked for whose plan is not held yet.
+    pub(super) wanted: Wanted,
     /// Frames come over Zenoh (every mission's frames arrive without subscribing).
     pub(super) frames_over_zenoh: bool,
 }
@@ -96,30 +99,26 @@ impl Proc<'_> {
                 ..SubscribeOptions::default()
             },
         )?;
-        let mut last_lookup = Instant::now();
-        let plan_wait =
-            format!("a plan ({ALL_PLANS}: published by a planner, or held by any process)");
+        let plan_wait = format!(
+            "a plan ({}) of a mission that a client asks results of ({}): no other is taken on",
+            pkeys::ALL_PLANS,
+            pkeys::ALL_RESULTS
+        );
         self.waits.waiting_for(self.node, Some(&plan_wait));
-        for p in PlanCache::plans_known_at_start(self.node) {
-            self.add_plan(p);
-        }
         tracing::info!(instance = %self.args.instance, frames = ?self.args.frames, "processor ready");
         let interval = self.args.status_interval_s.duration();
         let mut last_status = Instant::now();
         while !stop.load(Ordering::Relaxed) {
+            // a mission is taken on only when asked for (wanted.rs): the plans published for
+            // others are not
             while let Some(p) = plans.try_recv() {
-                self.add_plan(p.message);
-            }
-            if self.runs.iter().all(|r| r.metrics.is_some())
-                && last_lookup.elapsed() > Duration::from_secs(5)
-            {
-                // a plan published while this process was down: ask for it
-                last_lookup = Instant::now();
-                if let Ok(found) = PlanCache::lookup(self.node, ALL_PLANS, Duration::from_secs(1)) {
-                    for p in found {
-                        self.add_plan(p);
-                    }
+                let bytes = usize::try_from(p.header.body_len).unwrap_or(usize::MAX);
+                if let Some(plan) = self.wanted.published(p.message, bytes) {
+                    self.take_on(plan);
                 }
+            }
+            for p in self.wanted.found() {
+                self.take_on(p);
             }
             while let Ok(id) = inbox.watching.try_recv() {
                 if let Some(i) = self.run_index(id) {
@@ -141,6 +140,11 @@ impl Proc<'_> {
                 self.on_result(r)?;
             }
             while let Some(q) = result_requests.recv_timeout(Duration::ZERO) {
+                if self.run_index(q.request.mission_id).is_none() {
+                    if let Some(plan) = self.wanted.ask(self.node, q.request.mission_id) {
+                        self.take_on(plan);
+                    }
+                }
                 let ack = self.republish(&q.request);
                 if let Err(e) = q.reply(
                     &ack,
@@ -187,6 +191,12 @@ impl Proc<'_> {
             result_requests.counters().snapshot().malformed,
         );
         Ok(self.report.clone())
+    }
+
+    /// Takes on the mission of `plan`, which was asked for.
+    fn take_on(&mut self, plan: Plan) {
+        self.wanted.forget(plan.mission_id);
+        self.add_plan(plan);
     }
 
     /// Starts a mission for a new plan (a plan already held, or one that does not resolve

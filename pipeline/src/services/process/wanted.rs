@@ -1,0 +1,135 @@
+//! Which missions the processor takes on: only those that a launcher (or any client collecting
+//! results) asks for, with a result request on `cellsar/<m>/results`, not every plan that is
+//! published, so that plans made for others (a peer flooding the planner with requests, say)
+//! cannot crowd out the mission being collected. A mission asked for whose plan is not held
+//! is *wanted*: its plan is looked up (`cellsar/<m>/plan`, answered by every process that
+//! holds it), and taken when published, whichever comes first. The last few plans published
+//! are kept aside ([`MAX_OFFERED`]), not taken on: the launcher asks for its mission just
+//! after the planner published its plan, which is then at hand without a lookup.
+
+use std::collections::VecDeque;
+use std::time::Duration;
+
+use bridge::envelope::DecodeLimits;
+use bridge::net::{PendingQuery, QueryOptions};
+use bridge::zenoh::query::QueryTarget;
+use bridge::{MissionId, ZenohNode};
+
+use crate::protocol::keys as pkeys;
+use crate::protocol::{Plan, PlanLookup, MAX_PLAN_BYTES};
+use crate::services::plan::Lru;
+
+/// Missions wanted at once; asking for another forgets the one asked for least recently.
+pub(super) const MAX_WANTED: usize = 16;
+
+/// Plan lookups in flight at once; a mission asked for beyond them is looked up when it is
+/// asked for again (or taken when its plan is published).
+pub(super) const MAX_LOOKUPS: usize = 4;
+
+/// Plans published lately kept aside for a request that may follow, at most (and at most
+/// [`MAX_PLAN_BYTES`] of them, encoded, together); the least recent goes first.
+pub(super) const MAX_OFFERED: usize = 4;
+
+/// How long a plan lookup waits for its replies.
+const LOOKUP_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// The missions asked for whose plan is not held, their lookups in flight, and the plans
+/// published lately.
+pub(super) struct Wanted {
+    /// Most recently asked for last.
+    ids: VecDeque<MissionId>,
+    lookups: Vec<(MissionId, PendingQuery<Plan>)>,
+    offered: Lru<Plan>,
+}
+
+impl Default for Wanted {
+    fn default() -> Self {
+        Wanted {
+            ids: VecDeque::new(),
+            lookups: Vec::new(),
+            offered: Lru::new(MAX_OFFERED, MAX_PLAN_BYTES),
+        }
+    }
+}
+
+impl Wanted {
+    /// A plan published (`bytes` its encoded body): given back if its mission is wanted,
+    /// else kept aside.
+    pub(super) fn published(&mut self, plan: Plan, bytes: usize) -> Option<Plan> {
+        let id = plan.mission_id;
+        if self.ids.contains(&id) {
+            return Some(plan);
+        }
+        self.offered.insert(id, plan, bytes);
+        None
+    }
+
+    /// Notes that mission `id` was asked for: its plan if it was published lately, else
+    /// `None` and its plan is looked up, unless a lookup of it, or [`MAX_LOOKUPS`] lookups,
+    /// are in flight.
+    pub(super) fn ask(&mut self, node: &ZenohNode, id: MissionId) -> Option<Plan> {
+        if let Some(plan) = self.offered.remove(id) {
+            return Some(plan);
+        }
+        self.ids.retain(|m| *m != id);
+        self.ids.push_back(id);
+        while self.ids.len() > MAX_WANTED {
+            if let Some(old) = self.ids.pop_front() {
+                self.lookups.retain(|(m, _)| *m != old);
+            }
+        }
+        if self.lookups.len() >= MAX_LOOKUPS || self.lookups.iter().any(|(m, _)| *m == id) {
+            return None;
+        }
+        let opts = QueryOptions {
+            timeout: LOOKUP_TIMEOUT,
+            target: QueryTarget::All,
+            limits: DecodeLimits {
+                max_body_bytes: MAX_PLAN_BYTES,
+                verify_crc: true,
+            },
+            ..QueryOptions::default()
+        };
+        let started = pkeys::plan(id).map_err(|e| e.to_string()).and_then(|key| {
+            node.start_query::<PlanLookup, Plan>(&key, &PlanLookup {}, &opts)
+                .map_err(|e| e.to_string())
+        });
+        match started {
+            Ok(q) => {
+                tracing::info!(mission = %id, "mission asked for: looking its plan up");
+                self.lookups.push((id, q));
+            }
+            Err(e) => tracing::warn!(mission = %id, error = %e, "plan lookup not sent"),
+        }
+        None
+    }
+
+    /// The plans that the lookups found, each of the mission it was looked up for (a reply of
+    /// another mission is skipped); lookups that ended are dropped, their missions still
+    /// wanted.
+    pub(super) fn found(&mut self) -> Vec<Plan> {
+        let mut found = Vec::new();
+        self.lookups.retain_mut(|(id, q)| loop {
+            match q.poll(Duration::ZERO) {
+                None => break true,
+                Some(Ok(r)) if r.message.mission_id == *id => {
+                    found.push(r.message);
+                    break false;
+                }
+                Some(Ok(r)) => tracing::warn!(mission = %id, got = %r.message.mission_id,
+                    "plan lookup: a reply of another mission skipped"),
+                Some(Err(e)) => {
+                    tracing::debug!(mission = %id, error = %e, "plan lookup ended without the plan");
+                    break false;
+                }
+            }
+        });
+        found
+    }
+
+    /// Mission `id` is no longer wanted (its plan is held, or was refused).
+    pub(super) fn forget(&mut self, id: MissionId) {
+        self.ids.retain(|m| *m != id);
+        self.lookups.retain(|(m, _)| *m != id);
+    }
+}
