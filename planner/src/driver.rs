@@ -13,6 +13,7 @@ use crate::schemes::paper::PaperObjective;
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
+mod altitude;
 mod best_effort;
 mod coarse;
 mod error;
@@ -73,12 +74,23 @@ fn run_plan(
     stop: Option<&AtomicBool>,
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
-    let mut out = run_plan_from(started, mission, options, observer, stop)?;
+    let free = mission.params().altitude == AltitudeMode::Free
+        && options.altitude_profile
+        && options.scheme == Scheme::Exact;
+    let mut out = if free {
+        options.validate()?;
+        altitude::plan_free(started, mission, options, observer, stop)?
+    } else {
+        run_plan_from(started, mission, options, observer, stop)?
+    };
     out.solve_seconds = started.elapsed().as_secs_f64();
     Ok(out)
 }
 
-/// Refuses a mission whose altitude mode no scheme plans ([`PlanError::AltitudeConflict`]).
+/// Refuses a free-altitude mission on the fixed-altitude paths ([`PlanError::AltitudeConflict`]):
+/// [`run_plan`] sends the free missions it plans (scheme `exact` with
+/// [`PlanOptions::altitude_profile`]) elsewhere, so any that arrives here is one the caller or
+/// the scheme does not plan per-slot altitudes for.
 pub(crate) fn check_altitude(mission: &Mission, options: &PlanOptions) -> Result<(), PlanError> {
     match mission.params().altitude {
         AltitudeMode::Fixed => Ok(()),

@@ -165,6 +165,50 @@ impl Trajectory {
         start_m: [f64; 2],
         altitude_m: f64,
     ) -> Result<Self, TrajectoryError> {
+        Self::parse_csv(text, name, (slot_s, slots, start_m), altitude_m, false).map(|(tr, _)| tr)
+    }
+
+    /// Reads a trajectory of a mission with `altitude = "free"` (a plan's `trajectory.csv`):
+    /// like [`Trajectory::from_csv_path`], but the `z_m` column may vary and is returned, one
+    /// altitude per slot (the t = 0 row's, when present, must be the start altitude
+    /// `altitude_m`); without a `z_m` column every slot is at `altitude_m`.
+    pub fn from_csv_path_with_altitudes(
+        path: &Path,
+        slot_s: f64,
+        slots: usize,
+        start_m: [f64; 2],
+        altitude_m: f64,
+    ) -> Result<(Self, Vec<f64>), TrajectoryError> {
+        let shown = path.display().to_string();
+        let text = crate::files::read_text_bounded(path, crate::files::MAX_INPUT_FILE_BYTES)
+            .map_err(|error| TrajectoryError::Io {
+                path: shown.clone(),
+                error,
+            })?;
+        Self::from_csv_str_with_altitudes(&text, &shown, slot_s, slots, start_m, altitude_m)
+    }
+
+    /// Parses CSV text (see [`Trajectory::from_csv_path_with_altitudes`]).
+    pub fn from_csv_str_with_altitudes(
+        text: &str,
+        name: &str,
+        slot_s: f64,
+        slots: usize,
+        start_m: [f64; 2],
+        altitude_m: f64,
+    ) -> Result<(Self, Vec<f64>), TrajectoryError> {
+        Self::parse_csv(text, name, (slot_s, slots, start_m), altitude_m, true)
+    }
+
+    /// The reader of both: with `varying`, the `z_m` column is returned per slot (the t = 0
+    /// row's must be `altitude_m`); without, it must hold `altitude_m` in every row.
+    fn parse_csv(
+        text: &str,
+        name: &str,
+        (slot_s, slots, start_m): (f64, usize, [f64; 2]),
+        altitude_m: f64,
+        varying: bool,
+    ) -> Result<(Self, Vec<f64>), TrajectoryError> {
         let err = |location: String, reason: String| TrajectoryError::Format {
             path: name.to_string(),
             location,
@@ -195,6 +239,7 @@ impl Trajectory {
         let altitude_tol_m = 1e-6 * altitude_m.abs().max(1.0);
         let mut start = start_m;
         let mut pos = Vec::with_capacity(slots);
+        let mut altitudes = Vec::with_capacity(slots);
         for record in rd.records() {
             let fields = record.map_err(|e| {
                 let line = e.position().map_or(0, |p| line_of(text, p));
@@ -223,8 +268,24 @@ impl Trajectory {
                 Ok(v)
             };
             let (t, x, y) = (get(ct, "t_s")?, get(cx, "x_m")?, get(cy, "y_m")?);
-            if let Some(cz) = cz {
-                let z = get(cz, "z_m")?;
+            let start_row = t.abs() < 1e-9 && pos.is_empty();
+            let z = cz.map(|c| get(c, "z_m")).transpose()?;
+            if varying {
+                if let (Some(z), true) = (z, start_row) {
+                    if (z - altitude_m).abs() > altitude_tol_m {
+                        return Err(err(
+                            format!("line {line}, column z_m"),
+                            format!(
+                                "start altitude {z} m, but the mission starts at altitude_m = \
+                                 {altitude_m} m"
+                            ),
+                        ));
+                    }
+                }
+                if !start_row {
+                    altitudes.push(z.unwrap_or(altitude_m));
+                }
+            } else if let Some(z) = z {
                 match first_z {
                     None if (z - altitude_m).abs() > altitude_tol_m => {
                         return Err(err(
@@ -249,7 +310,7 @@ impl Trajectory {
                     Some(_) => {}
                 }
             }
-            if t.abs() < 1e-9 && pos.is_empty() {
+            if start_row {
                 start = [x, y];
                 continue;
             }
@@ -274,11 +335,14 @@ impl Trajectory {
                 ),
             ));
         }
-        Ok(Self {
-            slot_s,
-            start_m: start,
-            pos_m: pos,
-        })
+        Ok((
+            Self {
+                slot_s,
+                start_m: start,
+                pos_m: pos,
+            },
+            altitudes,
+        ))
     }
 }
 
@@ -385,5 +449,22 @@ mod tests {
         // within the reader's tolerance (1e-6 relative) it is the same altitude
         let near = flat.replace(",1000\n", ",1000.0005\n");
         Trajectory::from_csv_str(&near, "x.csv", 0.5, 2, [0.0, 0.0], 1000.0).unwrap();
+    }
+
+    #[test]
+    fn a_varying_altitude_column_is_read_as_a_profile() {
+        let climbing = "t_s,x_m,y_m,z_m\n0,1,2,1000\n0.5,3,4,1001\n1.0,5,6,1001.5\n";
+        let read = |text: &str, z0: f64| {
+            Trajectory::from_csv_str_with_altitudes(text, "x.csv", 0.5, 2, [0.0, 0.0], z0)
+        };
+        let (tr, z) = read(climbing, 1000.0).unwrap();
+        assert_eq!(tr.pos_m, vec![[3.0, 4.0], [5.0, 6.0]]);
+        assert_eq!((tr.start_m, z), ([1.0, 2.0], vec![1001.0, 1001.5]));
+        // the start row at another altitude than the mission's start
+        let e = read(climbing, 900.0).unwrap_err().to_string();
+        assert!(e.contains("line 2, column z_m") && e.contains("900"), "{e}");
+        // no altitude column: the mission's altitude in every slot
+        let (_, z) = read("t_s,x_m,y_m\n0.5,3,4\n1.0,5,6\n", 800.0).unwrap();
+        assert_eq!(z, vec![800.0, 800.0]);
     }
 }

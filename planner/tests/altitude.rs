@@ -1,6 +1,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 //! Missions with `altitude = "free"`: read, validated, round-tripped, and refused by every
-//! scheme (none plans per-slot altitudes) with an error naming `altitude`, not planned at the
+//! scheme for a caller that flies one altitude (without `PlanOptions::altitude_profile`; the
+//! plans with it are in `altitude_plan.rs`) with an error naming `altitude`, not planned at the
 //! fixed altitude.
 
 use planner::evaluate::evaluate_with_altitudes;

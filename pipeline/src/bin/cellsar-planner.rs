@@ -262,6 +262,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 strict_resolution: best_effort.strict_resolution,
                 max_extra_energy_pct: best_effort.max_extra_energy_pct,
                 dynamics: dynamics.unwrap_or(scheme.default_dynamics()),
+                // a free-altitude mission's plan directory carries its altitudes (z_m)
+                altitude_profile: true,
                 ..PlanOptions::default()
             };
             if !scheme.supports(options.dynamics) {
@@ -291,15 +293,28 @@ fn run(cli: Cli) -> Result<(), Failure> {
         } => {
             let m = Mission::from_path(&mission).map_err(bad)?;
             let p = m.params();
-            let tr = Trajectory::from_csv_path(
-                &trajectory,
-                p.slot_s,
-                m.slots(),
-                p.start_m,
-                p.altitude_m,
-            )
-            .map_err(bad)?;
-            let ev = evaluate(&m, &tr);
+            let ev = if p.altitude == planner::AltitudeMode::Free {
+                // a free-altitude plan's z_m column: each slot at its own altitude
+                let (tr, z) = Trajectory::from_csv_path_with_altitudes(
+                    &trajectory,
+                    p.slot_s,
+                    m.slots(),
+                    p.start_m,
+                    p.altitude_m,
+                )
+                .map_err(bad)?;
+                planner::evaluate::evaluate_with_altitudes(&m, &tr, &z).map_err(bad)?
+            } else {
+                let tr = Trajectory::from_csv_path(
+                    &trajectory,
+                    p.slot_s,
+                    m.slots(),
+                    p.start_m,
+                    p.altitude_m,
+                )
+                .map_err(bad)?;
+                evaluate(&m, &tr)
+            };
             let json = serde_json::json!({
                 "energy_j": ev.energy_j,
                 "feasible": ev.is_feasible(),

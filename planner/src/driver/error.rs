@@ -55,11 +55,13 @@ pub enum PlanError {
         dynamics: crate::evaluate::Dynamics,
     },
     /// A mission with `altitude = "free"` given to a scheme that plans at one altitude (every
-    /// scheme, until per-slot altitudes are planned): refused rather than planned at the fixed
-    /// altitude `altitude_m`.
+    /// scheme but `exact`), or to `exact` by a caller that flies one altitude (without
+    /// [`PlanOptions::altitude_profile`](super::PlanOptions::altitude_profile)): refused rather
+    /// than planned at the fixed altitude `altitude_m`.
     #[error(
         "mission parameter `altitude` = \"free\": the scheme {scheme} plans at the fixed \
-         altitude `altitude_m` only, not per-slot altitudes (set altitude = \"fixed\")"
+         altitude `altitude_m` only here, not per-slot altitudes (only the scheme exact plans \
+         them, in `cellsar-planner plan`; set altitude = \"fixed\")"
     )]
     AltitudeConflict {
         /// The scheme.

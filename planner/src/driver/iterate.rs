@@ -83,6 +83,7 @@ pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) ->
         init_replaced: None,
         best_effort: None,
         dynamics: Dynamics::Paper,
+        altitudes_m: None,
     }
 }
 

@@ -254,6 +254,11 @@ pub struct PlanOptions {
     /// only); [`Dynamics::Paper`] lets the velocity jump, as the paper does.
     /// [`PlanOptions::for_scheme`] gives each scheme its default ([`Scheme::default_dynamics`]).
     pub dynamics: Dynamics,
+    /// Plan an altitude per slot for a mission with `altitude = "free"` (the `exact` scheme
+    /// only; the plan's [`PlanResult::altitudes_m`](super::PlanResult::altitudes_m)). Off (the
+    /// default), such a mission is refused ([`PlanError::AltitudeConflict`]): a caller that flies
+    /// the plan's track at one altitude leaves it off. Fixed missions ignore it.
+    pub altitude_profile: bool,
 }
 
 impl PlanOptions {
@@ -387,6 +392,7 @@ impl Default for PlanOptions {
             max_extra_energy_pct: None,
             resolution_weight_j_per_m: DEFAULT_RESOLUTION_WEIGHT_J_PER_M,
             dynamics: DEFAULT_DYNAMICS,
+            altitude_profile: false,
         }
     }
 }

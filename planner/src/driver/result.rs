@@ -98,6 +98,11 @@ pub struct PlanResult {
     /// acceleration limit in every slot).
     #[serde(default)]
     pub dynamics: Dynamics,
+    /// The altitude H_t of every slot, m, for a mission with `altitude = "free"` planned with
+    /// [`PlanOptions::altitude_profile`](super::PlanOptions::altitude_profile) (`evaluation`
+    /// is then at these altitudes); `None` for a plan at the mission's fixed altitude.
+    #[serde(default)]
+    pub altitudes_m: Option<Vec<f64>>,
 }
 
 impl PlanResult {

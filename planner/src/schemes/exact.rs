@@ -15,14 +15,17 @@
 //! energy is no larger than the previous one (a majorisation–minimisation sequence).
 
 use crate::evaluate::{Dynamics, ResolutionMode, ACCEL_MARGIN_REL};
-use crate::geometry::{heading_unit, Length, Matrix2, Point2, Vector2, RIGHT_TURN};
+use crate::geometry::{heading_unit, Length, Point2, Vector2, RIGHT_TURN};
 use crate::power::PowerModel;
 use crate::socp::{Lin, ProblemBuilder};
 use crate::{Mission, Trajectory};
 
+mod altitude;
 mod cell;
+mod landmark;
+pub use altitude::cell_altitude_margin;
+use altitude::{altitude_rows, AltitudeVars};
 pub use cell::{cell_margin, BEST_EFFORT_CELL_TARGET_FRACTION};
-use cell::{resolution_cell_constraints, ResolutionSlot};
 
 /// 1/√3: sup of ‖D²u‖/2 times s² for the unit-vector map u(v) = v/‖v‖ in the plane is 1/√3
 /// (‖D²u(v)[d, d]‖ ≤ (2/√3)‖d‖²/‖v‖²).
@@ -142,6 +145,8 @@ struct SlotVars {
     rho: Option<usize>,
     /// Elastic mode under the vehicle dynamics: the acceleration slack τ_t, m of step change.
     accel_slack: Option<usize>,
+    /// Free altitude: the slot's altitude variables.
+    alt: Option<AltitudeVars>,
 }
 
 /// The linearisation data of one slot, from the previous iterate.
@@ -166,13 +171,39 @@ pub struct ExactSubproblem {
     objective_scale: f64,
     objective: ExactObjective,
     constant_j: f64,
+    /// Free altitude: the altitude bounds, for [`ExactSubproblem::altitudes_m`].
+    altitude_bounds_m: Option<(f64, f64)>,
 }
 
 impl ExactSubproblem {
-    /// Assembles the subproblem around the iterate `prev`.
+    /// Assembles the subproblem around the iterate `prev` (at the mission's altitude).
     pub fn build(
         mission: &Mission,
         prev: &Trajectory,
+        objective: ExactObjective,
+        tuning: &ExactTuning,
+    ) -> Self {
+        Self::build_profile(mission, prev, None, objective, tuning)
+    }
+
+    /// Assembles the subproblem with the altitude H_t of every slot a variable (module
+    /// `altitude`), around the iterate `prev` flown at `prev_altitudes_m` (one per slot; H_0 is
+    /// the mission's `altitude_m`). A profile of another length is read as the mission's
+    /// altitude where it has no entry.
+    pub fn build_with_altitudes(
+        mission: &Mission,
+        prev: &Trajectory,
+        prev_altitudes_m: &[f64],
+        objective: ExactObjective,
+        tuning: &ExactTuning,
+    ) -> Self {
+        Self::build_profile(mission, prev, Some(prev_altitudes_m), objective, tuning)
+    }
+
+    fn build_profile(
+        mission: &Mission,
+        prev: &Trajectory,
+        prev_altitudes_m: Option<&[f64]>,
         objective: ExactObjective,
         tuning: &ExactTuning,
     ) -> Self {
@@ -180,17 +211,18 @@ impl ExactSubproblem {
         let model = PowerModel::new(p);
         let n = mission.slots();
         let delta = p.slot_s;
-        let offset = p.centre_offset_m();
-        let radius = p.sensing_radius_m - SENSING_MARGIN_M;
-        let v_min = p.min_speed_mps() + SPEED_MARGIN_MPS;
         let v_max = p.max_speed_mps - SPEED_MARGIN_MPS;
-        let keepout = p.range_keepout_m();
         let v0 = p.induced_velocity_mps;
 
-        let (vars, next) = layout(mission, objective, tuning);
+        let (vars, next) = layout(mission, objective, tuning, prev_altitudes_m.is_some());
         let mut b = ProblemBuilder::new(next);
+        let prev_z = |t: usize| {
+            prev_altitudes_m
+                .and_then(|a| a.get(t - 1).copied())
+                .unwrap_or(p.altitude_m)
+        };
 
-        let lin = linearise(mission, prev, &model);
+        let lin = linearise(mission, prev, &model, prev_altitudes_m);
 
         let objective_scale = objective_terms(&mut b, &vars, objective, &model, tuning, delta);
         if let Some(cap) = tuning.energy_cap_j {
@@ -220,6 +252,11 @@ impl ExactSubproblem {
                 );
             }
 
+            if let Some(av) = sv.alt {
+                let prev_h = (t > 1).then(|| vars[t - 2].alt.map(|a| a.h)).flatten();
+                altitude_rows(&mut b, p, av, prev_h);
+            }
+
             if let Some(energy) = sv.energy {
                 energy_cones(
                     &mut b,
@@ -234,90 +271,20 @@ impl ExactSubproblem {
             let (Some(g), Some(e)) = (mission.target_m(t), sv.e) else {
                 continue;
             };
-            // speed floor along the previous heading, ĥ·v ≥ s_t: keeps every velocity of the
-            // segment [u_t, v_t] at least s_t long (the centre-error bound needs it) and carries
-            // the azimuth requirement ‖v‖ ≥ δ V_min conservatively. In elastic mode the azimuth
-            // part may be violated (slack σ_t); the bound's part stays hard.
-            let u_norm = l.step_m.length();
-            let h = l.dir;
-            let along = vx.clone().scaled(h.x).plus_lin(&vy.clone().scaled(h.y));
-            let keep = (tuning.speed_keep_fraction * u_norm).min(KEEP_CAP_OF_LIMIT * delta * v_max);
-            let s_min = match sv.sigma {
-                None => (delta * v_min).max(keep),
-                Some(sig) => {
-                    b.nonneg(along.clone().plus(sig, delta).plus_const(-delta * v_min));
-                    keep.max(delta * v_min).min(u_norm).max(1e-3)
-                }
-            };
-            b.nonneg(along.plus_const(-s_min));
-
-            let (cx, cy) = linear_centre(sv, (&vx, &vy), h, u_norm, offset);
-            let mut head = Lin::var(e, -1.0).plus_const(radius);
-            if let Some(sig) = sv.sigma {
-                head = head.plus(sig, 1.0);
-            }
-            if tuning.whole_slot_sensing {
-                // the centre at the start of the slot: c̃ − v (same heading, one step back)
-                b.soc(
-                    head.clone(),
-                    &[
-                        cx.clone().minus_lin(&vx).plus_const(-g[0]),
-                        cy.clone().minus_lin(&vy).plus_const(-g[1]),
-                    ],
-                );
-            }
-            b.soc(
-                head,
-                &[cx.clone().plus_const(-g[0]), cy.clone().plus_const(-g[1])],
+            landmark::landmark_rows(
+                &mut b,
+                mission,
+                tuning,
+                landmark::LandmarkSlot {
+                    sv,
+                    lin: l,
+                    q0: Point2::from(prev.q(t)),
+                    landmark_m: g,
+                    e,
+                    alt: sv.alt.map(|av| (av, prev_z(t))),
+                },
+                (&vx, &vy),
             );
-            // κ‖v − u‖² ≤ e
-            let kappa = tuning.kappa_scale * offset * CENTRE_CURVATURE_BOUND / (s_min * s_min);
-            let dvx = vx.clone().plus_const(-l.step_m.x);
-            let dvy = vy.clone().plus_const(-l.step_m.y);
-            b.rotated_soc(
-                Lin::var(e, 1.0 / kappa),
-                Lin::constant_only(1.0),
-                &[dvx.clone(), dvy.clone()],
-            );
-            if let Some(tr) = tuning.trust_radius_m {
-                b.soc(Lin::constant_only(tr), &[dvx, dvy]);
-            }
-            // range requirement (only when it is not vacuous): the true centre stays outside
-            // the keep-out disc around the BS; linearised along the previous centre's direction.
-            if let Some(rk) = keepout {
-                let bs = Point2::from(p.bs_m);
-                let nrm = (l.centre_m - bs).direction().unwrap_or_else(Vector2::x);
-                let mut expr = cx
-                    .scaled(nrm.x)
-                    .plus_lin(&cy.scaled(nrm.y))
-                    .plus_const(-nrm.dot(&bs.coords) - rk - SENSING_MARGIN_M)
-                    .plus(e, -1.0);
-                if let Some(sig) = sv.sigma {
-                    expr = expr.plus(sig, 1.0);
-                }
-                b.nonneg(expr);
-            }
-            if sv.shift.is_some() || sv.rho.is_some() {
-                resolution_cell_constraints(
-                    &mut b,
-                    mission,
-                    ResolutionSlot {
-                        q0: Point2::from(prev.q(t)),
-                        step0: l.step_m,
-                        landmark: Point2::from(g),
-                        x: sv.x,
-                        y: sv.y,
-                        shift: sv.shift,
-                        sigma: sv.sigma,
-                        rho: sv.rho,
-                    },
-                    &vx,
-                    &vy,
-                );
-            }
-            if let Some(sig) = sv.sigma {
-                b.nonneg(Lin::var(sig, 1.0));
-            }
         }
         Self {
             builder: b,
@@ -325,7 +292,26 @@ impl ExactSubproblem {
             objective_scale,
             objective,
             constant_j: n as f64 * delta * model.blade_power_w,
+            altitude_bounds_m: prev_altitudes_m.map(|_| crate::altitude::bounds_m(p)),
         }
+    }
+
+    /// The altitude profile of a solution vector (one per slot, m), clamped into the altitude
+    /// bounds against the solver's last digits (clamping keeps the rates: it is monotone and
+    /// 1-Lipschitz, and H_0 is within the bounds); `None` when the subproblem was built at the
+    /// mission's altitude.
+    pub fn altitudes_m(&self, x: &[f64]) -> Option<Vec<f64>> {
+        let (lo, hi) = self.altitude_bounds_m?;
+        Some(
+            self.vars
+                .iter()
+                .map(|sv| {
+                    sv.alt
+                        .and_then(|av| x.get(av.h).copied())
+                        .map_or(f64::NAN, |z| z.clamp(lo, hi))
+                })
+                .collect(),
+        )
     }
 
     /// The trajectory of a solution vector.
@@ -397,6 +383,10 @@ fn objective_terms(
             }
             _ => {}
         }
+        if let (Some(av), ExactObjective::Energy) = (sv.alt, objective) {
+            // W max(v_z, 0) δ = W c_t, J
+            b.add_linear_cost(av.climb, model.weight_n * objective_scale);
+        }
         if let (Some(sig), Some(w)) = (sv.sigma, tuning.elastic_weight) {
             b.add_linear_cost(sig, w * objective_scale);
         }
@@ -413,42 +403,12 @@ fn objective_terms(
     objective_scale
 }
 
-/// The first-order expansion of the sensing centre of a slot with variables `sv` and step
-/// `(vx, vy)` around a previous step of length `u_norm` and heading `h`:
-/// c̃ = q_t + D J ĥ + (D/‖u‖) J P v, P = I − ĥĥᵀ (D = `offset`).
-fn linear_centre(
-    sv: SlotVars,
-    (vx, vy): (&Lin, &Lin),
-    h: Vector2<f64>,
-    u_norm: f64,
-    offset: f64,
-) -> (Lin, Lin) {
-    let scale = if u_norm > 0.0 { offset / u_norm } else { 0.0 };
-    let pm = Matrix2::identity() - h * h.transpose();
-    // J P v = ((P v)_y, −(P v)_x)
-    let pvx = vx
-        .clone()
-        .scaled(pm[(0, 0)])
-        .plus_lin(&vy.clone().scaled(pm[(0, 1)]));
-    let pvy = vx
-        .clone()
-        .scaled(pm[(1, 0)])
-        .plus_lin(&vy.clone().scaled(pm[(1, 1)]));
-    let jh = RIGHT_TURN * h;
-    let cx = Lin::var(sv.x, 1.0)
-        .plus_const(offset * jh.x)
-        .plus_lin(&pvy.clone().scaled(scale));
-    let cy = Lin::var(sv.y, 1.0)
-        .plus_const(offset * jh.y)
-        .plus_lin(&pvx.clone().scaled(-scale));
-    (cx, cy)
-}
-
 /// The variable layout of the subproblem: each slot's variables, and their number.
 fn layout(
     mission: &Mission,
     objective: ExactObjective,
     tuning: &ExactTuning,
+    free_altitude: bool,
 ) -> (Vec<SlotVars>, usize) {
     let n = mission.slots();
     let mut vars = Vec::with_capacity(n);
@@ -472,6 +432,11 @@ fn layout(
         let rho = best_effort.then(&mut take);
         let accel_slack = (tuning.elastic_weight.is_some() && tuning.dynamics == Dynamics::Vehicle)
             .then(&mut take);
+        let alt = free_altitude.then(|| AltitudeVars {
+            h: take(),
+            climb: take(),
+            cell_shift: shift.map(|_| take()),
+        });
         vars.push(SlotVars {
             x,
             y,
@@ -482,16 +447,26 @@ fn layout(
             shift,
             rho,
             accel_slack,
+            alt,
         });
     }
     (vars, next)
 }
 
 /// The linearisation data of every slot around the iterate `prev`.
-fn linearise(mission: &Mission, prev: &Trajectory, model: &PowerModel) -> Vec<SlotLin> {
+fn linearise(
+    mission: &Mission,
+    prev: &Trajectory,
+    model: &PowerModel,
+    prev_altitudes_m: Option<&[f64]>,
+) -> Vec<SlotLin> {
     let p = mission.params();
     let delta = p.slot_s;
-    let offset = p.centre_offset_m();
+    let tan = p.observation_angle_rad.tan();
+    let offset_at = |t: usize| match prev_altitudes_m.and_then(|a| a.get(t - 1)) {
+        Some(z) => z * tan,
+        None => p.centre_offset_m(),
+    };
     let headings = prev.headings_rad();
     (1..=mission.slots())
         .map(|t| {
@@ -503,7 +478,7 @@ fn linearise(mission: &Mission, prev: &Trajectory, model: &PowerModel) -> Vec<Sl
                 step_m: step,
                 dir,
                 aux: model.induced_factor(step.length() / delta),
-                centre_m: Point2::from(prev.q(t)) + RIGHT_TURN * dir * offset,
+                centre_m: Point2::from(prev.q(t)) + RIGHT_TURN * dir * offset_at(t),
             }
         })
         .collect()
@@ -555,6 +530,9 @@ fn energy_cap(
     let constant = vars.len() as f64 * delta * model.blade_power_w;
     let mut e = Lin::constant_only(cap_j - constant);
     for sv in vars {
+        if let Some(av) = sv.alt {
+            e = e.plus(av.climb, -model.weight_n);
+        }
         if let Some([a, _s, w, z]) = sv.energy {
             e = e
                 .plus(
@@ -620,6 +598,7 @@ fn step_exprs(vars: &[SlotVars], t: usize, start_m: [f64; 2]) -> (Lin, Lin) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Matrix2;
     use proptest::prelude::*;
 
     proptest! {

@@ -6,7 +6,7 @@
 use crate::geometry::{CellLinear, Length, Point2, Vector2};
 use crate::params::SPEED_OF_LIGHT_MPS;
 use crate::socp::{Lin, ProblemBuilder};
-use crate::Mission;
+use crate::Params;
 
 /// Where the resolution-cell constraints of one landmark slot are expanded.
 #[derive(Debug, Clone, Copy)]
@@ -77,14 +77,18 @@ pub const BEST_EFFORT_CELL_TARGET_FRACTION: f64 = 0.95;
 /// - Best effort (`rs.rho`): d = [`BEST_EFFORT_CELL_TARGET_FRACTION`] d_min, a deficit slack,
 ///   and no position margin. The model is then optimistic, and the driver checks every step on
 ///   the exact geometry (the merit must fall); with the proven margin the slack SCA creeps.
+///
+/// `p` are the parameters at the slot's previous altitude; with a free altitude and hard
+/// constraints, `altitude_shift` is the variable m_H ≥ |H_t − H_t^(ℓ)| and the cone gets the
+/// margin [`super::cell_altitude_margin`] m_H too.
 pub(super) fn resolution_cell_constraints(
     b: &mut ProblemBuilder,
-    mission: &Mission,
+    p: &Params,
+    altitude_shift: Option<usize>,
     rs: ResolutionSlot,
     vx: &Lin,
     vy: &Lin,
 ) {
-    let p = mission.params();
     let delta = p.slot_s;
     let d_m = match rs.rho {
         Some(_) => BEST_EFFORT_CELL_TARGET_FRACTION * p.d_min_m,
@@ -113,6 +117,9 @@ pub(super) fn resolution_cell_constraints(
             ],
         );
         head = head.plus(shift, -cell_margin(p, rs.q0, rs.landmark));
+    }
+    if let Some(m) = altitude_shift {
+        head = head.plus(m, -super::cell_altitude_margin(p, rs.q0, rs.landmark));
     }
     if let Some(sig) = rs.sigma {
         // one metre of slack relaxes the width requirement by about one metre
