@@ -81,3 +81,16 @@ impl Baseline {
         grew
     }
 }
+
+/// Plans a plan cache keeps (`pipeline::services::plan::MAX_HELD_PLANS`).
+pub const CACHE_PLANS: u64 = pipeline::services::plan::MAX_HELD_PLANS as u64;
+
+/// How much more a service may hold at its peak under hostile peers than before, for plans of
+/// at most `plan_bytes` encoded: a full plan cache of [`CACHE_PLANS`], each plan decoded at
+/// most 4 times its encoded size, plus 64 MiB for Zenoh's buffers, the allocator's slack and
+/// the processor's missions (at most `--max-missions`, 16; the forgers' other messages are
+/// small). The bound of the hostile suite on the private mesh (`tests/tests/hostile.rs`) and
+/// of the forger tests of the secure deployment (`tests/tests/netns_tls.rs`).
+pub fn peak_bound(plan_bytes: u64) -> u64 {
+    64 * MIB + CACHE_PLANS * 4 * plan_bytes
+}

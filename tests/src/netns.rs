@@ -1,7 +1,9 @@
 //! Hosts emulated with Linux network namespaces (two namespaces joined by a veth pair, or one
 //! with multicast on its loopback for the tests of multicast scouting), the deployment
 //! configurations of `pipeline/deploy/` adapted to them, the certificates of a secure
-//! deployment (`cellsar certs`), and what a hostile peer (`cellsar-bridge-bench forge`) logs.
+//! deployment (`cellsar certs`), its router, processor and hostile peers (`cellsar-bridge-bench
+//! forge`, and what they log), and a run of it under forgers whose services' peak memory is
+//! bounded ([`launch_over_tls`]).
 //!
 //! Needs `ip` (iproute2) and the right to create network namespaces (root or CAP_NET_ADMIN):
 //! [`unavailable`] says why they cannot be made; the tests that need them are run by
@@ -12,7 +14,8 @@ use std::process::Command;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
-use crate::pipeline::{exe, Service};
+use crate::memory::{peak_bound, Baseline};
+use crate::pipeline::{echo_args, exe, scene, shm_files, Launch, Service};
 use crate::root;
 
 /// The namespaces of a test, deleted (with their veth ends) on drop.
@@ -224,4 +227,238 @@ pub fn forge_zid(log: &str) -> String {
                 .map(|(_, z)| z.trim().to_string())
         })
         .unwrap_or_else(|| panic!("no zid logged:\n{log}"))
+}
+
+// ---- the processes of the secure deployment, and a run under forgers ----
+
+/// What the router logs of its access control: every decision (trace), so that a test sees
+/// what the router denied.
+pub const ACL_LOG: &str = "RUST_LOG=info,zenoh::net::routing::interceptor::access_control=trace";
+
+/// The router of `pipeline/deploy/tls/router.json5`, in namespace A.
+pub fn start_router(hosts: &TwoHosts, dir: &Path, certs: &Path) -> Service {
+    start_router_as(hosts, dir, certs, "router", "router")
+}
+
+/// The router of `pipeline/deploy/tls/router.json5` in namespace A, presenting `certs`'s
+/// certificate and key of `role` (the router's own: `router`), logging to `name`.
+pub fn start_router_as(
+    hosts: &TwoHosts,
+    dir: &Path,
+    certs: &Path,
+    role: &str,
+    name: &str,
+) -> Service {
+    let cfg = config(dir, "tls/router.json5", &hosts.ip_a, Some(certs));
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    for ext in ["pem", "key"] {
+        assert!(text.contains(&format!("router.{ext}")), "{cfg}");
+    }
+    let text = text
+        .replace("router.pem", &format!("{role}.pem"))
+        .replace("router.key", &format!("{role}.key"));
+    let cfg_as = dir.join(format!("{name}.json5"));
+    std::fs::write(&cfg_as, text).unwrap();
+    let [ip, netns, exec, a] = hosts.in_a();
+    let mut router = Service::start_in(
+        &[ip, netns, exec, a, "env", ACL_LOG],
+        name,
+        dir,
+        &["router".into(), "-c".into(), cfg_as.display().to_string()],
+    );
+    wait_for_log(&mut router, "router running", Duration::from_secs(30));
+    router
+}
+
+/// Waits until `s`'s log contains `text` (panics, with the log, past `timeout` or when `s`
+/// exits first).
+pub fn wait_for_log(s: &mut Service, text: &str, timeout: Duration) {
+    let deadline = Instant::now() + timeout;
+    loop {
+        if s.log_text().contains(text) {
+            return;
+        }
+        if let Some(st) = s.child.try_wait().unwrap() {
+            panic!(
+                "{} exited ({st}) before {text:?}:\n{}",
+                s.name,
+                s.log_text()
+            );
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{}: no {text:?} within {timeout:?}:\n{}",
+            s.name,
+            s.log_text()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// The processor of the deployment in namespace B, with its role's configuration `cfg`.
+pub fn start_processor(hosts: &TwoHosts, dir: &Path, cfg: &str) -> Service {
+    let args = [
+        "process",
+        "--frames",
+        "zenoh",
+        "--scene",
+        &scene().display().to_string(),
+        "--resend-after-s",
+        "2",
+        "-c",
+        cfg,
+    ]
+    .map(String::from);
+    Service::start_in(&hosts.in_b(), "processor", dir, &args)
+}
+
+/// `cellsar-bridge-bench forge` in namespace B for 600 s with the client configuration `cfg`
+/// and the flags `extra`, logging to `name`; on the mesh (READY) before it returns, so that it
+/// is there before the run plans.
+pub fn start_forger(
+    hosts: &TwoHosts,
+    dir: &Path,
+    name: &str,
+    cfg: &str,
+    extra: &[&str],
+) -> Service {
+    let args: Vec<String> = ["forge", "--duration-s", "600", "-c", cfg]
+        .iter()
+        .chain(extra)
+        .map(|a| a.to_string())
+        .collect();
+    let s = Service::start_exe_in(
+        &hosts.in_b(),
+        &crate::bin("cellsar-bridge-bench"),
+        name,
+        dir,
+        &args,
+    );
+    s.wait_for_log("READY", Duration::from_secs(60));
+    s
+}
+
+/// Seconds the forgers work against the planned mission before the echo starts: the window
+/// in which each service's peak memory is measured (as the hostile suite on the private mesh
+/// does, `tests/tests/hostile.rs`).
+pub const FORGE_S: u64 = 15;
+
+/// The largest encoded plan in play (the run's, about 30 KB, and the forgers' smaller ones):
+/// the plan size of the memory bound ([`peak_bound`]).
+pub const PLAN_BYTES: u64 = 64 * 1024;
+
+/// A run of the secure deployment whose echo starts late ([`launch_over_tls`]).
+pub struct Run {
+    /// The launcher.
+    pub l: Launch,
+    /// The echo, started by hand in namespace A once the window is over.
+    pub echo: Service,
+    /// The launcher's `network` event.
+    pub net: serde_json::Value,
+    /// The mission's id.
+    pub id: String,
+}
+
+impl Run {
+    /// Waits for the launcher to exit; its status. Stops the echo and removes the
+    /// iceoryx2 segments it left after the launcher's clean-up.
+    pub fn finish(&mut self) -> std::process::ExitStatus {
+        let st = self.l.finish(Duration::from_secs(240));
+        let echo = self.echo.stop(Duration::from_secs(20));
+        let iox: Vec<&str> = self.net["iox"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap())
+            .collect();
+        if let Some(w) = iox.windows(2).find(|w| w[0] == "--iox-prefix") {
+            for f in shm_files(w[1]) {
+                let _ = std::fs::remove_file(format!("/dev/shm/{f}"));
+            }
+        }
+        assert!(echo.success(), "echo: {echo:?}\n{}", self.echo.log_text());
+        st
+    }
+}
+
+/// The launcher in namespace A (`role(r)`: role r's configuration) with the planner and the
+/// bridge as children, each with its role's configuration; the processor (in B, `processor`)
+/// and the echo external. Once the mission is planned and the bridge started, `forgers` (given
+/// the mission id) starts what forgers are still to start, and the peak resident memory of
+/// the router, the launcher, the planner, the bridge and the processor is measured for
+/// [`FORGE_S`] s under the forgers and asserted within the hostile suite's bound
+/// ([`peak_bound`] of [`PLAN_BYTES`]); then the echo starts (by hand, in A, with the echo's
+/// configuration) and the run goes on.
+pub fn launch_over_tls(
+    hosts: &TwoHosts,
+    dir: &Path,
+    h: f64,
+    role: &dyn Fn(&str) -> String,
+    services: [&Service; 2],
+    forgers: &mut dyn FnMut(&str) -> Vec<Service>,
+) -> (Run, Vec<Service>) {
+    let child_config = |r: &str| format!("{r}={}", role(r));
+    let (planner, bridge) = (child_config("planner"), child_config("bridge"));
+    let launcher = role("launcher");
+    let mut l = Launch::start_in(
+        &hosts.in_a(),
+        dir,
+        h,
+        &[
+            "--transport",
+            "zenoh",
+            "--external",
+            "processor",
+            "--external",
+            "echo",
+            "-c",
+            &launcher,
+            "--child-config",
+            &planner,
+            "--child-config",
+            &bridge,
+        ],
+    );
+    let net = l.event("network", Duration::from_secs(60));
+    let planned = l.event("planned", Duration::from_secs(120));
+    let id = planned["mission_id"].as_str().unwrap().to_string();
+    // the bridge up (alive: its session open), so that its start is not counted
+    l.wait_for("the bridge alive", Duration::from_secs(60), |e| {
+        e["event"] == "alive" && e["role"] == "bridge" && e["alive"] == true
+    });
+    let [router, processor] = services;
+    let measured = [
+        ("router", router.child.id()),
+        ("processor", processor.child.id()),
+        ("launcher", l.child.id()),
+        ("planner", l.pid("planner")),
+        ("bridge", l.pid("bridge")),
+    ]
+    .map(|(name, pid)| (name, Baseline::take(pid)));
+    let started = forgers(&id);
+    std::thread::sleep(Duration::from_secs(FORGE_S));
+    for (name, b) in &measured {
+        b.assert_peak_within(
+            peak_bound(PLAN_BYTES),
+            &format!("the {name} under forgers over TLS ({FORGE_S} s)"),
+        );
+    }
+    // the echo now, with its role's configuration instead of the launcher's
+    let mut ea = echo_args(&net);
+    match ea.iter().position(|a| a == "--config") {
+        Some(i) => ea[i + 1] = role("echo"),
+        None => ea.extend(["--config".to_string(), role("echo")]),
+    }
+    let echo = Service::start_in(&hosts.in_a(), "echo", dir, &ea);
+    (Run { l, echo, net, id }, started)
+}
+
+/// The last status the launcher got from the processor: its counters.
+pub fn processor_counters(l: &Launch) -> serde_json::Value {
+    l.named("status")
+        .into_iter()
+        .rev()
+        .find(|e| e["role"] == "processor")
+        .map(|e| e["counters"].clone())
+        .unwrap_or_else(|| panic!("no processor status:\n{:#?}", l.named("status")))
 }

@@ -4,8 +4,11 @@
 //! control lets each role (the certificate's common name) use only its own keys.
 //!
 //! - The pipeline completes over mutual TLS with the same detections as the closed loop
-//!   (router, launcher with planner, echo and bridge in namespace A, each child with its own
-//!   role's certificate; the processor in namespace B), while a peer holding the echo's valid
+//!   (router, launcher with planner and bridge, and the echo in namespace A, each with its own
+//!   role's certificate; the processor in namespace B; the echo starts once hostile peers have
+//!   worked 15 s against the planned mission, during which the peak memory of the router, the
+//!   launcher, the planner, the bridge and the processor stays within the hostile suite's
+//!   bound, `harness::netns::launch_over_tls`), while a peer holding the echo's valid
 //!   certificate forges processor status, detections, images and metrics from namespace B
 //!   (and keeps asking the processor for every result again): the router drops the
 //!   forgeries, so none reaches the collector. That peer also declares the liveliness token of
@@ -15,6 +18,9 @@
 //!   session opens, but it can neither put (status, detections, images, metrics, a plan), nor
 //!   get (results, apertures, plans), nor declare a liveliness token, a queryable that the
 //!   launcher's plan request reaches, or a subscriber that receives anything.
+//! - Forgers holding the processor's, the planner's and the bridge's certificates, each
+//!   denied what its role may not do and refused by the consumers for what it may (the
+//!   bridge's: wrong IQ frames on the echo keys, refused and counted by the processor).
 //! - A client without a certificate, one with a certificate of another CA, and a plain-TCP
 //!   client cannot open a session with the router; the same client with a certificate of the
 //!   deployment can (so the refusals are the certificates', not a broken set-up).
@@ -28,7 +34,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use harness::netns::{
-    config, forge_zid, make_certs, make_certs_with, next_progress, two_namespaces, TwoHosts,
+    config, forge_zid, launch_over_tls, make_certs, make_certs_with, next_progress,
+    processor_counters, start_forger, start_processor, start_router, start_router_as,
+    two_namespaces, wait_for_log, TwoHosts,
 };
 use harness::pipeline::*;
 use harness::trials::Test;
@@ -41,134 +49,12 @@ const STRANGER: &str = "stranger";
 /// would reach the collector all the same.
 const STRANGER_MISSION: &str = "00000000c0ffee00";
 
-/// What the router logs of its access control: every decision (trace), so that a test sees
-/// what the router denied.
-const ACL_LOG: &str = "RUST_LOG=info,zenoh::net::routing::interceptor::access_control=trace";
+/// The mission id of the plan a forger publishes under an id its content does not give
+/// (`forge --forge-plans`).
+const WRONG_PLAN_ID: &str = "5eed5eed5eed5eed";
 
 /// What a client logs of its connections: why a handshake failed (debug).
 const TLS_LOG: &str = "info,zenoh::net::runtime::orchestrator=debug,zenoh_link_tls=debug";
-
-/// The router of `pipeline/deploy/tls/router.json5`, in namespace A.
-fn start_router(hosts: &TwoHosts, dir: &Path, certs: &Path) -> Service {
-    start_router_as(hosts, dir, certs, "router", "router")
-}
-
-/// The router of `pipeline/deploy/tls/router.json5` in namespace A, presenting `certs`'s
-/// certificate and key of `role` (the router's own: `router`), logging to `name`.
-fn start_router_as(hosts: &TwoHosts, dir: &Path, certs: &Path, role: &str, name: &str) -> Service {
-    let cfg = config(dir, "tls/router.json5", &hosts.ip_a, Some(certs));
-    let text = std::fs::read_to_string(&cfg).unwrap();
-    for ext in ["pem", "key"] {
-        assert!(text.contains(&format!("router.{ext}")), "{cfg}");
-    }
-    let text = text
-        .replace("router.pem", &format!("{role}.pem"))
-        .replace("router.key", &format!("{role}.key"));
-    let cfg_as = dir.join(format!("{name}.json5"));
-    std::fs::write(&cfg_as, text).unwrap();
-    let [ip, netns, exec, a] = hosts.in_a();
-    let mut router = Service::start_in(
-        &[ip, netns, exec, a, "env", ACL_LOG],
-        name,
-        dir,
-        &["router".into(), "-c".into(), cfg_as.display().to_string()],
-    );
-    wait_for_log(&mut router, "router running", Duration::from_secs(30));
-    router
-}
-
-/// Waits until `s`'s log contains `text` (panics, with the log, past `timeout` or when `s`
-/// exits first).
-fn wait_for_log(s: &mut Service, text: &str, timeout: Duration) {
-    let deadline = Instant::now() + timeout;
-    loop {
-        if s.log_text().contains(text) {
-            return;
-        }
-        if let Some(st) = s.child.try_wait().unwrap() {
-            panic!(
-                "{} exited ({st}) before {text:?}:\n{}",
-                s.name,
-                s.log_text()
-            );
-        }
-        assert!(
-            Instant::now() < deadline,
-            "{}: no {text:?} within {timeout:?}:\n{}",
-            s.name,
-            s.log_text()
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
-}
-
-/// The processor of the deployment in namespace B, with its role's configuration `cfg`.
-fn start_processor(hosts: &TwoHosts, dir: &Path, cfg: &str) -> Service {
-    let args = [
-        "process",
-        "--frames",
-        "zenoh",
-        "--scene",
-        &scene().display().to_string(),
-        "--resend-after-s",
-        "2",
-        "-c",
-        cfg,
-    ]
-    .map(String::from);
-    Service::start_in(&hosts.in_b(), "processor", dir, &args)
-}
-
-/// `cellsar-bridge-bench forge` in namespace B for 600 s with the client configuration `cfg`
-/// and the flags `extra`, logging to `name`; on the mesh (READY) before it returns, so that it
-/// is there before the run plans.
-fn start_forger(hosts: &TwoHosts, dir: &Path, name: &str, cfg: &str, extra: &[&str]) -> Service {
-    let args: Vec<String> = ["forge", "--duration-s", "600", "-c", cfg]
-        .iter()
-        .chain(extra)
-        .map(|a| a.to_string())
-        .collect();
-    let s = Service::start_exe_in(
-        &hosts.in_b(),
-        &harness::bin("cellsar-bridge-bench"),
-        name,
-        dir,
-        &args,
-    );
-    s.wait_for_log("READY", Duration::from_secs(60));
-    s
-}
-
-/// The launcher in namespace A (`role(r)`: role r's configuration) with the planner, the echo
-/// and the bridge as children, each with its role's configuration; the processor external.
-fn launch_over_tls(hosts: &TwoHosts, dir: &Path, h: f64, role: &dyn Fn(&str) -> String) -> Launch {
-    let child_config = |r: &str| format!("{r}={}", role(r));
-    let (planner, echo, bridge) = (
-        child_config("planner"),
-        child_config("echo"),
-        child_config("bridge"),
-    );
-    let launcher = role("launcher");
-    Launch::start_in(
-        &hosts.in_a(),
-        dir,
-        h,
-        &[
-            "--transport",
-            "zenoh",
-            "--external",
-            "processor",
-            "-c",
-            &launcher,
-            "--child-config",
-            &planner,
-            "--child-config",
-            &echo,
-            "--child-config",
-            &bridge,
-        ],
-    )
-}
 
 fn pipeline_over_mutual_tls_with_access_control() {
     let hosts = two_namespaces();
@@ -190,9 +76,9 @@ fn pipeline_over_mutual_tls_with_access_control() {
     .unwrap();
     // every process's log, printed if the test fails (the router's access-control decisions,
     // the launcher's and its children's logs)
-    let _logs = LogsOnFailure::of_run(d, &["router", "processor", "forger", "stranger"]);
+    let _logs = LogsOnFailure::of_run(d, &["router", "processor", "echo", "forger", "stranger"]);
     let router = start_router(&hosts, d, &certs);
-    let _processor = start_processor(&hosts, d, &role("processor"));
+    let processor = start_processor(&hosts, d, &role("processor"));
     let metrics_template = reference
         .join("processed/metrics.json")
         .display()
@@ -239,8 +125,11 @@ fn pipeline_over_mutual_tls_with_access_control() {
             "--flood-queries",
         ],
     );
-    let mut l = launch_over_tls(&hosts, d, H, &role);
-    let st = l.finish(Duration::from_secs(240));
+    let (mut run, _) = launch_over_tls(&hosts, d, H, &role, [&router, &processor], &mut |_| {
+        Vec::new()
+    });
+    let st = run.finish();
+    let l = &run.l;
     // first what the ACL's promises are about (checked before the run's result, which a
     // broken promise may spoil): neither the echo's forger nor the stranger was ever taken
     // for a processor, the router denied their tokens (every role may declare only its own;
@@ -363,12 +252,16 @@ fn assert_stranger_did_nothing(r: &serde_json::Value, forge_log: &str, router_lo
 /// - with the processor's certificate (instance `intruder-p`, announced as a planner): its
 ///   planner token, its plan under a wrong id and its answers to plan requests are denied by
 ///   the router; the processor's failed status, detections and (malformed) images it may put
-///   reach the launcher, which refuses them (no processor of that instance is alive);
+///   reach the launcher, which refuses them (no processor of that instance is alive); it asks
+///   the echo for apertures of the mission of the planner forger's plan (which a processor may);
 /// - with the planner's certificate (instance `intruder-q`, announced as a processor): its
 ///   processor token and its status, detections, images and metrics are denied; the plan it
-///   may publish under a wrong id reaches the echo and the processor, which skip it (the id is
-///   not its content's), and its answer to the launcher's plan request (another mission) is
-///   skipped as not answering the request.
+///   may publish under a wrong id reaches the echo and the processor, which take on no
+///   published plan (only one looked up when a mission is asked for): the echo, asked for
+///   that mission, refuses as it has no plan for it, and the processor, which no client asks
+///   results of that mission (only the launcher's certificate may), never takes it on; its
+///   answer to the launcher's plan request (another mission) is skipped as not answering the
+///   request.
 ///
 /// The run ends with the closed loop's outputs.
 fn forgers_with_the_processors_and_the_planners_certificates() {
@@ -379,9 +272,9 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
     let d = dir.path();
     let certs = make_certs(d, "certs", &hosts.ip_a);
     let role = |r: &str| config(d, &format!("tls/{r}.json5"), &hosts.ip_a, Some(&certs));
-    let _logs = LogsOnFailure::of_run(d, &["router", "processor", "forger-p", "forger-q"]);
+    let _logs = LogsOnFailure::of_run(d, &["router", "processor", "echo", "forger-p", "forger-q"]);
     let router = start_router(&hosts, d, &certs);
-    let _processor = start_processor(&hosts, d, &role("processor"));
+    let processor = start_processor(&hosts, d, &role("processor"));
     let forged = ["--forge-plans", "--malformed-images"];
     let mut by_processor = start_forger(
         &hosts,
@@ -391,6 +284,7 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
         &[
             &forged[..],
             &["--instance", "intruder-p", "--announce-as", "planner"],
+            &["--mission", WRONG_PLAN_ID, "--flood-queries"],
         ]
         .concat(),
     );
@@ -407,8 +301,15 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
         ]
         .concat(),
     );
-    let mut l = launch_over_tls(&hosts, d, H, &role);
-    let st = l.finish(Duration::from_secs(240));
+    let (mut run, _) = launch_over_tls(&hosts, d, H, &role, [&router, &processor], &mut |_| {
+        Vec::new()
+    });
+    // the echo, started late and asked for the mission of the planner forger's plan (put under
+    // a wrong id every round), does not take that plan on: it has none for the mission
+    let refused = format!("request refused: unknown mission {WRONG_PLAN_ID}");
+    run.echo.wait_for_log(&refused, Duration::from_secs(60));
+    let st = run.finish();
+    let l = &run.l;
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
     assert_same_as_reference(&l.out, &reference);
     for f in [&mut by_processor, &mut by_planner] {
@@ -446,8 +347,8 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
         "{alive:#?}"
     );
     // the processor's certificate may not publish a plan nor answer a plan request
-    let wrong_plan = "cellsar/5eed5eed5eed5eed/plan";
-    denied(&p_zid, "Put", wrong_plan);
+    let wrong_plan = format!("cellsar/{WRONG_PLAN_ID}/plan");
+    denied(&p_zid, "Put", &wrong_plan);
     assert!(!p_log.contains("answered a plan request"), "{p_log}");
     // the planner's certificate may not publish a processor's status or results
     for key in ["detections", "status/processor", "image/0", "metrics"] {
@@ -455,8 +356,8 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
     }
     // what their certificates allow reached its consumers and was refused there: the
     // processor forger's status, detections and images by the launcher's sender check; the
-    // planner forger's plan reply by the launcher, its plan under a wrong id by the echo and
-    // the processor
+    // planner forger's plan reply by the launcher; its plan under a wrong id neither by the
+    // echo (above) nor by the processor, which never took that plan's mission on
     let c = &l.pipeline_json()["collector"];
     assert!(c["refused_senders"].as_u64().unwrap() > 0, "{c}");
     assert!(q_log.contains("answered a plan request"), "{q_log}");
@@ -466,14 +367,125 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
         launcher_log.contains("foreign status skipped"),
         "{launcher_log}"
     );
-    assert!(l
-        .log("echo")
-        .contains("plan skipped: its mission id is not its content's"));
     let processor_log = std::fs::read_to_string(d.join("processor.log")).unwrap();
     assert!(
-        processor_log.contains("plan skipped: its mission id is not its content's"),
+        !processor_log.contains(&format!("mission={WRONG_PLAN_ID}")),
         "{processor_log}"
     );
+}
+
+/// A forger holding the bridge's certificate (instance `intruder-b`, announced as a
+/// processor), started once the mission is planned and told its id (a bridge sees no plan):
+///
+/// - what the bridge's certificate allows, IQ frames on the mission's echo key and counters
+///   on the bridge's, it puts wrong (`forge --forge-iq`: frames of another mission, numbered
+///   outside the mission, of a shape and time that fit no layout, replayed, flooded, and puts
+///   that are no valid frame): the router lets them through, and the processor refuses every
+///   one, counted (`unsolicited`, `bad`, `malformed`);
+/// - what it does not allow is denied by the router: a processor's token, its status,
+///   detections, images and metrics, a plan, answering plan requests, asking for results,
+///   apertures and plans, subscribing to plans and statuses.
+///
+/// The run ends with the closed loop's outputs, and no service's memory grew past the bound.
+fn a_forger_with_the_bridges_certificate() {
+    let hosts = two_namespaces();
+    const H: f64 = 30.0;
+    let reference = reference(H);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let certs = make_certs(d, "certs", &hosts.ip_a);
+    let role = |r: &str| config(d, &format!("tls/{r}.json5"), &hosts.ip_a, Some(&certs));
+    let _logs = LogsOnFailure::of_run(d, &["router", "processor", "echo", "forger-b"]);
+    let router = start_router(&hosts, d, &certs);
+    let processor = start_processor(&hosts, d, &role("processor"));
+    let metrics_template = reference
+        .join("processed/metrics.json")
+        .display()
+        .to_string();
+    let bridge_cfg = role("bridge");
+    let (mut run, mut forgers) =
+        launch_over_tls(&hosts, d, H, &role, [&router, &processor], &mut |id| {
+            let args = [
+                "--mission",
+                id,
+                "--instance",
+                "intruder-b",
+                "--announce-as",
+                "processor",
+                "--forge-iq",
+                "--iq-flood-frames",
+                "8",
+                "--forge-results",
+                "--metrics-template",
+                &metrics_template,
+                "--malformed-images",
+                "--forge-plans",
+                "--flood-queries",
+            ];
+            vec![start_forger(&hosts, d, "forger-b", &bridge_cfg, &args)]
+        });
+    let forger = &mut forgers[0];
+    let st = run.finish();
+    let l = &run.l;
+    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, &reference);
+    assert!(forger.child.try_wait().unwrap().is_none(), "forger exited");
+    let r = next_progress(forger);
+    eprintln!("the bridge's forger: {r}");
+    let iq = &r["iq"];
+    for k in [
+        "other_mission",
+        "seq_outside",
+        "misfit",
+        "replays",
+        "garbage",
+        "flooded",
+    ] {
+        assert!(iq[k].as_u64().unwrap() > 0, "{k}: {r}");
+    }
+    assert_eq!(iq["errors"], 0, "{r}");
+    // what its certificate allows reached the processor and was refused there, counted
+    let c = processor_counters(l);
+    eprintln!("processor: {c}");
+    for k in ["unsolicited", "bad", "malformed"] {
+        assert!(c[k].as_u64().unwrap() > 0, "{k}: {c}");
+    }
+    // the results are the echo's alone: the collector took nothing foreign
+    let p = l.pipeline_json();
+    assert_eq!(p["collector"]["foreign"], 0, "{p}");
+    assert_eq!(p["collector"]["refused_senders"], 0, "{p}");
+    assert_eq!(p["collector"]["refused_plans"], 0, "{p}");
+    // and the router let none of the rest through: it received nothing, no query of its was
+    // answered, it saw no processor
+    assert_eq!(r["received"], 0, "{r}");
+    assert_eq!(r["flood"]["answered"], 0, "{r}");
+    assert_eq!(r["processors_seen"], 0, "{r}");
+    let id = &run.id;
+    let zid = forge_zid(&forger.log_text());
+    let log = router.log_text();
+    let mine: Vec<&str> = log.lines().filter(|l| l.contains(&zid)).collect();
+    let denied = |what: &str, key: &str| {
+        assert!(
+            mine.iter()
+                .any(|l| l.contains(&format!("is unauthorized to {what}")) && l.ends_with(key)),
+            "no denied {what} on {key}:\n{}",
+            mine.join("\n")
+        );
+    };
+    denied("Liveliness Token", "cellsar/alive/processor/intruder-b");
+    for key in ["detections", "status/processor", "image/0", "metrics"] {
+        denied("Put", &format!("cellsar/{id}/{key}"));
+    }
+    denied("Put", &format!("cellsar/{WRONG_PLAN_ID}/plan"));
+    assert!(!forger.log_text().contains("answered a plan request"));
+    // the echo key and the bridge's counters were never denied to it
+    let echo_key = format!("cellsar/{id}/echo");
+    let refused_frames: Vec<&&str> = mine
+        .iter()
+        .filter(|l| l.contains("is unauthorized to Put"))
+        .filter(|l| l.ends_with(&echo_key) || l.contains("cellsar/bridge/"))
+        .collect();
+    assert!(refused_frames.is_empty(), "{refused_frames:#?}");
 }
 
 /// A client of the TLS router with `tls` settings (none: plain TCP), started in namespace B
@@ -655,6 +667,10 @@ fn main() {
         Test::netns(
             "forgers_with_the_processors_and_the_planners_certificates",
             forgers_with_the_processors_and_the_planners_certificates,
+        ),
+        Test::netns(
+            "a_forger_with_the_bridges_certificate",
+            a_forger_with_the_bridges_certificate,
         ),
         Test::netns(
             "clients_refuse_a_router_that_is_not_the_deployments",
