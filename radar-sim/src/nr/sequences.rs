@@ -21,22 +21,34 @@ const MASK31: u64 = (1 << 31) - 1;
 /// The pseudo-random sequence c(n), n = 0..len, of §5.2.1: x1 seeded with 1, x2 with `c_init`
 /// (its low 31 bits), c(n) = (x1(n + N_c) + x2(n + N_c)) mod 2.
 pub fn gold(c_init: u32, len: usize) -> Vec<u8> {
-    // bit i of s holds x(n + i), i = 0..31
+    // bit i of s holds x(n + i), i = 0..31. Both recursions reach back at most 3 places
+    // (x(n + 31) from x(n..=n + 3)), so the next 28 values x(n + 31..n + 59) follow from the
+    // state at once: bit i of `s ^ s >> 3` (x1) or `s ^ s >> 1 ^ s >> 2 ^ s >> 3` (x2),
+    // i < 28, reads only state bits i..=i + 3 ≤ 30.
+    const STRIDE: usize = 28;
+    const LOW: u32 = (1 << STRIDE) - 1;
     let mut s1: u32 = 1;
     let mut s2: u32 = c_init & (MASK31 as u32);
-    let step = |s1: &mut u32, s2: &mut u32| {
-        let n1 = (*s1 ^ (*s1 >> 3)) & 1;
-        let n2 = (*s2 ^ (*s2 >> 1) ^ (*s2 >> 2) ^ (*s2 >> 3)) & 1;
-        *s1 = (*s1 >> 1) | (n1 << 30);
-        *s2 = (*s2 >> 1) | (n2 << 30);
+    // advances both states by `k` ≤ 28 places
+    let advance = |s1: &mut u32, s2: &mut u32, k: usize| {
+        let n1 = (*s1 ^ (*s1 >> 3)) & LOW;
+        let n2 = (*s2 ^ (*s2 >> 1) ^ (*s2 >> 2) ^ (*s2 >> 3)) & LOW;
+        // the state x(n + k..n + k + 31): the old bits k..31, then the new ones
+        *s1 = ((*s1 >> k) | (n1 << (31 - k))) & (MASK31 as u32);
+        *s2 = ((*s2 >> k) | (n2 << (31 - k))) & (MASK31 as u32);
     };
-    for _ in 0..GOLD_OFFSET {
-        step(&mut s1, &mut s2);
+    let mut skip = GOLD_OFFSET;
+    while skip > 0 {
+        let k = skip.min(STRIDE);
+        advance(&mut s1, &mut s2, k);
+        skip -= k;
     }
     let mut out = Vec::with_capacity(len);
-    for _ in 0..len {
-        out.push(((s1 ^ s2) & 1) as u8);
-        step(&mut s1, &mut s2);
+    while out.len() < len {
+        let k = (len - out.len()).min(STRIDE);
+        let c = s1 ^ s2;
+        out.extend((0..k).map(|i| ((c >> i) & 1) as u8));
+        advance(&mut s1, &mut s2, k);
     }
     out
 }
