@@ -2,7 +2,8 @@
 //! same steps on the same inputs and sizes, measured in the same run
 //! (`radar-sim/bench/numpy_bench.py`, needs python3 + numpy).
 //!
-//! Run: `cargo run --release -p radar-sim --example bench [-- --quick] [-- --threads N]`.
+//! Run: `cargo run --release -p radar-sim --example bench [-- --quick] [-- --threads N]`;
+//! `--synthesis-only` stops after the echo-synthesis figures (no NumPy).
 //!
 //! Every figure is the median over repetitions, with its CPU time (all threads: the process
 //! CPU-time clock, [`radar_sim::cputime`]) and the load average at the start of the step,
@@ -250,6 +251,10 @@ fn main() {
         results: serde_json::Map::new(),
     };
     let synth_cases = bench_synthesis(&mut b);
+    if args.iter().any(|a| a == "--synthesis-only") {
+        println!("load average at the end: {}", load_average());
+        return;
+    }
     // cancellation, range compression and backprojection on the in-CP look
     let (_, pulses, iq) = &synth_cases[0];
     let ap = plan_apertures(&[([0.0, 0.0], Some(0), 0.0, b.setup.look_s)], 1.0, 100.0)

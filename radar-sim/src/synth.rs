@@ -46,6 +46,7 @@ use crate::waveform::{Numerology, C_MPS};
 #[cfg(target_arch = "x86_64")]
 mod avx512;
 mod path_sums;
+mod split;
 mod timing;
 
 pub(crate) use path_sums::path_sums;
@@ -79,6 +80,18 @@ pub struct Path {
     pub delay_samples: f64,
     /// Doppler shift within the window, Hz (0 under stop-and-hop).
     pub doppler_hz: f64,
+}
+
+/// How [`Synthesizer::synthesize_window`] treats paths that change symbol within the window.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(not(test), allow(dead_code))]
+enum SplitMethod {
+    /// Corrections when more paths change symbol than the series has terms, else segments.
+    Auto,
+    /// One spectrum per segment between change points.
+    Segments,
+    /// Corrections from a shared basis ([`split`]).
+    Corrections,
 }
 
 /// The echo synthesiser for one scene and radar.
@@ -258,12 +271,29 @@ impl Synthesizer {
     /// FFT (long segments) or by direct sums over the subcarriers (short ones). Paths inside
     /// the CP never change symbol: then this is one IFFT of one spectrum. Doppler within the
     /// window enters by a Taylor series in (k − N/2)/f_s (truncation < 1e-12 of the amplitude).
+    ///
+    /// Many split paths (more than the terms of [`split`]'s series) are instead each taken as
+    /// their longer piece's symbol in the one spectrum, plus a correction over the shorter side
+    /// from a basis shared by all paths of the same pair of symbols ([`split`]): about Q
+    /// transforms per window instead of one per split path.
     pub fn synthesize_window(
         &self,
         m: i64,
         paths: &[Path],
         data: &mut dyn FnMut(i64) -> Option<Arc<Vec<Complex32>>>,
         out: &mut [Complex64],
+    ) {
+        self.synthesize_window_by(m, paths, data, out, SplitMethod::Auto);
+    }
+
+    /// [`Self::synthesize_window`] with the method for split paths chosen by `method`.
+    fn synthesize_window_by(
+        &self,
+        m: i64,
+        paths: &[Path],
+        data: &mut dyn FnMut(i64) -> Option<Arc<Vec<Complex32>>>,
+        out: &mut [Complex64],
+        method: SplitMethod,
     ) {
         if paths.is_empty() {
             return;
@@ -319,19 +349,67 @@ impl Synthesizer {
         let j_of = |k: f64, d: f64| timing.j_of(k - d);
         let mut groups: Vec<(i64, Vec<&Path>)> = Vec::new();
         let mut events: Vec<(usize, &Path, i64, i64)> = Vec::new(); // (first sample, path, j0, j1)
-        for p in paths {
-            let d = p.delay_samples;
-            let (j0, j1) = (j_of(0.0, d), j_of((n - 1) as f64, d));
-            match groups.iter_mut().find(|(j, _)| *j == j0) {
-                Some((_, g)) => g.push(p),
-                None => groups.push((j0, vec![p])),
-            }
-            if j1 != j0 {
-                let s = timing.change_at(d, j1).ceil().clamp(0.0, n as f64) as usize;
+        let pieces: Vec<(i64, i64, usize)> = paths
+            .iter()
+            .map(|p| {
+                let d = p.delay_samples;
+                let (j0, j1) = (j_of(0.0, d), j_of((n - 1) as f64, d));
+                let s = if j1 == j0 {
+                    n
+                } else {
+                    timing.change_at(d, j1).ceil().clamp(0.0, n as f64) as usize
+                };
+                (j0, j1, s)
+            })
+            .collect();
+        let split_terms =
+            split::series_terms(std::f64::consts::PI * split::max_index(num) / n as f64);
+        let corrected = match method {
+            SplitMethod::Auto => pieces.iter().filter(|(j0, j1, _)| j0 != j1).count() > split_terms,
+            SplitMethod::Segments => false,
+            SplitMethod::Corrections => true,
+        };
+        // (j0, j1) → the corrections of the paths of that transition
+        let mut corrections: Vec<((i64, i64), Vec<split::Correction<'_>>)> = Vec::new();
+        for (p, &(j0, j1, s)) in paths.iter().zip(&pieces) {
+            let (base, corr) = if j1 == j0 {
+                (j0, None)
+            } else if !corrected {
                 events.push((s, p, j0, j1));
+                (j0, None)
+            } else if 2 * s >= n {
+                (j0, Some((1.0, s..n)))
+            } else {
+                (j1, Some((-1.0, 0..s)))
+            };
+            match groups.iter_mut().find(|(j, _)| *j == base) {
+                Some((_, g)) => g.push(p),
+                None => groups.push((base, vec![p])),
+            }
+            if let Some((sign, range)) = corr {
+                let c = split::Correction {
+                    path: p,
+                    sign,
+                    range,
+                };
+                match corrections.iter_mut().find(|(key, _)| *key == (j0, j1)) {
+                    Some((_, v)) => v.push(c),
+                    None => corrections.push(((j0, j1), vec![c])),
+                }
             }
         }
         events.sort_by_key(|e| e.0);
+        for ((j0, j1), cs) in &corrections {
+            let (a, b) = (y_of(*j1, &mut ys), y_of(*j0, &mut ys));
+            let d: Vec<Complex64> = ys[a]
+                .1
+                .iter()
+                .zip(&ys[b].1)
+                .map(|(y1, y0)| y1 - y0)
+                .collect();
+            let g = split::basis(num, self.ifft.as_ref(), &d, split_terms);
+            split::apply(num, &g, split_terms, cs, out);
+        }
         // initial spectra Z_q
         let mut z = vec![Complex64::new(0.0, 0.0); nsc * terms];
         for (j, g) in &groups {

@@ -314,3 +314,91 @@ fn the_sector_pattern_scales_the_direct_path_and_the_echoes() {
     let ratio = sec.direct_power_w(behind, heading) / iso.direct_power_w(behind, heading);
     assert!((10.0 * ratio.log10() + 30.0).abs() < 1e-9, "{ratio}");
 }
+
+/// Many paths at delays in and beyond the CP and early ones (deterministic pseudo-random).
+fn many_paths(count: usize, max_delay: f64, doppler_hz: f64) -> Vec<Path> {
+    let mut x = 0.271_828_f64;
+    let mut next = move || {
+        x = (x * 997.0 + 0.123_456_7).fract();
+        x
+    };
+    (0..count)
+        .map(|_| Path {
+            amp: Complex64::from_polar(0.1 + next(), std::f64::consts::TAU * next()),
+            delay_samples: -4.0 + (max_delay + 4.0) * next(),
+            doppler_hz: doppler_hz * (2.0 * next() - 1.0),
+        })
+        .collect()
+}
+
+fn relative_error(got: &[Complex64], want: &[Complex64]) -> f64 {
+    let err: f64 = got.iter().zip(want).map(|(a, b)| (a - b).norm_sqr()).sum();
+    let pow: f64 = want.iter().map(|a| a.norm_sqr()).sum();
+    assert!(pow > 0.0);
+    err / pow
+}
+
+/// The corrections from a shared basis (split::) against brute force and against the segment
+/// spectra, with and without Doppler, for a window whose paths mostly change symbol.
+#[test]
+fn corrections_agree_with_brute_force_and_the_segment_spectra() {
+    for motion in [MotionModel::StopAndHop, MotionModel::IntraPulse] {
+        let s = synth(motion);
+        let dop = if motion == MotionModel::IntraPulse {
+            5e3
+        } else {
+            0.0
+        };
+        let paths = many_paths(40, 150.0, dop);
+        let mut data = |m: i64| (m >= 0).then(|| Arc::new(s.numerology().symbol_data(m as u64)));
+        let mut by = |method| {
+            let mut out = vec![Complex64::new(0.0, 0.0); 64];
+            s.synthesize_window_by(7, &paths, &mut data, &mut out, method);
+            out
+        };
+        let (seg, corr, auto) = (
+            by(SplitMethod::Segments),
+            by(SplitMethod::Corrections),
+            by(SplitMethod::Auto),
+        );
+        let want = brute(&s, 7, &paths);
+        assert!(relative_error(&seg, &want) < 1e-20, "{motion:?} segments");
+        let e = relative_error(&corr, &want);
+        assert!(e < 1e-20, "{motion:?}: corrections, relative error {e}");
+        assert!(relative_error(&corr, &seg) < 1e-22, "{motion:?}");
+        // 40 split paths are more than the series' terms: Auto takes the corrections
+        assert_eq!(auto, corr, "{motion:?}");
+    }
+}
+
+/// The same under NR's per-symbol CPs, windows across the long CPs.
+#[test]
+fn corrections_are_exact_under_nr() {
+    let s = nr_synth();
+    let num = s.numerology();
+    let paths = many_paths(30, 250.0, 0.0);
+    for m in [3u64, 13, 14, 15, 28, 33] {
+        let mut data = |m: i64| (m >= 0).then(|| Arc::new(num.symbol_data(m as u64)));
+        let mut out = vec![Complex64::new(0.0, 0.0); 128];
+        s.synthesize_window_by(
+            m as i64,
+            &paths,
+            &mut data,
+            &mut out,
+            SplitMethod::Corrections,
+        );
+        let e = relative_error(&out, &brute_nr(&s, m, &paths));
+        assert!(e < 1e-20, "m {m}: relative error {e}");
+    }
+}
+
+/// The series' terms hold the truncation bound: x^Q/Q!·e^x < 1e-16, and one term fewer does not.
+#[test]
+fn series_terms_meet_the_bound() {
+    for x in [0.1, 0.96, 1.35, 2.0] {
+        let q = split::series_terms(x);
+        let tail = |q: usize| x.powi(q as i32) / (1..=q).map(|v| v as f64).product::<f64>();
+        assert!(tail(q) * x.exp() < 1e-16, "x {x}: {q}");
+        assert!(tail(q - 1) * x.exp() >= 1e-16, "x {x}: {q}");
+    }
+}
