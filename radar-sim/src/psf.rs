@@ -203,6 +203,20 @@ pub struct ReferenceResponse {
     pub levels: ProfileLevels,
 }
 
+/// The peak sidelobe of the unweighted range response (a sinc over evenly covered
+/// subcarriers), dB.
+pub const SINC_PEAK_SIDELOBE_DB: f64 = -13.26;
+
+impl ReferenceResponse {
+    /// The predicted level at the comb alias N / `prs_comb`, dB: `None` (no alias) where the
+    /// reference covers every occupied subcarrier over the pulse (`ideal`, `reconstructed`, and
+    /// `pilots` once the PRS's staggering cycle of `prs_comb` symbols is complete); 0 dB for a
+    /// `pilots` pulse shorter than the cycle (a comb repeats its response every N / comb).
+    pub fn predicted_alias_db(&self, prs_comb: usize) -> Option<f64> {
+        (self.reference == Reference::Pilots && self.pulse_symbols < prs_comb).then_some(0.0)
+    }
+}
+
 /// The response of each reference under the NR cell `nr` (default canceller, no noise, the
 /// direct path on, so that `reconstructed` decides on it) for `case`: the comb alias at
 /// N / prs_comb samples.
