@@ -205,8 +205,10 @@ impl<'a> Echo<'a> {
             let waiting = self.missions.is_empty().then_some(plan_wait.as_str());
             waits.waiting_for(self.node, waiting);
             // published plans are not taken on (a processor's request is, handle_request);
-            // the subscription only counts the malformed ones
-            while plans.try_recv().is_some() {}
+            // the subscription only counts the malformed and the inconsistent ones
+            while let Some(p) = plans.try_recv() {
+                self.consistent(&p.message);
+            }
             let status_due = self.missions.len() != known_missions;
             known_missions = self.missions.len();
             let wait = if self.queue.is_empty() {
@@ -268,10 +270,7 @@ impl<'a> Echo<'a> {
         if self.missions.contains_key(&id) {
             return;
         }
-        if let Some(why) = plan.id_problem() {
-            self.report.plans_inconsistent += 1;
-            tracing::warn!(mission = %id, planner = %plan.planner, reason = %why,
-                "plan skipped: its mission id is not its content's");
+        if !self.consistent(&plan) {
             return;
         }
         if !self.make_room(id) {
@@ -290,6 +289,18 @@ impl<'a> Echo<'a> {
             }
             Err(e) => tracing::warn!(mission = %id, error = %e, "plan not usable"),
         }
+    }
+
+    /// Whether `plan`'s mission id is the one its content gives; if not, it is counted and
+    /// logged.
+    fn consistent(&mut self, plan: &Plan) -> bool {
+        let Some(why) = plan.id_problem() else {
+            return true;
+        };
+        self.report.plans_inconsistent += 1;
+        tracing::warn!(mission = %plan.mission_id, planner = %plan.planner, reason = %why,
+            "plan skipped: its mission id is not its content's");
+        false
     }
 
     /// Makes room for mission `id` under `--max-missions`; false when it must be refused.

@@ -112,6 +112,9 @@ impl Proc<'_> {
             // a mission is taken on only when asked for (wanted.rs): the plans published for
             // others are not
             while let Some(p) = plans.try_recv() {
+                if !self.consistent(&p.message) {
+                    continue;
+                }
                 let bytes = usize::try_from(p.header.body_len).unwrap_or(usize::MAX);
                 if let Some(plan) = self.wanted.published(p.message, bytes) {
                     self.take_on(plan);
@@ -193,6 +196,18 @@ impl Proc<'_> {
         Ok(self.report.clone())
     }
 
+    /// Whether `plan`'s mission id is the one its content gives; if not, it is counted and
+    /// logged.
+    fn consistent(&mut self, plan: &Plan) -> bool {
+        let Some(why) = plan.id_problem() else {
+            return true;
+        };
+        self.report.plans_inconsistent += 1;
+        tracing::warn!(mission = %plan.mission_id, planner = %plan.planner, reason = %why,
+            "plan skipped: its mission id is not its content's");
+        false
+    }
+
     /// Takes on the mission of `plan`, which was asked for.
     fn take_on(&mut self, plan: Plan) {
         self.wanted.forget(plan.mission_id);
@@ -207,10 +222,7 @@ impl Proc<'_> {
         if self.runs.iter().any(|r| r.ctx.base.mission_id == id) {
             return;
         }
-        if let Some(why) = plan.id_problem() {
-            self.report.plans_inconsistent += 1;
-            tracing::warn!(mission = %id, planner = %plan.planner, reason = %why,
-                "plan skipped: its mission id is not its content's");
+        if !self.consistent(&plan) {
             return;
         }
         let droppable = self.runs.iter().map(|r| r.droppable());

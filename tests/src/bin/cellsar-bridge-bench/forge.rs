@@ -23,6 +23,9 @@
 //! - `--mission <id>`: it forges for this mission from the start, without having to see it (a
 //!   peer that the router lets see nothing).
 //!
+//! Besides the keys it sees, it looks up the plans any process holds at start (a mission
+//! planned before it joined).
+//!
 //! It logs its session's Zenoh id (`forge zid <zid>`, so that a test can pick its lines out of
 //! a router's log) and, every [`PROGRESS_EVERY`], what it did and received so far (`forge
 //! progress <json>`, the report's fields): the samples its subscribers got and the processors
@@ -269,6 +272,13 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
                 .map_err(|e| anyhow::anyhow!("subscribing to {sel}: {e}"))?,
         );
     }
+    // and the plans any process holds (a mission planned before it joined, which no service
+    // announces until a processor or a client asks for it); its replies are not counted in
+    // `received`
+    let lookup = {
+        let (node, s, own) = (node.clone(), seen.clone(), own.clone());
+        std::thread::spawn(move || learn_held_plans(&node, &s, &own))
+    };
     let plans = if let (true, Some(plan)) = (a.forge_plans, base_plan) {
         let q =
             node.queryable::<PlanRequest>(keys::PLAN, bridge::net::SubscribeOptions::default())?;
@@ -406,11 +416,46 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
             .map_err(|_| anyhow::anyhow!("the flood of plan requests panicked"))?;
     }
     drop(subs);
+    lookup
+        .join()
+        .map_err(|_| anyhow::anyhow!("the plan lookup panicked"))?;
     report(&r)?;
     Arc::try_unwrap(node)
         .map_err(|_| anyhow::anyhow!("the Zenoh session is still shared at the end"))?
         .close()?;
     Ok(())
+}
+
+/// Adds to `seen` the missions (not `own`) of the plans any process holds (`PlanLookup` on
+/// every mission's plan key), as a late joiner would look them up; a lookup that fails (a
+/// router that does not let it through) adds none.
+fn learn_held_plans(
+    node: &bridge::ZenohNode,
+    seen: &Mutex<BTreeSet<MissionId>>,
+    own: &BTreeSet<MissionId>,
+) {
+    let opts = bridge::net::QueryOptions {
+        timeout: Duration::from_secs(2),
+        target: bridge::zenoh::query::QueryTarget::All,
+        limits: bridge::envelope::DecodeLimits {
+            max_body_bytes: pipeline::protocol::MAX_PLAN_BYTES,
+            verify_crc: true,
+        },
+        ..bridge::net::QueryOptions::default()
+    };
+    let Ok(replies) = node.query::<pipeline::protocol::PlanLookup, Plan>(
+        keys::ALL_PLANS,
+        &pipeline::protocol::PlanLookup {},
+        &opts,
+    ) else {
+        return;
+    };
+    for r in replies.into_iter().flatten() {
+        let id = r.message.mission_id;
+        if let (false, Ok(mut s)) = (own.contains(&id), seen.lock()) {
+            s.insert(id);
+        }
+    }
 }
 
 /// One round of forgeries for mission `id`: a failed processor status, detections of every
