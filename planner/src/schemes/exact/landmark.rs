@@ -120,36 +120,7 @@ pub(super) fn landmark_rows(
     );
     // κ‖v − u‖² ≤ e (free altitude: A‖v − u‖² + B (H_t − H_t^(ℓ))² ≤ e)
     let kappa = tuning.kappa_scale * slot_offset * CENTRE_CURVATURE_BOUND / (s_min * s_min);
-    let dvx = vx.clone().plus_const(-l.step_m.x);
-    let dvy = vy.clone().plus_const(-l.step_m.y);
-    match alt {
-        None => {
-            b.rotated_soc(
-                Lin::var(e, 1.0 / kappa),
-                Lin::constant_only(1.0),
-                &[dvx.clone(), dvy.clone()],
-            );
-            if let Some(tr) = tuning.trust_radius_m {
-                b.soc(Lin::constant_only(tr), &[dvx, dvy]);
-            }
-        }
-        Some((av, z0)) => {
-            let (ca, cb) = error_coefficients(p, kappa, s_min);
-            let dz = Lin::var(av.h, 1.0).plus_const(-z0);
-            b.rotated_soc(
-                Lin::var(e, 1.0),
-                Lin::constant_only(1.0),
-                &[
-                    dvx.clone().scaled(ca.sqrt()),
-                    dvy.clone().scaled(ca.sqrt()),
-                    dz.clone().scaled(cb.sqrt()),
-                ],
-            );
-            if let Some(tr) = tuning.trust_radius_m {
-                b.soc(Lin::constant_only(tr), &[dvx, dvy, dz]);
-            }
-        }
-    }
+    error_budget(b, tuning, (e, kappa, s_min), alt, p, (&vx, &vy), l.step_m);
     // range requirement (only when it is not vacuous): the true centre stays outside
     // the keep-out disc around the BS; linearised along the previous centre's direction.
     if let Some(rk) = keepout {
@@ -196,6 +167,50 @@ pub(super) fn landmark_rows(
     }
     if let Some(sig) = sv.sigma {
         b.nonneg(Lin::var(sig, 1.0));
+    }
+}
+
+/// The centre-error budget of a landmark slot: κ‖v − u‖² ≤ e at a fixed altitude,
+/// A‖v − u‖² + B (H_t − H_t^(ℓ))² ≤ e with a free one ([`error_coefficients`]), and the trust
+/// region on the same step when one is set.
+fn error_budget(
+    b: &mut ProblemBuilder,
+    tuning: &ExactTuning,
+    (e, kappa, s_min): (usize, f64, f64),
+    alt: Option<(AltitudeVars, f64)>,
+    p: &crate::Params,
+    (vx, vy): (&Lin, &Lin),
+    step_m: Vector2<f64>,
+) {
+    let dvx = vx.clone().plus_const(-step_m.x);
+    let dvy = vy.clone().plus_const(-step_m.y);
+    match alt {
+        None => {
+            b.rotated_soc(
+                Lin::var(e, 1.0 / kappa),
+                Lin::constant_only(1.0),
+                &[dvx.clone(), dvy.clone()],
+            );
+            if let Some(tr) = tuning.trust_radius_m {
+                b.soc(Lin::constant_only(tr), &[dvx, dvy]);
+            }
+        }
+        Some((av, z0)) => {
+            let (ca, cb) = error_coefficients(p, kappa, s_min);
+            let dz = Lin::var(av.h, 1.0).plus_const(-z0);
+            b.rotated_soc(
+                Lin::var(e, 1.0),
+                Lin::constant_only(1.0),
+                &[
+                    dvx.clone().scaled(ca.sqrt()),
+                    dvy.clone().scaled(ca.sqrt()),
+                    dz.clone().scaled(cb.sqrt()),
+                ],
+            );
+            if let Some(tr) = tuning.trust_radius_m {
+                b.soc(Lin::constant_only(tr), &[dvx, dvy, dz]);
+            }
+        }
     }
 }
 
