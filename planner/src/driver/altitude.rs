@@ -24,7 +24,7 @@ use crate::{Mission, Params};
 
 use super::iterate::record;
 use super::options::Deadline;
-use super::{Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason};
+use super::{BestEffort, Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason};
 
 /// Rejected steps (each halving the trust radius) after which the loop stops.
 const MAX_REJECTS: usize = 8;
@@ -240,8 +240,17 @@ fn refine(
             .map(|r| r * 4.0)
             .filter(|r| *r < 50.0);
     }
+    // a best effort's refusal names a slot the free plan leaves unresolved
+    let best_effort = best_effort.map(|b| BestEffort {
+        strict_refusal: b
+            .strict_refusal
+            .as_ref()
+            .and(super::best_effort::strict_refusal(mission, &ev)),
+        ..b
+    });
     Ok(PlanResult {
         scheme: Scheme::Exact,
+        best_effort,
         trajectory: current,
         evaluation: ev,
         objective,

@@ -247,12 +247,8 @@ fn best_effort_until(
             deadline,
         },
     )?;
-    if let Some(slot) = ResolutionShortfall::new(mission, &out.evaluation).first_unresolved_slot {
-        info.strict_refusal = Some(format!(
-            "the best effort leaves landmark slot {slot} (t = {:.1} s) with a cell wider than \
-             d_min",
-            slot as f64 * mission.params().slot_s
-        ));
+    if let Some(refusal) = strict_refusal(mission, &out.evaluation) {
+        info.strict_refusal = Some(refusal);
         return Ok(finish(out, 0, info));
     }
     // every slot resolved: the least energy with the cell constraints hard, from here
@@ -274,4 +270,19 @@ fn best_effort_until(
         },
     )?;
     Ok(finish(polished, programs, info))
+}
+
+/// Why a best effort evaluated as `ev` is not a strict general plan
+/// ([`BestEffort::strict_refusal`]): the first landmark slot it leaves unresolved, `None` when it
+/// resolves every one.
+pub(super) fn strict_refusal(mission: &Mission, ev: &crate::Evaluation) -> Option<String> {
+    ResolutionShortfall::new(mission, ev)
+        .first_unresolved_slot
+        .map(|slot| {
+            format!(
+                "the best effort leaves landmark slot {slot} (t = {:.1} s) with a cell wider \
+                 than d_min",
+                slot as f64 * mission.params().slot_s
+            )
+        })
 }
