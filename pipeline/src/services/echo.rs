@@ -205,10 +205,8 @@ impl<'a> Echo<'a> {
             let waiting = self.missions.is_empty().then_some(plan_wait.as_str());
             waits.waiting_for(self.node, waiting);
             // published plans are not taken on (a processor's request is, handle_request);
-            // the subscription only counts the malformed and the inconsistent ones
-            while let Some(p) = plans.try_recv() {
-                self.consistent(&p.message);
-            }
+            // the subscription only counts the malformed ones
+            while plans.try_recv().is_some() {}
             let status_due = self.missions.len() != known_missions;
             known_missions = self.missions.len();
             let wait = if self.queue.is_empty() {

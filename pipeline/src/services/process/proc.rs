@@ -112,9 +112,6 @@ impl Proc<'_> {
             // a mission is taken on only when asked for (wanted.rs): the plans published for
             // others are not
             while let Some(p) = plans.try_recv() {
-                if !self.consistent(&p.message) {
-                    continue;
-                }
                 let bytes = usize::try_from(p.header.body_len).unwrap_or(usize::MAX);
                 if let Some(plan) = self.wanted.published(p.message, bytes) {
                     self.take_on(plan);
