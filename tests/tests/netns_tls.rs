@@ -256,10 +256,9 @@ fn assert_stranger_did_nothing(r: &serde_json::Value, forge_log: &str, router_lo
 ///   the echo for apertures of the mission of the planner forger's plan (which a processor may);
 /// - with the planner's certificate (instance `intruder-q`, announced as a processor): its
 ///   processor token and its status, detections, images and metrics are denied; the plan it
-///   may publish under a wrong id reaches the echo and the processor, which take on no
-///   published plan (only one looked up when a mission is asked for): the echo, asked for
-///   that mission, refuses as it has no plan for it, and the processor, which no client asks
-///   results of that mission (only the launcher's certificate may), never takes it on; its
+///   may publish under a wrong id reaches the echo and the processor, which never take it on:
+///   the echo, asked for that mission, refuses as it has no plan for it (it takes on no
+///   published plan, only one looked up), and the processor skips it by its id; its
 ///   answer to the launcher's plan request (another mission) is skipped as not answering the
 ///   request.
 ///
@@ -357,7 +356,8 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
     // what their certificates allow reached its consumers and was refused there: the
     // processor forger's status, detections and images by the launcher's sender check; the
     // planner forger's plan reply by the launcher; its plan under a wrong id neither by the
-    // echo (above) nor by the processor, which never took that plan's mission on
+    // echo (above) nor by the processor, which never takes that plan's mission on (it skips
+    // the plan by its id, if it looks at it at all)
     let c = &l.pipeline_json()["collector"];
     assert!(c["refused_senders"].as_u64().unwrap() > 0, "{c}");
     assert!(q_log.contains("answered a plan request"), "{q_log}");
@@ -369,7 +369,7 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
     );
     let processor_log = std::fs::read_to_string(d.join("processor.log")).unwrap();
     assert!(
-        !processor_log.contains(&format!("mission={WRONG_PLAN_ID}")),
+        !processor_log.contains(&format!("plan received mission={WRONG_PLAN_ID}")),
         "{processor_log}"
     );
 }
