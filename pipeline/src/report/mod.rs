@@ -1,5 +1,6 @@
 //! Output files of a plan: `mission.toml`, `trajectory.csv`, `summary.json`, `trajectory.svg`,
-//! `energy.svg`, `convergence.svg`; and reading a plan directory back.
+//! `energy.svg`, `convergence.svg`, and `altitude.svg` for a free-altitude plan; and reading a
+//! plan directory back.
 
 pub mod image_svg;
 pub mod plot;
@@ -13,7 +14,7 @@ use crate::services::os::write_file_atomic;
 use planner::driver::{PlanResult, Scheme};
 use planner::summary::{trajectory_csv, Summary};
 use planner::{Mission, MissionError, Trajectory, TrajectoryError};
-use plot::{line_plot, trajectory_plot, Series, TrackStyle};
+use plot::{altitude_plot, line_plot, trajectory_plot, Series, TrackStyle};
 
 /// Writing or reading report files failed. A variant whose message includes its cause does
 /// not also return it from `source()` (each cause is printed once).
@@ -80,7 +81,9 @@ pub fn circle_slots(slots: usize, count: usize) -> Vec<usize> {
 }
 
 /// Writes a plan directory: `mission.toml`, `trajectory.csv`, `summary.json`, `trajectory.svg`,
-/// `energy.svg`, `convergence.svg`. Returns the files written.
+/// `energy.svg`, `convergence.svg`, and for a plan with altitudes per slot
+/// ([`PlanResult::altitudes_m`]) `altitude.svg` (no side view for a fixed mission: its one
+/// altitude is a flat line). Returns the files written.
 pub fn write_plan_dir(
     dir: &Path,
     mission: &Mission,
@@ -196,6 +199,27 @@ pub fn write_plan_dir(
         &series,
     )?;
     written.push(path);
+
+    // a free-altitude plan's side view; a fixed mission flies one altitude (in mission.toml)
+    if let Some(altitudes_m) = &result.altitudes_m {
+        let path = dir.join("altitude.svg");
+        let slot_s = mission.params().slot_s;
+        let profile_m: Vec<(f64, f64)> = std::iter::once((0.0, mission.params().altitude_m))
+            .chain(
+                altitudes_m
+                    .iter()
+                    .enumerate()
+                    .map(|(i, z)| ((i + 1) as f64 * slot_s, *z)),
+            )
+            .collect();
+        altitude_plot(
+            &path,
+            &format!("altitude — {}", mission.name()),
+            mission,
+            &profile_m,
+        )?;
+        written.push(path);
+    }
     Ok(written)
 }
 
@@ -240,5 +264,54 @@ mod tests {
         // a plot is written the same way
         let e = plot::line_plot(&missing, "t", "x", "y", &[]).unwrap_err();
         assert!(e.to_string().contains("plot.svg"), "{e}");
+    }
+
+    /// A free-altitude plan's directory has `altitude.svg` (listed among the files written)
+    /// with its bounds and rates; the same plan without altitudes (a fixed one) has none.
+    #[test]
+    fn a_free_plan_directory_has_its_altitude_side_view() {
+        let text = r#"
+name = "only lower"
+[params]
+horizon_s = 100
+start_m = [-800.0, 0.0]
+start_velocity_mps = [0.0, 5.0]
+max_speed_mps = 6.0
+altitude = "free"
+min_altitude_m = 800
+max_altitude_m = 1000
+max_descent_mps = 5
+[landmarks]
+points = [{ x_m = 0.0, y_m = 250.0, from_s = 50.0, to_s = 100.0 }]
+"#;
+        let m =
+            Mission::from_file_struct(&planner::MissionFile::from_toml_str(text).unwrap()).unwrap();
+        let options = planner::PlanOptions {
+            altitude_profile: true,
+            ..planner::PlanOptions::least_energy()
+        };
+        let r = planner::plan(&m, &options).unwrap();
+        assert!(r.altitudes_m.is_some());
+        let dir = tempfile::tempdir().unwrap();
+        let written = write_plan_dir(dir.path(), &m, &r).unwrap();
+        let path = dir.path().join("altitude.svg");
+        assert!(written.contains(&path), "{written:?}");
+        let svg = std::fs::read_to_string(&path).unwrap();
+        for text in [
+            "min_altitude_m = 800 m",
+            "max_altitude_m = 1000 m",
+            "descent ≤ 5.0 m/s",
+            "altitude z_m",
+        ] {
+            assert!(svg.contains(text), "{text} missing");
+        }
+        let fixed = PlanResult {
+            altitudes_m: None,
+            ..r
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let written = write_plan_dir(dir.path(), &m, &fixed).unwrap();
+        assert!(!dir.path().join("altitude.svg").exists(), "{written:?}");
+        assert_eq!(written.len(), 6);
     }
 }

@@ -1,5 +1,6 @@
 //! SVG plots: trajectories with landmarks, BS and sensing circles; line plots (energy per slot,
-//! convergence, power vs speed, E\[d_min\] vs R, ...).
+//! convergence, power vs speed, E\[d_min\] vs R, ...); the altitude side view of a
+//! free-altitude plan.
 
 use std::ops::Range;
 use std::path::Path;
@@ -184,6 +185,44 @@ pub fn line_plot(
         finish(&mut chart, &root, emptiest_corner(&all, series.len()), path)?;
     }
     write_file(path, &text)
+}
+
+/// The altitude profile of a free-altitude plan (`altitude = "free"`) against time: the
+/// altitude `profile_m` ((t_s, z_m) points, the start first) as a line with markers, the
+/// bounds `min_altitude_m` and `max_altitude_m` as dashed lines, and the climb and descent
+/// limits in the title.
+pub fn altitude_plot(
+    path: &Path,
+    title: &str,
+    mission: &Mission,
+    profile_m: &[(f64, f64)],
+) -> Result<(), ReportError> {
+    let p = mission.params();
+    let (lo_m, hi_m) = planner::altitude::bounds_m(p);
+    let t_end_s = profile_m
+        .iter()
+        .map(|(t, _)| *t)
+        .filter(|t| t.is_finite())
+        .fold(p.horizon_s, f64::max);
+    let bound = |name: String, z_m: f64, colour: usize| Series {
+        dashed: true,
+        colour: Some(colour),
+        ..Series::line(name, vec![(0.0, z_m), (t_end_s, z_m)])
+    };
+    let series = [
+        Series {
+            markers: profile_m.len() <= 60,
+            colour: Some(0),
+            ..Series::line("altitude z_m", profile_m.to_vec())
+        },
+        bound(format!("max_altitude_m = {hi_m:.0} m"), hi_m, 1),
+        bound(format!("min_altitude_m = {lo_m:.0} m"), lo_m, 2),
+    ];
+    let title = format!(
+        "{title} (climb ≤ {:.1} m/s, descent ≤ {:.1} m/s)",
+        p.max_climb_mps, p.max_descent_mps
+    );
+    line_plot(path, &title, "t (s)", "altitude (m)", &series)
 }
 
 /// The chart of a plot on `root`: the caption `title`, axes over `ranges` (x, y) described by
@@ -478,6 +517,82 @@ mod tests {
             ),
             "{pos:?}"
         );
+    }
+
+    /// The points of the first `<polyline>` stroked in `colour`, in pixels.
+    fn polyline_px(svg: &str, colour: RGBColor) -> Vec<(f64, f64)> {
+        let hex = format!("#{:02X}{:02X}{:02X}", colour.0, colour.1, colour.2);
+        let tag = svg
+            .split("<polyline")
+            .skip(1)
+            .map(|t| &t[..t.find('>').unwrap()])
+            .find(|t| t.to_uppercase().contains(&hex))
+            .unwrap();
+        let points = tag.split("points=\"").nth(1).unwrap();
+        let points = &points[..points.find('"').unwrap()];
+        points
+            .split_whitespace()
+            .map(|xy| {
+                let (x, y) = xy.split_once(',').unwrap();
+                (x.parse().unwrap(), y.parse().unwrap())
+            })
+            .collect()
+    }
+
+    /// The side view draws every (t, z) point of the profile on linear axes (pixel x rising
+    /// with t, pixel y falling with z, both affine) and names the bounds and the rates.
+    #[test]
+    fn the_altitude_plot_holds_the_profile_bounds_and_rates() {
+        let m = Mission::preset(planner::Preset::Default, 200.0).unwrap();
+        let mut p = m.params().clone();
+        p.altitude = planner::AltitudeMode::Free;
+        p.min_altitude_m = Some(600.0);
+        p.max_altitude_m = Some(1200.0);
+        p.max_climb_mps = 2.5;
+        let m = m.with_params(p).unwrap();
+        // down at 1 m/s for 100 s, level, up at 2.5 m/s
+        let profile: Vec<(f64, f64)> = (0..=30)
+            .map(|k| {
+                let t = 10.0 * k as f64;
+                let z = if t <= 100.0 {
+                    1000.0 - t
+                } else if t <= 200.0 {
+                    900.0
+                } else {
+                    900.0 + 2.5 * (t - 200.0)
+                };
+                (t, z)
+            })
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("altitude.svg");
+        altitude_plot(&path, "altitude", &m, &profile).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        for text in [
+            "min_altitude_m = 600 m",
+            "max_altitude_m = 1200 m",
+            "climb ≤ 2.5 m/s",
+            "descent ≤ 1.0 m/s",
+        ] {
+            assert!(svg.contains(text), "{text} missing");
+        }
+        let px = polyline_px(&svg, PALETTE[0]);
+        assert_eq!(px.len(), profile.len());
+        let (first, last) = (profile[0], profile[profile.len() - 1]);
+        let sx = (px[px.len() - 1].0 - px[0].0) / (last.0 - first.0);
+        let (lowest, high) = (profile[10], profile[30]);
+        let sy = (px[30].1 - px[10].1) / (high.1 - lowest.1);
+        assert!(sx > 0.0 && sy < 0.0, "{sx} {sy}");
+        for (k, (&(t, z), &(x, y))) in profile.iter().zip(&px).enumerate() {
+            assert!(
+                (x - (px[0].0 + sx * (t - first.0))).abs() <= 1.0,
+                "point {k}"
+            );
+            assert!(
+                (y - (px[10].1 + sy * (z - lowest.1))).abs() <= 1.0,
+                "point {k}"
+            );
+        }
     }
 
     #[test]
