@@ -18,6 +18,15 @@
 //! with fewer than [`MIN_TRAINING_CELLS`] independent training cells is tested against the
 //! image-wide floor instead (and counted: [`CfarMap::fallback_pixels`]); no pixel is left
 //! untested.
+//!
+//! Against clutter (an image-wide floor more than [`CLUTTER_FLOOR_RATIO`] above the known
+//! thermal floor: ground clutter, whose level varies across the image with the grazing angles,
+//! the ranges and the antenna gain) the thresholds follow the local level: the training
+//! pixels are censored against their own neighbourhood's first-pass mean instead of the
+//! image-wide floor, and a pixel without enough training cells beyond its guard is tested
+//! against the censored mean of the box of about 4 × [`MIN_TRAINING_CELLS`] coherence areas
+//! around it (no guard: a weak target's own response raises it a little) instead of the
+//! image-wide floor. A noise-floored image is processed exactly as before.
 
 mod cluster;
 mod detector;
@@ -25,7 +34,7 @@ mod model;
 mod stats;
 
 pub use cluster::{cluster, cluster_with_outside, components, outside_peaks, Detection};
-pub use detector::{ca_cfar, CfarMap, CfarParams};
+pub use detector::{ca_cfar, CfarMap, CfarParams, CLUTTER_FLOOR_RATIO};
 pub use model::{ResponseModel, MODEL_CELL_MARGIN, MODEL_SCALE_MARGIN};
 pub use stats::{
     averaged_pfa, ca_alpha, ca_pfa, censored_mean, expected_peaks_per_m2, gamma_sf, image_floor,

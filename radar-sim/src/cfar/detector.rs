@@ -6,6 +6,12 @@ use serde::{Deserialize, Serialize};
 use super::stats::{ca_alpha, censored_mean, image_floor, unit_gamma_isf};
 use super::{CENSOR_PFA, MIN_TRAINING_CELLS};
 
+/// A known thermal floor this many times below the image-wide floor marks a clutter background
+/// (10 dB): [`ca_cfar`] then censors against the local level and tests the pixels without enough
+/// training cells beyond their guard against a local mean without guard instead of the
+/// image-wide one.
+pub const CLUTTER_FLOOR_RATIO: f64 = 10.0;
+
 /// CFAR settings in pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CfarParams {
@@ -83,11 +89,8 @@ fn box_sum(sat: &[f64], nx: usize, ny: usize, x0: i64, y0: i64, x1: i64, y1: i64
 /// pixel with fewer than [`MIN_TRAINING_CELLS`] uses the image-wide floor, with α for the
 /// image's kept pixels.
 pub fn ca_cfar(img: &[f32], nx: usize, ny: usize, p: &CfarParams) -> CfarMap {
-    let npx = nx * ny;
     let looks = p.looks.max(1);
     let ppc = p.pixels_per_cell.max(1.0);
-    let (gx, gy) = (p.guard_x_px as i64, p.guard_y_px as i64);
-    let t = p.train_px as i64;
     let vals: Vec<f64> = img.iter().map(|v| *v as f64).collect();
     let from_median = || {
         let mut finite: Vec<f64> = vals.iter().copied().filter(|v| v.is_finite()).collect();
@@ -132,8 +135,103 @@ pub fn ca_cfar(img: &[f32], nx: usize, ny: usize, p: &CfarParams) -> CfarMap {
     };
     let n_global = (n_all / ppc).max(1.0);
     let alpha_global = ca_alpha(p.pfa, n_global, looks);
+    let global = Global {
+        mean: global,
+        alpha: alpha_global,
+        cells: n_global,
+    };
+    // a background far above the thermal floor is clutter (or interference), whose level
+    // varies across the image: censor against the local level (the uncensored local mean,
+    // then the censored one) and give the pixels without enough training cells beyond their
+    // guard a local mean without guard
+    let clutter = matches!(p.known_floor, Some(f) if f > 0.0 && floor > CLUTTER_FLOOR_RATIO * f);
+    let pass = if clutter {
+        // the local level: first uncensored, then twice censored against the previous pass
+        let finite: Vec<f64> = vals
+            .iter()
+            .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
+            .collect();
+        let mut pass = train_and_test(&vals, &finite, nx, ny, p, 1.0, global, true);
+        for _ in 0..2 {
+            let keep: Vec<f64> = vals
+                .iter()
+                .zip(&pass.noise)
+                .map(|(v, m)| {
+                    if v.is_finite() && *v < c * f64::from(*m).max(f64::MIN_POSITIVE) {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            pass = train_and_test(&vals, &keep, nx, ny, p, tau, global, true);
+        }
+        pass
+    } else {
+        train_and_test(&vals, &keep, nx, ny, p, tau, global, false)
+    };
+    let Pass {
+        hits,
+        noise,
+        mut cells,
+        fallback,
+    } = pass;
+    let median_cells = if cells.is_empty() {
+        0.0
+    } else {
+        let k = cells.len() / 2;
+        let (_, m, _) = cells.select_nth_unstable_by(k, f64::total_cmp);
+        *m
+    };
+    CfarMap {
+        hits,
+        noise,
+        fallback_pixels: fallback,
+        floor,
+        median_cells,
+    }
+}
+
+/// The image-wide estimate: the censored mean, its α and its independent cells.
+#[derive(Debug, Clone, Copy)]
+struct Global {
+    mean: f64,
+    alpha: f64,
+    cells: f64,
+}
+
+/// One training-and-test pass of [`ca_cfar`].
+struct Pass {
+    hits: Vec<bool>,
+    noise: Vec<f32>,
+    cells: Vec<f64>,
+    fallback: usize,
+}
+
+/// The CA threshold of every pixel from the training pixels `keep` marks (1) of `vals`: the
+/// mean of the kept pixels in the band around its guard box over `tau`; with fewer than
+/// [`MIN_TRAINING_CELLS`] there, `global`, or with `box_fallback` the mean of the kept pixels of
+/// the box of about 4 × [`MIN_TRAINING_CELLS`] coherence areas around it (no guard) where that
+/// has enough.
+#[allow(clippy::too_many_arguments)]
+fn train_and_test(
+    vals: &[f64],
+    keep: &[f64],
+    nx: usize,
+    ny: usize,
+    p: &CfarParams,
+    tau: f64,
+    global: Global,
+    box_fallback: bool,
+) -> Pass {
+    let npx = nx * ny;
+    let looks = p.looks.max(1);
+    let ppc = p.pixels_per_cell.max(1.0);
+    let (gx, gy) = (p.guard_x_px as i64, p.guard_y_px as i64);
+    let t = p.train_px as i64;
+    let kept: Vec<f64> = vals.iter().zip(keep).map(|(v, k)| v * k).collect();
     let sv = sat_of(&kept, nx, ny);
-    let sk = sat_of(&keep, nx, ny);
+    let sk = sat_of(keep, nx, ny);
     let mut alpha_cache: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
     // the training box is shifted inside the image at the edges (same size where possible)
     let shift = |c: i64, h: i64, n: i64| -> (i64, i64) {
@@ -148,6 +246,10 @@ pub fn ca_cfar(img: &[f32], nx: usize, ny: usize, p: &CfarParams) -> CfarMap {
         }
         (a.max(0), b)
     };
+    // the fallback box: about 4 × MIN_TRAINING_CELLS coherence areas around the pixel
+    let local = box_fallback
+        .then(|| ((4.0 * MIN_TRAINING_CELLS * ppc).sqrt() / 2.0).ceil() as i64)
+        .filter(|h| *h > 0);
     let mut hits = vec![false; npx];
     let mut noise = vec![0f32; npx];
     let mut cells = Vec::with_capacity(npx);
@@ -169,27 +271,30 @@ pub fn ca_cfar(img: &[f32], nx: usize, ny: usize, p: &CfarParams) -> CfarMap {
                     .entry(n)
                     .or_insert_with(|| ca_alpha(p.pfa, n_eff, looks));
                 (m, a * m, n_eff)
+            } else if let Some((m, n_box)) = local.filter(|_| box_fallback).and_then(|h| {
+                let (lx0, lx1) = shift(x, h, nx as i64);
+                let (ly0, ly1) = shift(y, h, ny as i64);
+                let nb = box_sum(&sk, nx, ny, lx0, ly0, lx1, ly1).round().max(0.0) as usize;
+                let sb = box_sum(&sv, nx, ny, lx0, ly0, lx1, ly1);
+                (nb as f64 / ppc >= MIN_TRAINING_CELLS).then(|| (sb.max(0.0) / nb as f64 / tau, nb))
+            }) {
+                let a = *alpha_cache
+                    .entry(n_box)
+                    .or_insert_with(|| ca_alpha(p.pfa, n_box as f64 / ppc, looks));
+                (m, a * m, n_box as f64 / ppc)
             } else {
                 fallback += 1;
-                (global, alpha_global * global, n_global)
+                (global.mean, global.alpha * global.mean, global.cells)
             };
             noise[i] = m as f32;
             hits[i] = vals[i].is_finite() && vals[i] >= thr;
             cells.push(cells_used);
         }
     }
-    let median_cells = if cells.is_empty() {
-        0.0
-    } else {
-        let k = cells.len() / 2;
-        let (_, m, _) = cells.select_nth_unstable_by(k, f64::total_cmp);
-        *m
-    };
-    CfarMap {
+    Pass {
         hits,
         noise,
-        fallback_pixels: fallback,
-        floor,
-        median_cells,
+        cells,
+        fallback,
     }
 }

@@ -409,3 +409,39 @@ fn sidelobes_of_a_strong_return_are_not_detections() {
         assert!(model.envelope(d) >= p * (1.0 - 1e-9), "{d:?}");
     }
 }
+
+/// Clutter 15–25 dB above the known thermal floor with a 10 dB level ramp across the image,
+/// and a guard so wide (big resolution cells) that no pixel has enough training cells beyond
+/// it: the pixels' thresholds follow the local clutter level (censoring against it, a local
+/// mean without guard), so the exceedance rate stays near its design, where the image-wide
+/// level of a background taken for noise puts the bright side far above it.
+#[test]
+fn thresholds_follow_a_clutter_ramp() {
+    let (nx, ny, looks, pfa) = (240usize, 240usize, 4usize, 1e-3);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let g = Gamma::new(looks as f64, 1.0 / looks as f64).unwrap();
+    let img: Vec<f32> = (0..nx * ny)
+        .map(|i| {
+            let level = 30.0 * 10f64.powf(1.0 * (i % nx) as f64 / (nx - 1) as f64);
+            (level * g.sample(&mut rng)) as f32
+        })
+        .collect();
+    // the guard covers the image: every pixel lacks training cells beyond it
+    let mut p = params(pfa, nx, 3, looks);
+    p.pixels_per_cell = 100.0;
+    let map = ca_cfar(&img, nx, ny, &p);
+    let hits = map.hits.iter().filter(|h| **h).count() as f64;
+    let want = pfa * (nx * ny) as f64;
+    assert!(map.floor > CLUTTER_FLOOR_RATIO, "floor {}", map.floor);
+    assert_eq!(map.fallback_pixels, 0, "no pixel uses the image-wide level");
+    // the image-wide level of a noise background: the bright side exceeds it
+    p.known_floor = None;
+    let noise_like = ca_cfar(&img, nx, ny, &p);
+    let noise_hits = noise_like.hits.iter().filter(|h| **h).count() as f64;
+    println!("clutter ramp: {hits} exceedances (design {want:.1}); as noise: {noise_hits}");
+    assert!(hits <= 2.0 * want && hits >= want / 4.0, "{hits} vs {want}");
+    assert!(
+        noise_hits > 20.0 * want,
+        "{noise_hits}: the test does not discriminate"
+    );
+}
