@@ -89,9 +89,14 @@ def plan(
             ``None`` (the default) takes the scheme's default, as ``cellsar-planner plan
             --dynamics``; ``"vehicle"`` with ``"paper"`` or ``"baseline"`` is a ValueError.
 
+    A mission with ``altitude = "free"`` is planned with an altitude per slot by the
+    ``"exact"`` scheme, as by ``cellsar-planner plan`` (the plan's ``z_m`` and ``climb_mps``
+    columns); the other schemes refuse it with a :class:`PlanError`.
+
     Raises:
         InfeasibleMission: the mission cannot be flown (``slot``, ``t_s``, ``reason``).
-        PlanError: the solver failed, or the time limit passed before a feasible start.
+        PlanError: the solver failed, the time limit passed before a feasible start, or a
+            scheme other than ``"exact"`` was given a free-altitude mission.
         ValueError: a bad option or start; ``strict_resolution`` or ``max_extra_energy_pct``
             with the ``"paper"`` resolution or a comparison scheme, which would ignore them
             (the message is the library's, as the CLI's with its flags' names).

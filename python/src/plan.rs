@@ -317,6 +317,9 @@ pub fn plan(py: Python<'_>, mission: PyRef<'_, PyMission>, args: PlanArgs<'_>) -
             Some(name) => parse_named(name, &Dynamics::ALL, Dynamics::name, "dynamics")?,
             None => defaults.dynamics,
         },
+        // a free-altitude mission gets its altitude per slot (`z_m`, `climb_mps`), as from
+        // `cellsar-planner plan`; the schemes other than exact refuse it
+        altitude_profile: true,
         ..defaults
     };
     // refused before the mission is planned, with the library's message (a ValueError)

@@ -1,0 +1,58 @@
+"""Free-altitude missions (``altitude = "free"``) through the package: the ``exact`` scheme plans
+an altitude per slot (``z_m``, ``climb_mps``) within the bounds and rates, the same plan as the
+CLI's; the other schemes refuse the mission with the library's message."""
+
+import numpy as np
+import pytest
+
+import cellsar
+from conftest import read_summary
+
+LOW_M, HIGH_M = 600.0, 1200.0
+
+
+def free_mission():
+    """The paper's 200 m mission with its altitude free within [600, 1200] m."""
+    return cellsar.Mission.default(
+        200.0, altitude="free", min_altitude_m=LOW_M, max_altitude_m=HIGH_M
+    )
+
+
+def test_a_free_mission_gets_an_altitude_per_slot_within_bounds_and_rates(cli_plan, tmp_path):
+    mission = free_mission()
+    params = mission.params
+    plan = cellsar.plan(mission, resolution="paper")
+    assert plan.feasible
+    z = plan.z_m
+    climb = plan.climb_mps
+    assert len(z) == mission.slots + 1
+    # the start row: the start altitude, no climb rate
+    assert z[0] == params["altitude_m"]
+    assert np.isnan(climb[0])
+    slot_s = params["slot_s"]
+    for t in range(1, mission.slots + 1):
+        assert LOW_M <= z[t] <= HIGH_M, (t, z[t])
+        rate = (z[t] - z[t - 1]) / slot_s
+        assert climb[t] == pytest.approx(rate, rel=1e-9, abs=1e-9), t
+        assert rate <= params["max_climb_mps"] + 1e-9, (t, rate)
+        assert -rate <= params["max_descent_mps"] + 1e-9, (t, rate)
+    # the altitude is used: lower than the fixed 1000 m somewhere, and cheaper than the fixed plan
+    assert z.min() < 950.0
+    fixed = cellsar.plan(cellsar.Mission.default(200.0), resolution="paper")
+    assert plan.total_energy_j < fixed.total_energy_j - 100.0
+    assert np.all(fixed.z_m == params["altitude_m"])
+
+    # the same plan as `cellsar-planner plan` of the same mission file
+    path = tmp_path / "free.toml"
+    path.write_text(mission.to_toml())
+    out = cli_plan(path, "--resolution", "paper")
+    assert plan.total_energy_j == pytest.approx(read_summary(out)["energy_j"], rel=1e-9)
+    table = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(z, table["z_m"], rtol=1e-9)
+    np.testing.assert_allclose(climb, table["climb_mps"], rtol=1e-9, atol=1e-12, equal_nan=True)
+
+
+@pytest.mark.parametrize("scheme", ["paper", "baseline"])
+def test_schemes_at_one_altitude_refuse_a_free_mission(scheme):
+    with pytest.raises(cellsar.PlanError, match=r'`altitude` = "free".*scheme ' + scheme):
+        cellsar.plan(free_mission(), scheme=scheme)
