@@ -34,6 +34,8 @@ fn scene(gamma_db: f64) -> SceneFile {
         enabled: true,
         gamma_db: Some(gamma_db),
         seed: 5,
+        // the image and a margin of several resolution cells
+        half_width_m: Some(55.0),
         ..Default::default()
     };
     s
@@ -163,5 +165,190 @@ fn clutter_images_match_the_closed_form_and_are_rayleigh() {
     assert!(
         (ratio - std::f64::consts::FRAC_PI_4).abs() <= 4.0 * sd,
         "{ratio}"
+    );
+}
+
+/// Clutter about 20 dB above the thermal noise (with the direct path and its canceller): the
+/// CFAR, whose threshold follows the local clutter level, keeps its design false-alarm rate.
+/// The exceedance pixels come in clumps, one per excursion above the threshold, of about
+/// m = design pixels / design excursions pixels (the Euler-characteristic count of
+/// `cfar::expected_peaks_per_m2`), so their count's standard deviation is √(design × m): the
+/// count must lie within 4 of them of P_fa × the pixels tested. The detections (peaks after
+/// non-maximum suppression) are Poisson: within a factor 2 and 3 standard deviations of their
+/// design.
+#[test]
+fn cfar_keeps_its_false_alarm_rate_on_clutter() {
+    let sc = scene(-25.0);
+    let params = planner::Params::default();
+    let probe = common::processor(&params, &sc);
+    let setup = probe.setup().clone();
+    let track = common::track_through(&params, TARGET, 200.0, 20.0, 2.0);
+    let ap = common::aperture(&setup, TARGET, 0.0, LOOKS);
+    let pulses = common::pulses(&setup, &track, &ap);
+    let clutter = GroundClutter::for_run(&setup, &track, std::slice::from_ref(&ap))
+        .unwrap()
+        .unwrap();
+    let iq = clutter
+        .synthesizer(&setup, &[], &ap, &pulses)
+        .unwrap()
+        .synthesize_frame(&pulses, Components::ALL)
+        .unwrap();
+    let cnr = predicted_cnr(&probe, &clutter, &ap, &pulses, TARGET);
+    let cnr_db = 10.0 * (cnr.iter().sum::<f64>() / LOOKS as f64).log10();
+    assert!(
+        cnr_db > 15.0,
+        "clutter-to-noise {cnr_db} dB: not clutter-dominated"
+    );
+    for pfa in [1e-2, 1e-3] {
+        let mut s = sc.clone();
+        s.processing.pfa = pfa;
+        let r = common::processor(&params, &s)
+            .process_aperture(&ap, &pulses, &iq, &[])
+            .unwrap();
+        let design_px = pfa * r.clear_pixels as f64;
+        let clump = design_px / r.design_false_alarms.max(1e-9);
+        let sd_px = (design_px * clump).sqrt();
+        println!(
+            "P_fa {pfa:e}: clutter-to-noise {cnr_db:.1} dB at the centre, floor {:.1}, \
+             exceedance pixels {} of {} (design {design_px:.1} ± {sd_px:.1}), fallback {}, \
+             detections {} (design {:.1})",
+            r.image_floor,
+            r.false_alarm_pixels,
+            r.clear_pixels,
+            r.cfar_fallback_pixels,
+            r.score.false_alarms.len(),
+            r.design_false_alarms
+        );
+        assert_eq!(
+            r.clear_pixels,
+            r.grid.pixels(),
+            "no objects: every pixel is clear"
+        );
+        let fa = r.false_alarm_pixels as f64;
+        assert!(
+            (fa - design_px).abs() <= 4.0 * sd_px,
+            "{fa} exceedance pixels vs design {design_px} ± {sd_px}"
+        );
+        let (dets, design) = (r.score.false_alarms.len() as f64, r.design_false_alarms);
+        let slack = 3.0 * design.sqrt();
+        assert!(
+            dets >= design / 2.0 - slack && dets <= 2.0 * design + slack,
+            "{dets} false-alarm detections vs design {design}"
+        );
+    }
+}
+
+/// Objects 15 dB above the clutter (and the noise) in the multilook image are detected: the
+/// RCS of each is 10^1.5 × (the clutter-to-noise closed form + 1) over the SNR per m².
+#[test]
+fn objects_above_the_clutter_are_detected() {
+    let sc = scene(-25.0);
+    let params = planner::Params::default();
+    let probe = common::processor(&params, &sc);
+    let setup = probe.setup().clone();
+    let track = common::track_through(&params, TARGET, 220.0, 20.0, 2.0);
+    let ap = common::aperture(&setup, TARGET, 0.0, LOOKS);
+    let pulses = common::pulses(&setup, &track, &ap);
+    let clutter = GroundClutter::for_run(&setup, &track, std::slice::from_ref(&ap))
+        .unwrap()
+        .unwrap();
+    let ppl = ap.pulses_per_look;
+    let scr_db = 15.0;
+    let mut positions = vec![TARGET];
+    for k in 0..6 {
+        let a = std::f64::consts::TAU * k as f64 / 6.0;
+        positions.push([22.0 * a.cos(), 22.0 * a.sin()]);
+    }
+    let objects: Vec<SceneObject> = positions
+        .iter()
+        .enumerate()
+        .map(|(id, p)| {
+            let cnr = predicted_cnr(&probe, &clutter, &ap, &pulses, *p);
+            let cnr = cnr.iter().sum::<f64>() / LOOKS as f64;
+            let unit = common::object(id, *p, 1.0);
+            let snr_per_m2 = (0..LOOKS)
+                .map(|l| {
+                    10f64.powf(probe.expected_snr_db(&unit, &pulses[l * ppl..(l + 1) * ppl]) / 10.0)
+                })
+                .sum::<f64>()
+                / LOOKS as f64;
+            common::object(id, *p, 10f64.powf(scr_db / 10.0) * (cnr + 1.0) / snr_per_m2)
+        })
+        .collect();
+    let (r, ..) = image(&sc, &objects, 220.0);
+    for o in &r.score.outcomes {
+        println!(
+            "object {} at SNR {:.1} dB: detected {} (error {:?} m)",
+            o.truth.id,
+            o.truth.expected_snr_db,
+            o.detection.is_some(),
+            o.error_m
+        );
+    }
+    println!("false alarms {}", r.score.false_alarms.len());
+    assert_eq!(r.score.outcomes.len(), objects.len());
+    assert!(
+        r.score.outcomes.iter().all(|o| o.detection.is_some()),
+        "an object {scr_db} dB above the clutter was missed"
+    );
+}
+
+/// With `[clutter]` off a recording is byte for byte the one of a scene without the table, the
+/// table stays out of `meta.json`, and clutter on adds no truth objects.
+#[test]
+fn clutter_off_is_the_recording_without_clutter() {
+    let mission = planner::Mission::preset(planner::Preset::Default, 30.0).unwrap();
+    let mission = radar_sim::run::shorten(&mission, 25.0).unwrap();
+    let plan = planner::plan(&mission, &planner::PlanOptions::default()).unwrap();
+    let mut base = SceneFile::default();
+    base.radar.prf_hz = 20.0;
+    let off = {
+        let mut s = base.clone();
+        s.clutter = ClutterConfig {
+            enabled: false,
+            terrain: Some(radar_sim::config::Terrain::Woods),
+            seed: 3,
+            ..Default::default()
+        };
+        s
+    };
+    let on = {
+        let mut s = base.clone();
+        s.clutter = ClutterConfig {
+            enabled: true,
+            scatterers_per_cell: 1.0,
+            ..Default::default()
+        };
+        s
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, scene: &SceneFile| {
+        let out = dir.path().join(name);
+        radar_sim::run::simulate(&mission, &plan.trajectory, scene, &out, &mut |_, _| {}).unwrap();
+        out
+    };
+    let (a, b, c) = (run("base", &base), run("off", &off), run("on", &on));
+    let read = |d: &std::path::Path, f: &str| std::fs::read(d.join(f)).unwrap();
+    let iq: Vec<String> = std::fs::read_dir(a.join("iq"))
+        .unwrap()
+        .map(|e| format!("iq/{}", e.unwrap().file_name().to_string_lossy()))
+        .collect();
+    assert_eq!(iq.len(), 2);
+    for f in iq
+        .iter()
+        .map(String::as_str)
+        .chain(["pulses.csv", "truth.csv"])
+    {
+        assert!(read(&a, f) == read(&b, f), "{f} differs with clutter off");
+    }
+    assert_eq!(read(&a, "truth.csv"), read(&c, "truth.csv"));
+    assert!(
+        read(&a, &iq[0]) != read(&c, &iq[0]),
+        "clutter on changed nothing"
+    );
+    let meta = String::from_utf8(read(&a, "meta.json")).unwrap();
+    assert!(
+        !meta.contains("clutter"),
+        "the default scene serialises a [clutter] table"
     );
 }
