@@ -190,20 +190,40 @@ const PLAN_FLOOD_BOUND: u64 = 64 * MIB + CACHE_PLANS * 4 * 64 * 1024;
 
 /// A peer floods the planner with plan requests of distinct, well-formed missions (each a
 /// real planning job; far more at once than its request queue takes, so that most are
-/// refused as busy) from before the planner starts: the planner serves the launcher's request
-/// in turn with the flood's (one queued request per requester), the plans it makes for the
-/// flood are taken on by neither the processor nor the echo (they take on only the missions
-/// asked for: no plan refused at `--max-missions`, no mission let go), the run ends with the
-/// closed loop's outputs and exit 0, and the planner's and the processor's memory stays
-/// bounded.
+/// refused as busy) from before the planner starts, the processor up: the planner serves the
+/// launcher's request in turn with the flood's (one queued request per requester), the plans
+/// it makes for the flood are taken on by neither the processor nor the echo (they take on
+/// only the missions asked for: no plan refused at `--max-missions`, no mission let go), the
+/// run ends with the closed loop's outputs and exit 0 (the echo joining once the flood ended,
+/// the planner then holding the flood's plans), and the planner's, the processor's and the
+/// echo's memory stays bounded.
 #[test]
 fn a_peer_flooding_the_planner_with_plan_requests_leaves_the_run_exact() {
     let reference = reference(H);
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mut l = Launch::start(d, H, &["--external", "planner", "--external", "echo"]);
+    let mut l = Launch::start(
+        d,
+        H,
+        &[
+            "--external",
+            "planner",
+            "--external",
+            "echo",
+            "--external",
+            "processor",
+        ],
+    );
     let net = l.event("network", Duration::from_secs(60));
     let hub = hub_of(&net);
+    // the processor is up all along (by hand, so that its memory can be read at the end of
+    // the flood); no echo yet: the mission waits while the flood goes on, and the launcher,
+    // the hub of the mesh, with it
+    let mut pa = echo_args(&net);
+    pa[0] = "process".to_string();
+    let mut processor = Service::start("processor", d, &pa);
+    processor.wait_for_log("processor ready", Duration::from_secs(60));
+    let processor_mem = Baseline::take(processor.child.id());
     let args: Vec<String> = [
         "forge",
         "--duration-s",
@@ -244,7 +264,6 @@ fn a_peer_flooding_the_planner_with_plan_requests_leaves_the_run_exact() {
     let planned = l.event("planned", Duration::from_secs(PLAN_FLOOD_S + 120));
     let planned_s = planner_up.elapsed().as_secs_f64();
     eprintln!("planned {planned_s:.1} s after the planner was up, in the flood: {planned}");
-    let processor = Baseline::take(l.pid("processor"));
     let r = forger_report(&mut forger, PLAN_FLOOD_S);
     let q = &r["flood"]["plan_requests"];
     // the flood kept the planner's queue full, and the planner worked through some of it
@@ -261,20 +280,31 @@ fn a_peer_flooding_the_planner_with_plan_requests_leaves_the_run_exact() {
         PLAN_FLOOD_BOUND,
         "the planner under a flood of plan requests",
     );
-    processor.assert_peak_within(
+    processor_mem.assert_peak_within(
         PLAN_FLOOD_BOUND,
         "the processor while the planner published the flood's plans",
     );
-    let ea = echo_args(&net);
-    let mut echo = Service::start("echo", d, &ea);
+    // the echo joins now, the planner holding the flood's plans
+    let mut echo = Service::start("echo", d, &echo_args(&net));
+    echo.wait_for_log("echo ready", Duration::from_secs(60));
+    let echo_mem = Baseline::take(echo.child.id());
     let st = l.finish(Duration::from_secs(300));
+    echo_mem.assert_peak_within(
+        PLAN_FLOOD_BOUND,
+        "the echo joining a planner that holds the flood's plans",
+    );
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
     assert_same_as_reference(&l.out, &reference);
-    assert!(echo.stop(Duration::from_secs(20)).success());
-    assert!(planner.stop(Duration::from_secs(20)).success());
+    for s in [&mut echo, &mut processor, &mut planner] {
+        assert!(
+            s.stop(Duration::from_secs(20)).success(),
+            "{}",
+            s.log_text()
+        );
+    }
     remove_echo_segments(&net);
     // the flood's plans were published (the forger got them) but taken on by nobody else
-    let (p, e, pl) = (l.log("processor"), echo.log_text(), planner.log_text());
+    let (p, e, pl) = (processor.log_text(), echo.log_text(), planner.log_text());
     for (who, log, marker) in [
         ("processor", &p, "processor stopping"),
         ("echo", &e, "echo stopping"),
@@ -282,6 +312,8 @@ fn a_peer_flooding_the_planner_with_plan_requests_leaves_the_run_exact() {
         for key in ["plans_refused", "evicted"] {
             assert_eq!(counter(log, marker, key), Some(0), "{who} {key}:\n{log}");
         }
+        let taken = log.lines().filter(|l| l.contains("plan received")).count();
+        assert_eq!(taken, 1, "{who} took on only the run's mission:\n{log}");
     }
     let busy = counter(&pl, "plan service stopping", "busy").unwrap();
     let plans = counter(&pl, "plan service stopping", "plans").unwrap();
@@ -293,6 +325,8 @@ fn a_peer_flooding_the_planner_with_plan_requests_leaves_the_run_exact() {
         "planner: {plans} plans, {busy} requests refused as busy; launcher retries: {}",
         serde_json::Value::Array(l.named("plan_retry"))
     );
+    let end = l.seen.last().cloned().unwrap_or_default();
+    eprintln!("the run ended at {} s: {end}", end["t_s"]);
     eprintln!(
         "plan-request flood suite: {:.1} s",
         started.elapsed().as_secs_f64()
