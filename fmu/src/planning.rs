@@ -14,6 +14,9 @@ use crate::core::Num;
 pub struct Planned {
     /// The trajectory.
     pub trajectory: Trajectory,
+    /// The altitude of every slot, m, for a mission with `altitude = "free"`
+    /// ([`planner::PlanResult::altitudes_m`]); `None` at the mission's fixed altitude.
+    pub altitudes_m: Option<Vec<f64>>,
     /// Wall time of the solve, s.
     pub solve_s: f64,
     /// One line for the log.
@@ -59,6 +62,8 @@ impl InitialPlan {
             strict_resolution: self.strict_resolution,
             max_extra_energy_pct: self.max_extra_energy_pct,
             dynamics: self.dynamics,
+            // a free-altitude mission is planned with its altitude per slot (output `z_m`)
+            altitude_profile: true,
             ..Default::default()
         }
     }
@@ -190,6 +195,7 @@ pub fn plan_with(
     );
     Ok(Planned {
         trajectory: result.trajectory,
+        altitudes_m: result.altitudes_m,
         solve_s,
         summary,
     })

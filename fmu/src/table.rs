@@ -287,6 +287,10 @@ pub mod planner_vr {
     pub const COMMANDED_ACCEL_X: u32 = 320;
     /// `commanded_accel_y_mps2`.
     pub const COMMANDED_ACCEL_Y: u32 = 321;
+    /// `z_m`.
+    pub const Z: u32 = 322;
+    /// `climb_mps`.
+    pub const CLIMB: u32 = 323;
     /// `plan_solve_time_s` (local).
     pub const SOLVE_TIME: u32 = 400;
     /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests, settable only in
@@ -498,6 +502,8 @@ pub const PLANNER_VARS: &[Var] = &[
     output("commanded_accel_mps2", pv::COMMANDED_ACCEL, VarType::Real, Some("m/s2"), "Commanded horizontal acceleration of the current slot t, |v_t - v_(t-1)| / slot_s: the plan's slot-to-slot velocity difference over the slot duration (v_0 = start_velocity_mps), the accel_mps2 of trajectory.csv; at most max_accel_mps2 (to 1e-6 relative) under dynamics = vehicle"),
     output("commanded_accel_x_mps2", pv::COMMANDED_ACCEL_X, VarType::Real, Some("m/s2"), "x component of commanded_accel_mps2: (v_t - v_(t-1)) / slot_s, x"),
     output("commanded_accel_y_mps2", pv::COMMANDED_ACCEL_Y, VarType::Real, Some("m/s2"), "y component of commanded_accel_mps2: (v_t - v_(t-1)) / slot_s, y"),
+    output("z_m", pv::Z, VarType::Real, Some("m"), "UAV altitude (linear within a slot): the plan's altitude per slot for a mission with altitude = free (planned by the exact scheme, as cellsar-planner plan does), altitude_m for a fixed one; the z_m of trajectory.csv"),
+    output("climb_mps", pv::CLIMB, VarType::Real, Some("m/s"), "Climb rate of the current slot, (z_t - z_(t-1)) / slot_s (negative: descent; 0 for a fixed altitude); the climb_mps of trajectory.csv"),
     Var {
         name: "plan_solve_time_s",
         vr: pv::SOLVE_TIME,

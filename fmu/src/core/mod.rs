@@ -197,6 +197,8 @@ pub fn guid(info: &ModelInfo, version: FmiVersion) -> String {
     )
 }
 
+#[cfg(test)]
+mod altitude_tests;
 mod dispatch;
 mod mission_file;
 mod mover;
@@ -213,4 +215,4 @@ pub use mission_file::{read_mission_text, MAX_MISSION_FILE_BYTES};
 pub use mover::MoverCore;
 pub use planner_core::PlannerCore;
 use run::slot_at_committed;
-pub use run::{current_window, slot_at, Run, Sample};
+pub use run::{current_window, evaluate_at, slot_at, Run, Sample};

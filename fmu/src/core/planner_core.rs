@@ -98,6 +98,8 @@ impl PlannerCore {
             pv::COMMANDED_ACCEL => s.commanded_accel_abs_mps2,
             pv::COMMANDED_ACCEL_X => s.commanded_accel_mps2[0],
             pv::COMMANDED_ACCEL_Y => s.commanded_accel_mps2[1],
+            pv::Z => s.z_m,
+            pv::CLIMB => s.climb_mps,
             _ => return Err(unknown(var)),
         })
     }
@@ -363,7 +365,18 @@ impl PlannerCore {
                 source.display()
             ))
         })?;
-        let eval = evaluate(&mission, &planned.trajectory);
+        let eval = evaluate_at(
+            &mission,
+            &planned.trajectory,
+            planned.altitudes_m.as_deref(),
+        )
+        .map_err(|e| {
+            FmuError::error(format!(
+                "mission '{}' ({}): its plan does not evaluate at its altitudes: {e}",
+                mission.name(),
+                source.display()
+            ))
+        })?;
         log.log(
             Category::Events,
             Status::Ok,
@@ -385,6 +398,7 @@ impl PlannerCore {
             solve_s: planned.solve_s,
             moved: BTreeSet::new(),
             dynamics: self.initial.dynamics,
+            altitudes_m: planned.altitudes_m,
         });
         Ok(())
     }
@@ -465,7 +479,9 @@ impl PlannerCore {
                 ),
             );
             run.moved.insert(window);
-            run.eval = evaluate(&mission, &run.traj);
+            run.eval = run
+                .evaluate(&mission, &run.traj)
+                .map_err(|m| mv.reject(m))?;
             run.mission = mission;
             let (count, _) = run.out_of_view_from(current);
             let seen = if count > 0 {
@@ -480,6 +496,9 @@ impl PlannerCore {
                 ),
                 log,
             ));
+        }
+        if run.altitudes_m.is_some() {
+            return keep_free_plan(run, &mv, log);
         }
         log.log(
             Category::Events,
@@ -515,6 +534,35 @@ impl LandmarkMove {
             Num(self.input[1])
         ))
     }
+}
+
+/// A landmark move in a free-altitude plan: the receding-horizon re-plan plans at one altitude
+/// only, so the plan (its track and its altitudes) is kept, evaluated against the moved
+/// landmark, with a warning saying so and how many slots no longer see a landmark.
+fn keep_free_plan(run: &mut Run, mv: &LandmarkMove, log: &dyn Log) -> Result<StepReport, FmuError> {
+    let mission =
+        planning::moved_mission(&run.mission, mv.window, mv.input).map_err(|m| mv.reject(m))?;
+    run.eval = run
+        .evaluate(&mission, &run.traj)
+        .map_err(|m| mv.reject(m))?;
+    run.mission = mission;
+    run.moved.insert(mv.window);
+    let (count, slots) = run.out_of_view_from(mv.from + 1);
+    let seen = if count > 0 {
+        format!(
+            "; {count} slot(s) after the current one are out of view: {slots} (output `slots_out_of_view` = {})",
+            run.eval.slots_out_of_view
+        )
+    } else {
+        String::new()
+    };
+    Ok(run.warn(
+        format!(
+            "{}: not re-planned: the mission's altitude is free (altitude = \"free\") and re-plans fly one altitude, so the plan and its altitudes are kept{seen}",
+            mv.what
+        ),
+        log,
+    ))
 }
 
 /// Re-plans the rest of the horizon after a landmark move and reports the outcome: the new

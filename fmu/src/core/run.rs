@@ -21,6 +21,10 @@ pub struct Run {
     pub moved: BTreeSet<usize>,
     /// The vehicle model of the plan and of every re-plan (parameter `dynamics`).
     pub dynamics: planner::evaluate::Dynamics,
+    /// The plan's altitude per slot, m, for a mission with `altitude = "free"` (`eval` is at
+    /// these altitudes); `None` at the mission's fixed altitude.
+    #[serde(default)]
+    pub altitudes_m: Option<Vec<f64>>,
 }
 
 /// The values of every output at one instant.
@@ -57,6 +61,10 @@ pub struct Sample {
     pub commanded_accel_mps2: [f64; 2],
     /// Its magnitude, the evaluator's `accel_mps2` of the slot, m/s².
     pub commanded_accel_abs_mps2: f64,
+    /// Altitude, linear within the slot, m.
+    pub z_m: f64,
+    /// Climb rate of the slot (negative: descent), m/s.
+    pub climb_mps: f64,
 }
 
 /// The slot (1-based) whose values hold at mission time `tau_s`: slot t covers ((t−1)δ, tδ]
@@ -71,7 +79,28 @@ pub fn slot_at(tau_s: f64, slot_s: f64, slots: usize) -> usize {
     }
 }
 
+/// `traj` evaluated on the exact geometry against `mission`, at the altitudes `altitudes_m` of
+/// a free-altitude plan (one per slot) or at the mission's fixed altitude. The error is the
+/// evaluator's message (a profile that breaks the mission's altitude bounds or rates).
+pub fn evaluate_at(
+    mission: &Mission,
+    traj: &Trajectory,
+    altitudes_m: Option<&[f64]>,
+) -> Result<Evaluation, String> {
+    match altitudes_m {
+        Some(z) => {
+            planner::evaluate::evaluate_with_altitudes(mission, traj, z).map_err(|e| e.to_string())
+        }
+        None => Ok(evaluate(mission, traj)),
+    }
+}
+
 impl Run {
+    /// `traj` evaluated against `mission` at this plan's altitudes ([`evaluate_at`]).
+    pub fn evaluate(&self, mission: &Mission, traj: &Trajectory) -> Result<Evaluation, String> {
+        evaluate_at(mission, traj, self.altitudes_m.as_deref())
+    }
+
     /// All outputs at mission time `tau_s`.
     pub fn sample(&self, tau_s: f64) -> Sample {
         let p = self.mission.params();
@@ -95,6 +124,8 @@ impl Run {
                 worst_cell_width_m: f64::NAN,
                 commanded_accel_mps2: [0.0; 2],
                 commanded_accel_abs_mps2: 0.0,
+                z_m: self.eval.start_altitude_m,
+                climb_mps: 0.0,
             };
         };
         let pos_m = self.traj.position_at(tau_s);
@@ -110,6 +141,11 @@ impl Run {
             self.mission.start_velocity_mps()
         };
         let accel = |i: usize| (s.velocity_mps[i] - before_mps[i]) / p.slot_s;
+        let before_z_m = if k >= 2 {
+            self.eval.slots[k - 2].z_m
+        } else {
+            self.eval.start_altitude_m
+        };
         Sample {
             pos_m,
             speed_mps: s.speed_mps,
@@ -126,6 +162,8 @@ impl Run {
             worst_cell_width_m: s.worst_width_m,
             commanded_accel_mps2: [accel(0), accel(1)],
             commanded_accel_abs_mps2: s.accel_mps2,
+            z_m: before_z_m + s.climb_mps * into_slot_s,
+            climb_mps: s.climb_mps,
         }
     }
 }

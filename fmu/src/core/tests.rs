@@ -90,6 +90,7 @@ fn run_of(pos_m: Vec<[f64; 2]>) -> Run {
         solve_s: 0.0,
         moved: BTreeSet::new(),
         dynamics: planner::DEFAULT_DYNAMICS,
+        altitudes_m: None,
     }
 }
 
@@ -363,7 +364,11 @@ fn mission_file_size_is_bounded() {
 #[test]
 fn plan_options_start_at_the_library_defaults() {
     let core = Core::new(ModelKind::Planner);
-    let d = planner::PlanOptions::default();
+    let d = planner::PlanOptions {
+        // a free-altitude mission gets its altitudes (output `z_m`), as from cellsar-planner plan
+        altitude_profile: true,
+        ..Default::default()
+    };
     assert_eq!(
         core.get_string(var(PLANNER_VARS, "resolution")).unwrap(),
         d.resolution.name()
