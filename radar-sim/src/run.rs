@@ -32,7 +32,9 @@ pub use process::{process, process_limited};
 pub use recording::{
     object_as_recorded, pulse_as_recorded, read_pulses, read_truth, write_detections,
 };
-pub use simulate::{simulate, simulate_limited, SIMULATE_FRAME_BYTES};
+pub use simulate::{
+    planned_track, simulate, simulate_limited, simulate_profile_limited, SIMULATE_FRAME_BYTES,
+};
 
 /// Format tag of a recording directory.
 pub const FORMAT: &str = "cellsar-radar-sim/1";

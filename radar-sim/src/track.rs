@@ -74,11 +74,16 @@ impl Track for LinearTrack {
     }
 }
 
-/// The planner's trajectory flown at altitude H (linear between slot positions).
+/// The planner's trajectory flown at altitude H, or at a planned altitude per slot H_t (a
+/// mission with `altitude = "free"`): linear between slot positions, the altitude too.
 #[derive(Debug, Clone)]
 pub struct PlannedTrack {
     traj: planner::Trajectory,
+    /// The altitude at t = 0 (the mission's `altitude_m`), m; the whole track's when
+    /// `altitudes_m` is `None`.
     altitude_m: f64,
+    /// H_t of slots 1..=N (at t = t δ), m.
+    altitudes_m: Option<Vec<f64>>,
     headings_rad: Vec<f64>,
 }
 
@@ -89,8 +94,46 @@ impl PlannedTrack {
         Self {
             traj,
             altitude_m,
+            altitudes_m: None,
             headings_rad,
         }
+    }
+
+    /// Wraps a planner trajectory flown from `start_altitude_m` at t = 0 through the altitude
+    /// `altitudes_m[t − 1]` at the end of slot t (a plan's
+    /// [`PlanResult::altitudes_m`](planner::PlanResult::altitudes_m)), linear in between like
+    /// the horizontal position; the vertical velocity is that slot's climb rate.
+    ///
+    /// One altitude per slot, each finite and > 0 ([`RadarError::Config`] naming
+    /// `altitudes_m` otherwise).
+    pub fn with_altitudes(
+        traj: planner::Trajectory,
+        start_altitude_m: f64,
+        altitudes_m: Vec<f64>,
+    ) -> Result<Self> {
+        if altitudes_m.len() != traj.slots() {
+            return Err(RadarError::config(
+                "altitudes_m",
+                format!(
+                    "{} altitudes for a trajectory of {} slots",
+                    altitudes_m.len(),
+                    traj.slots()
+                ),
+            ));
+        }
+        if let Some((i, h)) = std::iter::once(start_altitude_m)
+            .chain(altitudes_m.iter().copied())
+            .enumerate()
+            .find(|(_, h)| !(h.is_finite() && *h > 0.0))
+        {
+            return Err(RadarError::config(
+                "altitudes_m",
+                format!("slot {i}: altitude {h} m is not a finite number > 0"),
+            ));
+        }
+        let mut track = Self::new(traj, start_altitude_m);
+        track.altitudes_m = Some(altitudes_m);
+        Ok(track)
     }
 
     /// The wrapped trajectory.
@@ -98,20 +141,65 @@ impl PlannedTrack {
         &self.traj
     }
 
+    /// The planned altitude per slot, when the track follows one.
+    pub fn altitudes_m(&self) -> Option<&[f64]> {
+        self.altitudes_m.as_deref()
+    }
+
     fn slot_of(&self, t_s: f64) -> usize {
         let n = self.traj.slots().max(1);
         ((t_s / self.traj.slot_s).ceil().max(1.0) as usize).min(n)
+    }
+
+    /// The altitude at the end of slot `t` (t = 0: the start), m.
+    fn altitude_after(&self, profile: &[f64], t: usize) -> f64 {
+        match t {
+            0 => self.altitude_m,
+            _ => profile.get(t - 1).copied().unwrap_or(self.altitude_m),
+        }
+    }
+
+    /// The altitude at `t_s`, m: as [`planner::Trajectory::position_at`] interpolates.
+    fn altitude_at(&self, t_s: f64) -> f64 {
+        let Some(profile) = self.altitudes_m.as_deref() else {
+            return self.altitude_m;
+        };
+        let n = profile.len();
+        if n == 0 || !t_s.is_finite() || t_s <= 0.0 {
+            return self.altitude_m;
+        }
+        let x = t_s / self.traj.slot_s;
+        if x >= n as f64 {
+            return self.altitude_after(profile, n);
+        }
+        let t = x.floor() as usize;
+        let f = x - t as f64;
+        let a = self.altitude_after(profile, t);
+        let b = self.altitude_after(profile, t + 1);
+        a + (b - a) * f
+    }
+
+    /// The climb rate of the slot holding `t_s` (as [`planner::Trajectory::velocity_at`]), m/s.
+    fn climb_at(&self, t_s: f64) -> f64 {
+        let Some(profile) = self.altitudes_m.as_deref() else {
+            return 0.0;
+        };
+        if profile.is_empty() {
+            return 0.0;
+        }
+        let t = ((t_s / self.traj.slot_s).ceil() as usize).clamp(1, profile.len());
+        (self.altitude_after(profile, t) - self.altitude_after(profile, t - 1)) / self.traj.slot_s
     }
 }
 
 impl Track for PlannedTrack {
     fn position_m(&self, t_s: f64) -> [f64; 3] {
         let p = self.traj.position_at(t_s);
-        [p[0], p[1], self.altitude_m]
+        [p[0], p[1], self.altitude_at(t_s)]
     }
     fn velocity_mps(&self, t_s: f64) -> [f64; 3] {
         let v = self.traj.velocity_at(t_s);
-        [v[0], v[1], 0.0]
+        [v[0], v[1], self.climb_at(t_s)]
     }
     fn heading(&self, t_s: f64) -> [f64; 2] {
         let a = self
@@ -289,5 +377,38 @@ mod tests {
         assert_eq!(t.velocity_mps(0.7), [0.0, 20.0, 0.0]);
         let h = t.heading(0.7);
         assert!(h[0].abs() < 1e-12 && (h[1] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn planned_track_follows_the_altitude_profile() {
+        let traj = planner::Trajectory {
+            slot_s: 0.5,
+            start_m: [0.0, 0.0],
+            pos_m: vec![[0.0, 10.0], [0.0, 20.0], [5.0, 20.0]],
+        };
+        let t = PlannedTrack::with_altitudes(traj.clone(), 1000.0, vec![1010.0, 1010.0, 990.0])
+            .unwrap();
+        assert_eq!(t.position_m(0.0), [0.0, 0.0, 1000.0]);
+        assert_eq!(t.position_m(0.25), [0.0, 5.0, 1005.0]);
+        assert_eq!(t.position_m(0.75), [0.0, 15.0, 1010.0]);
+        assert_eq!(t.position_m(1.25), [2.5, 20.0, 1000.0]);
+        assert_eq!(t.position_m(9.0), [5.0, 20.0, 990.0]);
+        assert_eq!(t.velocity_mps(0.1), [0.0, 20.0, 20.0]);
+        assert_eq!(t.velocity_mps(0.7), [0.0, 20.0, 0.0]);
+        assert_eq!(t.velocity_mps(1.2), [10.0, 0.0, -40.0]);
+        // a constant profile at the start altitude is today's track, bit for bit
+        let flat = PlannedTrack::with_altitudes(traj.clone(), 1000.0, vec![1000.0; 3]).unwrap();
+        let fixed = PlannedTrack::new(traj.clone(), 1000.0);
+        for i in 0..=400 {
+            let ts = -0.1 + i as f64 * 0.005;
+            assert_eq!(flat.position_m(ts), fixed.position_m(ts), "{ts}");
+            assert_eq!(flat.velocity_mps(ts), fixed.velocity_mps(ts), "{ts}");
+            assert_eq!(flat.heading(ts), fixed.heading(ts), "{ts}");
+        }
+        let e = PlannedTrack::with_altitudes(traj.clone(), 1000.0, vec![1000.0; 2]).unwrap_err();
+        assert!(e.to_string().contains("altitudes_m"), "{e}");
+        let e =
+            PlannedTrack::with_altitudes(traj, 1000.0, vec![1000.0, f64::NAN, 1.0]).unwrap_err();
+        assert!(e.to_string().contains("slot 2"), "{e}");
     }
 }

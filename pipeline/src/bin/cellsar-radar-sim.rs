@@ -141,17 +141,46 @@ fn bad(e: impl Into<anyhow::Error>) -> Failure {
 
 type Result<T, E = Failure> = std::result::Result<T, E>;
 
+/// A plan directory's mission and trajectory, with the altitude per slot (the `z_m` column)
+/// when the mission has `altitude = "free"`.
+type Flight = (planner::Mission, planner::Trajectory, Option<Vec<f64>>);
+
+fn read_flight(plan: &Path) -> anyhow::Result<Flight> {
+    let mission = planner::Mission::from_path(&plan.join("mission.toml"))?;
+    if mission.params().altitude != planner::AltitudeMode::Free {
+        let (mission, traj) = pipeline::report::read_plan_dir(plan)?;
+        return Ok((mission, traj, None));
+    }
+    let p = mission.params();
+    let (traj, altitudes_m) = planner::Trajectory::from_csv_path_with_altitudes(
+        &plan.join("trajectory.csv"),
+        p.slot_s,
+        mission.slots(),
+        p.start_m,
+        p.altitude_m,
+    )?;
+    Ok((mission, traj, Some(altitudes_m)))
+}
+
 fn simulate(plan: &Path, scene: &Path, out: &Path, limits: &IqLimits) -> Result<()> {
-    let (mission, traj) = pipeline::report::read_plan_dir(plan)
+    let (mission, traj, altitudes_m) = read_flight(plan)
         .with_context(|| format!("reading plan directory {}", plan.display()))
         .map_err(bad)?;
     let scene = SceneFile::from_path(scene).map_err(radar_failure)?;
     let b = bar(1, "simulate");
     let t = Instant::now();
-    let meta = run::simulate_limited(&mission, &traj, &scene, out, limits, &mut |d, n| {
-        b.set_length(n);
-        b.set_position(d);
-    });
+    let meta = run::simulate_profile_limited(
+        &mission,
+        &traj,
+        altitudes_m.as_deref(),
+        &scene,
+        out,
+        limits,
+        &mut |d, n| {
+            b.set_length(n);
+            b.set_position(d);
+        },
+    );
     b.finish();
     let meta = meta.map_err(radar_failure)?;
     for w in &meta.warnings {
@@ -217,8 +246,13 @@ fn closed_loop(
     // planning
     let setup = RadarSetup::new(m.params(), &scene_file).map_err(radar_failure)?;
     radar_sim::limits::check_mission(&setup, &m, limits).map_err(radar_failure)?;
+    // a free mission is planned with its altitude profile and flown at it
+    let plan_options = planner::PlanOptions {
+        altitude_profile: m.params().altitude == planner::AltitudeMode::Free,
+        ..plan_options.clone()
+    };
     let t = Instant::now();
-    let result = planner::plan(&m, plan_options)
+    let result = planner::plan(&m, &plan_options)
         .map_err(|e| plan_failure(e).context(format!("planning {}", mission.display())))?;
 
     println!(
@@ -233,13 +267,21 @@ fn closed_loop(
         .with_context(|| format!("writing {}", plan_dir.display()))?;
     let rec = out.join("recording");
     // the plan just written: a failure to read it back is a runtime failure
-    let (m2, traj) = pipeline::report::read_plan_dir(&plan_dir)
-        .with_context(|| format!("reading back {}", plan_dir.display()))?;
+    let (m2, traj, altitudes_m) =
+        read_flight(&plan_dir).with_context(|| format!("reading back {}", plan_dir.display()))?;
     let b = bar(1, "simulate");
-    let sim = run::simulate_limited(&m2, &traj, &scene_file, &rec, limits, &mut |d, n| {
-        b.set_length(n);
-        b.set_position(d);
-    });
+    let sim = run::simulate_profile_limited(
+        &m2,
+        &traj,
+        altitudes_m.as_deref(),
+        &scene_file,
+        &rec,
+        limits,
+        &mut |d, n| {
+            b.set_length(n);
+            b.set_position(d);
+        },
+    );
     b.finish();
     sim.map_err(radar_failure)?;
     let metrics = process(&rec, &out.join("processed"), limits)?;

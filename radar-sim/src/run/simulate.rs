@@ -31,7 +31,8 @@ pub fn simulate(
 
 /// Simulates the recording of `mission` flown along `traj` over the scene into `out`. Before
 /// anything is synthesised or written, the run's IQ and the memory of its largest aperture are
-/// checked against `limits` ([`crate::limits::IqBudget`]).
+/// checked against `limits` ([`crate::limits::IqBudget`]). A mission with `altitude = "free"`
+/// is refused here: flying it needs its plan's altitudes ([`simulate_profile_limited`]).
 pub fn simulate_limited(
     mission: &planner::Mission,
     traj: &planner::Trajectory,
@@ -40,11 +41,75 @@ pub fn simulate_limited(
     limits: &IqLimits,
     progress: Progress<'_>,
 ) -> Result<RecordingMeta> {
+    simulate_profile_limited(mission, traj, None, scene, out, limits, progress)
+}
+
+/// Allowance on the altitude bounds of a free mission, m (the planner's solver meets them to
+/// within its tolerance).
+const ALTITUDE_BOUND_SLACK_M: f64 = 1e-3;
+
+/// The track that flies `traj` for `mission`: at its fixed altitude, or through
+/// `altitudes_m` (one per slot, within the mission's bounds) for a mission with
+/// `altitude = "free"`. A free mission without a profile, or a fixed one with a profile, is
+/// refused ([`RadarError::Config`] naming `altitude` / `altitudes_m`).
+pub fn planned_track(
+    mission: &planner::Mission,
+    traj: &planner::Trajectory,
+    altitudes_m: Option<&[f64]>,
+) -> Result<PlannedTrack> {
+    let p = mission.params();
+    match (p.altitude, altitudes_m) {
+        (planner::AltitudeMode::Fixed, None) => Ok(PlannedTrack::new(traj.clone(), p.altitude_m)),
+        (planner::AltitudeMode::Fixed, Some(_)) => Err(RadarError::config(
+            "altitudes_m",
+            format!(
+                "mission {} flies at one altitude ({} m, altitude = \"fixed\"): an altitude per slot is not flown",
+                mission.name(),
+                p.altitude_m
+            ),
+        )),
+        (planner::AltitudeMode::Free, None) => Err(RadarError::config(
+            "altitude",
+            format!(
+                "mission {} has altitude = \"free\": flying it needs its plan's altitude per slot (the z_m column of the plan's trajectory.csv, planned with the altitude profile on)",
+                mission.name()
+            ),
+        )),
+        (planner::AltitudeMode::Free, Some(h)) => {
+            let (lo, hi) = planner::altitude::bounds_m(p);
+            if let Some((i, z)) = h.iter().enumerate().find(|(_, z)| {
+                !(**z >= lo - ALTITUDE_BOUND_SLACK_M && **z <= hi + ALTITUDE_BOUND_SLACK_M)
+            }) {
+                return Err(RadarError::config(
+                    "altitudes_m",
+                    format!(
+                        "slot {}: altitude {z} m is outside the mission's bounds [{lo}, {hi}] m",
+                        i + 1
+                    ),
+                ));
+            }
+            PlannedTrack::with_altitudes(traj.clone(), p.altitude_m, h.to_vec())
+        }
+    }
+}
+
+/// As [`simulate_limited`], flying `traj` at the altitudes `altitudes_m` (one per slot) for a
+/// mission with `altitude = "free"` ([`planned_track`]): every pulse's position, the antenna's
+/// footprint, the echo and direct-path delays and powers follow H_t.
+pub fn simulate_profile_limited(
+    mission: &planner::Mission,
+    traj: &planner::Trajectory,
+    altitudes_m: Option<&[f64]>,
+    scene: &SceneFile,
+    out: &Path,
+    limits: &IqLimits,
+    progress: Progress<'_>,
+) -> Result<RecordingMeta> {
+    let track = planned_track(mission, traj, altitudes_m)?;
     let setup = RadarSetup::new(mission.params(), scene)?;
     let aps = setup.apertures(mission)?;
     IqBudget::new(&setup, &aps).check(&setup, limits)?;
     let objects = setup.objects(mission)?;
-    let track = PlannedTrack::new(traj.clone(), mission.params().altitude_m);
     let synth = setup.synthesizer(objects.clone())?;
     // ground clutter (`[clutter]`): synthesised with the objects, not part of the truth
     let clutter = crate::clutter::GroundClutter::for_run(&setup, &track, &aps)?;
