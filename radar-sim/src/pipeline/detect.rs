@@ -105,6 +105,8 @@ impl Processor {
                 .into();
                 let u = [m.pos_m[0], m.pos_m[1]];
                 let t = c.len() as f64 / self.setup.scene.radar.prf_hz;
+                // the geometry at the look's altitude (H_t of a free mission)
+                let params = &planner::altitude::params_at(params, m.pos_m[2]);
                 (
                     (Vector2::from(pg::bistatic_range_gradient(params, u, point_m)) * (b / C_MPS))
                         .into(),
@@ -147,7 +149,7 @@ impl Processor {
         } else {
             [mid.heading[0] * 1e-9, mid.heading[1] * 1e-9]
         };
-        let mut params = self.setup.params.clone();
+        let mut params = planner::altitude::params_at(&self.setup.params, mid.pos_m[2]);
         params.integration_time_s = self.setup.look_s;
         let cell = pg::ResolutionCell::new(&params, [mid.pos_m[0], mid.pos_m[1]], vel, ap.centre_m);
         let uc = [mid.pos_m[0], mid.pos_m[1]];

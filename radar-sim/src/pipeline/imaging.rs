@@ -83,7 +83,11 @@ impl Processor {
                 ))
             }
         };
-        let params = &self.setup.params;
+        // the geometry at the look's altitude (H_t of a free mission)
+        let params = &planner::altitude::params_at(
+            &self.setup.params,
+            (first.pos_m[2] + last.pos_m[2]) / 2.0,
+        );
         let uc = [
             (first.pos_m[0] + last.pos_m[0]) / 2.0,
             (first.pos_m[1] + last.pos_m[1]) / 2.0,
@@ -201,7 +205,10 @@ impl Processor {
             last.pos_m[1] - first.pos_m[1],
         ) * (1.0 / (last.t_s - first.t_s)))
             .into();
-        let mut params = self.setup.params.clone();
+        let mut params = planner::altitude::params_at(
+            &self.setup.params,
+            (first.pos_m[2] + last.pos_m[2]) / 2.0,
+        );
         params.integration_time_s = ps.len() as f64 / self.setup.scene.radar.prf_hz;
         params.bandwidth_hz = self.setup.num.bandwidth_hz();
         let cell = pg::ResolutionCell::new(&params, uc, vel, target_m);
