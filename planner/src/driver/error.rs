@@ -61,7 +61,8 @@ pub enum PlanError {
     #[error(
         "mission parameter `altitude` = \"free\": the scheme {scheme} plans at the fixed \
          altitude `altitude_m` only here, not per-slot altitudes (only the scheme exact plans \
-         them, in `cellsar-planner plan`; set altitude = \"fixed\")"
+         them, for a caller that flies the profile: the user guide's section Altitude lists \
+         which; or set altitude = \"fixed\")"
     )]
     AltitudeConflict {
         /// The scheme.
