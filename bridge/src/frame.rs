@@ -5,19 +5,30 @@
 //!
 //! ```text
 //! envelope header (48 bytes, body_format = RawFrame, body_crc32 = checksum of the samples)
-//! frame descriptor (24 bytes):
+//! frame descriptor (56 bytes):
 //!     0  u16 element_size   bytes per element (8 for complex f32)
-//!     2  u16 reserved (0)
+//!     2  u16 frame flags    bit 0: the frame carries a tag; other bits 0
 //!     4  u32 rows           e.g. pulses (slow time)
 //!     8  u32 cols           e.g. fast-time samples per pulse
 //!    12  u32 reserved (0)
 //!    16  i64 mission_time_ns   mission time of the first row
+//!    24  [u8; 32] tag       keyed BLAKE3 of the frame (all zero without a tag)
 //! samples (rows * cols * element_size bytes, raw little endian; complex f32 = re, im)
 //! ```
 //!
-//! Samples start 72 bytes into the payload, a multiple of 8, so a contiguous receive buffer
+//! Samples start 104 bytes into the payload, a multiple of 8, so a contiguous receive buffer
 //! can be viewed as `[Complex32]` without copying. Decoding checks every field and never
 //! panics.
+//!
+//! # Tags
+//!
+//! A frame may carry a tag: the keyed BLAKE3 hash ([`FrameKey::tag`]) under a secret
+//! [`FrameKey`] of its kind, schema version, element size, mission id, sequence number, shape,
+//! mission time and samples. The echo draws a key per mission and gives it to the processors
+//! that ask it for apertures; a processor that holds a mission's key takes only frames whose
+//! tag it verifies ([`FrameHeader::verify_tag`]), so a peer that may put frames on the
+//! mission's key (the bridge) but was never given the key cannot make one the processor
+//! takes. Frames without a tag (tools, benchmarks) stay valid wherever no key is required.
 
 use iceoryx2::prelude::ZeroCopySend;
 use num_complex::Complex32;
@@ -40,12 +51,19 @@ pub const IQ_FRAME_SCHEMA_VERSION: u16 = 1;
 /// Size of one complex f32 sample in bytes.
 pub const COMPLEX32_BYTES: u16 = 8;
 /// Length of the frame descriptor that follows the envelope header on Zenoh.
-pub const DESCRIPTOR_LEN: usize = 24;
+pub const DESCRIPTOR_LEN: usize = 56;
+/// Length of a frame key and of a frame tag in bytes.
+pub const FRAME_KEY_LEN: usize = 32;
 /// Offset of the first sample in a frame's Zenoh payload.
 pub const WIRE_PREFIX_LEN: usize = HEADER_LEN + DESCRIPTOR_LEN;
 /// Frame header flag: the frame came in from Zenoh through a bridge and is never sent back
 /// out (see [`crate::forward`]). Only used in shared memory; never on the wire.
 pub const FLAG_BRIDGED: u16 = 2;
+/// Frame header flag: `tag` is valid (the frame is tagged). On the wire, bit 0 of the frame
+/// descriptor's flags.
+pub const FLAG_TAGGED: u16 = 4;
+/// The descriptor's frame-flags bit of a tagged frame.
+const DESCRIPTOR_TAGGED: u16 = 1;
 /// Default largest frame payload (64 MiB).
 pub const DEFAULT_MAX_FRAME_BYTES: usize = 64 << 20;
 /// The default `--max-frame-bytes` of the IQ frame services (4 MiB: 100 pulses of 4096
@@ -58,7 +76,7 @@ pub const SERVICE_MAX_FRAME_BYTES: usize = 4 << 20;
 /// form).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend)]
 #[repr(C)]
-#[type_name("cellsar::FrameHeader/1")]
+#[type_name("cellsar::FrameHeader/2")]
 pub struct FrameHeader {
     /// Message kind of the frame (e.g. [`IQ_FRAME_KIND`]).
     pub kind: u16,
@@ -66,7 +84,8 @@ pub struct FrameHeader {
     pub schema_version: u16,
     /// Bytes per element (8 for complex f32).
     pub element_size: u16,
-    /// Flags ([`FLAG_CRC`]: `checksum` is valid; [`FLAG_BRIDGED`]).
+    /// Flags ([`FLAG_CRC`]: `checksum` is valid; [`FLAG_BRIDGED`]; [`FLAG_TAGGED`]: `tag` is
+    /// valid).
     pub flags: u16,
     /// CRC-32 (IEEE) of the payload bytes.
     pub checksum: u32,
@@ -84,6 +103,64 @@ pub struct FrameHeader {
     pub shape: [u32; 2],
     /// Payload length in bytes (= rows * cols * element_size).
     pub payload_len: u64,
+    /// Keyed BLAKE3 tag of the frame ([`FrameKey::tag`]) when [`FLAG_TAGGED`] is set, else 0.
+    pub tag: [u8; FRAME_KEY_LEN],
+}
+
+/// A secret key that tags frames (32 bytes, from the operating system's random source). Its
+/// `Debug` form does not show it.
+#[derive(Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct FrameKey([u8; FRAME_KEY_LEN]);
+
+impl std::fmt::Debug for FrameKey {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("FrameKey(..)")
+    }
+}
+
+impl FrameKey {
+    /// A new key drawn from the operating system's random source.
+    pub fn random() -> Result<Self, CodecError> {
+        let mut key = [0u8; FRAME_KEY_LEN];
+        getrandom::fill(&mut key).map_err(|e| CodecError::Field {
+            field: "frame key",
+            reason: format!("the operating system's random source failed: {e}"),
+        })?;
+        Ok(FrameKey(key))
+    }
+
+    /// A key of the given bytes.
+    pub fn from_bytes(bytes: [u8; FRAME_KEY_LEN]) -> Self {
+        FrameKey(bytes)
+    }
+
+    /// The key's bytes.
+    pub fn as_bytes(&self) -> &[u8; FRAME_KEY_LEN] {
+        &self.0
+    }
+
+    /// The tag of a frame of `meta` whose payload is `payload`: keyed BLAKE3 of a domain
+    /// string, the kind, schema version, element size, mission id, sequence number, rows,
+    /// cols, mission time and payload length (little endian), then the payload.
+    pub fn tag(&self, meta: &FrameMeta, payload: &[u8]) -> [u8; FRAME_KEY_LEN] {
+        self.tag_hash(meta, payload).into()
+    }
+
+    fn tag_hash(&self, meta: &FrameMeta, payload: &[u8]) -> blake3::Hash {
+        let mut h = blake3::Hasher::new_keyed(&self.0);
+        h.update(b"cellsar frame tag 1\0");
+        h.update(&meta.kind.to_le_bytes());
+        h.update(&meta.schema_version.to_le_bytes());
+        h.update(&meta.element_size.to_le_bytes());
+        h.update(&meta.mission_id.0.to_le_bytes());
+        h.update(&meta.seq.to_le_bytes());
+        h.update(&meta.shape[0].to_le_bytes());
+        h.update(&meta.shape[1].to_le_bytes());
+        h.update(&meta.mission_time_ns.to_le_bytes());
+        h.update(&(payload.len() as u64).to_le_bytes());
+        h.update(payload);
+        h.finalize()
+    }
 }
 
 /// What a sender chooses for a frame; the rest of [`FrameHeader`] is filled in on send.
@@ -103,6 +180,8 @@ pub struct FrameMeta {
     pub mission_time_ns: i64,
     /// `[rows, cols]`.
     pub shape: [u32; 2],
+    /// The frame's tag ([`FrameKey::tag`]), if it carries one.
+    pub tag: Option<[u8; FRAME_KEY_LEN]>,
 }
 
 impl FrameMeta {
@@ -116,7 +195,14 @@ impl FrameMeta {
             seq,
             mission_time_ns,
             shape: [rows, cols],
+            tag: None,
         }
+    }
+
+    /// This metadata with the tag of `payload` under `key` ([`FrameKey::tag`]).
+    pub fn tagged(mut self, key: &FrameKey, payload: &[u8]) -> Self {
+        self.tag = Some(key.tag(&self, payload));
+        self
     }
 
     /// Metadata of an opaque byte frame of `len` bytes (shape `[1, len]`).
@@ -139,6 +225,7 @@ impl FrameMeta {
             seq,
             mission_time_ns: 0,
             shape: [1, cols],
+            tag: None,
         })
     }
 
@@ -155,7 +242,8 @@ impl FrameMeta {
             kind: self.kind,
             schema_version: self.schema_version,
             element_size: self.element_size,
-            flags: if checksum.is_some() { FLAG_CRC } else { 0 },
+            flags: if checksum.is_some() { FLAG_CRC } else { 0 }
+                | if self.tag.is_some() { FLAG_TAGGED } else { 0 },
             checksum: checksum.unwrap_or(0),
             reserved: 0,
             mission_id: self.mission_id.0,
@@ -164,6 +252,7 @@ impl FrameMeta {
             mission_time_ns: self.mission_time_ns,
             shape: self.shape,
             payload_len: payload_len as u64,
+            tag: self.tag.unwrap_or_default(),
         })
     }
 }
@@ -199,6 +288,46 @@ impl FrameHeader {
         self.flags & FLAG_CRC != 0
     }
 
+    /// Whether the frame carries a tag.
+    pub fn has_tag(&self) -> bool {
+        self.flags & FLAG_TAGGED != 0
+    }
+
+    /// The metadata this header was made of (its tag included).
+    pub fn meta(&self) -> FrameMeta {
+        FrameMeta {
+            kind: self.kind,
+            schema_version: self.schema_version,
+            element_size: self.element_size,
+            mission_id: MissionId(self.mission_id),
+            seq: self.seq,
+            mission_time_ns: self.mission_time_ns,
+            shape: self.shape,
+            tag: self.has_tag().then_some(self.tag),
+        }
+    }
+
+    /// Checks the frame's tag against `payload` under `key`: an error names a frame without
+    /// a tag or one whose tag does not match (a different key, or any tagged field or sample
+    /// changed). The comparison takes the same time wherever the tags differ.
+    pub fn verify_tag(&self, key: &FrameKey, payload: &[u8]) -> Result<(), CodecError> {
+        if !self.has_tag() {
+            return Err(CodecError::Field {
+                field: "tag",
+                reason: "the frame carries no tag, and its mission requires one".into(),
+            });
+        }
+        // `blake3::Hash` compares in constant time
+        if key.tag_hash(&self.meta(), payload) != blake3::Hash::from(self.tag) {
+            return Err(CodecError::Field {
+                field: "tag",
+                reason: "the frame's tag does not match its contents under the mission's key"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
+
     /// Checks the header's internal consistency against the payload length actually present
     /// and the size limit.
     pub fn validate(
@@ -206,13 +335,21 @@ impl FrameHeader {
         actual_payload_len: usize,
         max_payload: usize,
     ) -> Result<(), CodecError> {
-        if self.flags & !(FLAG_CRC | FLAG_BRIDGED) != 0 {
+        let known = FLAG_CRC | FLAG_BRIDGED | FLAG_TAGGED;
+        if self.flags & !known != 0 {
             return Err(CodecError::Field {
                 field: "flags",
-                reason: format!(
-                    "unknown flag bits {:#06x}",
-                    self.flags & !(FLAG_CRC | FLAG_BRIDGED)
-                ),
+                reason: format!("unknown flag bits {:#06x}", self.flags & !known),
+            });
+        }
+        if self.has_tag() == (self.tag == [0; FRAME_KEY_LEN]) {
+            return Err(CodecError::Field {
+                field: "tag",
+                reason: if self.has_tag() {
+                    "a tagged frame's tag is never all zero".into()
+                } else {
+                    "a frame without the tagged flag must have an all-zero tag".into()
+                },
             });
         }
         if self.payload_len > max_payload as u64 {
@@ -258,7 +395,7 @@ impl FrameHeader {
         Ok(())
     }
 
-    /// The 72-byte Zenoh prefix (envelope header + frame descriptor) of this frame.
+    /// The 104-byte Zenoh prefix (envelope header + frame descriptor) of this frame.
     pub fn to_wire_prefix(&self) -> [u8; WIRE_PREFIX_LEN] {
         let header = Header {
             body_format: BodyFormat::RawFrame,
@@ -275,13 +412,17 @@ impl FrameHeader {
         out[..HEADER_LEN].copy_from_slice(&header.to_bytes());
         let d = &mut out[HEADER_LEN..];
         d[0..2].copy_from_slice(&self.element_size.to_le_bytes());
+        if self.has_tag() {
+            d[2..4].copy_from_slice(&DESCRIPTOR_TAGGED.to_le_bytes());
+        }
         d[4..8].copy_from_slice(&self.shape[0].to_le_bytes());
         d[8..12].copy_from_slice(&self.shape[1].to_le_bytes());
         d[16..24].copy_from_slice(&self.mission_time_ns.to_le_bytes());
+        d[24..56].copy_from_slice(&self.tag);
         out
     }
 
-    /// Parses and checks the 72-byte Zenoh prefix of a frame whose whole payload (prefix +
+    /// Parses and checks the 104-byte Zenoh prefix of a frame whose whole payload (prefix +
     /// samples) is `total_len` bytes long.
     pub fn from_wire_prefix(
         prefix: &[u8],
@@ -301,12 +442,24 @@ impl FrameHeader {
         let Some(d) = prefix.get(HEADER_LEN..WIRE_PREFIX_LEN) else {
             return Err(CodecError::TooShort { len: prefix.len() });
         };
-        if le_u16(&d[2..4]) != 0 || le_u32(&d[12..16]) != 0 {
+        if le_u32(&d[12..16]) != 0 {
             return Err(CodecError::Field {
                 field: "frame descriptor reserved",
                 reason: "reserved bytes must be 0".into(),
             });
         }
+        let frame_flags = le_u16(&d[2..4]);
+        if frame_flags & !DESCRIPTOR_TAGGED != 0 {
+            return Err(CodecError::Field {
+                field: "frame descriptor flags",
+                reason: format!(
+                    "unknown flag bits {:#06x}",
+                    frame_flags & !DESCRIPTOR_TAGGED
+                ),
+            });
+        }
+        let mut tag = [0u8; FRAME_KEY_LEN];
+        tag.copy_from_slice(&d[24..56]);
         let Some(payload_len) = header.body_len.checked_sub(DESCRIPTOR_LEN as u64) else {
             return Err(CodecError::Field {
                 field: "body_len",
@@ -320,7 +473,12 @@ impl FrameHeader {
             kind: header.kind,
             schema_version: header.schema_version,
             element_size: le_u16(&d[0..2]),
-            flags: header.flags,
+            flags: header.flags
+                | if frame_flags & DESCRIPTOR_TAGGED != 0 {
+                    FLAG_TAGGED
+                } else {
+                    0
+                },
             checksum: header.body_crc32,
             reserved: 0,
             mission_id: header.mission_id.0,
@@ -329,6 +487,7 @@ impl FrameHeader {
             mission_time_ns: le_u64(&d[16..24]) as i64,
             shape: [le_u32(&d[4..8]), le_u32(&d[8..12])],
             payload_len,
+            tag,
         };
         let actual = total_len.saturating_sub(WIRE_PREFIX_LEN);
         if total_len < WIRE_PREFIX_LEN {
@@ -344,7 +503,7 @@ pub const MAX_FRAME_HARD_LIMIT: usize = 1 << 30;
 
 // The frame descriptor keeps samples 8-byte aligned after the envelope header.
 const _: () = assert!(WIRE_PREFIX_LEN.is_multiple_of(8));
-const _: () = assert!(std::mem::size_of::<FrameHeader>() == 64);
+const _: () = assert!(std::mem::size_of::<FrameHeader>() == 96);
 const _: () = assert!(MAX_BODY_BYTES <= MAX_FRAME_HARD_LIMIT);
 
 /// Encodes a frame for Zenoh: prefix + payload in one buffer.
@@ -441,8 +600,8 @@ mod tests {
     }
 
     #[test]
-    fn header_is_64_bytes_and_c_layout() {
-        assert_eq!(std::mem::size_of::<FrameHeader>(), 64);
+    fn header_is_96_bytes_and_c_layout() {
+        assert_eq!(std::mem::size_of::<FrameHeader>(), 96);
         assert_eq!(std::mem::align_of::<FrameHeader>(), 8);
     }
 
@@ -494,6 +653,119 @@ mod tests {
         assert!(e.to_string().contains("body_format"), "{e}");
     }
 
+    fn key(b: u8) -> FrameKey {
+        FrameKey::from_bytes([b; FRAME_KEY_LEN])
+    }
+
+    /// A tagged frame survives the wire and verifies; the tag sits in the descriptor.
+    #[test]
+    fn tagged_frame_roundtrip() {
+        let (h, s) = iq(3, 4);
+        let payload = samples_as_bytes(&s);
+        let k = key(7);
+        let h = h
+            .meta()
+            .tagged(&k, payload)
+            .header(h.has_checksum().then_some(h.checksum))
+            .unwrap();
+        assert!(h.has_tag());
+        assert_eq!(h.tag, k.tag(&h.meta(), payload));
+        assert_ne!(h.tag, [0; FRAME_KEY_LEN]);
+        let wire = encode_wire(&h, payload).unwrap();
+        assert_eq!(WIRE_PREFIX_LEN, 104);
+        assert_eq!(&wire[HEADER_LEN + 2..HEADER_LEN + 4], &1u16.to_le_bytes());
+        assert_eq!(&wire[HEADER_LEN + 24..HEADER_LEN + 56], &h.tag);
+        let (h2, p) = decode_wire(&wire, DEFAULT_MAX_FRAME_BYTES, true).unwrap();
+        assert_eq!(h2, h);
+        h2.verify_tag(&k, p).unwrap();
+        // the tag is the keyed BLAKE3 of the documented fields and the samples
+        let mut msg = b"cellsar frame tag 1\0".to_vec();
+        for part in [
+            &IQ_FRAME_KIND.to_le_bytes()[..],
+            &IQ_FRAME_SCHEMA_VERSION.to_le_bytes(),
+            &COMPLEX32_BYTES.to_le_bytes(),
+            &5u64.to_le_bytes(),
+            &3u64.to_le_bytes(),
+            &3u32.to_le_bytes(),
+            &4u32.to_le_bytes(),
+            &1_000i64.to_le_bytes(),
+            &96u64.to_le_bytes(),
+            payload,
+        ] {
+            msg.extend_from_slice(part);
+        }
+        assert_eq!(h.tag, *blake3::keyed_hash(k.as_bytes(), &msg).as_bytes());
+    }
+
+    /// Changing a sample, the sequence number, the mission time, the shape, the mission or
+    /// the key makes the tag fail; so does a frame without a tag.
+    #[test]
+    fn tag_mismatch_is_refused() {
+        let (h, s) = iq(2, 4);
+        let payload = samples_as_bytes(&s).to_vec();
+        let k = key(9);
+        let h = h.meta().tagged(&k, &payload).header(None).unwrap();
+        h.verify_tag(&k, &payload).unwrap();
+        let refused = |h: &FrameHeader, k: &FrameKey, p: &[u8]| {
+            let e = h.verify_tag(k, p).unwrap_err();
+            assert!(e.to_string().contains("tag"), "{e}");
+        };
+        let mut p = payload.clone();
+        p[13] ^= 1;
+        refused(&h, &k, &p);
+        refused(&h, &key(8), &payload);
+        let mut h2 = h;
+        h2.seq += 1;
+        refused(&h2, &k, &payload);
+        let mut h2 = h;
+        h2.mission_time_ns += 1;
+        refused(&h2, &k, &payload);
+        let mut h2 = h;
+        h2.shape = [4, 2];
+        refused(&h2, &k, &payload);
+        let mut h2 = h;
+        h2.mission_id ^= 1;
+        refused(&h2, &k, &payload);
+        let mut h2 = h;
+        h2.tag[31] ^= 0x80;
+        refused(&h2, &k, &payload);
+        let untagged = FrameMeta::iq(MissionId(5), 3, 1_000, 2, 4)
+            .header(None)
+            .unwrap();
+        refused(&untagged, &k, &payload);
+        // a tag flipped on the wire is refused after decoding too
+        let mut wire = encode_wire(&h, &payload).unwrap();
+        wire[HEADER_LEN + 30] ^= 4;
+        let (h3, p3) = decode_wire(&wire, DEFAULT_MAX_FRAME_BYTES, false).unwrap();
+        refused(&h3, &k, p3);
+    }
+
+    /// Unknown descriptor flags and a tag without the flag are refused by name.
+    #[test]
+    fn descriptor_flags_are_checked() {
+        let (h, s) = iq(1, 2);
+        let wire = encode_wire(&h, samples_as_bytes(&s)).unwrap();
+        let mut w = wire.clone();
+        w[HEADER_LEN + 2] = 2;
+        let e = decode_wire(&w, DEFAULT_MAX_FRAME_BYTES, false).unwrap_err();
+        assert!(e.to_string().contains("frame descriptor flags"), "{e}");
+        let mut w = wire.clone();
+        w[HEADER_LEN + 40] = 1; // a tag byte, the tagged flag clear
+        let e = decode_wire(&w, DEFAULT_MAX_FRAME_BYTES, false).unwrap_err();
+        assert!(e.to_string().contains("tag"), "{e}");
+        let mut w = wire.clone();
+        w[HEADER_LEN + 2] = 1; // the tagged flag, the tag all zero
+        let e = decode_wire(&w, DEFAULT_MAX_FRAME_BYTES, false).unwrap_err();
+        assert!(e.to_string().contains("never all zero"), "{e}");
+    }
+
+    #[test]
+    fn random_keys_differ() {
+        let (a, b) = (FrameKey::random().unwrap(), FrameKey::random().unwrap());
+        assert_ne!(a, b);
+        assert_eq!(format!("{a:?}"), "FrameKey(..)");
+    }
+
     #[test]
     fn shape_overflow_is_an_error() {
         let m = FrameMeta::iq(MissionId(0), 0, 0, u32::MAX, u32::MAX);
@@ -511,8 +783,10 @@ mod tests {
         #[test]
         fn prefix_roundtrip(kind in any::<u16>(), ver in any::<u16>(), rows in 0u32..64, cols in 0u32..64,
                             elem in 1u16..17, crc in any::<Option<u32>>(), mission in any::<u64>(),
-                            seq in any::<u64>(), mt in any::<i64>(), t in any::<u64>()) {
-            let m = FrameMeta { kind, schema_version: ver, element_size: elem, mission_id: MissionId(mission), seq, mission_time_ns: mt, shape: [rows, cols] };
+                            seq in any::<u64>(), mt in any::<i64>(), t in any::<u64>(),
+                            tag in any::<Option<[u8; 32]>>()) {
+            let tag = tag.filter(|t| *t != [0; 32]);
+            let m = FrameMeta { kind, schema_version: ver, element_size: elem, mission_id: MissionId(mission), seq, mission_time_ns: mt, shape: [rows, cols], tag };
             let mut h = m.header(crc).unwrap();
             h.time_unix_ns = t;
             let len = h.payload_len as usize;

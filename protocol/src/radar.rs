@@ -70,12 +70,17 @@ pub struct RequestAck {
     pub queued_before: u32,
     /// False when an identical request was already queued (nothing added).
     pub queued: bool,
+    /// The mission's frame key: the echo tags every IQ frame of the mission with it
+    /// ([`bridge::frame::FrameKey::tag`]), and a processor given it takes only frames whose
+    /// tag verifies. It goes only to whoever asked (a query reply); `None`: frames untagged.
+    pub frame_key: Option<bridge::frame::FrameKey>,
 }
 
 impl Message for RequestAck {
     const KIND: u16 = 0x0302;
     const NAME: &'static str = "radar.request_ack";
-    const SCHEMA_VERSION: u16 = 1;
+    /// 2: `frame_key`.
+    const SCHEMA_VERSION: u16 = 2;
 }
 
 /// Metadata of one IQ frame (`cellsar/<mission>/frames`), published next to the frame.

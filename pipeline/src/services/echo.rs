@@ -102,6 +102,9 @@ struct EchoMission {
     synth: Synthesizer,
     publisher: Option<FramePublisher>,
     info: TypedPublisher<FrameInfo>,
+    /// The mission's frame key: every frame sent is tagged with it, and every processor that
+    /// asks for apertures is given it (in the [`RequestAck`]).
+    frame_key: bridge::frame::FrameKey,
     /// When a processor last asked for it (or when its plan arrived).
     last_used: Instant,
 }
@@ -353,11 +356,16 @@ impl<'a> Echo<'a> {
         let publisher = self
             .frames
             .publisher(&spec, FramePublisherOptions::default())?;
+        let frame_key = bridge::frame::FrameKey::random().map_err(|error| ServiceError::Codec {
+            what: format!("mission {}: drawing its frame key", ctx.mission_id),
+            error,
+        })?;
         Ok(EchoMission {
             ctx,
             synth,
             publisher: Some(publisher),
             info,
+            frame_key,
             last_used: Instant::now(),
         })
     }
@@ -470,6 +478,7 @@ impl<'a> Echo<'a> {
             seqs,
             queued_before,
             queued: !dup,
+            frame_key: Some(m.frame_key.clone()),
         })
     }
 
@@ -523,6 +532,8 @@ impl<'a> Echo<'a> {
             spp as u32,
         );
         let bytes = bridge::frame::samples_as_bytes(&iq);
+        // the tag lets a processor tell the echo's frames from a peer's that fit the layout
+        let meta = meta.tagged(&m.frame_key, bytes);
         let sent = publisher.send_bytes(&meta, bytes)?;
         self.report.frames += 1;
         self.report.bytes += bytes.len() as u64;

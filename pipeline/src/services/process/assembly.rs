@@ -1,6 +1,7 @@
 //! The processor's state of one mission ([`Run`]) and of each aperture (or look) being filled
 //! from frames ([`Assembly`]).
 
+use super::frame_key::KeyGate;
 use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -100,6 +101,8 @@ pub(super) struct Run {
     pub(super) started: Instant,
     /// When the mission last made progress: its plan or a frame of it arrived.
     pub(super) last_progress: Instant,
+    /// The mission's frame key from the echo, and the frames waiting for it.
+    pub(super) key_gate: KeyGate,
 }
 
 impl Run {
@@ -121,6 +124,7 @@ impl Run {
             last_frame: Instant::now(),
             started: Instant::now(),
             last_progress: Instant::now(),
+            key_gate: KeyGate::default(),
         }
     }
 

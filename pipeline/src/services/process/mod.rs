@@ -14,6 +14,7 @@
 
 mod assembly;
 mod context;
+mod frame_key;
 mod proc;
 mod publish;
 mod receive;
@@ -120,6 +121,10 @@ pub struct ProcessReport {
     pub unsolicited: u64,
     /// Frames inconsistent with the mission's layout, dropped.
     pub bad: u64,
+    /// Frames that fit the layout but whose tag is missing or does not verify under the
+    /// mission's frame key (not the echo's), dropped.
+    #[serde(default)]
+    pub forged: u64,
     /// Frames dropped because the receive queue was full.
     pub dropped: u64,
     /// Frames the transport reported as missed (sequence gaps) or malformed.

@@ -15,6 +15,7 @@ use radar_sim::limits::IqLimits;
 
 use super::assembly::{Assembly, Run};
 use super::context::{fold_metrics, ApertureOutcome, MissionContext, ProcContext};
+use super::frame_key::Admit;
 use super::publish::Publishers;
 use super::receive::{FrameLoss, RawFrame, ReceiverCmd};
 use super::store::{restore, store, store_metrics};
@@ -303,10 +304,15 @@ impl Proc<'_> {
         self.runs.iter().position(|r| r.ctx.base.mission_id == id)
     }
 
-    /// Files a frame into the assembly waiting for it; complete assemblies are queued for the
-    /// worker.
+    /// Counts a frame received and files it.
     fn on_frame(&mut self, f: RawFrame) {
         self.report.frames += 1;
+        self.file_frame(f);
+    }
+
+    /// Files a frame into the assembly waiting for it once its tag verifies; complete
+    /// assemblies are queued for the worker.
+    fn file_frame(&mut self, f: RawFrame) {
         let Some(i) = self.run_index(f.mission) else {
             self.report.unsolicited += 1;
             return;
@@ -338,6 +344,26 @@ impl Proc<'_> {
             );
             return;
         }
+        // only the echo's frames (tagged with the mission's key) take a slot
+        let (mission, seq) = (f.mission, f.seq);
+        let f = match run.key_gate.admit(f) {
+            Admit::Take(f) => f,
+            Admit::Parked => return,
+            Admit::Overflow => {
+                self.report.dropped += 1;
+                return;
+            }
+            Admit::Forged(e) => {
+                self.report.forged += 1;
+                if std::mem::replace(&mut run.key_gate.warned, true) {
+                    tracing::debug!(%mission, seq, error = %e, "forged frame skipped");
+                } else {
+                    tracing::warn!(%mission, seq, error = %e,
+                        "forged frame skipped (not tagged with the mission's key; later ones are logged at debug)");
+                }
+                return;
+            }
+        };
         run.last_frame = Instant::now();
         run.last_progress = run.last_frame;
         let target = match run.assembling.get_mut(&slot.aperture) {
@@ -539,6 +565,19 @@ impl Proc<'_> {
         let Some(i) = self.run_index(d.mission) else {
             return;
         };
+        // the answer brings the mission's frame key: file the frames that waited for it
+        let parked = match &d.result {
+            Ok(ack) => self.runs[i].key_gate.on_ack(ack.frame_key.clone()),
+            Err(_) => Vec::new(),
+        };
+        self.note_request_done(i, d);
+        for f in parked {
+            self.file_frame(f);
+        }
+    }
+
+    /// The rest of [`Self::on_request_done`] for mission `i`.
+    fn note_request_done(&mut self, i: usize, d: RequestDone) {
         let run = &mut self.runs[i];
         let a = match d.look {
             None => run.assembling.get_mut(&d.aperture),

@@ -26,6 +26,8 @@ pub(super) struct RawFrame {
     pub(super) cols: usize,
     /// The samples, pulse after pulse.
     pub(super) samples: Vec<Complex32>,
+    /// The frame's header (its tag is checked against the mission's key).
+    pub(super) header: bridge::FrameHeader,
 }
 
 /// What the service loop tells the iceoryx2 receiver.
@@ -111,6 +113,7 @@ pub(super) fn receive_zenoh(
             rows: h.shape[0] as usize,
             cols: h.shape[1] as usize,
             samples,
+            header: h,
         };
         if !out.forward(raw) {
             break;
@@ -179,6 +182,7 @@ pub(super) fn receive_iox(
                     rows: h.shape[0] as usize,
                     cols: h.shape[1] as usize,
                     samples,
+                    header: h,
                 };
                 if !out.forward(raw) {
                     return Ok(());

@@ -370,9 +370,11 @@ pub(super) fn bad_payload(rng: &mut Rng, valid: &[u8], max_frame_bytes: usize, i
                 let mut v = valid.to_vec();
                 let big = (max_frame_bytes as u64 + 8 + rng.below(1 << 30)) / 8 * 8;
                 let cols = (big / 8).min(u64::from(u32::MAX)) as u32;
-                v[40..48].copy_from_slice(&(24 + u64::from(cols) * 8).to_le_bytes());
-                v[frame::WIRE_PREFIX_LEN - 24 + 8..frame::WIRE_PREFIX_LEN - 24 + 12]
-                    .copy_from_slice(&cols.to_le_bytes());
+                v[40..48].copy_from_slice(
+                    &(frame::DESCRIPTOR_LEN as u64 + u64::from(cols) * 8).to_le_bytes(),
+                );
+                let d = bridge::envelope::HEADER_LEN;
+                v[d + 8..d + 12].copy_from_slice(&cols.to_le_bytes());
                 v
             }
             // wrong magic / version / format / reserved

@@ -15,18 +15,26 @@
 //!   than the processor's `--max-frame-bytes` default;
 //! - with `--iq-flood-frames N`, `N` frames of `--iq-flood-bytes` bytes each, numbered in the
 //!   mission and not fitting its layout (1 pulse, at −1 s);
-//! - a garbage counters message on `cellsar/bridge/<instance>/stats`.
+//! - a garbage counters message on `cellsar/bridge/<instance>/stats`;
+//! - with `--iq-plan-dir` and `--iq-scene` (the mission's plan, as a peer that knows it
+//!   would have it), `--iq-fit-frames` frames every round that FIT the layout: numbered,
+//!   shaped and timed as the processor expects (computed by the same library calls as the
+//!   processor's context), with forged samples, every other one tagged under a key of the
+//!   forger's own and the rest untagged. They go through the mission's frames in turn.
 //!
 //! None of them may change what the processor makes: a frame is taken only when its mission is
-//! one the processor runs, its number falls in the mission, and its shape and mission time are
-//! the layout's for that number. (A frame that a peer holding the bridge's certificate and the
-//! mission's plan numbers, shapes and times as the layout says is taken; nothing tells it from
-//! the echo's.)
+//! one the processor runs, its number falls in the mission, its shape and mission time are the
+//! layout's for that number, and its tag verifies under the key the echo gave the processor
+//! (which a peer holding only the bridge's certificate cannot learn: the key travels in the
+//! echo's answers to the processor's aperture requests).
 
-use bridge::frame::{self, FrameMeta};
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+use bridge::frame::{self, FrameKey, FrameMeta};
 use bridge::zenoh::Wait;
 use bridge::{MissionId, ZenohNode};
-use pipeline::protocol::keys;
+use pipeline::protocol::{keys, FrameLayout};
 use serde::Serialize;
 
 /// The number of a forged frame that no mission has.
@@ -59,6 +67,16 @@ pub(in super::super) struct IqArgs {
     /// Payload bytes of each flooded frame (a multiple of 8).
     #[arg(long, default_value_t = 64 * 1024)]
     iq_flood_bytes: u32,
+    /// With --forge-iq and --iq-scene: the plan directory (mission.toml, trajectory.csv) of
+    /// the mission forged for; frames that fit its layout are forged too.
+    #[arg(long, requires = "iq_scene")]
+    iq_plan_dir: Option<PathBuf>,
+    /// The scene file of the mission of --iq-plan-dir.
+    #[arg(long, requires = "iq_plan_dir")]
+    iq_scene: Option<PathBuf>,
+    /// With --iq-plan-dir: layout-fitting frames forged every round.
+    #[arg(long, default_value_t = 1)]
+    iq_fit_frames: u32,
 }
 
 /// What the IQ forgeries put (and how many puts failed).
@@ -79,6 +97,11 @@ pub(super) struct IqForged {
     pub flooded: u64,
     /// Garbage bridge counters.
     pub stats: u64,
+    /// Frames that fit the mission's layout, with forged samples (tagged under the forger's
+    /// own key, or untagged).
+    pub fitting: u64,
+    /// Why no layout-fitting frame could be made (the plan or scene did not load), if so.
+    pub fit_error: Option<String>,
     /// Puts that failed.
     pub errors: u64,
     /// Rounds done.
@@ -95,6 +118,85 @@ fn iq_frame(id: MissionId, seq: u64, time_ns: i64, rows: u32, cols: u32, value: 
         .header(Some(frame::checksum(payload)))
         .and_then(|h| frame::encode_wire(&h, payload))
         .unwrap_or_default()
+}
+
+/// What the processor expects of each frame of a mission: (rows, cols, mission time ns) by
+/// frame number, and the mission's frame count.
+struct Fit {
+    layout: FrameLayout,
+    /// Mission time of every aperture's pulses, as the processor holds them, ns.
+    pulse_times_ns: Vec<Vec<i64>>,
+}
+
+/// The layout of the mission of `plan_dir` and `scene`, by the library calls the processor's
+/// context makes (`MissionContext::with_limits`, `ProcContext::new`).
+fn fit_of(plan_dir: &std::path::Path, scene: &std::path::Path) -> Result<Fit, String> {
+    let (mission, traj) = pipeline::report::read_plan_dir(plan_dir)
+        .map_err(|e| format!("{}: {e}", plan_dir.display()))?;
+    let scene = radar_sim::config::SceneFile::from_path(scene)
+        .map_err(|e| format!("{}: {e}", scene.display()))?;
+    let setup = radar_sim::pipeline::RadarSetup::new(mission.params(), &scene)
+        .map_err(|e| e.to_string())?;
+    let apertures = setup.apertures(&mission).map_err(|e| e.to_string())?;
+    let spp = setup.scene.radar.samples_per_pulse();
+    let layout = FrameLayout::new(&apertures, spp, frame::SERVICE_MAX_FRAME_BYTES)
+        .map_err(|e| e.to_string())?;
+    let track = radar_sim::track::PlannedTrack::new(traj, mission.params().altitude_m);
+    let pulse_times_ns = apertures
+        .iter()
+        .map(|ap| {
+            setup
+                .pulses(&track, ap)
+                .iter()
+                .map(|p| {
+                    (pipeline::services::process::pulse_as_recorded(p).t_s * 1e9).round() as i64
+                })
+                .collect()
+        })
+        .collect();
+    Ok(Fit {
+        layout,
+        pulse_times_ns,
+    })
+}
+
+/// The forger's own frame key (the echo's is never given to it).
+fn own_key() -> Option<&'static FrameKey> {
+    static KEY: OnceLock<Option<FrameKey>> = OnceLock::new();
+    KEY.get_or_init(|| FrameKey::random().ok()).as_ref()
+}
+
+/// `a.iq_fit_frames` frames of mission `id` that fit its layout, the `k`-th of the mission
+/// `start + k` (modulo its frame count), with forged samples; odd frame numbers tagged under
+/// the forger's own key, even ones untagged.
+fn fitting_frames(id: MissionId, fit: &Fit, start: u64, count: u32) -> Vec<Vec<u8>> {
+    let total = fit.layout.total_frames();
+    if total == 0 {
+        return Vec::new();
+    }
+    (0..u64::from(count))
+        .filter_map(|k| {
+            let seq = (start + k) % total;
+            let slot = fit.layout.locate(seq)?;
+            let t_ns = *fit
+                .pulse_times_ns
+                .get(slot.aperture)?
+                .get(slot.first_pulse)?;
+            let (rows, cols) = (slot.pulses as u32, fit.layout.samples_per_pulse() as u32);
+            let samples = vec![
+                bridge::Complex32::new(1e3, -1e3);
+                slot.pulses * fit.layout.samples_per_pulse()
+            ];
+            let payload = frame::samples_as_bytes(&samples);
+            let mut meta = FrameMeta::iq(id, seq, t_ns, rows, cols);
+            if seq % 2 == 1 {
+                meta = meta.tagged(own_key()?, payload);
+            }
+            meta.header(Some(frame::checksum(payload)))
+                .and_then(|h| frame::encode_wire(&h, payload))
+                .ok()
+        })
+        .collect()
 }
 
 /// The frames that are no valid frame: not a frame, a bad checksum, truncated, bytes that are
@@ -188,5 +290,19 @@ pub(super) fn forge_round(
         put(&stats, b"{\"forged\": true}".to_vec(), &mut n);
     }
     r.stats += n;
+    if let (Some(plan_dir), Some(scene)) = (&a.iq_plan_dir, &a.iq_scene) {
+        static FIT: OnceLock<Result<Fit, String>> = OnceLock::new();
+        match FIT.get_or_init(|| fit_of(plan_dir, scene)) {
+            Ok(fit) => {
+                let mut n = 0;
+                let start = r.rounds.saturating_mul(u64::from(a.iq_fit_frames));
+                for f in fitting_frames(id, fit, start, a.iq_fit_frames) {
+                    put(&key, f, &mut n);
+                }
+                r.fitting += n;
+            }
+            Err(e) => r.fit_error = Some(e.clone()),
+        }
+    }
     r.rounds += 1;
 }
