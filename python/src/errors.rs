@@ -54,9 +54,7 @@ pub fn plan_error(py: Python<'_>, e: &planner::PlanError) -> PyErr {
         }
         planner::PlanError::InvalidInit(_)
         | planner::PlanError::InvalidOption { .. }
-        | planner::PlanError::OptionConflict(_) => {
-            PyValueError::new_err(message)
-        }
+        | planner::PlanError::OptionConflict(_) => PyValueError::new_err(message),
         _ => PlanError::new_err(message),
     }
 }

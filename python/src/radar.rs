@@ -7,6 +7,7 @@ use numpy::{Complex32, IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadon
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use radar_sim::clutter::GroundClutter;
 use radar_sim::config::SceneFile;
 use radar_sim::limits::{IqBudget, IqLimits};
 use radar_sim::pipeline::{synthesize_frames, Processor, RadarSetup};
@@ -69,14 +70,20 @@ fn simulate_in_memory(
     let objects = setup.objects(mission)?;
     let track = PlannedTrack::new(traj.clone(), mission.params().altitude_m);
     let synth = setup.synthesizer(objects.clone())?;
+    // ground clutter (`[clutter]`): synthesised with the objects, as `cellsar-radar-sim simulate`
+    let clutter = GroundClutter::for_run(&setup, &track, &apertures)?;
     let spp = synth.samples_per_pulse();
     let mut pulses = Vec::with_capacity(apertures.len());
     let mut iq = Vec::with_capacity(apertures.len());
     for ap in &apertures {
         let ps = setup.pulses(&track, ap);
+        let cluttered = match &clutter {
+            Some(c) => Some(c.synthesizer(&setup, &objects, ap, &ps)?),
+            None => None,
+        };
         let mut samples = Vec::with_capacity(ps.len() * spp);
         synthesize_frames(
-            &synth,
+            cluttered.as_ref().unwrap_or(&synth),
             &ps,
             FRAME_PULSES,
             Components::ALL,
