@@ -235,6 +235,17 @@ impl Launch {
 
     /// As [`Launch::start`], the command prefixed by `prefix` (e.g. `ip netns exec NS`).
     pub fn start_in(prefix: &[&str], dir: &Path, horizon_s: f64, extra: &[&str]) -> Launch {
+        Launch::start_scene_in(prefix, &scene(), dir, horizon_s, extra)
+    }
+
+    /// As [`Launch::start_in`], on the scene file `scene` instead of the small test scene.
+    pub fn start_scene_in(
+        prefix: &[&str],
+        scene: &Path,
+        dir: &Path,
+        horizon_s: f64,
+        extra: &[&str],
+    ) -> Launch {
         let out = dir.join("out");
         let stderr = dir.join("launcher.err");
         let mut cmd = match prefix.split_first() {
@@ -249,7 +260,7 @@ impl Launch {
             .arg("run")
             .arg(mission())
             .arg("--scene")
-            .arg(scene())
+            .arg(scene)
             .arg("--out")
             .arg(&out)
             .args(["--horizon-s", &horizon_s.to_string(), "--events-json"])

@@ -84,6 +84,35 @@ fn run_over_iceoryx2_matches_closed_loop() {
     assert!(shm_files(prefix).is_empty());
 }
 
+/// A scene with ground clutter: the echo synthesises each aperture's patch of ground as
+/// `closed-loop` does (the images would differ if it left the clutter out).
+#[test]
+fn run_with_ground_clutter_matches_closed_loop() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("clutter-scene.toml");
+    let mut text = std::fs::read_to_string(harness::pipeline::scene()).unwrap();
+    text.push_str(
+        "\n[clutter]\nenabled = true\nterrain = \"farmland\"\nscatterers_per_cell = 4.0\n",
+    );
+    std::fs::write(&scene, text).unwrap();
+    let m = planner::Mission::from_path(&mission()).unwrap();
+    let m = radar_sim::run::shorten(&m, H).unwrap();
+    let reference = dir.path().join("closed-loop");
+    closed_loop(&m, &scene, &reference);
+    // the clutter is in the reference: its images are not those of the scene without it
+    let plain = harness::pipeline::reference(H);
+    let name = "processed/images/aperture_000.npy";
+    assert_ne!(
+        std::fs::read(reference.join(name)).unwrap(),
+        std::fs::read(plain.join(name)).unwrap(),
+        "{name}: the clutter changed nothing"
+    );
+    let mut l = Launch::start_scene_in(&[], &scene, dir.path(), H, &[]);
+    let st = l.finish(Duration::from_secs(240));
+    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, &reference);
+}
+
 #[test]
 fn run_over_zenoh_through_the_bridge_matches_closed_loop() {
     let reference = reference(H);

@@ -24,8 +24,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::args::IqLimitArgs;
 use bridge::flags::Seconds;
+use radar_sim::clutter::GroundClutter;
 use radar_sim::config::SceneFile;
 use radar_sim::limits::IqLimits;
+use radar_sim::scene::SceneObject;
 use radar_sim::synth::{Components, Synthesizer};
 use radar_sim::track::PulseMeta;
 
@@ -100,6 +102,10 @@ pub struct EchoReport {
 struct EchoMission {
     ctx: Arc<MissionContext>,
     synth: Synthesizer,
+    /// The scene's objects (each aperture's clutter synthesiser holds them too).
+    objects: Vec<SceneObject>,
+    /// The scene's ground clutter (`[clutter]`), `None` when off.
+    clutter: Option<GroundClutter>,
     publisher: Option<FramePublisher>,
     info: TypedPublisher<FrameInfo>,
     /// The mission's frame key: every frame sent is tagged with it, and every processor that
@@ -115,6 +121,8 @@ struct Job {
     look: Option<usize>,
     slots: Vec<(u64, FrameSlot)>,
     pulses: Vec<PulseMeta>,
+    /// The aperture's objects and its patch of ground clutter, when the scene has clutter.
+    cluttered: Option<Synthesizer>,
     next: usize,
 }
 
@@ -341,7 +349,9 @@ impl<'a> Echo<'a> {
             &self.limits,
         )?);
         let objects = ctx.setup.objects(&ctx.mission)?;
-        let synth = ctx.setup.synthesizer(objects)?;
+        let synth = ctx.setup.synthesizer(objects.clone())?;
+        // ground clutter (`[clutter]`): synthesised with the objects, as `cellsar-radar-sim simulate`
+        let clutter = GroundClutter::for_run(&ctx.setup, &ctx.track, &ctx.apertures)?;
         let info = self.node.publisher::<FrameInfo>(
             &pkeys::frames(ctx.mission_id)?,
             PublishOptions {
@@ -363,6 +373,8 @@ impl<'a> Echo<'a> {
         Ok(EchoMission {
             ctx,
             synth,
+            objects,
+            clutter,
             publisher: Some(publisher),
             info,
             frame_key,
@@ -468,6 +480,7 @@ impl<'a> Echo<'a> {
                 look,
                 slots,
                 pulses: Vec::new(),
+                cluttered: None,
                 next: 0,
             });
         }
@@ -493,7 +506,12 @@ impl<'a> Echo<'a> {
         };
         let ctx = &m.ctx;
         if job.pulses.is_empty() {
-            job.pulses = ctx.setup.pulses(&ctx.track, &ctx.apertures[job.aperture]);
+            let ap = &ctx.apertures[job.aperture];
+            job.pulses = ctx.setup.pulses(&ctx.track, ap);
+            job.cluttered = match &m.clutter {
+                Some(c) => Some(c.synthesizer(&ctx.setup, &m.objects, ap, &job.pulses)?),
+                None => None,
+            };
         }
         let Some(&(seq, slot)) = job.slots.get(job.next) else {
             self.queue.pop_front();
@@ -510,7 +528,8 @@ impl<'a> Echo<'a> {
                     job.aperture
                 ))
             })?;
-        let iq = m.synth.synthesize_frame(chunk, Components::ALL)?;
+        let synth = job.cluttered.as_ref().unwrap_or(&m.synth);
+        let iq = synth.synthesize_frame(chunk, Components::ALL)?;
         if m.publisher.is_none() {
             let spec =
                 FrameServiceSpec::new(&pkeys::echo(ctx.mission_id)?, self.args.max_frame_bytes);
