@@ -11,11 +11,11 @@ use radar_sim::clutter::GroundClutter;
 use radar_sim::config::SceneFile;
 use radar_sim::limits::{IqBudget, IqLimits};
 use radar_sim::pipeline::{synthesize_frames, Processor, RadarSetup};
-use radar_sim::run::Metrics;
+use radar_sim::run::{planned_track, Metrics};
 use radar_sim::scene::SceneObject;
 use radar_sim::synth::Components;
 use radar_sim::tally::{self, ApertureTally};
-use radar_sim::track::{Aperture, PlannedTrack, PulseMeta};
+use radar_sim::track::{Aperture, PulseMeta};
 
 use crate::errors::{panic_error, RadarError};
 use crate::json;
@@ -62,13 +62,15 @@ struct Simulated {
 fn simulate_in_memory(
     mission: &planner::Mission,
     traj: &planner::Trajectory,
+    altitudes_m: Option<&[f64]>,
     scene: &SceneFile,
 ) -> radar_sim::Result<Simulated> {
     let setup = RadarSetup::new(mission.params(), scene)?;
     let apertures = setup.apertures(mission)?;
     IqBudget::new(&setup, &apertures).check(&setup, &IqLimits::default())?;
     let objects = setup.objects(mission)?;
-    let track = PlannedTrack::new(traj.clone(), mission.params().altitude_m);
+    // a free mission's plan is flown at its altitude per slot, a fixed one at `altitude_m`
+    let track = planned_track(mission, traj, altitudes_m)?;
     let synth = setup.synthesizer(objects.clone())?;
     // ground clutter (`[clutter]`): synthesised with the objects, as `cellsar-radar-sim simulate`
     let clutter = GroundClutter::for_run(&setup, &track, &apertures)?;
@@ -186,6 +188,41 @@ impl PyRecording {
         )
     }
 
+    /// Every pulse of every aperture, in recording order (the CLI's `pulses.csv`): a structured
+    /// array (aperture, look, t_s, x_m, y_m, z_m, vx_mps, vy_mps, vz_mps, window_delay_samples)
+    /// of the UAV's navigated position and velocity at each pulse.
+    #[getter]
+    fn pulses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let p: Vec<&PulseMeta> = self.pulses.iter().flatten().collect();
+        structured(
+            py,
+            &[
+                "aperture",
+                "look",
+                "t_s",
+                "x_m",
+                "y_m",
+                "z_m",
+                "vx_mps",
+                "vy_mps",
+                "vz_mps",
+                "window_delay_samples",
+            ],
+            vec![
+                i64_col(py, &p, |p| index(p.aperture)),
+                i64_col(py, &p, |p| index(p.look)),
+                f64_col(py, &p, |p| p.t_s),
+                f64_col(py, &p, |p| p.pos_m[0]),
+                f64_col(py, &p, |p| p.pos_m[1]),
+                f64_col(py, &p, |p| p.pos_m[2]),
+                f64_col(py, &p, |p| p.vel_mps[0]),
+                f64_col(py, &p, |p| p.vel_mps[1]),
+                f64_col(py, &p, |p| p.vel_mps[2]),
+                i64_col(py, &p, |p| p.window_delay_samples),
+            ],
+        )
+    }
+
     /// Samples per pulse.
     #[getter]
     fn samples_per_pulse(&self) -> usize {
@@ -229,7 +266,12 @@ pub fn simulate(
     let sim = py
         .detach(|| {
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                simulate_in_memory(&m.inner, &result.trajectory, &scene)
+                simulate_in_memory(
+                    &m.inner,
+                    &result.trajectory,
+                    result.altitudes_m.as_deref(),
+                    &scene,
+                )
             }))
         })
         .map_err(|p| panic_error("the radar simulator", p.as_ref()))?

@@ -56,3 +56,22 @@ def test_a_free_mission_gets_an_altitude_per_slot_within_bounds_and_rates(cli_pl
 def test_schemes_at_one_altitude_refuse_a_free_mission(scheme):
     with pytest.raises(cellsar.PlanError, match=r'`altitude` = "free".*scheme ' + scheme):
         cellsar.plan(free_mission(), scheme=scheme)
+
+
+def test_the_radar_flies_a_free_plan_at_its_altitudes():
+    """``cellsar.radar.simulate`` flies the plan's altitude per slot: every pulse's z is the
+    profile interpolated linearly between slot ends (the start row at ``altitude_m``)."""
+    from conftest import ROOT
+
+    mission = cellsar.Mission.default(
+        30.0, horizon_s=25.0, altitude="free", min_altitude_m=LOW_M, max_altitude_m=HIGH_M
+    )
+    plan = cellsar.plan(mission)
+    rec = cellsar.radar.simulate(mission, plan, ROOT / "tests" / "data" / "small-scene.toml")
+    p = rec.pulses
+    assert len(p) == sum(iq.shape[0] for iq in rec.iq)
+    slot_ends_s = np.arange(len(plan.z_m)) * mission.params["slot_s"]
+    expected = np.interp(p["t_s"], slot_ends_s, plan.z_m)
+    assert np.abs(p["z_m"] - expected).max() < 1e-6
+    # the profile is flown, not the mission's altitude_m
+    assert np.ptp(p["z_m"]) > 1.0, (p["z_m"].min(), p["z_m"].max())

@@ -29,6 +29,11 @@ def test_recording(short_run):
     assert set(truth.dtype.names) >= {"id", "x_m", "y_m", "rcs_m2", "landmark"}
     landmarks = truth[truth["landmark"] >= 0]
     assert len(landmarks) == len(mission.landmarks)
+    # a fixed mission is flown at altitude_m, pulse by pulse
+    pulses = recording.pulses
+    assert len(pulses) == sum(iq.shape[0] for iq in recording.iq)
+    assert (pulses["z_m"] == mission.params["altitude_m"]).all()
+    assert (pulses["vz_mps"] == 0.0).all()
     assert recording.iq[0] is recording.iq[0] or np.shares_memory(recording.iq[0], recording.iq[0])
 
 

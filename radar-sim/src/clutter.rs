@@ -89,7 +89,6 @@ pub fn look_gradients(
     point_m: [f64; 2],
 ) -> Vec<([f64; 2], [f64; 2])> {
     let b = setup.num.bandwidth_hz();
-    let params = &setup.params;
     pulses
         .chunks(ap.pulses_per_look.max(1))
         .filter(|c| c.len() >= 2)
@@ -103,6 +102,8 @@ pub fn look_gradients(
             ];
             let u = [m.pos_m[0], m.pos_m[1]];
             let t = c.len() as f64 / setup.scene.radar.prf_hz;
+            // the geometry at the look's altitude (a free mission's H_t; a fixed one's H exactly)
+            let params = &planner::altitude::params_at(&setup.params, m.pos_m[2]);
             let g = pg::bistatic_range_gradient(params, u, point_m);
             let d = pg::doppler_gradient(params, u, v, point_m);
             ([g[0] * b / C_MPS, g[1] * b / C_MPS], [d[0] * t, d[1] * t])
