@@ -380,8 +380,11 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
 /// - what the bridge's certificate allows, IQ frames on the mission's echo key and counters
 ///   on the bridge's, it puts wrong (`forge --forge-iq`: frames of another mission, numbered
 ///   outside the mission, of a shape and time that fit no layout, replayed, flooded, and puts
-///   that are no valid frame): the router lets them through, and the processor refuses every
-///   one, counted (`unsolicited`, `bad`, `malformed`);
+///   that are no valid frame; and, knowing the plan, frames that fit the layout exactly, with
+///   forged samples, untagged or tagged under a key of its own): the router lets them
+///   through, and the processor refuses every one, counted (`unsolicited`, `bad`,
+///   `malformed`, `forged`: a layout-fitting frame is taken only when its tag verifies under
+///   the key the echo gave the processor);
 /// - what it does not allow is denied by the router: a processor's token, its status,
 ///   detections, images and metrics, a plan, answering plan requests, asking for results,
 ///   apertures and plans, subscribing to plans and statuses.
@@ -403,6 +406,8 @@ fn a_forger_with_the_bridges_certificate() {
         .display()
         .to_string();
     let bridge_cfg = role("bridge");
+    let plan_dir = reference.join("plan").display().to_string();
+    let scene = scene().display().to_string();
     let (mut run, mut forgers) =
         launch_over_tls(&hosts, d, H, &role, [&router, &processor], &mut |id| {
             let args = [
@@ -415,6 +420,12 @@ fn a_forger_with_the_bridges_certificate() {
                 "--forge-iq",
                 "--iq-flood-frames",
                 "8",
+                "--iq-plan-dir",
+                &plan_dir,
+                "--iq-scene",
+                &scene,
+                "--iq-fit-frames",
+                "2",
                 "--forge-results",
                 "--metrics-template",
                 &metrics_template,
@@ -440,14 +451,16 @@ fn a_forger_with_the_bridges_certificate() {
         "replays",
         "garbage",
         "flooded",
+        "fitting",
     ] {
         assert!(iq[k].as_u64().unwrap() > 0, "{k}: {r}");
     }
     assert_eq!(iq["errors"], 0, "{r}");
+    assert!(iq["fit_error"].is_null(), "{r}");
     // what its certificate allows reached the processor and was refused there, counted
     let c = processor_counters(l);
     eprintln!("processor: {c}");
-    for k in ["unsolicited", "bad", "malformed"] {
+    for k in ["unsolicited", "bad", "malformed", "forged"] {
         assert!(c[k].as_u64().unwrap() > 0, "{k}: {c}");
     }
     // the results are the echo's alone: the collector took nothing foreign
