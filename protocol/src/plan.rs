@@ -98,6 +98,9 @@ impl PlanRequestOptions {
         }
         o.check_best_effort()
             .map_err(|e| BadRequest(format!("options.{e}")))?;
+        // the pipeline flies a free mission's altitude per slot (its track is the plan's
+        // `altitudes_m`), so `exact` plans one; the other schemes still refuse the mission
+        o.altitude_profile = true;
         Ok(o)
     }
 }
@@ -271,7 +274,14 @@ mod tests {
     #[test]
     fn request_defaults_and_refusals_are_the_librarys() {
         let none = PlanRequestOptions::default();
-        assert_eq!(none.to_plan_options().unwrap(), PlanOptions::default());
+        // ... and plans a free mission's altitudes, as they do
+        assert_eq!(
+            none.to_plan_options().unwrap(),
+            PlanOptions {
+                altitude_profile: true,
+                ..PlanOptions::default()
+            }
+        );
         assert_eq!(
             none.to_plan_options().unwrap().resolution,
             planner::DEFAULT_RESOLUTION
@@ -283,7 +293,10 @@ mod tests {
             };
             assert_eq!(
                 o.to_plan_options().unwrap(),
-                PlanOptions::for_scheme(scheme)
+                PlanOptions {
+                    altitude_profile: true,
+                    ..PlanOptions::for_scheme(scheme)
+                }
             );
         }
         let paper_strict = PlanRequestOptions {

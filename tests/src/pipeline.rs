@@ -235,12 +235,14 @@ impl Launch {
 
     /// As [`Launch::start`], the command prefixed by `prefix` (e.g. `ip netns exec NS`).
     pub fn start_in(prefix: &[&str], dir: &Path, horizon_s: f64, extra: &[&str]) -> Launch {
-        Launch::start_scene_in(prefix, &scene(), dir, horizon_s, extra)
+        Launch::start_files_in(prefix, &mission(), &scene(), dir, horizon_s, extra)
     }
 
-    /// As [`Launch::start_in`], on the scene file `scene` instead of the small test scene.
-    pub fn start_scene_in(
+    /// As [`Launch::start_in`], on the mission file `mission` and the scene file `scene`
+    /// instead of the main mission and the small test scene.
+    pub fn start_files_in(
         prefix: &[&str],
+        mission: &Path,
         scene: &Path,
         dir: &Path,
         horizon_s: f64,
@@ -258,7 +260,7 @@ impl Launch {
         };
         let mut child = cmd
             .arg("run")
-            .arg(mission())
+            .arg(mission)
             .arg("--scene")
             .arg(scene)
             .arg("--out")

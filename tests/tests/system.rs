@@ -107,7 +107,44 @@ fn run_with_ground_clutter_matches_closed_loop() {
         std::fs::read(plain.join(name)).unwrap(),
         "{name}: the clutter changed nothing"
     );
-    let mut l = Launch::start_scene_in(&[], &scene, dir.path(), H, &[]);
+    let mut l = Launch::start_files_in(&[], &mission(), &scene, dir.path(), H, &[]);
+    let st = l.finish(Duration::from_secs(240));
+    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, &reference);
+}
+
+/// A free-altitude mission: the planner service plans an altitude per slot, the echo and the
+/// processor fly it, and the run ends with the outputs of `cellsar-radar-sim closed-loop`
+/// (which flies the profile), the plan's varying `z_m` included.
+#[test]
+fn a_free_altitude_mission_runs_at_its_planned_altitudes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mission = harness::root().join("missions/default-30m-free-altitude.toml");
+    let reference = dir.path().join("closed-loop");
+    let st = Command::new(harness::bin("cellsar-radar-sim"))
+        .arg("closed-loop")
+        .arg(&mission)
+        .arg("--scene")
+        .arg(scene())
+        .arg("--out")
+        .arg(&reference)
+        .args(["--horizon-s", &H.to_string()])
+        .status()
+        .unwrap();
+    assert!(st.success(), "closed-loop: {st:?}");
+    // the plan flies more than one altitude
+    let csv = std::fs::read_to_string(reference.join("plan/trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "z_m").unwrap();
+    let z: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    let (lo, hi) = z
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    assert!(hi - lo > 1.0, "z_m from {lo} to {hi} m");
+    let mut l = Launch::start_files_in(&[], &mission, &scene(), dir.path(), H, &[]);
     let st = l.finish(Duration::from_secs(240));
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
     assert_same_as_reference(&l.out, &reference);

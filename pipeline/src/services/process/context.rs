@@ -34,7 +34,7 @@ pub struct MissionContext {
     pub apertures: Vec<Aperture>,
     /// Which frame carries which pulses.
     pub layout: FrameLayout,
-    /// The planned track at the mission altitude.
+    /// The planned track, at the plan's altitudes (a free mission) or the mission's altitude.
     pub track: PlannedTrack,
 }
 
@@ -62,7 +62,12 @@ impl MissionContext {
         IqBudget::new(&setup, &apertures).check(&setup, limits)?;
         let spp = setup.scene.radar.samples_per_pulse();
         let layout = FrameLayout::new(&apertures, spp, max_frame_bytes)?;
-        let track = PlannedTrack::new(plan.result.trajectory.clone(), mission.params().altitude_m);
+        // a free mission is flown at the plan's altitude per slot, a fixed one at `altitude_m`
+        let track = radar_sim::run::planned_track(
+            &mission,
+            &plan.result.trajectory,
+            plan.result.altitudes_m.as_deref(),
+        )?;
         Ok(MissionContext {
             mission_id: plan.mission_id,
             plan: plan.clone(),
