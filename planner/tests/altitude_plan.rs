@@ -143,10 +143,10 @@ fn free_plans_of_the_paper_missions_are_feasible_and_no_dearer() {
 }
 
 /// The default options (general resolution as a best effort): the free plan keeps every
-/// constraint but the cell at its altitudes, and its merit (energy + weight × deficit) is no
-/// larger than the fixed plan's.
+/// constraint but the cell at its altitudes, its merit (energy + weight × deficit) is no
+/// larger than the fixed plan's, and neither is its energy.
 #[test]
-fn a_best_effort_free_plan_does_not_lose_merit() {
+fn a_best_effort_free_plan_does_not_lose_merit_or_cost_energy() {
     let m = Mission::preset(Preset::Default, 30.0).unwrap();
     let options = PlanOptions::default();
     let fixed = plan(&m, &options).unwrap();
@@ -159,6 +159,8 @@ fn a_best_effort_free_plan_does_not_lose_merit() {
     };
     let (a, b) = (merit(&m, &fixed.evaluation), merit(&fm, &r.evaluation));
     assert!(b <= a * (1.0 + 1e-9), "{b} > {a}");
+    let (ea, eb) = (fixed.evaluation.energy_j, r.evaluation.energy_j);
+    assert!(eb <= ea * (1.0 + 1e-9), "free {eb} J > fixed {ea} J");
 }
 
 /// V_min = λ_c H / (T_d d_min cos η) is 7.07 m/s at 1000 m, above the speed limit of 6 m/s, and

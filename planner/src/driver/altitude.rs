@@ -5,8 +5,10 @@
 //! that plan at H_t = `altitude_m`. Every iterate is checked by
 //! [`evaluate_with_altitudes`] and accepted only when it is feasible and its true merit (the
 //! energy with the climb power, plus the weighted resolution deficit while the plan is a best
-//! effort that leaves slots unresolved) does not increase: the plan never uses more energy than
-//! the fixed one.
+//! effort that leaves slots unresolved) does not increase and whose energy is at most the
+//! starting plan's (a best effort's subproblems are capped at it too): the plan never uses more
+//! energy than the fixed one, and a best effort buys resolution with altitude only where it
+//! costs no energy.
 //!
 //! A mission the fixed altitude cannot fly is started instead from its plan at the lowest
 //! altitude `min_altitude_m`, flown along the fastest descent there from `altitude_m`, when that
@@ -125,9 +127,13 @@ fn refine(
         resolution: fixed.resolution,
         dynamics: options.dynamics,
         cell_slack_weight: slack.then_some(options.resolution_weight_j_per_m),
-        energy_cap_j: best_effort.as_ref().and_then(|b| {
-            b.max_extra_energy_pct
-                .map(|pct| b.least_energy_j * (1.0 + pct / 100.0))
+        // free altitude never costs more energy than the fixed plan it starts from: a best
+        // effort (whose merit also counts the resolution deficit) is capped at that energy too
+        energy_cap_j: best_effort.as_ref().map(|b| {
+            let fixed_j = fixed.evaluation.energy_j;
+            b.max_extra_energy_pct.map_or(fixed_j, |pct| {
+                fixed_j.min(b.least_energy_j * (1.0 + pct / 100.0))
+            })
         }),
         ..ExactTuning::default()
     };
@@ -174,7 +180,9 @@ fn refine(
                 let cand_ev = evaluate_with_altitudes(mission, &cand, &z).ok();
                 let own = sub.physical_objective(sol.objective);
                 let ok = cand_ev.as_ref().is_some_and(|e| {
-                    judge_feasible(&fixed, options, e) && merit(e) <= value * (1.0 + 1e-9) + 1e-9
+                    judge_feasible(&fixed, options, e)
+                        && merit(e) <= value * (1.0 + 1e-9) + 1e-9
+                        && e.energy_j <= fixed.evaluation.energy_j * (1.0 + 1e-9)
                 });
                 let shown = cand_ev.as_ref().unwrap_or(&ev);
                 let rec = record(
