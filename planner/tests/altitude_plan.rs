@@ -169,20 +169,7 @@ fn a_best_effort_free_plan_does_not_lose_merit_or_cost_energy() {
 /// 50 s) it is.
 #[test]
 fn a_mission_only_a_lower_altitude_can_fly_gets_a_plan() {
-    let text = r#"
-name = "only lower"
-[params]
-horizon_s = 100
-start_m = [-800.0, 0.0]
-start_velocity_mps = [0.0, 5.0]
-max_speed_mps = 6.0
-altitude = "free"
-min_altitude_m = 800
-max_altitude_m = 1000
-max_descent_mps = 5
-[landmarks]
-points = [{ x_m = 0.0, y_m = 250.0, from_s = 50.0, to_s = 100.0 }]
-"#;
+    let text = include_str!("../../missions/only-a-lower-altitude.toml");
     let fm = Mission::from_file_struct(&MissionFile::from_toml_str(text).unwrap()).unwrap();
     let options = PlanOptions::least_energy();
     let mut fixed_params = fm.params().clone();

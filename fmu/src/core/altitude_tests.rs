@@ -7,20 +7,7 @@ use super::*;
 
 /// A mission the fixed altitude (1000 m) cannot fly: with the altitude free down to 800 m it
 /// can (the planner's test `a_mission_only_a_lower_altitude_can_fly_gets_a_plan`).
-const ONLY_LOWER: &str = r#"
-name = "only lower"
-[params]
-horizon_s = 100
-start_m = [-800.0, 0.0]
-start_velocity_mps = [0.0, 5.0]
-max_speed_mps = 6.0
-altitude = "free"
-min_altitude_m = 800
-max_altitude_m = 1000
-max_descent_mps = 5
-[landmarks]
-points = [{ x_m = 0.0, y_m = 250.0, from_s = 50.0, to_s = 100.0 }]
-"#;
+const ONLY_LOWER: &str = include_str!("../../../missions/only-a-lower-altitude.toml");
 
 fn run(core: &Core) -> &Run {
     let Core::Planner(c) = core else {

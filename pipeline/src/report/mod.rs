@@ -270,20 +270,7 @@ mod tests {
     /// with its bounds and rates; the same plan without altitudes (a fixed one) has none.
     #[test]
     fn a_free_plan_directory_has_its_altitude_side_view() {
-        let text = r#"
-name = "only lower"
-[params]
-horizon_s = 100
-start_m = [-800.0, 0.0]
-start_velocity_mps = [0.0, 5.0]
-max_speed_mps = 6.0
-altitude = "free"
-min_altitude_m = 800
-max_altitude_m = 1000
-max_descent_mps = 5
-[landmarks]
-points = [{ x_m = 0.0, y_m = 250.0, from_s = 50.0, to_s = 100.0 }]
-"#;
+        let text = include_str!("../../../missions/only-a-lower-altitude.toml");
         let m =
             Mission::from_file_struct(&planner::MissionFile::from_toml_str(text).unwrap()).unwrap();
         let options = planner::PlanOptions {

@@ -4,6 +4,7 @@ trajectory.csv for the same mission and options, in both FMI versions; a fixed m
 its one altitude."""
 
 import csv
+from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
@@ -14,20 +15,7 @@ from test_simulation import cli_plan
 SLOT_S = 0.5
 STOP_S = 100.0
 # the fixed altitude (1000 m) cannot fly it; with the altitude free down to 800 m it can
-ONLY_LOWER = """
-name = "only lower"
-[params]
-horizon_s = 100
-start_m = [-800.0, 0.0]
-start_velocity_mps = [0.0, 5.0]
-max_speed_mps = 6.0
-altitude = "free"
-min_altitude_m = 800
-max_altitude_m = 1000
-max_descent_mps = 5
-[landmarks]
-points = [{ x_m = 0.0, y_m = 250.0, from_s = 50.0, to_s = 100.0 }]
-"""
+ONLY_LOWER = (Path(__file__).resolve().parents[3] / "missions" / "only-a-lower-altitude.toml").read_text()
 
 
 def test_altitude_outputs_are_described(version):
