@@ -272,9 +272,9 @@ impl Synthesizer {
     /// the CP never change symbol: then this is one IFFT of one spectrum. Doppler within the
     /// window enters by a Taylor series in (k − N/2)/f_s (truncation < 1e-12 of the amplitude).
     ///
-    /// Many split paths (more than the terms of [`split`]'s series) are instead each taken as
+    /// Many split paths (more than the terms of the `split` module's series) are instead each taken as
     /// their longer piece's symbol in the one spectrum, plus a correction over the shorter side
-    /// from a basis shared by all paths of the same pair of symbols ([`split`]): about Q
+    /// from a basis shared by all paths of the same pair of symbols (the `split` module): about Q
     /// transforms per window instead of one per split path.
     pub fn synthesize_window(
         &self,
