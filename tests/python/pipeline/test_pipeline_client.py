@@ -12,8 +12,8 @@ iceoryx2 root). Then, with nothing but `eclipse-zenoh` and JSON:
   `infeasible` naming the slot, or `internal`);
 - reads the plan summary `cellsar/<mission>/plan/summary`, every aperture's detections
   `cellsar/<mission>/detections` and the services' status `cellsar/<mission>/status/<role>`
-  as JSON (asking `cellsar/<mission>/results` again for anything published before it
-  subscribed is not needed: it subscribes before asking for the plan);
+  as JSON, once it has asked `cellsar/<mission>/results` for them (a JSON result request:
+  the processor takes on only the missions a client asks results of);
 - runs the Python example of pipeline/README.md ("The services on their own") as a script
   against the same services: it plans, prints the detections and exits (a session left
   open with a callback subscriber would keep the interpreter from exiting: zenoh-python
@@ -186,6 +186,13 @@ class PipelineClientTest(unittest.TestCase):
         self.assertEqual(len(body["result"]["trajectory"]["pos_m"]), 40)  # 20 s of 0.5-s slots
         self.assertTrue(body["summary"]["feasible"])
 
+        # the results, asked for: the processor takes the mission on (its plan looked up)
+        ask = envelope(0x0307, {"mission_id": mission_id, "apertures": [], "metrics": False})
+        acks = list(self.session.get("cellsar/%s/results" % mission_id, payload=ask,
+                                     encoding="application/json;cellsar/radar.result_request/v1",
+                                     timeout=30.0))
+        self.assertEqual(len(acks), 1)
+        self.assertIsNotNone(acks[0].ok, acks[0].err and acks[0].err.payload.to_string())
         wait_for(lambda: len(detections) == 2, "the detections of both apertures")
         with lock:
             for ap, msg in detections.items():
