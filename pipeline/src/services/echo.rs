@@ -279,7 +279,7 @@ impl<'a> Echo<'a> {
         if self.missions.contains_key(&id) {
             return;
         }
-        if !self.consistent(&plan) {
+        if !super::plan::id_consistent(&plan, &mut self.report.plans_inconsistent) {
             return;
         }
         if !self.make_room(id) {
@@ -298,18 +298,6 @@ impl<'a> Echo<'a> {
             }
             Err(e) => tracing::warn!(mission = %id, error = %e, "plan not usable"),
         }
-    }
-
-    /// Whether `plan`'s mission id is the one its content gives; if not, it is counted and
-    /// logged.
-    fn consistent(&mut self, plan: &Plan) -> bool {
-        let Some(why) = plan.id_problem() else {
-            return true;
-        };
-        self.report.plans_inconsistent += 1;
-        tracing::warn!(mission = %plan.mission_id, planner = %plan.planner, reason = %why,
-            "plan skipped: its mission id is not its content's");
-        false
     }
 
     /// Makes room for mission `id` under `--max-missions`; false when it must be refused.

@@ -425,6 +425,19 @@ fn plan_in_thread(
     }
 }
 
+/// Whether `plan`'s mission id is the one its content gives (the echo's and the processor's
+/// check of a plan they are asked to take on); if not, it is counted in `inconsistent`,
+/// logged and to be skipped.
+pub fn id_consistent(plan: &crate::protocol::Plan, inconsistent: &mut u64) -> bool {
+    let Some(why) = plan.id_problem() else {
+        return true;
+    };
+    *inconsistent += 1;
+    tracing::warn!(mission = %plan.mission_id, planner = %plan.planner, reason = %why,
+        "plan skipped: its mission id is not its content's");
+    false
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

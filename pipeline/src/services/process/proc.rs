@@ -194,18 +194,6 @@ impl Proc<'_> {
         Ok(self.report.clone())
     }
 
-    /// Whether `plan`'s mission id is the one its content gives; if not, it is counted and
-    /// logged.
-    fn consistent(&mut self, plan: &Plan) -> bool {
-        let Some(why) = plan.id_problem() else {
-            return true;
-        };
-        self.report.plans_inconsistent += 1;
-        tracing::warn!(mission = %plan.mission_id, planner = %plan.planner, reason = %why,
-            "plan skipped: its mission id is not its content's");
-        false
-    }
-
     /// Takes on the mission of `plan`, which was asked for.
     fn take_on(&mut self, plan: Plan) {
         self.wanted.forget(plan.mission_id);
@@ -220,7 +208,7 @@ impl Proc<'_> {
         if self.runs.iter().any(|r| r.ctx.base.mission_id == id) {
             return;
         }
-        if !self.consistent(&plan) {
+        if !crate::services::plan::id_consistent(&plan, &mut self.report.plans_inconsistent) {
             return;
         }
         let droppable = self.runs.iter().map(|r| r.droppable());
