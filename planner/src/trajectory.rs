@@ -147,12 +147,7 @@ impl Trajectory {
         start_m: [f64; 2],
         altitude_m: f64,
     ) -> Result<Self, TrajectoryError> {
-        let shown = path.display().to_string();
-        let text = crate::files::read_text_bounded(path, crate::files::MAX_INPUT_FILE_BYTES)
-            .map_err(|error| TrajectoryError::Io {
-                path: shown.clone(),
-                error,
-            })?;
+        let (text, shown) = Self::read_bounded(path)?;
         Self::from_csv_str(&text, &shown, slot_s, slots, start_m, altitude_m)
     }
 
@@ -179,12 +174,7 @@ impl Trajectory {
         start_m: [f64; 2],
         altitude_m: f64,
     ) -> Result<(Self, Vec<f64>), TrajectoryError> {
-        let shown = path.display().to_string();
-        let text = crate::files::read_text_bounded(path, crate::files::MAX_INPUT_FILE_BYTES)
-            .map_err(|error| TrajectoryError::Io {
-                path: shown.clone(),
-                error,
-            })?;
+        let (text, shown) = Self::read_bounded(path)?;
         Self::from_csv_str_with_altitudes(&text, &shown, slot_s, slots, start_m, altitude_m)
     }
 
@@ -198,6 +188,18 @@ impl Trajectory {
         altitude_m: f64,
     ) -> Result<(Self, Vec<f64>), TrajectoryError> {
         Self::parse_csv(text, name, (slot_s, slots, start_m), altitude_m, true)
+    }
+
+    /// The text of the file at `path` (at most [`crate::files::MAX_INPUT_FILE_BYTES`]) and the
+    /// path as error messages name it.
+    fn read_bounded(path: &Path) -> Result<(String, String), TrajectoryError> {
+        let shown = path.display().to_string();
+        let text = crate::files::read_text_bounded(path, crate::files::MAX_INPUT_FILE_BYTES)
+            .map_err(|error| TrajectoryError::Io {
+                path: shown.clone(),
+                error,
+            })?;
+        Ok((text, shown))
     }
 
     /// The reader of both: with `varying`, the `z_m` column is returned per slot (the t = 0
