@@ -60,6 +60,12 @@ impl Baseline {
     /// bytes above its resident memory then (`what` names the process and the bound's
     /// reason in the message); gives the growth.
     pub fn assert_peak_within(&self, bound: u64, what: &str) -> u64 {
+        // a process that ended has no memory to measure: say so, not that a field is missing
+        assert!(
+            crate::running(self.pid),
+            "{what}: the process (pid {}) has ended",
+            self.pid
+        );
         let r = resident(self.pid);
         let grew = r.peak.saturating_sub(self.at_start);
         eprintln!(

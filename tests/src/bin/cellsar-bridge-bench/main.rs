@@ -4,6 +4,8 @@
 //!
 //! - `iox-pub` / `iox-sub`: publish / consume frames on an iceoryx2 frame service;
 //! - `z-pub` / `z-sub`: publish / consume the same frames on a plain Zenoh key;
+//! - `z-duplex`: publish frames on one Zenoh key while taking them from another (a link
+//!   carrying traffic both ways at once);
 //! - `z-flood`: send malformed and oversized frame payloads on a Zenoh key (each one checked
 //!   to be rejected by this crate's own decoder before it is sent);
 //! - `forge`: a hostile peer publishing a forged processor status, detections, images and
@@ -35,6 +37,7 @@ use clap::{Parser, Subcommand};
 use serde::{Deserialize, Serialize};
 
 mod bench;
+mod duplex;
 mod forge;
 mod tools;
 
@@ -161,6 +164,8 @@ enum Cmd {
         #[command(flatten)]
         zenoh: ZenohArgs,
     },
+    /// Publish frames on one Zenoh key while taking frames from another, for a time.
+    ZDuplex(duplex::DuplexArgs),
     /// Send malformed and oversized frame payloads on a Zenoh key.
     ZFlood {
         /// Zenoh key.
@@ -291,6 +296,7 @@ fn run(cli: Cli) -> Result<()> {
             wait_matching,
             zenoh,
         } => z_flood(&key, count, max_frame_bytes, seed, wait_matching, &zenoh),
+        Cmd::ZDuplex(args) => duplex::z_duplex(&args),
         Cmd::Forge(args) => forge::forge(&args),
         Cmd::Bench(args) => bench(&args),
     }
