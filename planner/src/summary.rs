@@ -4,6 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::altitude::AltitudeMode;
 use crate::driver::{BestEffort, PlanResult, Scheme, TerminationReason};
 use crate::evaluate::SlotEval;
 use crate::power::PowerModel;
@@ -118,6 +119,79 @@ pub struct Summary {
     /// mission's `start_velocity_mps`, or its rule's value when the mission states none).
     #[serde(default)]
     pub start_velocity_mps: [f64; 2],
+    /// The planned altitudes of a free-altitude plan (a mission with `altitude = "free"`,
+    /// planned with [`crate::PlanOptions::altitude_profile`]); absent for a plan at the
+    /// mission's one altitude `altitude_m`, whose summary it leaves unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub altitude: Option<AltitudeSummary>,
+}
+
+/// The altitudes of a free-altitude plan (`altitude` in `summary.json`), on the exact geometry
+/// ([`crate::evaluate::evaluate_with_altitudes`]): the altitude H_t at the end of every slot
+/// and the vertical rate (H_t − H_{t−1})/δ of every slot, from H_0 = `altitude_m`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AltitudeSummary {
+    /// The mission's altitude mode (`free`).
+    pub mode: AltitudeMode,
+    /// The altitude at the start H_0 (the mission's `altitude_m`), m.
+    pub start_altitude_m: f64,
+    /// The mission's bounds `[min_altitude_m, max_altitude_m]`, m.
+    pub bounds_m: [f64; 2],
+    /// Lowest planned altitude over the slots, m.
+    pub min_altitude_m: f64,
+    /// Highest planned altitude over the slots, m.
+    pub max_altitude_m: f64,
+    /// Mean planned altitude over the slots, m.
+    pub mean_altitude_m: f64,
+    /// Largest climb rate of a slot, m/s (0 when the plan never climbs).
+    pub max_climb_mps: f64,
+    /// Largest descent rate of a slot, m/s, positive (0 when the plan never descends).
+    pub max_descent_mps: f64,
+    /// The mission's climb-rate limit (its `max_climb_mps`), m/s.
+    pub climb_limit_mps: f64,
+    /// The mission's descent-rate limit (its `max_descent_mps`), m/s.
+    pub descent_limit_mps: f64,
+    /// Energy spent climbing, Σ W max(v_z, 0) δ ([`PowerModel::climb_w`]: descent earns no
+    /// credit), J; part of `energy_j`.
+    pub climb_energy_j: f64,
+    /// `climb_energy_j / energy_j`, the share of the energy spent climbing (0 to 1).
+    pub climb_energy_share: f64,
+}
+
+impl AltitudeSummary {
+    /// The altitudes of the plan evaluated as `ev` with the altitude profile `altitudes_m` of
+    /// `mission`; `None` for an empty profile.
+    fn new(mission: &Mission, ev: &crate::Evaluation, altitudes_m: &[f64]) -> Option<Self> {
+        if altitudes_m.is_empty() || ev.slots.is_empty() {
+            return None;
+        }
+        let p = mission.params();
+        let model = PowerModel::new(p);
+        let (lo, hi) = crate::altitude::bounds_m(p);
+        let climbs = || ev.slots.iter().map(|s| s.climb_mps);
+        let climb_energy_j: f64 = climbs().map(|v| model.climb_w(v) * p.slot_s).sum();
+        Some(Self {
+            mode: p.altitude,
+            start_altitude_m: ev.start_altitude_m,
+            bounds_m: [lo, hi],
+            min_altitude_m: altitudes_m.iter().copied().fold(f64::INFINITY, f64::min),
+            max_altitude_m: altitudes_m
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max),
+            mean_altitude_m: altitudes_m.iter().sum::<f64>() / altitudes_m.len() as f64,
+            max_climb_mps: climbs().fold(0.0, f64::max),
+            max_descent_mps: climbs().map(|v| -v).fold(0.0, f64::max),
+            climb_limit_mps: p.max_climb_mps,
+            descent_limit_mps: p.max_descent_mps,
+            climb_energy_j,
+            climb_energy_share: if ev.energy_j > 0.0 {
+                climb_energy_j / ev.energy_j
+            } else {
+                0.0
+            },
+        })
+    }
 }
 
 impl Summary {
@@ -187,6 +261,10 @@ impl Summary {
                 })
                 .count(),
             start_velocity_mps: mission.start_velocity_mps(),
+            altitude: result
+                .altitudes_m
+                .as_deref()
+                .and_then(|z| AltitudeSummary::new(mission, ev, z)),
         }
     }
 }
@@ -364,6 +442,104 @@ mod tests {
         let start = "-12.5,3,nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,\
                      nan,nan,nan,1000,nan";
         assert_eq!(text, format!("{TRAJECTORY_COLUMNS}\n0,{start}\n"));
+    }
+
+    /// A straight track north at 20 m/s for 10 s (20 slots), the landmark broadside of its
+    /// middle; `altitude` adds to `[params]`.
+    fn straight(altitude: &str) -> (Mission, crate::Trajectory) {
+        let text = format!(
+            "[params]\nhorizon_s = 10\nstart_m = [-1000.0, 0.0]\nstart_velocity_mps = [0, 20]\n\
+             {altitude}\n[landmarks]\n\
+             points = [{{ x_m = 0.0, y_m = 100.0, from_s = 0.0, to_s = 10.0 }}]\n"
+        );
+        let m =
+            Mission::from_file_struct(&crate::MissionFile::from_toml_str(&text).unwrap()).unwrap();
+        let traj = crate::Trajectory {
+            slot_s: 0.5,
+            start_m: [-1000.0, 0.0],
+            pos_m: (1..=20).map(|t| [-1000.0, 10.0 * t as f64]).collect(),
+        };
+        (m, traj)
+    }
+
+    /// The plan result of `traj` flown at `altitudes_m` (the mission's altitude: `None`).
+    fn result(m: &Mission, traj: &crate::Trajectory, altitudes_m: Option<Vec<f64>>) -> PlanResult {
+        let evaluation = match &altitudes_m {
+            Some(z) => crate::evaluate::evaluate_with_altitudes(m, traj, z).unwrap(),
+            None => crate::evaluate(m, traj),
+        };
+        PlanResult {
+            scheme: Scheme::Exact,
+            trajectory: traj.clone(),
+            objective: evaluation.energy_j,
+            objective_history: vec![evaluation.energy_j],
+            true_energy_history: vec![evaluation.energy_j],
+            evaluation,
+            records: Vec::new(),
+            iterations: 1,
+            converged: true,
+            termination: TerminationReason::Converged,
+            solve_seconds: 0.0,
+            start_energy_j: 0.0,
+            repair_iterations: 0,
+            cone_programs: 1,
+            resolution: crate::evaluate::ResolutionMode::Paper,
+            init_replaced: None,
+            best_effort: None,
+            dynamics: crate::Dynamics::Vehicle,
+            altitudes_m,
+        }
+    }
+
+    /// A free plan's `altitude`: closed forms of a profile that climbs 4 m at 2 m/s, holds,
+    /// descends 2 m at 1 m/s and holds (the climb energy W · 4 m, descent without credit).
+    #[test]
+    fn a_free_plan_summarises_its_altitudes_in_closed_form() {
+        let (m, traj) = straight(
+            "altitude = \"free\"\nmin_altitude_m = 600\nmax_altitude_m = 1200\n\
+             max_climb_mps = 2.5\nmax_descent_mps = 1.5",
+        );
+        let mut z: Vec<f64> = (1..=4).map(|t| 1000.0 + f64::from(t)).collect();
+        z.extend([1004.0; 6]);
+        z.extend((1..=4).map(|t| 1004.0 - 0.5 * f64::from(t)));
+        z.extend([1002.0; 6]);
+        let r = result(&m, &traj, Some(z.clone()));
+        let s = Summary::new(&m, &r);
+        let a = s.altitude.clone().expect("a free plan has its altitudes");
+        assert_eq!(a.mode, AltitudeMode::Free);
+        assert_eq!((a.start_altitude_m, a.bounds_m), (1000.0, [600.0, 1200.0]));
+        assert_eq!((a.min_altitude_m, a.max_altitude_m), (1001.0, 1004.0));
+        let mean = (1001.0 + 1002.0 + 1003.0 + 1004.0 + 6.0 * 1004.0)
+            + (1003.5 + 1003.0 + 1002.5 + 1002.0 + 6.0 * 1002.0);
+        assert!((a.mean_altitude_m - mean / 20.0).abs() < 1e-9, "{a:?}");
+        assert!((a.max_climb_mps - 2.0).abs() < 1e-9, "{a:?}");
+        assert!((a.max_descent_mps - 1.0).abs() < 1e-9, "{a:?}");
+        assert_eq!((a.climb_limit_mps, a.descent_limit_mps), (2.5, 1.5));
+        // 2 kg climbing 4 m; the level power P(20 m/s) for 10 s besides
+        let climb_j = 2.0 * 9.80665 * 4.0;
+        assert!((a.climb_energy_j - climb_j).abs() < 1e-9, "{a:?}");
+        let level_j = 10.0 * PowerModel::new(m.params()).power_w(20.0);
+        assert!((s.energy_j - (level_j + climb_j)).abs() < 1e-9 * s.energy_j);
+        assert!((a.climb_energy_share - climb_j / s.energy_j).abs() < 1e-12);
+        // summary.json carries it and reads back
+        let json = serde_json::to_value(&s).unwrap();
+        assert_eq!(json["altitude"]["mode"], "free");
+        assert_eq!(json["altitude"]["max_altitude_m"], 1004.0);
+        let back: Summary = serde_json::from_value(json).unwrap();
+        assert_eq!(back, s);
+    }
+
+    /// A plan at the mission's one altitude has no `altitude` in its summary: summary.json is
+    /// the same as before the field, and a summary without it reads back.
+    #[test]
+    fn a_fixed_plan_has_no_altitude_summary() {
+        let (m, traj) = straight("");
+        let s = Summary::new(&m, &result(&m, &traj, None));
+        assert!(s.altitude.is_none());
+        let json = serde_json::to_value(&s).unwrap();
+        assert!(json.get("altitude").is_none(), "{json}");
+        let back: Summary = serde_json::from_value(json).unwrap();
+        assert_eq!(back, s);
     }
 
     #[test]
