@@ -1,8 +1,20 @@
 //! The energy–resolution trade-off of a mission: from the least-energy plan to the
 //! best-resolved plan, the best-effort plan under a rising cap on the extra energy.
+//!
+//! A mission with `altitude = "free"`, with [`PlanOptions::altitude_profile`] set, gets the
+//! curve of its free-altitude plans ([`crate::plan`] of each point, an altitude per slot in
+//! [`PlanResult::altitudes_m`]): the free least-energy plan, then the free best effort under
+//! each cap. A free best effort measures its cap against the least-energy plan at the fixed
+//! altitude `altitude_m` (its [`crate::BestEffort::least_energy_j`]; its altitude steps never
+//! add energy to the fixed plan they start from), so the curve's percentages are of that plan
+//! too: the first point's is at most 0 (what the free altitude saves), and every capped point
+//! meets its cap. Without the option a free mission is refused
+//! ([`PlanError::AltitudeConflict`]), as by [`crate::plan`].
 
+use crate::altitude::AltitudeMode;
 use crate::driver::{
-    best_effort_from, BestEffortBasis, NoObserver, Observer, PlanError, PlanOptions,
+    best_effort_from, plan_with_observer, BestEffortBasis, NoObserver, Observer, PlanError,
+    PlanOptions,
 };
 use crate::evaluate::ResolutionMode;
 use crate::shortfall::ResolutionShortfall;
@@ -26,7 +38,8 @@ pub struct TradeoffPoint {
     pub plan: PlanResult,
     /// Its shortfall on the exact geometry.
     pub shortfall: ResolutionShortfall,
-    /// Its energy above the least-energy plan's, %.
+    /// Its energy above the least-energy plan's, % (of a free mission: of the least-energy
+    /// plan at the fixed altitude, see the module documentation).
     pub extra_energy_pct: f64,
 }
 
@@ -57,6 +70,14 @@ impl Observer for PointObserver<'_> {
     }
 }
 
+/// The label of point `k` (1-based) of `total` with cap `cap`.
+fn label(k: usize, total: usize, cap: Option<f64>) -> String {
+    format!(
+        "point {k}/{total} ({})",
+        cap.map_or("no cap".to_string(), |c| format!("cap {c} %"))
+    )
+}
+
 /// [`tradeoff`], telling `observer` each iteration of each point's plan and each phase as
 /// `"point K/N (cap C %): PHASE"` (the least-energy plan first).
 pub fn tradeoff_with_observer(
@@ -73,6 +94,9 @@ pub fn tradeoff_with_observer(
         ..options.clone()
     };
     options.validate()?;
+    if mission.params().altitude == AltitudeMode::Free && options.altitude_profile {
+        return free_tradeoff(mission, &options, caps_pct, observer);
+    }
     crate::driver::check_altitude(mission, &options)?;
     let basis = BestEffortBasis::new(
         mission,
@@ -109,14 +133,9 @@ pub fn tradeoff_with_observer(
             max_extra_energy_pct: cap,
             ..options.clone()
         };
-        let label = format!(
-            "point {}/{total} ({})",
-            points.len() + 1,
-            cap.map_or("no cap".to_string(), |c| format!("cap {c} %"))
-        );
         let mut named = PointObserver {
             inner: &mut *observer,
-            point: label,
+            point: label(points.len() + 1, total, cap),
         };
         let plan = best_effort_from(mission, &capped, &basis, Some(&start), &mut named)?;
         // the next cap starts from this plan (within the larger cap too)
@@ -126,4 +145,98 @@ pub fn tradeoff_with_observer(
         points.push(p);
     }
     Ok(points)
+}
+
+/// The curve of the free-altitude mission `mission` (`options` as [`tradeoff_with_observer`]
+/// set them, with the altitude profile): each point its own free plan. The plans cannot start
+/// from one another (a free plan starts from the fixed-altitude plan it refines), so a point
+/// whose plan leaves a larger resolution deficit than the previous point's takes that plan
+/// instead (it meets the larger cap): the deficit never rises along the curve, as on a fixed
+/// one. A cap not reached (by [`UNUSED_CAP_PCT`]) is repeated as on a fixed curve.
+fn free_tradeoff(
+    mission: &Mission,
+    options: &PlanOptions,
+    caps_pct: &[f64],
+    observer: &mut dyn Observer,
+) -> Result<Vec<TradeoffPoint>, PlanError> {
+    let total = caps_pct.len() + 2;
+    let least = plan_with_observer(
+        mission,
+        &PlanOptions {
+            resolution: ResolutionMode::Paper,
+            ..options.clone()
+        },
+        &mut PointObserver {
+            inner: &mut *observer,
+            point: format!("point 1/{total} (least energy)"),
+        },
+    )?;
+    let mut plans: Vec<(Option<f64>, PlanResult)> = vec![(Some(0.0), least)];
+    // the basis of the percentages: the fixed-altitude least-energy plan that every free best
+    // effort measures its cap against
+    let mut least_j: Option<f64> = None;
+    let caps = caps_pct.iter().copied().map(Some).chain([None]);
+    let mut slack_pct = 0.0;
+    for cap in caps {
+        let Some((_, previous)) = plans.last() else {
+            break;
+        };
+        let plan = if slack_pct > UNUSED_CAP_PCT {
+            // the previous cap was not reached: its plan is the best effort under this one
+            with_cap(previous.clone(), cap)
+        } else {
+            let capped = PlanOptions {
+                max_extra_energy_pct: cap,
+                ..options.clone()
+            };
+            let mut named = PointObserver {
+                inner: &mut *observer,
+                point: label(plans.len() + 1, total, cap),
+            };
+            let plan = plan_with_observer(mission, &capped, &mut named)?;
+            if total_deficit(mission, &plan) > total_deficit(mission, previous) * (1.0 + 1e-9) {
+                tracing::info!(
+                    point = plans.len() + 1,
+                    "the free plan leaves a larger resolution deficit than the previous point's, \
+                     which meets this cap too: that plan is kept"
+                );
+                with_cap(previous.clone(), cap)
+            } else {
+                plan
+            }
+        };
+        if let Some(b) = plan.best_effort.as_ref() {
+            least_j.get_or_insert(b.least_energy_j);
+        }
+        slack_pct = match (cap, least_j) {
+            (Some(c), Some(j)) => c - 100.0 * (plan.evaluation.energy_j / j - 1.0),
+            _ => 0.0,
+        };
+        plans.push((cap, plan));
+    }
+    let least_j = least_j
+        .or_else(|| plans.first().map(|(_, p)| p.evaluation.energy_j))
+        .unwrap_or(f64::NAN);
+    Ok(plans
+        .into_iter()
+        .map(|(cap_pct, plan)| TradeoffPoint {
+            cap_pct,
+            shortfall: ResolutionShortfall::new(mission, &plan.evaluation),
+            extra_energy_pct: 100.0 * (plan.evaluation.energy_j / least_j - 1.0),
+            plan,
+        })
+        .collect())
+}
+
+/// `plan` taken for the point of cap `cap` (its best-effort record says so).
+fn with_cap(mut plan: PlanResult, cap: Option<f64>) -> PlanResult {
+    if let Some(info) = plan.best_effort.as_mut() {
+        info.max_extra_energy_pct = cap;
+    }
+    plan
+}
+
+/// The resolution deficit of `plan` on the exact geometry at its altitudes, m.
+fn total_deficit(mission: &Mission, plan: &PlanResult) -> f64 {
+    crate::shortfall::total_deficit_m(mission, &plan.evaluation)
 }

@@ -415,7 +415,11 @@ fn tradeoff_command(mission: &Path, out: &Path, caps_pct: &[f64]) -> Result<(), 
     if caps_pct.windows(2).any(|w| w[1] < w[0]) {
         return Err(bad(anyhow::anyhow!("--caps-pct must be ascending")));
     }
-    let options = PlanOptions::default();
+    // a free-altitude mission's points are free plans (each point_NN/ with its altitudes)
+    let options = PlanOptions {
+        altitude_profile: true,
+        ..PlanOptions::default()
+    };
     let pb = spinner();
     let points = planner::tradeoff::tradeoff_with_observer(
         &m,

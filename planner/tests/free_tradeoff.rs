@@ -1,0 +1,124 @@
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+//! The energy–resolution trade-off of a free-altitude mission (`altitude = "free"` with
+//! `PlanOptions::altitude_profile`): every point is a free plan, checked again on the exact
+//! geometry at its own altitudes (bounds, rates, every constraint), each capped point within its
+//! cap of the least-energy plan at the fixed altitude (computed here independently), the first
+//! point the free least-energy plan, and the resolution deficit never rising along the curve.
+
+use planner::evaluate::evaluate_with_altitudes;
+use planner::shortfall::ResolutionShortfall;
+use planner::tradeoff::{tradeoff, UNUSED_CAP_PCT};
+use planner::{plan, AltitudeMode, Mission, PlanOptions, Preset};
+
+#[test]
+fn a_free_mission_gets_a_curve_of_free_plans_within_their_caps() {
+    let fixed = Mission::preset(Preset::Default, 30.0).unwrap();
+    let mut p = fixed.params().clone();
+    p.altitude = AltitudeMode::Free;
+    p.min_altitude_m = Some(600.0);
+    p.max_altitude_m = Some(1200.0);
+    let m = fixed.with_params(p.clone()).unwrap();
+    let options = PlanOptions {
+        altitude_profile: true,
+        ..PlanOptions::least_energy()
+    };
+    let caps = [2.0];
+    let t0 = std::time::Instant::now();
+    let points = tradeoff(&m, &options, &caps).unwrap();
+    eprintln!(
+        "free curve of {} points in {:.1} s",
+        points.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    assert_eq!(points.len(), caps.len() + 2);
+    assert_eq!(points[0].cap_pct, Some(0.0));
+    assert_eq!(points[1].cap_pct, Some(2.0));
+    assert_eq!(points.last().unwrap().cap_pct, None);
+
+    // the percentages are of the fixed-altitude least-energy plan
+    let fixed_least_j = plan(&fixed, &PlanOptions::least_energy())
+        .unwrap()
+        .evaluation
+        .energy_j;
+    // the first point is the free least-energy plan, no dearer than the fixed one
+    let free_least = plan(&m, &options).unwrap();
+    assert_eq!(points[0].plan.trajectory, free_least.trajectory);
+    assert_eq!(points[0].plan.altitudes_m, free_least.altitudes_m);
+    assert!(
+        points[0].extra_energy_pct <= 1e-7,
+        "{}",
+        points[0].extra_energy_pct
+    );
+
+    let mut deficit = f64::INFINITY;
+    for (i, pt) in points.iter().enumerate() {
+        let z = pt
+            .plan
+            .altitudes_m
+            .as_ref()
+            .expect("a free plan has altitudes");
+        let mut prev = p.altitude_m;
+        for (t, &h) in z.iter().enumerate() {
+            assert!(
+                (600.0..=1200.0).contains(&h),
+                "point {i} slot {}: {h} m",
+                t + 1
+            );
+            let rate = (h - prev) / p.slot_s;
+            assert!(
+                rate <= p.max_climb_mps + 1e-9 && -rate <= p.max_descent_mps + 1e-9,
+                "point {i} slot {}: {rate} m/s",
+                t + 1
+            );
+            prev = h;
+        }
+        let ev = evaluate_with_altitudes(&m, &pt.plan.trajectory, z).unwrap();
+        assert_eq!(ev, pt.plan.evaluation, "point {i}");
+        assert!(ev.is_feasible(), "point {i}: {:?}", ev.violations);
+        let want_pct = 100.0 * (ev.energy_j / fixed_least_j - 1.0);
+        assert!(
+            (pt.extra_energy_pct - want_pct).abs() < 1e-9,
+            "point {i}: {} % vs {want_pct} %",
+            pt.extra_energy_pct
+        );
+        if let Some(cap) = pt.cap_pct {
+            assert!(
+                ev.energy_j <= fixed_least_j * (1.0 + cap / 100.0) * (1.0 + 1e-9),
+                "point {i}: {} J over its cap of {cap} %",
+                ev.energy_j
+            );
+        }
+        if i > 0 {
+            let b = pt.plan.best_effort.as_ref().expect("a best effort");
+            assert!((b.least_energy_j - fixed_least_j).abs() <= 1e-9 * fixed_least_j);
+            assert_eq!(b.max_extra_energy_pct, pt.cap_pct);
+        }
+        let s = ResolutionShortfall::new(&m, &ev);
+        assert_eq!(s, pt.shortfall, "point {i}");
+        assert!(
+            s.total_deficit_m <= deficit * (1.0 + 1e-9),
+            "point {i}: deficit {} after {deficit}",
+            s.total_deficit_m
+        );
+        deficit = s.total_deficit_m;
+        eprintln!(
+            "point {i}: cap {:?}, {:.1} J ({:+.2} %), deficit {:.1} m, {} unresolved windows, H {:.0}..{:.0} m",
+            pt.cap_pct,
+            ev.energy_j,
+            pt.extra_energy_pct,
+            s.total_deficit_m,
+            s.unresolved_windows,
+            z.iter().copied().fold(f64::MAX, f64::min),
+            z.iter().copied().fold(f64::MIN, f64::max)
+        );
+    }
+    // the best effort resolves more than the least-energy plan within 2 %
+    assert!(points[1].shortfall.total_deficit_m < points[0].shortfall.total_deficit_m);
+    for w in points.windows(2).skip(1) {
+        if let Some(cap) = w[0].cap_pct {
+            if cap - w[0].extra_energy_pct > UNUSED_CAP_PCT {
+                assert_eq!(w[1].plan.trajectory.pos_m, w[0].plan.trajectory.pos_m);
+            }
+        }
+    }
+}
