@@ -20,7 +20,8 @@
 //!   launcher's plan request reaches, or a subscriber that receives anything.
 //! - Forgers holding the processor's, the planner's and the bridge's certificates, each
 //!   denied what its role may not do and refused by the consumers for what it may (the
-//!   bridge's: wrong IQ frames on the echo keys, refused and counted by the processor).
+//!   bridge's: wrong IQ frames on the echo keys, refused and counted by the processor); one
+//!   holding the launcher's floods the planner with plan requests, served in turn.
 //! - A client without a certificate, one with a certificate of another CA, and a plain-TCP
 //!   client cannot open a session with the router; the same client with a certificate of the
 //!   deployment can (so the refusals are the certificates', not a broken set-up).
@@ -501,6 +502,61 @@ fn a_forger_with_the_bridges_certificate() {
     assert!(refused_frames.is_empty(), "{refused_frames:#?}");
 }
 
+/// A forger holding the launcher's certificate, whose role may ask for plans, floods the
+/// planner with well-formed plan requests of missions of its own (48 in flight) from before
+/// the run starts to its end: the planner serves requesters in turn, so the run's plan comes
+/// through the flood; the processor and the echo take on only the run's mission; the run ends
+/// with the closed loop's outputs, and no service's memory grew past the bound
+/// ([`launch_over_tls`] measures it under the flood).
+fn a_forger_with_the_launchers_certificate_flooding_the_planner() {
+    let hosts = two_namespaces();
+    const H: f64 = 30.0;
+    let reference = reference(H);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let certs = make_certs(d, "certs", &hosts.ip_a);
+    let role = |r: &str| config(d, &format!("tls/{r}.json5"), &hosts.ip_a, Some(&certs));
+    let _logs = LogsOnFailure::of_run(d, &["router", "processor", "echo", "forger-l"]);
+    let router = start_router(&hosts, d, &certs);
+    let processor = start_processor(&hosts, d, &role("processor"));
+    let mut flooder = start_forger(
+        &hosts,
+        d,
+        "forger-l",
+        &role("launcher"),
+        &["--flood-plan-requests", "1000000"],
+    );
+    let (mut run, _) = launch_over_tls(&hosts, d, H, &role, [&router, &processor], &mut |_| {
+        Vec::new()
+    });
+    let st = run.finish();
+    let l = &run.l;
+    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, &reference);
+    assert!(
+        flooder.child.try_wait().unwrap().is_none(),
+        "flooder exited"
+    );
+    // the flood went through the router to the planner, which kept refusing it as busy and
+    // planned some of it besides the run's mission (its final counters)
+    let planner_log = std::fs::read_to_string(l.out.join("logs/planner.log")).unwrap();
+    let last = planner_log
+        .lines()
+        .find(|l| l.contains("plan service stopping"))
+        .unwrap_or_else(|| panic!("no final counters:\n{planner_log}"));
+    eprintln!("planner: {last}");
+    let counter = |name: &str| -> u64 {
+        let v = last.split(&format!(" {name}=")).nth(1).unwrap();
+        v.split(' ').next().unwrap().parse().unwrap()
+    };
+    assert!(counter("busy") > 0, "{last}");
+    assert!(counter("plans") > 1, "{last}");
+    // the run's results are the real processor's: nothing foreign, no plan refused
+    let p = l.pipeline_json();
+    assert_eq!(p["collector"]["foreign"], 0, "{p}");
+    assert_eq!(p["collector"]["refused_plans"], 0, "{p}");
+}
+
 /// A client of the TLS router with `tls` settings (none: plain TCP), started in namespace B
 /// as a planner service that tries once to connect and exits when it cannot.
 fn client(hosts: &TwoHosts, dir: &Path, name: &str, tls: Option<&str>) -> Service {
@@ -684,6 +740,10 @@ fn main() {
         Test::netns(
             "a_forger_with_the_bridges_certificate",
             a_forger_with_the_bridges_certificate,
+        ),
+        Test::netns(
+            "a_forger_with_the_launchers_certificate_flooding_the_planner",
+            a_forger_with_the_launchers_certificate_flooding_the_planner,
         ),
         Test::netns(
             "clients_refuse_a_router_that_is_not_the_deployments",
