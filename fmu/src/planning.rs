@@ -261,6 +261,9 @@ pub struct Replanned {
     /// The moved landmark could not be kept in view in any slot of its window: the accepted plan
     /// leaves the window out (the other windows are planned as usual).
     pub window_dropped: bool,
+    /// The altitude of every slot of `trajectory` for a free-altitude plan (the current plan's up
+    /// to slot `from_slot`, the new plan's after it), m; `None` at the mission's fixed altitude.
+    pub altitudes_m: Option<Vec<f64>>,
     /// Wall time of all planner calls, s.
     pub solve_s: f64,
     /// Every planner call, in order (the last one is the accepted plan).
@@ -337,9 +340,31 @@ pub fn moved_mission(
 /// 1, 2, 4, … more slots until the planner finds a plan. When no delay works (or the landmark is
 /// out of reach in every slot of its window), the rest of the horizon is planned without that
 /// window ([`Replanned::window_dropped`]); the caller reports the slots out of view.
+///
+/// `current` is flown at the mission's fixed altitude; [`replan_with_altitudes`] re-plans a
+/// free-altitude plan.
 pub fn replan(
     mission: &Mission,
     current: &Trajectory,
+    from_slot: usize,
+    window: usize,
+    moved_m: [f64; 2],
+    options: &ReplanOptions,
+) -> Result<Replanned, ReplanError> {
+    replan_with_altitudes(mission, current, None, from_slot, window, moved_m, options)
+}
+
+/// [`replan`] of a plan `current` flown at the altitudes `current_altitudes_m` (one per slot,
+/// a free-altitude plan's; `None`: the mission's fixed altitude). A mission with
+/// `altitude = "free"` is re-planned as the initial plan is, with an altitude per slot
+/// ([`planner::PlanOptions::altitude_profile`]): the sub-mission starts at q_{from_slot} at the
+/// altitude flown there, H_{from_slot} (its `altitude_m`, with the sensing radius of the same
+/// antenna there, [`planner::altitude::params_at`]), so the spliced profile keeps the climb and
+/// descent rates across the splice ([`Replanned::altitudes_m`]).
+pub fn replan_with_altitudes(
+    mission: &Mission,
+    current: &Trajectory,
+    current_altitudes_m: Option<&[f64]>,
     from_slot: usize,
     window: usize,
     moved_m: [f64; 2],
@@ -351,6 +376,8 @@ pub fn replan(
         coarse: options.coarse,
         resolution: REPLAN_RESOLUTION,
         dynamics: options.dynamics,
+        // a free-altitude mission's re-plan has an altitude per slot, as its initial plan
+        altitude_profile: true,
         ..Default::default()
     };
     let started = Instant::now();
@@ -362,6 +389,7 @@ pub fn replan(
             trajectory: current.clone(),
             transition_slots: 0,
             window_dropped: false,
+            altitudes_m: current_altitudes_m.map(<[f64]>::to_vec),
             solve_s: 0.0,
             attempts: Vec::new(),
             start_excess_m: 0.0,
@@ -369,7 +397,7 @@ pub fn replan(
             summary: "the horizon is over: nothing to re-plan".into(),
         });
     }
-    let rest = remainder(&moved, current, from_slot, window);
+    let rest = remainder(&moved, current, current_altitudes_m, from_slot, window);
     let (plans, reach_note) = window_plans(&rest.sub_params, moved_m, rest.moved_slots);
     let mut attempts: Vec<Attempt> = Vec::new();
     let mut last_error = String::new();
@@ -416,6 +444,13 @@ pub fn replan(
                 pos_m.extend_from_slice(&planned.trajectory.pos_m);
                 let solve_s = started.elapsed().as_secs_f64();
                 let (transition_slots, window_dropped) = transition(plan, rest.moved_slots);
+                let altitudes_m = splice_altitudes_m(
+                    mission,
+                    current_altitudes_m,
+                    planned.altitudes_m.as_deref(),
+                    from_slot,
+                    rest.sub_params.altitude_m,
+                );
                 let outcome = if window_dropped {
                     format!("landmark {window}'s window left out")
                 } else {
@@ -430,6 +465,7 @@ pub fn replan(
                     },
                     transition_slots,
                     window_dropped,
+                    altitudes_m,
                     solve_s,
                     summary: format!(
                         "{} slots from t = {} s in {solve_s:.3} s, {} start (sensing excess {excess:.1} m){reach_note}, {} planner call(s) ({}), {outcome}, {}",
@@ -463,6 +499,30 @@ pub fn replan(
     })
 }
 
+/// The altitude profile of a re-plan from `from_slot`: `current_m` (the plan flown; `None`: at
+/// the mission's `altitude_m`) up to slot `from_slot`, then `planned_m` (the sub-mission's plan;
+/// `None`: at its altitude `sub_altitude_m`); `None` when neither has a profile.
+fn splice_altitudes_m(
+    mission: &Mission,
+    current_m: Option<&[f64]>,
+    planned_m: Option<&[f64]>,
+    from_slot: usize,
+    sub_altitude_m: f64,
+) -> Option<Vec<f64>> {
+    if current_m.is_none() && planned_m.is_none() {
+        return None;
+    }
+    let mut spliced = match current_m {
+        Some(z) => z.get(..from_slot).unwrap_or(z).to_vec(),
+        None => vec![mission.params().altitude_m; from_slot],
+    };
+    match planned_m {
+        Some(z) => spliced.extend_from_slice(z),
+        None => spliced.resize(mission.slots(), sub_altitude_m),
+    }
+    Some(spliced)
+}
+
 /// The part of the horizon a re-plan from `from_slot` covers (see [`replan`]).
 struct Remainder {
     /// Time of `from_slot`, s: the sub-mission's clock starts there.
@@ -471,7 +531,8 @@ struct Remainder {
     remaining: usize,
     /// The windows still (partly) ahead, with their index in the mission, shifted by `shift_s`.
     future: Vec<(usize, LandmarkWindow)>,
-    /// The sub-mission's parameters: starting at q_{from_slot}, over the remaining slots.
+    /// The sub-mission's parameters: starting at q_{from_slot} (at H_{from_slot} for a
+    /// free-altitude plan), over the remaining slots.
     sub_params: planner::Params,
     /// The rest of the current plan, as the sub-mission's warm start.
     init: Trajectory,
@@ -480,8 +541,15 @@ struct Remainder {
 }
 
 /// The remainder of `moved` (the mission with window `window` moved) after `from_slot`
-/// (`from_slot < moved.slots()`), flown so far along `current`.
-fn remainder(moved: &Mission, current: &Trajectory, from_slot: usize, window: usize) -> Remainder {
+/// (`from_slot < moved.slots()`), flown so far along `current` at `altitudes_m` (`None`: the
+/// mission's fixed altitude).
+fn remainder(
+    moved: &Mission,
+    current: &Trajectory,
+    altitudes_m: Option<&[f64]>,
+    from_slot: usize,
+    window: usize,
+) -> Remainder {
     let p = moved.params();
     let slot_s = p.slot_s;
     let n = moved.slots();
@@ -511,6 +579,14 @@ fn remainder(moved: &Mission, current: &Trajectory, from_slot: usize, window: us
     sub_params.horizon_s = remaining as f64 * slot_s;
     if from_slot > 0 {
         sub_params.start_velocity_mps = Some(splice_velocity_mps(current, from_slot, p));
+    }
+    // the altitude flown at q_{from_slot}, within the bounds (a plan meets them to rounding)
+    if let Some(h) = from_slot
+        .checked_sub(1)
+        .and_then(|k| altitudes_m?.get(k).copied())
+    {
+        let (lo, hi) = planner::altitude::bounds_m(p);
+        sub_params = planner::altitude::params_at(&sub_params, h.clamp(lo, hi));
     }
     let init = Trajectory {
         slot_s,

@@ -81,36 +81,87 @@ fn a_fixed_mission_outputs_its_one_altitude() {
     }
 }
 
-/// A landmark move in a free plan is not re-planned (re-plans fly one altitude): the plan and
-/// its altitudes are kept, the outputs report the moved landmark, and a warning says why.
+/// A landmark move in a free plan is re-planned as in a fixed one, with an altitude per slot:
+/// the slots flown or committed keep their positions and altitudes, the re-plan starts at the
+/// altitude flown at the splice (at the mission's 1000 m the mission cannot be flown at all,
+/// and a profile restarted there would break the climb rate at the splice), the whole spliced
+/// profile keeps the bounds and rates, and the run is the planner call's result, evaluated at
+/// its altitudes against the moved landmark.
 #[test]
-fn a_move_in_a_free_plan_keeps_the_plan_and_says_why() {
+fn a_move_in_a_free_plan_is_replanned_with_its_altitudes() {
     let (mut core, _dir, r) = planned(ONLY_LOWER, paper);
     r.unwrap();
     let before = run(&core).clone();
+    let z0 = before.altitudes_m.clone().unwrap();
+    let p = before.mission.params().clone();
+    let n = before.mission.slots();
+    // t = 60 s: slots up to 120 are flown or committed, the window (50, 100] s goes on
+    let from = 120;
+    assert!(z0[from - 1] < 900.0, "flown low: {} m", z0[from - 1]);
     set_input(&mut core, 40.0, 250.0);
     let log = Collect::default();
     let report = core.step(60.0, 0.5, &log).unwrap();
-    let warning = report.warning.expect("a kept plan must warn");
-    assert!(
-        warning.contains("not re-planned") && warning.contains("altitude = \"free\""),
-        "{warning}"
-    );
-    let after = run(&core);
-    assert_eq!(after.traj, before.traj);
-    assert_eq!(after.altitudes_m, before.altitudes_m);
-    assert_eq!(after.replans, 0);
-    assert_eq!(core.get_int(var(PLANNER_VARS, "replan_count")).unwrap(), 0);
-    assert_eq!(
-        core.get_real(var(PLANNER_VARS, "landmark_x_m"), 0, 60.0)
-            .unwrap(),
-        40.0
-    );
-    // the evaluation is at the plan's altitudes, against the moved landmark
-    let want = evaluate_at(&after.mission, &after.traj, after.altitudes_m.as_deref()).unwrap();
-    assert_eq!(after.eval, want);
-    assert_eq!(
-        core.get_real(var(PLANNER_VARS, "z_m"), 0, 60.0).unwrap(),
-        before.altitudes_m.as_ref().unwrap()[119]
+    if let Some(w) = &report.warning {
+        assert!(!w.contains("not re-planned"), "{w}");
+    }
+    let after = run(&core).clone();
+    assert_eq!(after.replans, 1);
+    assert_eq!(core.get_int(var(PLANNER_VARS, "replan_count")).unwrap(), 1);
+    let z = after
+        .altitudes_m
+        .clone()
+        .expect("the re-plan has altitudes");
+    assert_eq!(z.len(), n);
+    // the committed slots are kept, position and altitude
+    assert_eq!(after.traj.pos_m[..from], before.traj.pos_m[..from]);
+    assert_eq!(z[..from], z0[..from]);
+    // the rest is the planner call's plan
+    let want = planning::replan_with_altitudes(
+        &before.mission,
+        &before.traj,
+        Some(&z0),
+        from,
+        0,
+        [40.0, 250.0],
+        &planning::ReplanOptions {
+            dynamics: before.dynamics,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(after.traj, want.trajectory);
+    assert_eq!(after.altitudes_m, want.altitudes_m);
+    assert_ne!(after.traj.pos_m[from..], before.traj.pos_m[from..]);
+    // bounds and rates in every slot, the splice included
+    let mut prev = p.altitude_m;
+    for (i, &h) in z.iter().enumerate() {
+        assert!(
+            (800.0 - 1e-9..=1000.0 + 1e-9).contains(&h),
+            "slot {}: {h} m",
+            i + 1
+        );
+        let rate = (h - prev) / p.slot_s;
+        assert!(
+            rate <= p.max_climb_mps + 1e-9 && -rate <= p.max_descent_mps + 1e-9,
+            "slot {}: {rate} m/s",
+            i + 1
+        );
+        prev = h;
+    }
+    let ev = evaluate_at(&after.mission, &after.traj, Some(&z)).unwrap();
+    assert_eq!(after.eval, ev);
+    assert!(ev.violations.altitude_ok(1e-6), "{:?}", ev.violations);
+    assert_eq!(after.mission.schedule().landmarks[0].pos_m(), [40.0, 250.0]);
+    let get = |name, tau_s| core.get_real(var(PLANNER_VARS, name), 0, tau_s).unwrap();
+    assert_eq!(get("landmark_x_m", 60.0), 40.0);
+    assert_eq!(get("z_m", 60.0), z0[from - 1]);
+    assert!((get("z_m", 90.0) - z[179]).abs() <= 1e-9);
+    eprintln!(
+        "re-planned from {:.1} m: {:.1}..{:.1} m after the splice, {} slot(s) out of view; {}",
+        z0[from - 1],
+        z[from..].iter().copied().fold(f64::MAX, f64::min),
+        z[from..].iter().copied().fold(f64::MIN, f64::max),
+        ev.slots_out_of_view,
+        want.summary
     );
 }

@@ -470,6 +470,7 @@ impl PlannerCore {
             // outputs report the moved landmark (and whether the current slot still sees it)
             let mission =
                 planning::moved_mission(&run.mission, window, input).map_err(|m| mv.reject(m))?;
+            run.take_moved(mission, window).map_err(|m| mv.reject(m))?;
             log.log(
                 Category::Events,
                 Status::Ok,
@@ -478,11 +479,6 @@ impl PlannerCore {
                     Num(current as f64 * slot_s)
                 ),
             );
-            run.moved.insert(window);
-            run.eval = run
-                .evaluate(&mission, &run.traj)
-                .map_err(|m| mv.reject(m))?;
-            run.mission = mission;
             let (count, _) = run.out_of_view_from(current);
             let seen = if count > 0 {
                 format!("; slot {current} does not see it")
@@ -496,9 +492,6 @@ impl PlannerCore {
                 ),
                 log,
             ));
-        }
-        if run.altitudes_m.is_some() {
-            return keep_free_plan(run, &mv, log);
         }
         log.log(
             Category::Events,
@@ -536,47 +529,21 @@ impl LandmarkMove {
     }
 }
 
-/// A landmark move in a free-altitude plan: the receding-horizon re-plan plans at one altitude
-/// only, so the plan (its track and its altitudes) is kept, evaluated against the moved
-/// landmark, with a warning saying so and how many slots no longer see a landmark.
-fn keep_free_plan(run: &mut Run, mv: &LandmarkMove, log: &dyn Log) -> Result<StepReport, FmuError> {
-    let mission =
-        planning::moved_mission(&run.mission, mv.window, mv.input).map_err(|m| mv.reject(m))?;
-    run.eval = run
-        .evaluate(&mission, &run.traj)
-        .map_err(|m| mv.reject(m))?;
-    run.mission = mission;
-    run.moved.insert(mv.window);
-    let (count, slots) = run.out_of_view_from(mv.from + 1);
-    let seen = if count > 0 {
-        format!(
-            "; {count} slot(s) after the current one are out of view: {slots} (output `slots_out_of_view` = {})",
-            run.eval.slots_out_of_view
-        )
-    } else {
-        String::new()
-    };
-    Ok(run.warn(
-        format!(
-            "{}: not re-planned: the mission's altitude is free (altitude = \"free\") and re-plans fly one altitude, so the plan and its altitudes are kept{seen}",
-            mv.what
-        ),
-        log,
-    ))
-}
-
 /// Re-plans the rest of the horizon after a landmark move and reports the outcome: the new
 /// plan (with a warning when slots are out of view), or the previous plan kept on a planner
-/// failure (a warning); a refused move is an error.
+/// failure (a warning); a refused move is an error. A free-altitude plan is re-planned with an
+/// altitude per slot from the altitude flown at the splice
+/// ([`planning::replan_with_altitudes`]).
 fn replan_after_move(
     run: &mut Run,
     mv: &LandmarkMove,
     log: &dyn Log,
 ) -> Result<StepReport, FmuError> {
     let (what, window, from) = (&mv.what, mv.window, mv.from);
-    match planning::replan(
+    match planning::replan_with_altitudes(
         &run.mission,
         &run.traj,
+        run.altitudes_m.as_deref(),
         from,
         window,
         mv.input,
@@ -586,10 +553,12 @@ fn replan_after_move(
         },
     ) {
         Ok(re) => {
+            run.eval = evaluate_at(&re.mission, &re.trajectory, re.altitudes_m.as_deref())
+                .map_err(|m| mv.reject(m))?;
             run.moved.insert(window);
-            run.eval = evaluate(&re.mission, &re.trajectory);
             run.mission = re.mission;
             run.traj = re.trajectory;
+            run.altitudes_m = re.altitudes_m;
             run.replans += 1;
             run.solve_s = re.solve_s;
             log.log(
@@ -628,9 +597,7 @@ fn replan_after_move(
             solve_s,
             ..
         }) => {
-            run.moved.insert(window);
-            run.eval = evaluate(&mission, &run.traj);
-            run.mission = *mission;
+            run.take_moved(*mission, window).map_err(|m| mv.reject(m))?;
             run.solve_s = solve_s;
             let (count, slots) = run.out_of_view_from(from + 1);
             let seen = if count > 0 {

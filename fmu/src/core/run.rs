@@ -101,6 +101,16 @@ impl Run {
         evaluate_at(mission, traj, self.altitudes_m.as_deref())
     }
 
+    /// Takes `mission` (the run's mission with the landmark of window `window` moved) with the
+    /// plan kept: the plan is evaluated against it at its altitudes ([`Run::evaluate`]) and the
+    /// window counted as moved. The error is the evaluator's message; the run is then unchanged.
+    pub(super) fn take_moved(&mut self, mission: Mission, window: usize) -> Result<(), String> {
+        self.eval = self.evaluate(&mission, &self.traj)?;
+        self.mission = mission;
+        self.moved.insert(window);
+        Ok(())
+    }
+
     /// All outputs at mission time `tau_s`.
     pub fn sample(&self, tau_s: f64) -> Sample {
         let p = self.mission.params();

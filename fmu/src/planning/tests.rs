@@ -62,7 +62,7 @@ fn the_sub_mission_starts_with_the_velocity_flown() {
     let mission = short_mission();
     let current = plan(&mission, None).unwrap().trajectory;
     let p = mission.params();
-    let rest = remainder(&mission, &current, 5, 0);
+    let rest = remainder(&mission, &current, None, 5, 0);
     let v = rest.sub_params.start_velocity_mps.unwrap();
     let (a, b) = (current.q(4), current.q(5));
     for i in 0..2 {
@@ -70,7 +70,7 @@ fn the_sub_mission_starts_with_the_velocity_flown() {
     }
     assert_eq!(rest.sub_params.start_m, b);
     // from the start, the mission's own start rule
-    let rest = remainder(&mission, &current, 0, 0);
+    let rest = remainder(&mission, &current, None, 0, 0);
     assert_eq!(rest.sub_params.start_velocity_mps, p.start_velocity_mps);
 }
 
