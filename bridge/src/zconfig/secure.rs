@@ -377,6 +377,20 @@ mod tests {
                 "peer-default.json5: Zenoh's default listen endpoint of mode peer, tcp/",
             ),
             (
+                "router-default.json5",
+                format!("{{ mode: 'router', {TLS} }}"),
+                "router-default.json5: Zenoh's default listen endpoint of mode router, tcp/",
+            ),
+            (
+                "public-connect.json5",
+                format!(
+                    "{{ mode: 'client', connect: {{ endpoints: ['tls/router.example.com:7447'] }}, \
+                     {TLS} }}"
+                ),
+                "public-connect.json5: connect endpoint tls/router.example.com:7447: \
+                 router.example.com is a name a public certificate authority may certify",
+            ),
+            (
                 "scouting.json5",
                 format!(
                     "{{ mode: 'client', connect: {{ endpoints: ['tls/10.0.0.1:7447'] }}, \
