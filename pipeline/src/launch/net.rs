@@ -613,6 +613,16 @@ mod tests {
                 vec!["--router with -e tcp/127.0.0.1:7447".into()],
             ),
             (
+                true,
+                flags(&[], &[], Some(Mode::Peer)),
+                vec!["--router with -m peer".into()],
+            ),
+            (
+                true,
+                flags(&[], &["tcp/127.0.0.1:7448"], None),
+                vec!["--router with -l tcp/127.0.0.1:7448".into()],
+            ),
+            (
                 false,
                 flags(
                     &["tcp/127.0.0.1:7447"],
