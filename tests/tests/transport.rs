@@ -1040,6 +1040,53 @@ fn iox_isolated_environments_do_not_see_each_other() {
         .is_none());
 }
 
+/// The shared-memory files of a frame service (the segment that carries the frames, the
+/// connections, events and service state iceoryx2 makes in `/dev/shm` under the run's prefix)
+/// can be read and written by their owner only: another user on the host can neither read the
+/// IQ nor write into it. The one exception is iceoryx2's node counter of the domain
+/// (`node.<version>.global_mgmt`, one `u32` that numbers the nodes), which iceoryx2 creates
+/// world-writable on purpose (`enable_global_access`); a node's id also holds its process id.
+#[test]
+fn iox_shared_memory_files_are_private_to_their_user() {
+    use std::os::unix::fs::PermissionsExt;
+    let iso = Iso::new("mode");
+    let (node, _) = FrameNode::new(&iso.env(), "mode").unwrap();
+    let s = spec("cellsar/test/mode", 1024);
+    let sub = node.subscriber(&s).unwrap();
+    let p = node
+        .publisher(&s, FramePublisherOptions::default())
+        .unwrap();
+    p.send_bytes(&FrameMeta::bytes(1, MissionId(0), 0, 8).unwrap(), &[0u8; 8])
+        .unwrap();
+    assert!(sub.receive_timeout(T).unwrap().is_some());
+    let files = harness::pipeline::shm_files(&iso.prefix);
+    assert!(
+        !files.is_empty(),
+        "no /dev/shm file with prefix {}",
+        iso.prefix
+    );
+    let modes: Vec<(String, u32)> = files
+        .iter()
+        .map(|f| {
+            let m = std::fs::metadata(format!("/dev/shm/{f}")).unwrap();
+            (f.clone(), m.permissions().mode() & 0o777)
+        })
+        .collect();
+    eprintln!("{modes:?}");
+    assert!(
+        modes.iter().any(|(f, _)| f.ends_with(".data")),
+        "no frame segment among {modes:?}"
+    );
+    for (f, mode) in &modes {
+        if f.ends_with(".global_mgmt") {
+            let len = std::fs::metadata(format!("/dev/shm/{f}")).unwrap().len();
+            assert!(len <= 4096, "/dev/shm/{f}: {len} bytes, more than a node counter");
+            continue;
+        }
+        assert_eq!(mode & 0o077, 0, "/dev/shm/{f} has mode {mode:o}");
+    }
+}
+
 /// A publisher process killed with SIGKILL leaves its port registered; the next node removes
 /// it, so the service admits a full set of publishers again.
 #[test]
