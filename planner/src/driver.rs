@@ -9,10 +9,11 @@ use crate::evaluate::{evaluate, ResolutionMode};
 use crate::geometry::{distance, Point2};
 use crate::init::{guidance_start_with, precheck_with};
 use crate::schemes::exact::{ExactObjective, ExactTuning};
-use crate::schemes::paper::PaperObjective;
+use crate::schemes::paper::{PaperObjective, PaperState};
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
+mod alternating;
 mod altitude;
 mod best_effort;
 mod coarse;
@@ -23,6 +24,7 @@ mod options;
 mod phase_one;
 mod result;
 
+pub use alternating::{ALTERNATION_PHASE, ALTERNATION_TOLERANCE, MAX_ALTERNATIONS};
 pub use best_effort::{best_effort_from, BestEffortBasis};
 pub use error::PlanError;
 pub use observer::{IterationRecord, NoObserver, Observer};
@@ -74,12 +76,13 @@ fn run_plan(
     stop: Option<&AtomicBool>,
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
-    let free = mission.params().altitude == AltitudeMode::Free
-        && options.altitude_profile
-        && options.scheme == Scheme::Exact;
-    let mut out = if free {
+    let free = mission.params().altitude == AltitudeMode::Free && options.altitude_profile;
+    let mut out = if free && options.scheme == Scheme::Exact {
         options.validate()?;
         altitude::plan_free(started, mission, options, observer, stop)?
+    } else if free && options.scheme == Scheme::Paper {
+        options.validate()?;
+        alternating::plan_free_paper(started, mission, options, observer, stop)?
     } else {
         run_plan_from(started, mission, options, observer, stop)?
     };
@@ -107,6 +110,19 @@ fn run_plan_from(
     options: &PlanOptions,
     observer: &mut dyn Observer,
     stop: Option<&AtomicBool>,
+) -> Result<PlanResult, PlanError> {
+    run_plan_capture(started, mission, options, observer, stop, None)
+}
+
+/// [`run_plan_from`]; the paper's schemes leave the BCD state of their last iterate in
+/// `paper_state`.
+fn run_plan_capture(
+    started: Instant,
+    mission: &Mission,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
+    mut paper_state: Option<&mut Option<PaperState>>,
 ) -> Result<PlanResult, PlanError> {
     options.validate()?;
     check_altitude(mission, options)?;
@@ -230,6 +246,7 @@ fn run_plan_from(
             deadline,
             &mut solver,
             observer,
+            paper_state.take(),
         )?,
         Scheme::Baseline => run_paper(
             mission,
@@ -239,6 +256,7 @@ fn run_plan_from(
             deadline,
             &mut solver,
             observer,
+            paper_state.take(),
         )?,
     };
     out.scheme = options.scheme;

@@ -200,17 +200,20 @@ fn a_mission_only_a_lower_altitude_can_fly_gets_a_plan() {
 }
 
 #[test]
-fn only_exact_with_the_option_plans_free_altitudes() {
+fn only_exact_and_paper_with_the_option_plan_free_altitudes() {
     let fm = free(
         &Mission::preset(Preset::Default, 30.0).unwrap(),
         600.0,
         1200.0,
     );
-    for scheme in [Scheme::Paper, Scheme::Baseline, Scheme::BaselineExact] {
+    for scheme in [Scheme::Baseline, Scheme::BaselineExact] {
         let options = profile_options(PlanOptions::for_scheme(scheme));
         let e = plan(&fm, &options).unwrap_err();
         assert_eq!(e, PlanError::AltitudeConflict { scheme });
-        assert!(e.to_string().contains("only the scheme exact"), "{e}");
+        assert!(
+            e.to_string().contains("only the schemes exact and paper"),
+            "{e}"
+        );
     }
     let e = plan(&fm, &PlanOptions::least_energy()).unwrap_err();
     assert_eq!(

@@ -33,7 +33,7 @@ const MAX_REJECTS: usize = 8;
 
 /// The mission at one fixed altitude `altitude_m` (its bounds dropped), the sensing radius of
 /// the same antenna there.
-fn fixed_at(mission: &Mission, altitude_m: f64) -> Result<Mission, PlanError> {
+pub(super) fn fixed_at(mission: &Mission, altitude_m: f64) -> Result<Mission, PlanError> {
     let mut p: Params = params_at(mission.params(), altitude_m);
     p.altitude = AltitudeMode::Fixed;
     p.min_altitude_m = None;

@@ -55,13 +55,13 @@ pub enum PlanError {
         dynamics: crate::evaluate::Dynamics,
     },
     /// A mission with `altitude = "free"` given to a scheme that plans at one altitude (every
-    /// scheme but `exact`), or to `exact` by a caller that flies one altitude (without
+    /// scheme but `exact` and `paper`), or to those by a caller that flies one altitude (without
     /// [`PlanOptions::altitude_profile`](super::PlanOptions::altitude_profile)): refused rather
     /// than planned at the fixed altitude `altitude_m`.
     #[error(
         "mission parameter `altitude` = \"free\": the scheme {scheme} plans at the fixed \
-         altitude `altitude_m` only here, not per-slot altitudes (only the scheme exact plans \
-         them, for a caller that flies the profile: the user guide's section Altitude lists \
+         altitude `altitude_m` only here, not per-slot altitudes (only the schemes exact and paper \
+         plan them, for a caller that flies the profile: the user guide's section Altitude lists \
          which; or set altitude = \"fixed\")"
     )]
     AltitudeConflict {

@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use crate::evaluate::{evaluate, Dynamics, Evaluation, ResolutionMode};
+use crate::evaluate::{evaluate, evaluate_with_altitudes, Dynamics, Evaluation, ResolutionMode};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::schemes::paper::{PaperObjective, PaperState};
 use crate::shortfall::total_deficit_m;
@@ -334,6 +334,8 @@ pub(super) fn extrapolate(from: &Trajectory, to: &Trajectory, alpha: f64) -> Tra
 }
 
 /// Algorithm 1 (or the baseline) exactly as printed: alternate (p5) and (p6) from the start.
+/// `state_out` receives the BCD state {q, V, q_aux, w, u} of the last iterate.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn run_paper(
     mission: &Mission,
     start: Trajectory,
@@ -342,8 +344,45 @@ pub(super) fn run_paper(
     deadline: Deadline,
     solver: &mut SocpSolver,
     observer: &mut dyn Observer,
+    state_out: Option<&mut Option<PaperState>>,
 ) -> Result<PlanResult, PlanError> {
     let mut state = PaperState::from_trajectory(mission, &start);
+    let (traj, end) = paper_bcd(
+        mission,
+        &mut state,
+        start,
+        objective,
+        options,
+        Means {
+            solver,
+            observer,
+            deadline,
+        },
+        0,
+    )?;
+    if let Some(out) = state_out {
+        *out = Some(state);
+    }
+    Ok(finish(mission, traj, end))
+}
+
+/// The BCD loop of Algorithm 1 from `state` (whose positions are `start`'s), at the state's
+/// altitudes (per slot when it has them, each iterate then evaluated at them); records are
+/// numbered after `done` earlier iterations. Returns the last iterate's path and the loop's end.
+pub(super) fn paper_bcd(
+    mission: &Mission,
+    state: &mut PaperState,
+    start: Trajectory,
+    objective: PaperObjective,
+    options: &PlanOptions,
+    means: Means<'_>,
+    done: usize,
+) -> Result<(Trajectory, LoopEnd), PlanError> {
+    let Means {
+        solver,
+        observer,
+        deadline,
+    } = means;
     let mut p6_solver = SocpSolver::new(options.socp);
     let mut records = Vec::new();
     let mut obj_hist: Vec<f64> = Vec::new();
@@ -351,7 +390,7 @@ pub(super) fn run_paper(
     let mut termination = TerminationReason::MaxIterations;
     let mut programs = 0;
     let mut traj = start;
-    for it in 1..=options.max_iterations {
+    for it in done + 1..=done + options.max_iterations {
         if deadline.passed() {
             termination = TerminationReason::TimeLimit;
             break;
@@ -375,7 +414,11 @@ pub(super) fn run_paper(
         let ipm6 = state.solve_p6(mission, &mut p6_solver);
         programs += 1;
         traj = state.trajectory(&traj);
-        let ev = evaluate(mission, &traj);
+        let ev = match state.altitudes_m() {
+            Some(z) => evaluate_with_altitudes(mission, &traj, z)
+                .map_err(|e| PlanError::InvalidInit(format!("the altitude profile: {e}")))?,
+            None => evaluate(mission, &traj),
+        };
         let rec = record(it, own, &ev, ipm + ipm6, t0.elapsed().as_secs_f64(), true);
         observer.on_iteration(&rec);
         records.push(rec);
@@ -390,8 +433,7 @@ pub(super) fn run_paper(
         }
     }
     let last = obj_hist.last().copied().unwrap_or(f64::NAN);
-    Ok(finish(
-        mission,
+    Ok((
         traj,
         LoopEnd {
             objective: last,

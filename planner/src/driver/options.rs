@@ -254,8 +254,8 @@ pub struct PlanOptions {
     /// only); [`Dynamics::Paper`] lets the velocity jump, as the paper does.
     /// [`PlanOptions::for_scheme`] gives each scheme its default ([`Scheme::default_dynamics`]).
     pub dynamics: Dynamics,
-    /// Plan an altitude per slot for a mission with `altitude = "free"` (the `exact` scheme
-    /// only; the plan's [`PlanResult::altitudes_m`](super::PlanResult::altitudes_m)). Off (the
+    /// Plan an altitude per slot for a mission with `altitude = "free"` (the `exact` scheme,
+    /// jointly, and `paper`, by the paper's alternation; the plan's [`PlanResult::altitudes_m`](super::PlanResult::altitudes_m)). Off (the
     /// default), such a mission is refused ([`PlanError::AltitudeConflict`]): a caller that flies
     /// the plan's track at one altitude leaves it off. Fixed missions ignore it.
     pub altitude_profile: bool,

@@ -11,11 +11,16 @@
 //! one cone program, and any slot whose returned (w, u) fails our own check keeps its previous
 //! value, which (p5) guarantees to be feasible.
 
+mod altitude;
+
+pub use altitude::AltitudeStep;
+
+use crate::altitude::params_at;
 use crate::geometry::{Length, Vector2};
 use crate::power::PowerModel;
 use crate::schemes::exact::SPEED_UNIT_MPS as VU;
 use crate::socp::{Lin, ProblemBuilder, SocpSolver, SolveError};
-use crate::{Mission, Trajectory};
+use crate::{Mission, Params, Trajectory};
 
 /// What (p5) minimises.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -41,6 +46,9 @@ pub struct PaperState {
     pub u: Vec<f64>,
     start_m: [f64; 2],
     slot_s: f64,
+    /// H_t per slot (free altitude, the alternating extension), or `None`: every slot at the
+    /// mission's `altitude_m`, Algorithm 1 as printed.
+    altitudes_m: Option<Vec<f64>>,
 }
 
 impl PaperState {
@@ -58,6 +66,37 @@ impl PaperState {
             u: headings.iter().map(|a| a.cos()).collect(),
             start_m: traj.start_m,
             slot_s: traj.slot_s,
+            altitudes_m: None,
+        }
+    }
+
+    /// The same state with slot t flown at H_t = `altitudes_m[t − 1]`: (p5) and (p6) then take
+    /// the centre offset H_t tan η, the sensing radius r_s H_t / H (erratum 5) and the azimuth
+    /// floor V_min(H_t) of (p2.2) at the slot's altitude. `None` is Algorithm 1 as printed.
+    pub fn with_altitudes(mut self, altitudes_m: Option<Vec<f64>>) -> Self {
+        self.altitudes_m = altitudes_m;
+        self
+    }
+
+    /// The altitudes the state is flown at, if per slot.
+    pub fn altitudes_m(&self) -> Option<&[f64]> {
+        self.altitudes_m.as_deref()
+    }
+
+    /// Slot t's centre offset D_t (m), sensing radius r_t (m) and azimuth floor V_min,t (m/s):
+    /// the mission's own at a fixed altitude, those of [`params_at`] H_t with per-slot
+    /// altitudes.
+    fn slot_geometry(&self, p: &Params, t: usize) -> (f64, f64, f64) {
+        match self.altitudes_m.as_ref().and_then(|z| z.get(t - 1)) {
+            Some(&h) => {
+                let at = params_at(p, h);
+                (
+                    at.centre_offset_m(),
+                    at.sensing_radius_m,
+                    at.min_speed_mps(),
+                )
+            }
+            None => (p.centre_offset_m(), p.sensing_radius_m, p.min_speed_mps()),
         }
     }
 
@@ -90,9 +129,6 @@ impl PaperState {
         let model = PowerModel::new(p);
         let n = mission.slots();
         let delta = p.slot_s;
-        let d = p.centre_offset_m();
-        let r = p.sensing_radius_m;
-        let v_min = p.min_speed_mps();
         let v0 = p.induced_velocity_mps;
         let keepout = p.range_keepout_m();
         let per = match objective {
@@ -157,6 +193,7 @@ impl PaperState {
                 continue;
             };
             let (w, u) = (self.w[t - 1], self.u[t - 1]);
+            let (d, r, v_min) = self.slot_geometry(p, t);
             // (p2.2) V_t ≥ λ_c H/(T_d d_min cos η)
             b.nonneg(Lin::var(vv, VU).plus_const(-v_min));
             // (p52) w δ V ≤ y_t − y_{t−1} ; (p53) x_t − x_{t−1} ≤ u δ V
@@ -204,8 +241,6 @@ impl PaperState {
     /// feasible. Returns the interior-point iterations.
     pub fn solve_p6(&mut self, mission: &Mission, solver: &mut SocpSolver) -> u32 {
         let p = mission.params();
-        let d = p.centre_offset_m();
-        let r = p.sensing_radius_m;
         let delta = p.slot_s;
         let keepout = p.range_keepout_m().filter(|k| k.is_finite());
         let slots: Vec<usize> = (1..=mission.slots())
@@ -215,9 +250,10 @@ impl PaperState {
             return 0;
         }
         let mut b = ProblemBuilder::new(2 * slots.len());
-        let mut checks: Vec<(usize, Vec<Lin>, Vec<Lin>)> = Vec::with_capacity(slots.len());
+        let mut checks: Vec<(usize, f64, Vec<Lin>, Vec<Lin>)> = Vec::with_capacity(slots.len());
         for (k, &t) in slots.iter().enumerate() {
             let (wv, uv) = (2 * k, 2 * k + 1);
+            let (d, r, _) = self.slot_geometry(p, t);
             let g = mission.target_m(t).unwrap_or([0.0, 0.0]);
             let q = self.pos_m[t - 1];
             let qp = self.q_prev(t);
@@ -252,14 +288,15 @@ impl PaperState {
                 Lin::var(uv, -d).plus_const(q[1] - g[1]),
             ];
             b.soc(soc[0].clone(), &soc[1..]);
-            checks.push((t, lin_rows, soc));
+            checks.push((t, r, lin_rows, soc));
         }
         let Ok(sol) = solver.solve(&b) else {
             tracing::debug!("(p6) not solved; keeping the previous (w, u)");
             return 0;
         };
         let tol = 1e-7;
-        for (k, (t, rows, soc)) in checks.iter().enumerate() {
+        for (k, (t, r, rows, soc)) in checks.iter().enumerate() {
+            let r = *r;
             let x = &sol.x;
             let lin_ok = rows
                 .iter()

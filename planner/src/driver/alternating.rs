@@ -1,0 +1,228 @@
+//! Free altitude with the scheme `paper`: the paper's alternating three-dimensional extension
+//! as printed (Section III-C, the paragraph after (P6)), for reproduction. The `exact` scheme
+//! plans the track and the altitudes jointly instead ([`super::altitude`]).
+//!
+//! 1. The fixed-altitude plan: Algorithm 1 at `altitude_m` from the usual start, the plan the
+//!    scheme makes of the mission with `altitude = "fixed"`, and its BCD state
+//!    {q_t, V_t, q_t, w_t, u_t}.
+//! 2. Alternation ℓ = 1, 2, …: (b) the altitude step, the paper's "similar subproblem to (P6)"
+//!    with the track and its auxiliaries fixed
+//!    ([`PaperState::solve_altitudes`](crate::schemes::paper::PaperState::solve_altitudes):
+//!    H_t for (w_t, u_t) in (29a) and for H in (29d), with (p2.2) and eq. (explicit) at H_t);
+//!    then (a) the 2-D step, Algorithm 1's BCD between (p5) and (p6) continued from that state
+//!    with slot t at H_t (centre offset H_t tan η, radius r_s H_t / H, V_min(H_t)).
+//! 3. Each alternation's plan is evaluated by the exact evaluator at its altitudes
+//!    ([`evaluate_with_altitudes`]) and accepted when its true energy (climb power included) is
+//!    at most the last accepted plan's, and it is feasible. The alternation stops when the
+//!    altitude step leaves every H_t where it was (the 2-D step at those altitudes is the one
+//!    just solved), when the true energy changes by less than [`ALTERNATION_TOLERANCE`]
+//!    (relative), at [`MAX_ALTERNATIONS`], or at the first rejected alternation, and returns the
+//!    last accepted plan: never more energy than the fixed-altitude plan.
+//!
+//! Errata that apply (docs/paper-notes.md): 2 (the range rows only where the requirement is not
+//! vacuous), 5 (the sensing radius of the antenna at H_t), 8 (eq. (explicit) expanded in its
+//! correct form, here in H_t), 9 ((P6)-like problems degenerate: a failed altitude step keeps
+//! the previous altitudes), 3 (the relaxations are kept, as in the 2-D scheme). Because of
+//! erratum 3, Algorithm 1's plans are themselves infeasible on the exact geometry of the
+//! default missions; "feasible" for an alternation then means no less feasible than the plan
+//! it would replace: no more slots out of view and no larger violation of any constraint.
+
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use crate::evaluate::{evaluate_with_altitudes, Evaluation, FEASIBILITY_TOL};
+use crate::schemes::paper::{PaperObjective, PaperState};
+use crate::socp::SocpSolver;
+use crate::Mission;
+
+use super::altitude::fixed_at;
+use super::iterate::{paper_bcd, Means};
+use super::options::Deadline;
+use super::{Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason};
+
+/// Largest number of alternations (altitude step, then 2-D step).
+pub const MAX_ALTERNATIONS: usize = 20;
+
+/// The alternation has converged when an accepted alternation changes the true energy by less
+/// than this, relative.
+pub const ALTERNATION_TOLERANCE: f64 = 1e-4;
+
+/// An altitude step that moves no H_t by more than this, m, leaves the plan where it was.
+const STAYED_M: f64 = 1e-6;
+
+/// The phase an [`Observer`] is told at the start of every alternation.
+pub const ALTERNATION_PHASE: &str = "alternation";
+
+/// Plans the free-altitude `mission` with the scheme `paper` (the module documentation);
+/// `started` is the run's clock.
+pub(super) fn plan_free_paper(
+    started: Instant,
+    mission: &Mission,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
+) -> Result<PlanResult, PlanError> {
+    let p = mission.params();
+    let n = mission.slots();
+    let fixed_mission = fixed_at(mission, p.altitude_m)?;
+    let mut state = None;
+    let fixed = super::run_plan_capture(
+        started,
+        &fixed_mission,
+        options,
+        observer,
+        stop,
+        Some(&mut state),
+    )?;
+    let profile = vec![p.altitude_m; n];
+    let ev = evaluate_with_altitudes(mission, &fixed.trajectory, &profile)
+        .map_err(|e| PlanError::InvalidInit(format!("the fixed plan's altitude profile: {e}")))?;
+    let Some(state) = state else {
+        // not reached: Algorithm 1 always leaves its state
+        return Ok(PlanResult {
+            evaluation: ev,
+            altitudes_m: Some(profile),
+            ..fixed
+        });
+    };
+    let deadline = Deadline::after(started, options.time_limit_s, stop);
+    alternate(
+        mission,
+        fixed,
+        ev,
+        state.with_altitudes(Some(profile)),
+        options,
+        observer,
+        deadline,
+    )
+}
+
+/// Whether `cand` may replace `incumbent` (true energies at their altitudes): no more energy,
+/// and feasible, or, when `incumbent` is not, no less feasible than it.
+pub(super) fn acceptable(cand: &Evaluation, incumbent: &Evaluation) -> bool {
+    let energy = cand.energy_j <= incumbent.energy_j * (1.0 + 1e-9);
+    let no_worse = |a: f64, b: f64| a <= b.max(FEASIBILITY_TOL) + 1e-9;
+    let (c, i) = (&cand.violations, &incumbent.violations);
+    let feasible = cand.is_feasible()
+        || (!incumbent.is_feasible()
+            && cand.slots_out_of_view <= incumbent.slots_out_of_view
+            && no_worse(c.sensing_m, i.sensing_m)
+            && no_worse(c.min_speed_mps, i.min_speed_mps)
+            && no_worse(c.max_speed_mps, i.max_speed_mps)
+            && no_worse(c.range_paper_m, i.range_paper_m)
+            && c.altitude_ok(FEASIBILITY_TOL));
+    energy && feasible
+}
+
+/// The alternation from the fixed plan `fixed` (evaluated `fixed_ev` at its altitudes) and its
+/// BCD state `state`.
+fn alternate(
+    mission: &Mission,
+    fixed: PlanResult,
+    fixed_ev: Evaluation,
+    mut state: PaperState,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+    deadline: Deadline<'_>,
+) -> Result<PlanResult, PlanError> {
+    let mut best = (
+        fixed.trajectory.clone(),
+        state.altitudes_m().map(<[f64]>::to_vec).unwrap_or_default(),
+        fixed_ev,
+    );
+    let mut objective = fixed.objective;
+    let mut records = fixed.records.clone();
+    let mut obj_hist = fixed.objective_history.clone();
+    let mut energy_hist = fixed.true_energy_history.clone();
+    let mut solver = SocpSolver::new(options.scheme_socp());
+    let mut altitude_solver = SocpSolver::new(options.socp);
+    let mut programs = 0;
+    let mut termination = TerminationReason::MaxIterations;
+    for alternation in 1..=MAX_ALTERNATIONS {
+        if deadline.passed() {
+            termination = TerminationReason::TimeLimit;
+            break;
+        }
+        observer.on_phase(ALTERNATION_PHASE);
+        // (b) the altitudes with the track and its auxiliaries fixed
+        let step = state.solve_altitudes(mission, &mut altitude_solver);
+        programs += 1;
+        if step.max_change_m <= STAYED_M {
+            tracing::debug!(alternation, "the altitude step stayed put");
+            termination = TerminationReason::Converged;
+            break;
+        }
+        let z = state.altitudes_m().map(<[f64]>::to_vec).unwrap_or_default();
+        // (a) the 2-D problem at those altitudes, Algorithm 1 continued from the state
+        let start = state.trajectory(&best.0);
+        let run = paper_bcd(
+            mission,
+            &mut state,
+            start,
+            PaperObjective::Energy,
+            options,
+            Means {
+                solver: &mut solver,
+                observer: &mut *observer,
+                deadline,
+            },
+            records.len(),
+        );
+        let (traj, end) = match run {
+            Ok(run) => run,
+            Err(error) => {
+                termination = TerminationReason::SubproblemFailed(error.to_string());
+                break;
+            }
+        };
+        programs += end.cone_programs;
+        records.extend(end.records);
+        let ev = evaluate_with_altitudes(mission, &traj, &z)
+            .map_err(|e| PlanError::InvalidInit(format!("the altitude profile: {e}")))?;
+        if !acceptable(&ev, &best.2) {
+            tracing::debug!(
+                alternation,
+                energy_j = ev.energy_j,
+                incumbent_j = best.2.energy_j,
+                out_of_view = ev.slots_out_of_view,
+                "alternation rejected"
+            );
+            if let Some(last) = records.last_mut() {
+                last.accepted = false;
+            }
+            termination = TerminationReason::NoProgress;
+            break;
+        }
+        let rel = (best.2.energy_j - ev.energy_j).abs() / best.2.energy_j.abs().max(1e-12);
+        objective = end.objective;
+        obj_hist.extend(end.objective_history);
+        energy_hist.extend(end.true_energy_history);
+        tracing::debug!(
+            alternation,
+            energy_j = ev.energy_j,
+            rel,
+            "alternation accepted"
+        );
+        best = (traj, z, ev);
+        if rel < ALTERNATION_TOLERANCE {
+            termination = TerminationReason::Converged;
+            break;
+        }
+    }
+    let (trajectory, altitudes, evaluation) = best;
+    Ok(PlanResult {
+        scheme: Scheme::Paper,
+        trajectory,
+        evaluation,
+        objective,
+        objective_history: obj_hist,
+        true_energy_history: energy_hist,
+        iterations: records.len(),
+        records,
+        converged: termination == TerminationReason::Converged,
+        termination,
+        cone_programs: fixed.cone_programs + programs,
+        altitudes_m: Some(altitudes),
+        ..fixed
+    })
+}
