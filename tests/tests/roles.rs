@@ -254,3 +254,133 @@ fn another_user_cannot_join_the_private_mesh() {
     assert_eq!(st.code(), Some(130), "{}", l.stderr_tail());
     assert!(!mesh.exists(), "{} left behind", mesh.display());
 }
+
+/// Waits (at most `timeout`) until `text()` contains `needle`; panics with the text otherwise.
+fn wait_for_text(what: &str, needle: &str, timeout: Duration, text: impl Fn() -> String) {
+    let deadline = std::time::Instant::now() + timeout;
+    loop {
+        let t = text();
+        if t.contains(needle) {
+            return;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "{what}: no {needle:?} within {timeout:?}:\n{t}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// A forger on the private mesh answers the lookups of the run's plan (`cellsar/<run id>/plan`)
+/// with a plan whose content is changed (the mission renamed) but whose mission id is the
+/// run's. The test plays the planner (`--external planner`) so that, until the forgery has been
+/// refused, the forger is the only holder the echo and the processor can ask: the echo, asked
+/// for an aperture of the mission, looks the plan up, gets only the forgery, skips it and
+/// refuses the request; the processor, asked for the mission's results by the launcher, does
+/// the same. Then the planner's real plan is held too and the run ends with the closed loop's
+/// outputs, both services counting the forgery (`plans_inconsistent` in their final counters)
+/// and logging it, the forger answering every lookup all along.
+#[test]
+fn a_plan_looked_up_whose_id_is_not_its_contents_is_skipped() {
+    use bridge::net::{QueryOptions, SubscribeOptions};
+    use bridge::{ZenohArgs, ZenohNode};
+    use pipeline::protocol::{keys, ApertureRequest, PlanRequest, RequestAck};
+    use pipeline::services::plan::{plan_request, PlanCache};
+    use std::sync::Arc;
+
+    const SKIPPED: &str = "plan skipped: its mission id is not its content's";
+    let reference = reference(H);
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut l = Launch::start(d, H, &["--external", "planner"]);
+    let net = l.event("network", Duration::from_secs(60));
+    let listen: Vec<String> = serde_json::from_value(net["launcher"].clone()).unwrap();
+    let hub = listen
+        .iter()
+        .find(|a| a.starts_with("unixsock-stream/"))
+        .unwrap_or_else(|| panic!("the launcher listens on no Unix socket: {listen:?}"))
+        .clone();
+    let open = |role: &str, instance: &str| {
+        let z = ZenohArgs::isolated(&[], std::slice::from_ref(&hub));
+        ZenohNode::open(z.to_config().unwrap(), role, instance).unwrap()
+    };
+    let planner = open("planner", "real");
+    let forger = open("forge", "intruder");
+    let requests = planner
+        .queryable::<PlanRequest>(keys::PLAN, SubscribeOptions::default())
+        .unwrap();
+    let started = std::time::Instant::now();
+    let q = loop {
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no plan request\n{}",
+            l.stderr_tail()
+        );
+        if let Some(q) = requests.recv_timeout(Duration::from_millis(200)) {
+            break q;
+        }
+    };
+    let plan = plan_request(&q.request, "real", &mut planner::NoObserver).unwrap();
+    let id = plan.mission_id;
+    let mut forged = plan.clone();
+    forged.mission.name = Some("forged".into());
+    assert!(forged.id_problem().is_some());
+    let forgeries = PlanCache::new(&forger, None).unwrap();
+    forgeries.insert(Arc::new(forged)).unwrap();
+    // the echo, asked for an aperture of the mission, finds only the forgery
+    wait_for_text("the echo", "echo ready", Duration::from_secs(60), || {
+        l.log("echo")
+    });
+    let ask = ApertureRequest {
+        mission_id: id,
+        aperture: 0,
+        look: None,
+        frame_pulses: 1,
+        requester: "roles-test".into(),
+    };
+    let opts = QueryOptions {
+        timeout: Duration::from_secs(10),
+        ..QueryOptions::default()
+    };
+    let key = keys::echo_request(id).unwrap();
+    match forger.query_one::<ApertureRequest, RequestAck>(&key, &ask, &opts) {
+        Err(bridge::NetError::Refused { refusal, .. }) => {
+            assert!(refusal.message.contains(&id.to_string()), "{refusal:?}")
+        }
+        other => panic!("the echo took a forged plan: {other:?}"),
+    }
+    wait_for_text("the echo", SKIPPED, Duration::from_secs(10), || {
+        l.log("echo")
+    });
+    // the launcher gets the real plan and asks the processor for the results: it finds only
+    // the forgery
+    let meta = bridge::Meta {
+        mission_id: id,
+        ..bridge::Meta::default()
+    };
+    q.reply(&plan, meta).unwrap();
+    wait_for_text("the processor", SKIPPED, Duration::from_secs(60), || {
+        l.log("processor")
+    });
+    // now the planner holds the real plan too: the run ends exact
+    let holds = PlanCache::new(&planner, None).unwrap();
+    holds.insert(Arc::new(plan)).unwrap();
+    let st = l.finish(Duration::from_secs(240));
+    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, &reference);
+    for (role, marker) in [
+        ("echo", "echo stopping"),
+        ("processor", "processor stopping"),
+    ] {
+        let log = l.log(role);
+        let n = counter(&log, marker, "plans_inconsistent");
+        assert!(n.is_some_and(|n| n >= 1), "{role}: {n:?}\n{log}");
+        assert!(
+            log.contains(SKIPPED) && log.contains(&format!("mission={id}")),
+            "{role}:\n{log}"
+        );
+    }
+    drop((forgeries, holds));
+    forger.close().unwrap();
+    planner.close().unwrap();
+}

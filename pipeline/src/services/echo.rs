@@ -265,6 +265,7 @@ impl<'a> Echo<'a> {
             send_errors = self.report.send_errors,
             jobs = self.report.jobs,
             plans_refused = self.report.plans_refused,
+            plans_inconsistent = self.report.plans_inconsistent,
             evicted = self.report.evicted,
             plans_malformed = c.malformed,
             requests_malformed = q.malformed,
@@ -375,12 +376,13 @@ impl<'a> Echo<'a> {
         if !self.missions.contains_key(&r.mission_id) {
             // a mission is taken on when a processor first asks for it (or asks again after
             // this echo restarted or let it go)
-            if let Ok(key) = pkeys::plan(r.mission_id) {
-                if let Ok(found) = PlanCache::lookup(self.node, &key, Duration::from_millis(1500)) {
-                    for p in found {
-                        self.add_plan(p);
-                    }
-                }
+            if let Some(p) = PlanCache::lookup_consistent(
+                self.node,
+                r.mission_id,
+                Duration::from_millis(1500),
+                &mut self.report.plans_inconsistent,
+            ) {
+                self.add_plan(p);
             }
         }
         match self.accept(&r) {

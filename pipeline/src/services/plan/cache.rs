@@ -223,6 +223,63 @@ impl PlanCache {
         }
         Ok(out.into_values().collect())
     }
+
+    /// Asks every process for the plan of mission `id` (`cellsar/<id>/plan`) and gives the
+    /// first reply whose content gives `id` ([`super::id_consistent`]), waiting at most
+    /// `timeout`. Replies are not consolidated, so that one holder's plan cannot hide
+    /// another's: a reply of another mission, or one whose mission id is not its content's (a
+    /// forgery, counted in `inconsistent` and logged), is skipped and the next one read.
+    /// `None` when no reply gives the plan (a failed lookup is logged).
+    pub fn lookup_consistent(
+        node: &ZenohNode,
+        id: MissionId,
+        timeout: Duration,
+        inconsistent: &mut u64,
+    ) -> Option<Plan> {
+        let opts = QueryOptions {
+            timeout,
+            target: QueryTarget::All,
+            limits: DecodeLimits {
+                max_body_bytes: MAX_PLAN_BYTES,
+                verify_crc: true,
+            },
+            ..QueryOptions::default()
+        };
+        let started = crate::protocol::keys::plan(id)
+            .map_err(|e| e.to_string())
+            .and_then(|key| {
+                node.start_query::<PlanLookup, Plan>(&key, &PlanLookup {}, &opts)
+                    .map_err(|e| e.to_string())
+            });
+        let mut pending = match started {
+            Ok(q) => q,
+            Err(e) => {
+                tracing::warn!(mission = %id, error = %e, "plan lookup not sent");
+                return None;
+            }
+        };
+        let deadline = std::time::Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            match pending.poll(left.min(Duration::from_millis(50))) {
+                None if left.is_zero() => return None,
+                None => {}
+                Some(Ok(r)) if r.message.mission_id != id => {
+                    tracing::warn!(mission = %id, got = %r.message.mission_id,
+                        "plan lookup: a reply of another mission skipped");
+                }
+                Some(Ok(r)) if super::id_consistent(&r.message, inconsistent) => {
+                    return Some(r.message);
+                }
+                // a forgery: counted and logged, the next reply read
+                Some(Ok(_)) => {}
+                Some(Err(e)) => {
+                    tracing::debug!(mission = %id, error = %e, "plan lookup ended without the plan");
+                    return None;
+                }
+            }
+        }
+    }
 }
 
 /// Where the plan of `id` is stored in `dir`.
@@ -387,6 +444,120 @@ mod tests {
         drop(cache);
         a.close().unwrap();
         b.close().unwrap();
+    }
+
+    /// A small plan, planned here.
+    fn small_plan(name: &str) -> Plan {
+        use crate::protocol::PlanRequest;
+        use crate::services::plan::plan_request;
+        use planner::{MissionFile, NoObserver};
+        let req = PlanRequest {
+            mission: MissionFile::from_toml_str(&format!(
+                "name = \"{name}\"\n[params]\nhorizon_s = 20.0\n[landmarks]\npoints = [{{ x_m \
+                 = 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }}, {{ x_m = 0.0, y_m = 30.0, \
+                 from_s = 10.0, to_s = 20.0 }}]\n",
+            ))
+            .unwrap(),
+            options: Default::default(),
+        };
+        plan_request(&req, "p", &mut NoObserver).unwrap()
+    }
+
+    /// `plan` with its content changed (the mission renamed), its mission id kept.
+    fn forged(plan: &Plan) -> Plan {
+        let mut f = plan.clone();
+        f.mission.name = Some("forged".into());
+        f
+    }
+
+    /// A plan whose mission id is not its content's is refused, counted once and logged; the
+    /// real plan passes, the count unchanged.
+    #[test]
+    fn a_plan_whose_id_is_not_its_contents_is_counted_and_refused() {
+        let plan = small_plan("real");
+        let mut inconsistent = 0;
+        assert!(crate::services::plan::id_consistent(
+            &plan,
+            &mut inconsistent
+        ));
+        assert_eq!(inconsistent, 0);
+        let f = forged(&plan);
+        assert_eq!(f.mission_id, plan.mission_id);
+        assert!(!crate::services::plan::id_consistent(&f, &mut inconsistent));
+        assert_eq!(inconsistent, 1);
+        // an id of another mission under the real content, too
+        let other = Plan {
+            mission_id: MissionId(plan.mission_id.0 ^ 1),
+            ..plan.clone()
+        };
+        assert!(!crate::services::plan::id_consistent(
+            &other,
+            &mut inconsistent
+        ));
+        assert_eq!(inconsistent, 2);
+        assert!(crate::services::plan::id_consistent(
+            &plan,
+            &mut inconsistent
+        ));
+        assert_eq!(inconsistent, 2);
+    }
+
+    /// A lookup of a mission whose only holder answers a forgery (its content changed, the
+    /// mission id kept) finds nothing and counts the forgery; with the real plan held too,
+    /// whichever reply comes first, the lookup gives the real plan.
+    #[test]
+    fn a_lookup_skips_forged_plans_and_takes_the_holders() {
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .and_then(|l| l.local_addr())
+            .unwrap()
+            .port();
+        let ep = format!("tcp/127.0.0.1:{port}");
+        let open = |listen: &[String], connect: &[String], name: &str| {
+            ZenohNode::open(
+                ZenohArgs::isolated(listen, connect).to_config().unwrap(),
+                "test",
+                name,
+            )
+            .unwrap()
+        };
+        let hub = open(std::slice::from_ref(&ep), &[], "asker");
+        let forger = open(
+            &["tcp/127.0.0.1:0".to_string()],
+            std::slice::from_ref(&ep),
+            "forger",
+        );
+        let holder = open(&["tcp/127.0.0.1:0".to_string()], &[ep], "holder");
+        let plan = small_plan("looked-up");
+        let id = plan.mission_id;
+        let forgeries = PlanCache::new(&forger, None).unwrap();
+        forgeries.insert(Arc::new(forged(&plan))).unwrap();
+        // the forger is reached (the mesh forms within a moment)
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let mut inconsistent = 0;
+        while inconsistent == 0 {
+            assert!(Instant::now() < deadline, "the forger never answered");
+            let got =
+                PlanCache::lookup_consistent(&hub, id, Duration::from_secs(1), &mut inconsistent);
+            assert!(got.is_none(), "a forgery taken");
+        }
+        assert_eq!(inconsistent, 1);
+        let holds = PlanCache::new(&holder, None).unwrap();
+        holds.insert(Arc::new(plan.clone())).unwrap();
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let got = loop {
+            assert!(Instant::now() < deadline, "the holder never answered");
+            if let Some(p) =
+                PlanCache::lookup_consistent(&hub, id, Duration::from_secs(2), &mut inconsistent)
+            {
+                break p;
+            }
+        };
+        assert_eq!(got, plan);
+        assert!(got.id_problem().is_none());
+        drop((forgeries, holds));
+        for n in [hub, forger, holder] {
+            n.close().unwrap();
+        }
     }
 
     /// The cache holds at most its bound of plans, the least recently used evicted first from

@@ -118,7 +118,7 @@ impl Proc<'_> {
                     self.take_on(plan);
                 }
             }
-            for p in self.wanted.found() {
+            for p in self.wanted.found(&mut self.report.plans_inconsistent) {
                 self.take_on(p);
             }
             while let Ok(id) = inbox.watching.try_recv() {

@@ -260,6 +260,7 @@ impl Proc<'_> {
             request_errors = r.request_errors,
             republished = r.republished,
             plans_refused = r.plans_refused,
+            plans_inconsistent = r.plans_inconsistent,
             evicted = r.evicted,
             state_errors = r.state_errors,
             plans_malformed,

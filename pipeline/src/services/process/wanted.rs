@@ -104,17 +104,21 @@ impl Wanted {
         None
     }
 
-    /// The plans that the lookups found, each of the mission it was looked up for (a reply of
-    /// another mission is skipped); lookups that ended are dropped, their missions still
+    /// The plans that the lookups found, each of the mission it was looked up for and
+    /// consistent with its id (a reply of another mission is skipped; one whose mission id is
+    /// not its content's is counted in `inconsistent`, logged and skipped, and the lookup goes
+    /// on for the holders' replies); lookups that ended are dropped, their missions still
     /// wanted.
-    pub(super) fn found(&mut self) -> Vec<Plan> {
+    pub(super) fn found(&mut self, inconsistent: &mut u64) -> Vec<Plan> {
         let mut found = Vec::new();
         self.lookups.retain_mut(|(id, q)| loop {
             match q.poll(Duration::ZERO) {
                 None => break true,
                 Some(Ok(r)) if r.message.mission_id == *id => {
-                    found.push(r.message);
-                    break false;
+                    if crate::services::plan::id_consistent(&r.message, inconsistent) {
+                        found.push(r.message);
+                        break false;
+                    }
                 }
                 Some(Ok(r)) => tracing::warn!(mission = %id, got = %r.message.mission_id,
                     "plan lookup: a reply of another mission skipped"),
