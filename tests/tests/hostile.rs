@@ -173,6 +173,28 @@ fn a_hostile_peer_of_every_kind_leaves_the_run_exact_and_bounded() {
     remove_echo_segments(&net);
     let p = l.pipeline_json();
     eprintln!("collector: {}", p["collector"]);
+    // the forgeries reached the launcher and were refused there: the forged status,
+    // detections, images and metrics as another sender's, the malformed image as malformed
+    let c = &p["collector"];
+    for key in ["refused_senders", "foreign", "malformed"] {
+        assert!(c[key].as_u64().unwrap() > 0, "{key}: {c}");
+    }
+    for kind in ["status", "detections", "images", "metrics"] {
+        assert!(
+            c["refused_by_kind"][kind].as_u64().unwrap() > 0,
+            "{kind}: {c}"
+        );
+    }
+    // the flooded plans reached the processor (its plan subscription) but it took on none of
+    // them: no plan refused at --max-missions, no mission let go for them
+    let log = l.log("processor");
+    for key in ["plans_refused", "evicted"] {
+        assert_eq!(
+            counter(&log, "processor stopping", key),
+            Some(0),
+            "processor {key}:\n{log}"
+        );
+    }
     eprintln!("hostile suite: {:.1} s", started.elapsed().as_secs_f64());
 }
 
@@ -321,10 +343,15 @@ fn a_peer_flooding_the_planner_with_plan_requests_leaves_the_run_exact() {
         busy > 0 && plans > flood_planned,
         "busy {busy}, plans {plans}:\n{pl}"
     );
-    eprintln!(
-        "planner: {plans} plans, {busy} requests refused as busy; launcher retries: {}",
-        serde_json::Value::Array(l.named("plan_retry"))
+    // the launcher's request held a place of its own in the planner's queue: never refused as
+    // busy, so never asked again
+    let retries = l.named("plan_retry");
+    assert!(
+        retries.is_empty(),
+        "the launcher was answered busy {} times: {retries:?}",
+        retries.len()
     );
+    eprintln!("planner: {plans} plans, {busy} requests refused as busy");
     let end = l.seen.last().cloned().unwrap_or_default();
     eprintln!("the run ended at {} s: {end}", end["t_s"]);
     eprintln!(
