@@ -11,11 +11,30 @@ pub const DEFAULT_MAX_MISSIONS: usize = 16;
 /// mission whose echo never comes) cannot fill the cap for good.
 pub const MISSION_IDLE_TIMEOUT: Duration = Duration::from_secs(60);
 
+/// Whether a held mission may be dropped to make room for a new one, and how readily.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Droppable {
+    /// It must be kept: not finished, with progress within [`MISSION_IDLE_TIMEOUT`] or work
+    /// queued or in progress.
+    No,
+    /// Unfinished, but without progress for [`MISSION_IDLE_TIMEOUT`] and with no work queued or
+    /// in progress: dropped only when no [`Droppable::Done`] mission is held.
+    Idle,
+    /// Finished or given up: dropped first.
+    Done,
+}
+
 /// Whether a held mission may be dropped to make room for a new one: it is `done` (finished or
 /// given up), or it has had no progress for [`MISSION_IDLE_TIMEOUT`] (`since_progress`) and
 /// has no work queued or in progress (`busy`).
-pub fn droppable(done: bool, since_progress: Duration, busy: bool) -> bool {
-    done || (!busy && since_progress >= MISSION_IDLE_TIMEOUT)
+pub fn droppable(done: bool, since_progress: Duration, busy: bool) -> Droppable {
+    if done {
+        Droppable::Done
+    } else if !busy && since_progress >= MISSION_IDLE_TIMEOUT {
+        Droppable::Idle
+    } else {
+        Droppable::No
+    }
 }
 
 /// What to do with a new mission, given those held.
@@ -29,17 +48,23 @@ pub enum Admission {
     Refuse,
 }
 
-/// Decides on a new mission when `held` missions are held, each with whether it may be dropped
-/// (finished, given up or idle), oldest first; the oldest droppable one makes room.
-pub fn admit(held: impl ExactSizeIterator<Item = bool>, cap: usize) -> Admission {
+/// Decides on a new mission when `held` missions are held, each with whether it may be dropped,
+/// oldest first: the oldest finished or given-up mission makes room, else the oldest idle one.
+pub fn admit(held: impl ExactSizeIterator<Item = Droppable>, cap: usize) -> Admission {
     if held.len() < cap {
         return Admission::Admit;
     }
-    let mut held = held;
-    match held.position(|droppable| droppable) {
-        Some(i) => Admission::Evict(i),
-        None => Admission::Refuse,
+    let mut idle = None;
+    for (i, d) in held.enumerate() {
+        match d {
+            Droppable::Done => return Admission::Evict(i),
+            Droppable::Idle => {
+                idle.get_or_insert(i);
+            }
+            Droppable::No => {}
+        }
     }
+    idle.map_or(Admission::Refuse, Admission::Evict)
 }
 
 /// The apertures a result request may make a processor publish again: the distinct indices
@@ -58,26 +83,43 @@ pub fn requested_apertures(requested: &[u32], apertures: usize) -> Vec<u32> {
 mod tests {
     use super::*;
 
+    use Droppable::{Done, Idle, No};
+
     #[test]
     fn below_the_cap_admits() {
-        assert_eq!(admit([false, false].into_iter(), 3), Admission::Admit);
-        assert_eq!(admit(std::iter::empty::<bool>(), 1), Admission::Admit);
+        assert_eq!(admit([No, No].into_iter(), 3), Admission::Admit);
+        assert_eq!(admit(std::iter::empty::<Droppable>(), 1), Admission::Admit);
     }
 
     #[test]
     fn at_the_cap_the_oldest_droppable_makes_room() {
+        assert_eq!(admit([No, Done, Done].into_iter(), 3), Admission::Evict(1));
+        assert_eq!(admit([Done, No].into_iter(), 2), Admission::Evict(0));
+        assert_eq!(admit([No, Idle, Idle].into_iter(), 3), Admission::Evict(1));
+    }
+
+    /// A finished or given-up mission makes room before an idle one, however much older the
+    /// idle one is.
+    #[test]
+    fn a_done_mission_goes_before_an_idle_one() {
+        assert_eq!(admit([Idle, Done].into_iter(), 2), Admission::Evict(1));
         assert_eq!(
-            admit([false, true, true].into_iter(), 3),
-            Admission::Evict(1)
+            admit([Idle, No, Idle, Done, Done].into_iter(), 5),
+            Admission::Evict(3)
         );
-        assert_eq!(admit([true, false].into_iter(), 2), Admission::Evict(0));
+        // from the service's view: an idle mission (held long without progress) and a
+        // finished one that progressed a moment ago
+        let idle = droppable(false, MISSION_IDLE_TIMEOUT * 2, false);
+        let done = droppable(true, Duration::ZERO, false);
+        assert_eq!((idle, done), (Idle, Done));
+        assert_eq!(admit([idle, done].into_iter(), 2), Admission::Evict(1));
     }
 
     #[test]
     fn at_the_cap_with_nothing_droppable_refuses() {
-        assert_eq!(admit([false, false].into_iter(), 2), Admission::Refuse);
+        assert_eq!(admit([No, No].into_iter(), 2), Admission::Refuse);
         // a cap of zero takes nothing
-        assert_eq!(admit(std::iter::empty::<bool>(), 0), Admission::Refuse);
+        assert_eq!(admit(std::iter::empty::<Droppable>(), 0), Admission::Refuse);
     }
 
     /// A full cap of missions that never got a frame refuses a new mission until they have
@@ -100,9 +142,9 @@ mod tests {
             Admission::Evict(0)
         );
         // busy or done
-        assert!(!droppable(false, old * 10, true));
-        assert!(droppable(true, Duration::ZERO, true));
-        assert!(!droppable(false, old - Duration::from_millis(1), false));
+        assert_eq!(droppable(false, old * 10, true), No);
+        assert_eq!(droppable(true, Duration::ZERO, true), Done);
+        assert_eq!(droppable(false, old - Duration::from_millis(1), false), No);
     }
 
     #[test]

@@ -31,7 +31,7 @@ use radar_sim::scene::SceneObject;
 use radar_sim::synth::{Components, Synthesizer};
 use radar_sim::track::PulseMeta;
 
-use super::admission::{admit, Admission, DEFAULT_MAX_MISSIONS};
+use super::admission::{admit, Admission, Droppable, DEFAULT_MAX_MISSIONS};
 use super::process::MissionContext;
 use super::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
 use crate::protocol::{ApertureRequest, FrameInfo, FrameSlot, RequestAck, Role, ServiceState};
@@ -310,7 +310,19 @@ impl<'a> Echo<'a> {
             .collect();
         held.sort();
         let queued = |m: &MissionId| self.queue.iter().any(|j| j.mission == *m);
-        match admit(held.iter().map(|(_, m)| !queued(m)), self.args.max_missions) {
+        // a mission without requests queued may go (the least recently used first): the
+        // echo cannot tell a finished one from one that a processor will ask more of
+        let droppable = |m: &MissionId| {
+            if queued(m) {
+                Droppable::No
+            } else {
+                Droppable::Idle
+            }
+        };
+        match admit(
+            held.iter().map(|(_, m)| droppable(m)),
+            self.args.max_missions,
+        ) {
             Admission::Admit => true,
             Admission::Evict(i) => {
                 let (_, old) = held[i];

@@ -131,8 +131,8 @@ impl Run {
     /// Whether the mission may be dropped to make room for another
     /// ([`droppable`](crate::services::admission::droppable)): finished, given up, or held
     /// without progress for [`MISSION_IDLE_TIMEOUT`](crate::services::admission::MISSION_IDLE_TIMEOUT)
-    /// with nothing queued or in the worker.
-    pub(super) fn droppable(&self) -> bool {
+    /// with nothing queued or in the worker (the finished or given-up first).
+    pub(super) fn droppable(&self) -> crate::services::admission::Droppable {
         crate::services::admission::droppable(
             self.metrics.is_some() || self.failed.is_some(),
             self.last_progress.elapsed(),

@@ -88,7 +88,8 @@ pub struct ProcessArgs {
     #[arg(long, default_value = "1", value_parser = bridge::flags::parse_seconds)]
     pub status_interval_s: Seconds,
     /// Missions held at once: at the cap, a new plan replaces the oldest finished (or given
-    /// up) mission, and is refused while every held mission is still in progress.
+    /// up) mission, else the oldest one without progress (no plan or frame) for 60 s and no
+    /// work queued, and is refused while every held mission is still in progress.
     #[arg(long, default_value_t = DEFAULT_MAX_MISSIONS, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=4096))]
     pub max_missions: usize,
     /// Limits on a mission's IQ and on one aperture's memory (a plan above them is refused).
