@@ -228,7 +228,7 @@ pub struct Launch {
 
 impl Launch {
     /// Starts `cellsar run MISSION --scene SCENE --out <dir>/out --horizon-s H --events-json
-    /// --timeout-s 240 <extra>`.
+    /// --timeout-s 240 <extra>` (without `--timeout-s 240` when `extra` gives one).
     pub fn start(dir: &Path, horizon_s: f64, extra: &[&str]) -> Launch {
         Launch::start_in(&[], dir, horizon_s, extra)
     }
@@ -266,7 +266,13 @@ impl Launch {
             .arg("--out")
             .arg(&out)
             .args(["--horizon-s", &horizon_s.to_string(), "--events-json"])
-            .args(["--timeout-s", "240", "--resend-after-s", "2"])
+            .args(["--resend-after-s", "2"])
+            // 240 s unless `extra` names a time-out of its own (the flag may not repeat)
+            .args(if extra.iter().any(|a| a.starts_with("--timeout-s")) {
+                &[][..]
+            } else {
+                &["--timeout-s", "240"][..]
+            })
             .args(extra)
             .env("RUST_LOG", "info")
             .stdout(Stdio::piped())

@@ -4,11 +4,13 @@
 //!
 //! Each test reads the run's own prefix (`cs<pid>x<random>_`) from its `network` event and
 //! checks that files with it exist while frames flow (so that their absence afterwards means
-//! something). A `kill -9` of each child, with the run ending normally, is in
-//! `tests/tests/reliability.rs` (`kill9_*`); SIGINT before or while waiting for the planner and
-//! the runs that fail or time out are in `tests/tests/system.rs`. A run started by another test
-//! binary at the moment this file's killed run is checked would remove its files first; `cargo
-//! test` runs test binaries one after the other.
+//! something): SIGINT, a run that times out and one that fails, each once frames flowed, and a
+//! run killed as a whole. A `kill -9` of each child, with the run ending normally, is in
+//! `tests/tests/reliability.rs` (`kill9_*`); a complete run, SIGINT before the children start
+//! and while waiting for the planner, and runs that fail before any frame flowed are in
+//! `tests/tests/system.rs`. A run started by another test binary at the moment this file's
+//! killed run is checked would remove its files first; `cargo test` runs test binaries one
+//! after the other.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -123,4 +125,59 @@ fn a_run_killed_as_a_whole_is_cleaned_up_by_the_next_run() {
         "the killed run's files are still there: {still:?} (of {left:?})"
     );
     assert!(shm_files(&next_prefix).is_empty());
+}
+
+/// `--timeout-s` expiring once frames flowed: the echo frozen after the first aperture (with
+/// one aperture in flight at a time the mission cannot end), the launcher gives up at the
+/// time-out, exits 1 naming it, stops its children (the frozen echo with SIGKILL) and leaves no
+/// frame file.
+#[test]
+fn a_run_that_times_out_once_frames_flowed_leaves_no_frame_files() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    // long enough for the first aperture on a loaded machine (about 5 s on an idle one),
+    // short beside the mission's remaining apertures once the echo is frozen
+    const TIMEOUT_S: u64 = 45;
+    let dir = tempfile::tempdir().unwrap();
+    let timeout = TIMEOUT_S.to_string();
+    let mut l = Launch::start(dir.path(), H, &["--window", "1", "--timeout-s", &timeout]);
+    let started = Instant::now();
+    let prefix = run_prefix(&mut l);
+    let files = frames_flow(&mut l, &prefix);
+    assert!(
+        started.elapsed() < Duration::from_secs(TIMEOUT_S),
+        "the first aperture came after the time-out"
+    );
+    signal(l.pid("echo"), Signal::SIGSTOP);
+    assert!(l.child.try_wait().unwrap().is_none(), "the run ended first");
+    let st = l.finish(Duration::from_secs(TIMEOUT_S + 120));
+    assert_eq!(st.code(), Some(1), "{}", l.stderr_tail());
+    let err = l.stderr_text();
+    assert!(err.contains("timed out after"), "{err}");
+    assert!(
+        started.elapsed() >= Duration::from_secs(TIMEOUT_S),
+        "ended before the time-out:\n{err}"
+    );
+    let left = shm_files(&prefix);
+    assert!(left.is_empty(), "left: {left:?} (while imaging: {files:?})");
+}
+
+/// A run that fails once frames flowed: with `--max-restarts 0`, the processor killed with
+/// `-9` after the first aperture (it cleans up nothing) makes the launcher give up; it exits 1
+/// and leaves no frame file.
+#[test]
+fn a_run_that_fails_once_frames_flowed_leaves_no_frame_files() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    let mut l = Launch::start(dir.path(), H, &["--window", "1", "--max-restarts", "0"]);
+    let prefix = run_prefix(&mut l);
+    let files = frames_flow(&mut l, &prefix);
+    signal(l.pid("echo"), Signal::SIGSTOP);
+    assert!(l.child.try_wait().unwrap().is_none(), "the run ended first");
+    signal(l.pid("processor"), Signal::SIGKILL);
+    let st = l.finish(Duration::from_secs(120));
+    assert_eq!(st.code(), Some(1), "{}", l.stderr_tail());
+    let err = l.stderr_text();
+    assert!(err.contains("giving up"), "{err}");
+    let left = shm_files(&prefix);
+    assert!(left.is_empty(), "left: {left:?} (while imaging: {files:?})");
 }
