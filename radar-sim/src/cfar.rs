@@ -30,11 +30,15 @@
 
 mod cluster;
 mod detector;
+mod exact;
 mod model;
 mod stats;
 
-pub use cluster::{cluster, cluster_with_outside, components, outside_peaks, Detection};
+pub use cluster::{
+    cluster, cluster_edited, cluster_with_outside, components, outside_peaks, Detection,
+};
 pub use detector::{ca_cfar, CfarMap, CfarParams, CLUTTER_FLOOR_RATIO};
+pub use exact::{ExactResponse, LookImages, RangeResponse, EXACT_MODEL_ERROR};
 pub use model::{ResponseModel, MODEL_CELL_MARGIN, MODEL_SCALE_MARGIN};
 pub use stats::{
     averaged_pfa, ca_alpha, ca_pfa, censored_mean, expected_peaks_per_m2, gamma_sf, image_floor,

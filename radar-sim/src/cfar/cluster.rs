@@ -3,8 +3,12 @@
 
 use serde::{Deserialize, Serialize};
 
+use rustfft::num_complex::Complex64;
+
+use super::exact::{residual, source, LookImages, Source, EXACT_MODEL_ERROR};
 use super::{CfarMap, ResponseModel, SIDELOBE_MARGIN};
 use crate::backproject::Grid;
+use rustfft::num_complex::Complex32;
 
 /// One detection.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -98,6 +102,42 @@ pub fn cluster_with_outside(
     aperture: usize,
     model: Option<&ResponseModel>,
 ) -> Vec<Detection> {
+    cluster_edited(
+        img,
+        map,
+        grid,
+        outside,
+        merge_radius_m,
+        aperture,
+        model,
+        None,
+    )
+}
+
+/// [`cluster_with_outside`] with, given the complex look images `exact`, sidelobe editing
+/// against the exact point response ([`super::exact`]): each peak taken (the grid's and the
+/// band's, detections or not) is a source whose per-look complex amplitude is its look values
+/// less the stronger sources' responses there (CLEAN at the peaks), at its sub-pixel position;
+/// a candidate peak of the grid is a detection only where its residual after subtracting every
+/// stronger source's response, look by look, still reaches its CFAR threshold
+/// ([`CfarMap::threshold`]) and exceeds [`EXACT_MODEL_ERROR`]² times the sources' predicted
+/// power there. Several objects' sidelobes adding up, and an object's far response where the
+/// linearised envelope falls short of it, are thus edited; a weak object in a strong one's
+/// sidelobes stays a detection (its residual is its own response).
+///
+/// `outside` must be `exact`'s band peaks (positions on `exact.band_grid`) for their look
+/// values to be read; a band peak whose pixel is not on that grid is no source.
+#[allow(clippy::too_many_arguments)]
+pub fn cluster_edited(
+    img: &[f32],
+    map: &CfarMap,
+    grid: &Grid,
+    outside: &[([f64; 2], f64)],
+    merge_radius_m: f64,
+    aperture: usize,
+    model: Option<&ResponseModel>,
+    exact: Option<LookImages<'_>>,
+) -> Vec<Detection> {
     let (nx, ny) = (grid.nx, grid.ny);
     if img.len() != nx * ny || map.hits.len() != nx * ny || map.noise.len() != nx * ny {
         return Vec::new();
@@ -147,7 +187,12 @@ pub fn cluster_with_outside(
     all.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     let r = merge_radius_m.max(grid.spacing_m);
     let mut taken: Vec<([f64; 2], f64)> = Vec::new();
+    let mut sources: Vec<Source> = Vec::new();
     let mut out = Vec::new();
+    let exact = exact.filter(|e| {
+        let n = e.response.looks();
+        e.grid.len() == n && e.grid.iter().all(|l| l.len() == nx * ny)
+    });
     for (v, which) in all {
         let (pos, noise) = match which {
             Ok(i) => (
@@ -171,6 +216,44 @@ pub fn cluster_with_outside(
                 continue;
             }
         }
+        if let Some(e) = exact {
+            // the peak's look values, its sub-pixel position and, for a grid peak, the CLEAN
+            // residual against the stronger sources
+            let looked = match which {
+                Ok(i) => Some((
+                    e.grid.iter().map(|l| to64(l[i])).collect::<Vec<_>>(),
+                    refined(img, nx, ny, i, grid.spacing_m, pos),
+                )),
+                Err(_) => band_peak(&e, pos),
+            };
+            let Some((values, source_pos)) = looked else {
+                taken.push((pos, v));
+                continue;
+            };
+            if let Ok(i) = which {
+                let (res, pred) = residual(e.response, &sources, pos, &values, e.scale);
+                let threshold = map.threshold.get(i).map_or(0.0, |t| f64::from(*t));
+                let edited = res < threshold || res <= EXACT_MODEL_ERROR.powi(2) * pred;
+                tracing::debug!(
+                    aperture,
+                    x_m = pos[0],
+                    y_m = pos[1],
+                    value = v,
+                    residual = res,
+                    predicted = pred,
+                    threshold,
+                    edited,
+                    "exact sidelobe editing"
+                );
+                if edited {
+                    continue;
+                }
+            }
+            let gains = (e.gains)(source_pos);
+            sources.push(source(
+                e.response, &sources, pos, source_pos, &values, gains,
+            ));
+        }
         taken.push((pos, v));
         let Ok(i) = which else {
             continue;
@@ -179,28 +262,72 @@ pub fn cluster_with_outside(
         if xu == 0 || yu == 0 || xu + 1 == nx || yu + 1 == ny {
             continue;
         }
-        let refine = |a: f32, b: f32, c: f32| -> f64 {
-            let (a, b, c) = (a as f64, b as f64, c as f64);
-            let den = a - 2.0 * b + c;
-            if den < 0.0 {
-                (0.5 * (a - c) / den).clamp(-0.5, 0.5)
-            } else {
-                0.0
-            }
-        };
-        let fx = refine(img[i - 1], img[i], img[i + 1]);
-        let fy = refine(img[i - nx], img[i], img[i + nx]);
+        let at = refined(img, nx, ny, i, grid.spacing_m, pos);
         let noise = map.noise[i].max(f32::MIN_POSITIVE) as f64;
         out.push(Detection {
             aperture,
-            x_m: pos[0] + fx * grid.spacing_m,
-            y_m: pos[1] + fy * grid.spacing_m,
+            x_m: at[0],
+            y_m: at[1],
             snr_db: 10.0 * (v / noise).log10(),
             pixels: sizes[label[i]],
         });
     }
     out.sort_by(|a, b| b.snr_db.total_cmp(&a.snr_db));
     out
+}
+
+fn to64(v: Complex32) -> Complex64 {
+    Complex64::new(f64::from(v.re), f64::from(v.im))
+}
+
+/// The sub-pixel position of the peak at pixel `i` (position `pos`) of the `nx × ny` image
+/// `img` of spacing `spacing_m`: a parabola through it and its neighbours along each axis
+/// (the pixel itself on the border).
+fn refined(img: &[f32], nx: usize, ny: usize, i: usize, spacing_m: f64, pos: [f64; 2]) -> [f64; 2] {
+    let (xu, yu) = (i % nx, i / nx);
+    if xu == 0 || yu == 0 || xu + 1 >= nx || yu + 1 >= ny {
+        return pos;
+    }
+    let refine = |a: f32, b: f32, c: f32| -> f64 {
+        let (a, b, c) = (a as f64, b as f64, c as f64);
+        let den = a - 2.0 * b + c;
+        if den < 0.0 {
+            (0.5 * (a - c) / den).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        }
+    };
+    let fx = refine(img[i - 1], img[i], img[i + 1]);
+    let fy = refine(img[i - nx], img[i], img[i + nx]);
+    [pos[0] + fx * spacing_m, pos[1] + fy * spacing_m]
+}
+
+/// A band peak at `pos`: its look values and sub-pixel position from `e`'s band images (on
+/// `e.band_grid`); `None` where it is not on that grid.
+fn band_peak(e: &LookImages<'_>, pos: [f64; 2]) -> Option<(Vec<Complex64>, [f64; 2])> {
+    let bg = e.band_grid?;
+    let (nx, ny) = (bg.nx, bg.ny);
+    if e.band.len() != e.grid.len() || e.band.iter().any(|l| l.len() != nx * ny) {
+        return None;
+    }
+    let (fx, fy) = bg.index_of(pos);
+    let (x, y) = (fx.round(), fy.round());
+    if x < 0.0 || y < 0.0 || x >= nx as f64 || y >= ny as f64 {
+        return None;
+    }
+    let (x, y) = (x as usize, y as usize);
+    let i = y * nx + x;
+    // the 3 × 3 neighbourhood's power, row-major; a border peak is not refined
+    let at = if x >= 1 && y >= 1 && x + 1 < nx && y + 1 < ny {
+        let power: Vec<f32> = (y - 1..=y + 1)
+            .flat_map(|yy| (x - 1..=x + 1).map(move |xx| yy * nx + xx))
+            .map(|j| e.band.iter().map(|l| l[j].norm_sqr()).sum())
+            .collect();
+        refined(&power, 3, 3, 4, bg.spacing_m, pos)
+    } else {
+        pos
+    };
+    Some((e.band.iter().map(|l| to64(l[i])).collect(), at))
 }
 
 /// The peaks of `band` (an image on `band_grid`, the guard band: a coarser grid around

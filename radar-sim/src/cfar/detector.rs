@@ -42,6 +42,8 @@ pub struct CfarMap {
     /// Per pixel: the noise estimate it was tested against (censored training mean, or the
     /// image-wide one for a fallback pixel).
     pub noise: Vec<f32>,
+    /// Per pixel: the threshold α · noise it was tested against.
+    pub threshold: Vec<f32>,
     /// Pixels with fewer than [`MIN_TRAINING_CELLS`] independent training cells, tested
     /// against the image-wide censored mean.
     pub fallback_pixels: usize,
@@ -173,6 +175,7 @@ pub fn ca_cfar(img: &[f32], nx: usize, ny: usize, p: &CfarParams) -> CfarMap {
     let Pass {
         hits,
         noise,
+        threshold,
         mut cells,
         fallback,
     } = pass;
@@ -186,6 +189,7 @@ pub fn ca_cfar(img: &[f32], nx: usize, ny: usize, p: &CfarParams) -> CfarMap {
     CfarMap {
         hits,
         noise,
+        threshold,
         fallback_pixels: fallback,
         floor,
         median_cells,
@@ -204,6 +208,7 @@ struct Global {
 struct Pass {
     hits: Vec<bool>,
     noise: Vec<f32>,
+    threshold: Vec<f32>,
     cells: Vec<f64>,
     fallback: usize,
 }
@@ -252,6 +257,7 @@ fn train_and_test(
         .filter(|h| *h > 0);
     let mut hits = vec![false; npx];
     let mut noise = vec![0f32; npx];
+    let mut threshold = vec![0f32; npx];
     let mut cells = Vec::with_capacity(npx);
     let mut fallback = 0usize;
     for y in 0..ny as i64 {
@@ -287,6 +293,7 @@ fn train_and_test(
                 (global.mean, global.alpha * global.mean, global.cells)
             };
             noise[i] = m as f32;
+            threshold[i] = thr as f32;
             hits[i] = vals[i].is_finite() && vals[i] >= thr;
             cells.push(cells_used);
         }
@@ -294,6 +301,7 @@ fn train_and_test(
     Pass {
         hits,
         noise,
+        threshold,
         cells,
         fallback,
     }

@@ -207,6 +207,7 @@ fn euler_characteristic_count_matches_simulated_chi2_fields() {
         let map = CfarMap {
             hits: padded.iter().map(|v| *v as f64 >= threshold).collect(),
             noise: vec![1.0; m * m],
+            threshold: vec![threshold as f32; m * m],
             fallback_pixels: 0,
             floor: 1.0,
             median_cells: 1e9,

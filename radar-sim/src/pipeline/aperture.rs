@@ -4,7 +4,7 @@ use rustfft::num_complex::Complex32;
 
 use crate::backproject::Grid;
 use crate::cancel::CancelStats;
-use crate::cfar::{expected_peaks_per_m2, CfarMap, ResponseModel};
+use crate::cfar::{expected_peaks_per_m2, CfarMap, LookImages, ResponseModel};
 use crate::error::{RadarError, Result};
 use crate::scene::SceneObject;
 use crate::scoring::{score, TruthInImage};
@@ -66,29 +66,43 @@ impl Processor {
         let noise_var = self.look_noise_var(ppl);
         let mut multilook = vec![0f32; grid.pixels()];
         let mut band = vec![0f32; band_grid.as_ref().map_or(0, Grid::pixels)];
-        let mut looks = Vec::new();
+        // the complex look images are kept for the exact sidelobe editing
+        let mut looks = Vec::with_capacity(ap.looks);
+        let mut band_looks = Vec::new();
         let s = (1.0 / (noise_var * ap.looks as f64)) as f32;
         for l in 0..ap.looks {
             let img = self.image_look(&grid, &c, l * ppl..(l + 1) * ppl)?;
             for (o, v) in multilook.iter_mut().zip(&img) {
                 *o += v.norm_sqr() * s;
             }
-            if pc.save_complex {
-                looks.push(img);
-            }
+            looks.push(img);
             if let Some(bg) = &band_grid {
                 let img = self.image_look(bg, &c, l * ppl..(l + 1) * ppl)?;
                 for (o, v) in band.iter_mut().zip(&img) {
                     *o += v.norm_sqr() * s;
                 }
+                band_looks.push(img);
             }
         }
-        let det = self.detect(
+        let exact = self.exact_response(&c, ap);
+        let gains = |q: [f64; 2]| self.pulse_gains(pulses, q);
+        let det = self.detect_edited(
             ap,
             pulses,
             &multilook,
             band_grid.as_ref().map(|g| (g, band.as_slice())),
+            Some(LookImages {
+                response: &exact,
+                grid: &looks,
+                band_grid,
+                band: &band_looks,
+                scale: f64::from(s),
+                gains: &gains,
+            }),
         )?;
+        if !pc.save_complex {
+            looks = Vec::new();
+        }
         let echo_power_w = self.echo_power_w(objects, pulses);
         let floor_w =
             echo_power_w + self.noise_power_w() * c.cancel.noise_retained(self.setup.num.fft_size);

@@ -2,7 +2,8 @@
 
 use crate::backproject::Grid;
 use crate::cfar::{
-    ca_alpha, ca_cfar, cluster_with_outside, outside_peaks, CfarParams, Detection, ResponseModel,
+    ca_alpha, ca_cfar, cluster_edited, outside_peaks, CfarParams, Detection, ExactResponse,
+    LookImages, RangeResponse, ResponseModel,
 };
 use crate::error::{RadarError, Result};
 use crate::track::{Aperture, PulseMeta};
@@ -121,13 +122,69 @@ impl Processor {
     /// predicted cell at the image centre, mid-aperture. `band`: the multilook image of the
     /// guard band ([`super::RadarSetup::guard_grid`], on the same scale), whose peaks outside
     /// the grid above the CFAR threshold of the image-wide floor suppress the grid's skirts and
-    /// sidelobes of objects beyond its edge ([`cluster_with_outside`]).
+    /// sidelobes of objects beyond its edge ([`crate::cfar::cluster_with_outside`]).
     pub fn detect(
         &self,
         ap: &Aperture,
         pulses: &[PulseMeta],
         multilook: &[f32],
         band: Option<(&Grid, &[f32])>,
+    ) -> Result<Detected> {
+        self.detect_edited(ap, pulses, multilook, band, None)
+    }
+
+    /// The exact point response of the looks of aperture `ap` compressed into `c`
+    /// ([`ExactResponse`]: the pulses' positions and slow-time weights, the range taper over the
+    /// occupied subcarriers).
+    pub fn exact_response(&self, c: &super::Compressed, ap: &Aperture) -> ExactResponse {
+        let num = &self.setup.num;
+        let ppl = ap.pulses_per_look.max(1);
+        ExactResponse::new(
+            self.setup.geometry(),
+            c.pulses.clone(),
+            (0..ap.looks).map(|l| l * ppl..(l + 1) * ppl).collect(),
+            RangeResponse::new(
+                self.setup.scene.processing.range_weighting,
+                num.fft_size,
+                num.subcarrier_index(0),
+                num.subcarriers,
+            ),
+        )
+    }
+
+    /// Per pulse of `pulses` the echo amplitude of a unit-RCS point at ground position `q_m`
+    /// (the link budget of [`Processor::expected_snr_db`]: antenna gains, ranges, the cyclic
+    /// prefix's overlap), for [`ExactResponse::response`].
+    pub fn pulse_gains(&self, pulses: &[PulseMeta], q_m: [f64; 2]) -> Vec<f64> {
+        let geom = self.setup.geometry();
+        let (n, cp) = (self.setup.num.fft_size, self.setup.num.cp_samples);
+        let unit = crate::scene::SceneObject {
+            id: 0,
+            x_m: q_m[0],
+            y_m: q_m[1],
+            rcs_m2: 1.0,
+            phase_rad: 0.0,
+            landmark: None,
+        };
+        pulses
+            .iter()
+            .map(|p| {
+                let delay = geom.delay_samples(q_m, p.pos_m, p.window_delay_samples);
+                super::cp_overlap_factor(delay, n, cp)
+                    * self.link.echo_power_w(&unit, p.pos_m, p.heading).sqrt()
+            })
+            .collect()
+    }
+
+    /// [`Processor::detect`] with, given the complex look images `looks`, sidelobe editing
+    /// against the exact point response as well ([`cluster_edited`]).
+    pub fn detect_edited(
+        &self,
+        ap: &Aperture,
+        pulses: &[PulseMeta],
+        multilook: &[f32],
+        band: Option<(&Grid, &[f32])>,
+        looks: Option<LookImages<'_>>,
     ) -> Result<Detected> {
         let grid = self.setup.grid(ap);
         if multilook.len() != grid.pixels() || pulses.is_empty() {
@@ -197,7 +254,7 @@ impl Processor {
             }
             None => Vec::new(),
         };
-        let detections = cluster_with_outside(
+        let detections = cluster_edited(
             multilook,
             &map,
             &grid,
@@ -205,6 +262,7 @@ impl Processor {
             pc.cluster_radius_m.unwrap_or(d_min / 2.0),
             ap.index,
             Some(&model),
+            looks,
         );
         Ok(Detected {
             detections,
