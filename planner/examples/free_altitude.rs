@@ -1,19 +1,72 @@
 //! Fixed against free altitude: plans a mission at its fixed altitude and with
-//! `altitude = "free"` between two bounds (the `exact` scheme, [`PlanOptions::altitude_profile`]),
-//! and prints each plan's energy, wall time, altitude range, feasibility and unresolved slots,
-//! with the floor T min_V P(V) that no plan at any altitudes goes below.
+//! `altitude = "free"` between two bounds (the `exact` scheme, jointly,
+//! [`PlanOptions::altitude_profile`]), and prints each plan's true energy, wall time, altitude
+//! range, feasibility, slots out of view and unresolved (worst width, the cell's longest chord,
+//! over d_min), cone programs, iterations and alternations, with the floor T min_V P(V) that no
+//! plan at any altitudes goes below, and the receive path's spreading term of the landmark
+//! echoes' SNR, −20 log10(R_r / 1 km) dB, min/mean over the landmark slots in view. With `paper` it also plans the scheme `paper` at the fixed
+//! altitude and by the paper's alternation (altitude step, then Algorithm 1), in the same run.
 //!
 //! `cargo run --release -p planner --example free_altitude -- MISSION.toml MIN_M MAX_M [paper] [records]`
 //! (`paper`: the least-energy plans, the paper's resolution; default: the default options, the
-//! general resolution as a best effort; `records`: the free plan's iterations).
+//! general resolution as a best effort, which the scheme `paper` does not plan; `records`: the
+//! joint plan's iterations).
 
 use std::path::Path;
 use std::time::Instant;
 
+use planner::driver::ALTERNATION_PHASE;
 use planner::evaluate::ResolutionMode;
-use planner::{plan, AltitudeMode, Mission, PlanOptions, PlanResult};
+use planner::{
+    plan_with_observer, AltitudeMode, IterationRecord, Mission, Observer, PlanOptions, PlanResult,
+    Scheme,
+};
 
-fn row(label: &str, r: &PlanResult, seconds: f64) {
+/// Counts the alternations of a plan by the scheme `paper`.
+#[derive(Default)]
+struct Alternations(usize);
+impl Observer for Alternations {
+    fn on_phase(&mut self, phase: &str) {
+        if phase == ALTERNATION_PHASE {
+            self.0 += 1;
+        }
+    }
+    fn on_iteration(&mut self, _record: &IterationRecord) {}
+}
+
+/// Plans `mission` with `options`, timed, counting alternations.
+fn timed(mission: &Mission, options: &PlanOptions) -> Result<(PlanResult, f64, usize), String> {
+    let mut count = Alternations::default();
+    let started = Instant::now();
+    let r = plan_with_observer(mission, options, &mut count).map_err(|e| e.to_string())?;
+    Ok((r, started.elapsed().as_secs_f64(), count.0))
+}
+
+/// The receive path's spreading term of the radar equation, −20 log10(R_r / 1 km) dB, min and
+/// mean over the landmark slots in view (R_r the slant range from the UAV at its altitude to
+/// the landmark): the SNR of a landmark echo changes between plans by the change of this term
+/// (the BS–landmark range is the plan's no matter the track) plus that of the antenna gain
+/// towards the landmark, which the planner does not model.
+fn rx_spreading_db(r: &PlanResult) -> (f64, f64) {
+    let db: Vec<f64> = r
+        .evaluation
+        .slots
+        .iter()
+        .filter(|s| s.in_view)
+        .filter_map(|s| {
+            let g = s.landmark_m?;
+            let ground = (s.pos_m[0] - g[0]).hypot(s.pos_m[1] - g[1]);
+            Some(-20.0 * (ground.hypot(s.z_m) / 1000.0).log10())
+        })
+        .collect();
+    if db.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let min = db.iter().copied().fold(f64::INFINITY, f64::min);
+    (min, db.iter().sum::<f64>() / db.len() as f64)
+}
+
+fn row(label: &str, r: &PlanResult, seconds: f64, alternations: usize) {
     let (lo, hi) = match &r.altitudes_m {
         Some(z) => z
             .iter()
@@ -22,15 +75,21 @@ fn row(label: &str, r: &PlanResult, seconds: f64) {
             }),
         None => (r.evaluation.start_altitude_m, r.evaluation.start_altitude_m),
     };
+    let rx = rx_spreading_db(r);
     println!(
-        "{label:<6} {:>10.1} {:>8.2} {:>6.0}-{:<6.0} {:>8} {:>10} {:>8}",
+        "{label:<7} {:>10.1} {:>8.2} {:>6.0}-{:<6.0} {:>8} {:>11} {:>10} {:>8} {:>10} {:>12} {:>7.2}/{:<6.2}",
         r.evaluation.energy_j,
         seconds,
         lo,
         hi,
         r.is_feasible(),
+        r.evaluation.slots_out_of_view,
         r.evaluation.slots_unresolved,
-        r.cone_programs
+        r.cone_programs,
+        r.iterations,
+        alternations,
+        rx.0,
+        rx.1
     );
 }
 
@@ -52,21 +111,44 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mission.name(),
         options.resolution
     );
-    println!("plan     energy_j   time_s  altitude_m  feasible unresolved programs");
-    let started = Instant::now();
-    let fixed = plan(&mission, &options)?;
-    row("fixed", &fixed, started.elapsed().as_secs_f64());
+    println!(
+        "plan      energy_j   time_s  altitude_m  feasible out_of_view unresolved programs iterations alternations rx_db min/mean"
+    );
+    let paper = rest.iter().any(|a| a == "paper");
+    let (fixed, seconds, _) = timed(&mission, &options)?;
+    row("fixed", &fixed, seconds, 0);
     let mut free = p.clone();
     free.altitude = AltitudeMode::Free;
     free.min_altitude_m = Some(lo.parse()?);
     free.max_altitude_m = Some(hi.parse()?);
-    let mission = mission.with_params(free)?;
+    let free_mission = mission.with_params(free)?;
     options.altitude_profile = true;
-    let started = Instant::now();
-    let result = plan(&mission, &options)?;
-    row("free", &result, started.elapsed().as_secs_f64());
+    let (joint, seconds, _) = timed(&free_mission, &options)?;
+    row("joint", &joint, seconds, 0);
+    if paper {
+        let paper_options = PlanOptions::for_scheme(Scheme::Paper);
+        let (r, seconds, _) = timed(&mission, &paper_options)?;
+        row("paper", &r, seconds, 0);
+        let paper_free = PlanOptions {
+            altitude_profile: true,
+            ..paper_options
+        };
+        let (alt, seconds, alternations) = timed(&free_mission, &paper_free)?;
+        row("altern", &alt, seconds, alternations);
+        // what each alternation's 2-D step reached, accepted or not
+        for rec in alt.records[r.records.len()..]
+            .iter()
+            .filter(|x| !x.accepted)
+        {
+            println!(
+                "  rejected alternation ends at iteration {}: true energy {:.1} J, largest sensing violation {:.1} m",
+                rec.iteration, rec.true_energy_j, rec.sensing_violation_m
+            );
+        }
+        println!("  alternation: {}", alt.termination);
+    }
     if rest.iter().any(|a| a == "records") {
-        for r in &result.records[fixed.records.len()..] {
+        for r in &joint.records[fixed.records.len()..] {
             println!(
                 "  iteration {:>3} objective {:>10.2} true energy {:>10.2} accepted {}",
                 r.iteration, r.objective, r.true_energy_j, r.accepted
