@@ -20,8 +20,10 @@
 //!   launcher's plan request reaches, or a subscriber that receives anything.
 //! - Forgers holding the processor's, the planner's and the bridge's certificates, each
 //!   denied what its role may not do and refused by the consumers for what it may (the
-//!   bridge's: wrong IQ frames on the echo keys, refused and counted by the processor); one
-//!   holding the launcher's floods the planner with plan requests, served in turn.
+//!   bridge's: wrong IQ frames on the echo keys, refused and counted by the processor; it may
+//!   neither ask the echo, nor answer for it, nor read the frames; the processor's may not
+//!   answer plan lookups); one holding the launcher's floods the planner with plan requests,
+//!   served in turn.
 //! - A client without a certificate, one with a certificate of another CA, and a plain-TCP
 //!   client cannot open a session with the router; the same client with a certificate of the
 //!   deployment can (so the refusals are the certificates', not a broken set-up).
@@ -251,8 +253,9 @@ fn assert_stranger_did_nothing(r: &serde_json::Value, forge_log: &str, router_lo
 /// lets its role do and what it does not, while the pipeline runs over mutual TLS:
 ///
 /// - with the processor's certificate (instance `intruder-p`, announced as a planner): its
-///   planner token, its plan under a wrong id and its answers to plan requests are denied by
-///   the router; the processor's failed status, detections and (malformed) images it may put
+///   planner token, its plan under a wrong id, its answers to plan requests and its queryable
+///   on every mission's plan key (to answer plan lookups with a forged plan) are denied by the
+///   router, so no lookup reaches it; the processor's failed status, detections and (malformed) images it may put
 ///   reach the launcher, which refuses them (no processor of that instance is alive); it asks
 ///   the echo for apertures of the mission of the planner forger's plan (which a processor may);
 /// - with the planner's certificate (instance `intruder-q`, announced as a processor): its
@@ -285,6 +288,7 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
             &forged[..],
             &["--instance", "intruder-p", "--announce-as", "planner"],
             &["--mission", WRONG_PLAN_ID, "--flood-queries"],
+            &["--answer-plan-lookups"],
         ]
         .concat(),
     );
@@ -350,6 +354,16 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
     let wrong_plan = format!("cellsar/{WRONG_PLAN_ID}/plan");
     denied(&p_zid, "Put", &wrong_plan);
     assert!(!p_log.contains("answered a plan request"), "{p_log}");
+    // nor answer plan lookups: its queryable on every mission's plan key is denied, so no
+    // lookup reached it (the echo's of the wrong plan's mission, above, among them) and it
+    // answered none
+    denied(&p_zid, "Declare Queryable (ingress)", "cellsar/*/plan");
+    let rp = next_progress(&by_processor);
+    assert_eq!(rp["lookups"]["declared"], true, "{rp}");
+    for k in ["lookups", "answers", "errors"] {
+        assert_eq!(rp["lookups"][k], 0, "{k}: {rp}");
+    }
+    assert!(!p_log.contains("answered a plan lookup"), "{p_log}");
     // the planner's certificate may not publish a processor's status or results
     for key in ["detections", "status/processor", "image/0", "metrics"] {
         denied(&q_zid, "Put", &format!("cellsar/{id}/{key}"));
@@ -388,7 +402,13 @@ fn forgers_with_the_processors_and_the_planners_certificates() {
 ///   the key the echo gave the processor);
 /// - what it does not allow is denied by the router: a processor's token, its status,
 ///   detections, images and metrics, a plan, answering plan requests, asking for results,
-///   apertures and plans, subscribing to plans and statuses.
+///   apertures and plans, subscribing to plans and statuses;
+/// - in particular what the frame tags rest on (the echo gives the mission's frame key only in
+///   its answers to aperture requests): it asks the echo for an aperture in range as a
+///   processor does, declares a queryable on the echo's requests to answer them with a key of
+///   its own, and subscribes to the IQ frames (`forge --ask-echo --answer-echo
+///   --read-frames`); the router denies the query and both declarations for its zid, and it
+///   gets no answer, no request and no frame while the run's frames flow.
 ///
 /// The run ends with the closed loop's outputs, and no service's memory grew past the bound.
 fn a_forger_with_the_bridges_certificate() {
@@ -433,17 +453,20 @@ fn a_forger_with_the_bridges_certificate() {
                 "--malformed-images",
                 "--forge-plans",
                 "--flood-queries",
+                "--ask-echo",
+                "--answer-echo",
+                "--read-frames",
             ];
             vec![start_forger(&hosts, d, "forger-b", &bridge_cfg, &args)]
         });
     let forger = &mut forgers[0];
     let st = run.finish();
     let l = &run.l;
-    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
-    assert_same_as_reference(&l.out, &reference);
     assert!(forger.child.try_wait().unwrap().is_none(), "forger exited");
     let r = next_progress(forger);
     eprintln!("the bridge's forger: {r}");
+    assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
+    assert_same_as_reference(&l.out, &reference);
     let iq = &r["iq"];
     for k in [
         "other_mission",
@@ -492,11 +515,49 @@ fn a_forger_with_the_bridges_certificate() {
     }
     denied("Put", &format!("cellsar/{WRONG_PLAN_ID}/plan"));
     assert!(!forger.log_text().contains("answered a plan request"));
-    // the echo key and the bridge's counters were never denied to it
+    // the frame-tag defence: it may neither ask the echo (for an aperture in range, as a
+    // processor does: the answer carries the mission's frame key) nor answer for it (with a key
+    // of its own), nor read the frames; the router denied each, for its zid
+    let request_key = format!("cellsar/{id}/echo/request");
+    denied("Query (ingress)", &request_key);
+    denied("Declare Queryable (ingress)", &request_key);
+    denied(
+        "Declare Subscriber (ingress)",
+        &format!("cellsar/{id}/echo"),
+    );
+    // so its requests got no answer (no key), its queryable no request and its subscriber no
+    // frame, while the run's frames went through the router to the processor
+    let e = &r["echo"];
+    assert!(e["asked"].as_u64().unwrap() > 0, "{r}");
+    // every request reached the router and was denied there: its in-range ones (`asked`) and
+    // the out-of-range ones of its flood (one a round, of three queries), each logged
+    let queries_denied = mine
+        .iter()
+        .filter(|l| l.contains("is unauthorized to Query (ingress)") && l.ends_with(&request_key))
+        .count() as u64;
+    let requests = e["asked"].as_u64().unwrap() + r["flood"]["queries"].as_u64().unwrap() / 3;
+    assert!(
+        queries_denied >= requests,
+        "{queries_denied} < {requests}: {r}"
+    );
+    assert_eq!(e["queryables"], 1, "{r}");
+    assert_eq!(e["subscribers"], 1, "{r}");
+    for k in [
+        "answered", "keys", "refused", "requests", "answers", "frames", "errors",
+    ] {
+        assert_eq!(e[k], 0, "{k}: {r}");
+    }
+    let bridge_log = l.log("bridge");
+    assert!(
+        counter(&bridge_log, "route counters", "out_forwarded").unwrap() >= 30,
+        "{bridge_log}"
+    );
+    // the echo key and the bridge's counters were never denied to it (as it puts them; the
+    // router does not forward the frames to it, `Put (egress)`)
     let echo_key = format!("cellsar/{id}/echo");
     let refused_frames: Vec<&&str> = mine
         .iter()
-        .filter(|l| l.contains("is unauthorized to Put"))
+        .filter(|l| l.contains("is unauthorized to Put (ingress)"))
         .filter(|l| l.ends_with(&echo_key) || l.contains("cellsar/bridge/"))
         .collect();
     assert!(refused_frames.is_empty(), "{refused_frames:#?}");

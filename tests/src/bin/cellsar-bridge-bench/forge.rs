@@ -20,6 +20,11 @@
 //! - `--flood-plan-requests N` and the other floods: see `flood.rs`;
 //! - `--forge-iq`: wrong IQ frames on the echo keys (what the bridge's certificate may put):
 //!   see `iq.rs`;
+//! - `--ask-echo`, `--answer-echo`, `--read-frames`: it asks the echo for an aperture (whose
+//!   answer carries the mission's frame key), answers aperture requests with a frame key of its
+//!   own, and subscribes to the IQ frames: see `echo.rs`;
+//! - `--answer-plan-lookups`: it answers every plan lookup (`cellsar/*/plan`) with a forged
+//!   plan claiming the mission looked up: see `lookups.rs`;
 //! - `--mission <id>`: it forges for this mission from the start, without having to see it (a
 //!   peer that the router lets see nothing).
 //!
@@ -48,8 +53,10 @@ use serde::Serialize;
 
 use super::{ready, report, tools::z_node};
 
+mod echo;
 mod flood;
 mod iq;
+mod lookups;
 
 /// The mission id the published forged plan claims (its content gives another).
 pub(super) const FORGED_PLAN_ID: MissionId = MissionId(0x5eed_5eed_5eed_5eed);
@@ -110,6 +117,10 @@ pub(super) struct ForgeArgs {
     #[command(flatten)]
     iq: iq::IqArgs,
     #[command(flatten)]
+    echo: echo::EchoArgs,
+    #[command(flatten)]
+    lookups: lookups::LookupArgs,
+    #[command(flatten)]
     zenoh: ZenohArgs,
 }
 
@@ -130,6 +141,8 @@ struct ForgeReport {
     processors_seen: usize,
     flood: flood::Flooded,
     iq: iq::IqForged,
+    echo: echo::EchoTried,
+    lookups: lookups::LookupsAnswered,
 }
 
 fn parse_mission(s: &str) -> Result<MissionId, String> {
@@ -224,7 +237,7 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
         )?)?),
         None => None,
     };
-    let base_plan = if a.forge_plans || a.flood.flood_plans > 0 {
+    let base_plan = if a.forge_plans || a.flood.flood_plans > 0 || a.lookups.answer_plan_lookups {
         Some(forged_plan()?)
     } else {
         None
@@ -279,6 +292,10 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
         let (node, s, own) = (node.clone(), seen.clone(), own.clone());
         std::thread::spawn(move || learn_held_plans(&node, &s, &own))
     };
+    let lookups = match (a.lookups.answer_plan_lookups, &base_plan) {
+        (true, Some(plan)) => Some((lookups::Lookups::declare(&node)?, plan.clone())),
+        _ => None,
+    };
     let plans = if let (true, Some(plan)) = (a.forge_plans, base_plan) {
         let q =
             node.queryable::<PlanRequest>(keys::PLAN, bridge::net::SubscribeOptions::default())?;
@@ -312,8 +329,12 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     flood::publish_plans(&node, &flood_plans, &mut r.flood)?;
     drop(flood_plans);
     let mut forgers: Vec<(MissionId, Forger)> = Vec::new();
+    let mut echo = echo::Echo::default();
     let mut progress = Instant::now();
     while Instant::now() < end {
+        if let Some((l, plan)) = &lookups {
+            l.answer(plan, &mut r.lookups);
+        }
         if let Some((q, plan, publisher, wrong_id)) = &plans {
             match publisher.put(wrong_id) {
                 Ok(_) => r.plans += 1,
@@ -399,6 +420,7 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
             forge_round(*id, f, a, template.as_ref(), &mut r);
             flood::flood_queries(&node, *id, &a.flood, &mut r.flood);
             iq::forge_round(&node, *id, &a.instance, &a.iq, &mut r.iq);
+            echo.round(&node, *id, &a.instance, (&a.echo, &a.iq), &mut r.echo);
         }
         r.missions = forgers.len();
         r.received = received.load(std::sync::atomic::Ordering::Relaxed);
@@ -416,6 +438,8 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
             .map_err(|_| anyhow::anyhow!("the flood of plan requests panicked"))?;
     }
     drop(subs);
+    drop(echo);
+    drop(lookups);
     lookup
         .join()
         .map_err(|_| anyhow::anyhow!("the plan lookup panicked"))?;

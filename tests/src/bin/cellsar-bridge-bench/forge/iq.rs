@@ -122,8 +122,9 @@ fn iq_frame(id: MissionId, seq: u64, time_ns: i64, rows: u32, cols: u32, value: 
 
 /// What the processor expects of each frame of a mission: (rows, cols, mission time ns) by
 /// frame number, and the mission's frame count.
-struct Fit {
-    layout: FrameLayout,
+pub(super) struct Fit {
+    /// The mission's frame layout, as the processor and the echo hold it.
+    pub layout: FrameLayout,
     /// Mission time of every aperture's pulses, as the processor holds them, ns.
     pulse_times_ns: Vec<Vec<i64>>,
 }
@@ -160,8 +161,18 @@ fn fit_of(plan_dir: &std::path::Path, scene: &std::path::Path) -> Result<Fit, St
     })
 }
 
+/// The layout of the mission of `--iq-plan-dir` and `--iq-scene` (loaded once), or why it
+/// could not be made; `None` without those flags.
+pub(super) fn fit(a: &IqArgs) -> Option<&'static Result<Fit, String>> {
+    static FIT: OnceLock<Result<Fit, String>> = OnceLock::new();
+    let (Some(plan_dir), Some(scene)) = (&a.iq_plan_dir, &a.iq_scene) else {
+        return None;
+    };
+    Some(FIT.get_or_init(|| fit_of(plan_dir, scene)))
+}
+
 /// The forger's own frame key (the echo's is never given to it).
-fn own_key() -> Option<&'static FrameKey> {
+pub(super) fn own_key() -> Option<&'static FrameKey> {
     static KEY: OnceLock<Option<FrameKey>> = OnceLock::new();
     KEY.get_or_init(|| FrameKey::random().ok()).as_ref()
 }
@@ -290,9 +301,8 @@ pub(super) fn forge_round(
         put(&stats, b"{\"forged\": true}".to_vec(), &mut n);
     }
     r.stats += n;
-    if let (Some(plan_dir), Some(scene)) = (&a.iq_plan_dir, &a.iq_scene) {
-        static FIT: OnceLock<Result<Fit, String>> = OnceLock::new();
-        match FIT.get_or_init(|| fit_of(plan_dir, scene)) {
+    if let Some(fit) = fit(a) {
+        match fit {
             Ok(fit) => {
                 let mut n = 0;
                 let start = r.rounds.saturating_mul(u64::from(a.iq_fit_frames));
