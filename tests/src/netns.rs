@@ -2,8 +2,9 @@
 //! with multicast on its loopback for the tests of multicast scouting), the deployment
 //! configurations of `pipeline/deploy/` adapted to them, the certificates of a secure
 //! deployment (`cellsar certs`), its router, processor and hostile peers (`cellsar-bridge-bench
-//! forge`, and what they log), and a run of it under forgers whose services' peak memory is
-//! bounded ([`launch_over_tls`]).
+//! forge`, and what they log), clients of its router that try once to open a session
+//! ([`client`]), and a run of it under forgers whose services' peak memory is bounded
+//! ([`launch_over_tls`]).
 //!
 //! Needs `ip` (iproute2) and the right to create network namespaces (root or CAP_NET_ADMIN):
 //! [`unavailable`] says why they cannot be made; the tests that need them are run by
@@ -227,6 +228,66 @@ pub fn forge_zid(log: &str) -> String {
                 .map(|(_, z)| z.trim().to_string())
         })
         .unwrap_or_else(|| panic!("no zid logged:\n{log}"))
+}
+
+// ---- clients of the secure deployment's router ----
+
+/// A client of the TLS router with `tls` settings (none: plain TCP), started in namespace B
+/// as a planner service that tries once to connect and exits when it cannot.
+pub fn client(hosts: &TwoHosts, dir: &Path, name: &str, tls: Option<&str>) -> Service {
+    client_logging(hosts, dir, name, tls, "info")
+}
+
+/// [`client`] with `RUST_LOG=rust_log`.
+pub fn client_logging(
+    hosts: &TwoHosts,
+    dir: &Path,
+    name: &str,
+    tls: Option<&str>,
+    rust_log: &str,
+) -> Service {
+    let (proto, tls) = match tls {
+        Some(t) => (
+            "tls",
+            format!("transport: {{ link: {{ tls: {{ {t} }} }} }},"),
+        ),
+        None => ("tcp", String::new()),
+    };
+    let cfg = dir.join(format!("{name}.json5"));
+    std::fs::write(
+        &cfg,
+        format!(
+            "{{ mode: 'client', connect: {{ endpoints: ['{proto}/{}:7447'], timeout_ms: 5000, \
+             exit_on_failure: true }}, scouting: {{ multicast: {{ enabled: false }} }}, {tls} }}",
+            hosts.ip_a
+        ),
+    )
+    .unwrap();
+    let [ip, netns, exec, b] = hosts.in_b();
+    let log = format!("RUST_LOG={rust_log}");
+    Service::start_in(
+        &[ip, netns, exec, b, "env", &log],
+        name,
+        dir,
+        &["planner".into(), "-c".into(), cfg.display().to_string()],
+    )
+}
+
+/// Waits (bounded) for `s` to exit; its status.
+pub fn exit_within(s: &mut Service, timeout: Duration) -> std::process::ExitStatus {
+    let deadline = Instant::now() + timeout;
+    loop {
+        if let Some(st) = s.child.try_wait().unwrap() {
+            return st;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{} still running after {timeout:?}:\n{}",
+            s.name,
+            s.log_text()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
 }
 
 // ---- the processes of the secure deployment, and a run under forgers ----

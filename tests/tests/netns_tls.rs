@@ -34,12 +34,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use harness::netns::{
-    config, forge_zid, launch_over_tls, make_certs, make_certs_with, next_progress,
-    processor_counters, start_forger, start_processor, start_router, start_router_as,
-    two_namespaces, wait_for_log, TwoHosts,
+    client, client_logging, config, exit_within, forge_zid, launch_over_tls, make_certs,
+    make_certs_with, next_progress, processor_counters, start_forger, start_processor,
+    start_router, start_router_as, two_namespaces, wait_for_log,
 };
 use harness::pipeline::*;
 use harness::trials::Test;
@@ -616,64 +616,6 @@ fn a_forger_with_the_launchers_certificate_flooding_the_planner() {
     let p = l.pipeline_json();
     assert_eq!(p["collector"]["foreign"], 0, "{p}");
     assert_eq!(p["collector"]["refused_plans"], 0, "{p}");
-}
-
-/// A client of the TLS router with `tls` settings (none: plain TCP), started in namespace B
-/// as a planner service that tries once to connect and exits when it cannot.
-fn client(hosts: &TwoHosts, dir: &Path, name: &str, tls: Option<&str>) -> Service {
-    client_logging(hosts, dir, name, tls, "info")
-}
-
-/// [`client`] with `RUST_LOG=rust_log`.
-fn client_logging(
-    hosts: &TwoHosts,
-    dir: &Path,
-    name: &str,
-    tls: Option<&str>,
-    rust_log: &str,
-) -> Service {
-    let (proto, tls) = match tls {
-        Some(t) => (
-            "tls",
-            format!("transport: {{ link: {{ tls: {{ {t} }} }} }},"),
-        ),
-        None => ("tcp", String::new()),
-    };
-    let cfg = dir.join(format!("{name}.json5"));
-    std::fs::write(
-        &cfg,
-        format!(
-            "{{ mode: 'client', connect: {{ endpoints: ['{proto}/{}:7447'], timeout_ms: 5000, \
-             exit_on_failure: true }}, scouting: {{ multicast: {{ enabled: false }} }}, {tls} }}",
-            hosts.ip_a
-        ),
-    )
-    .unwrap();
-    let [ip, netns, exec, b] = hosts.in_b();
-    let log = format!("RUST_LOG={rust_log}");
-    Service::start_in(
-        &[ip, netns, exec, b, "env", &log],
-        name,
-        dir,
-        &["planner".into(), "-c".into(), cfg.display().to_string()],
-    )
-}
-
-/// Waits (bounded) for `s` to exit; its status.
-fn exit_within(s: &mut Service, timeout: Duration) -> std::process::ExitStatus {
-    let deadline = Instant::now() + timeout;
-    loop {
-        if let Some(st) = s.child.try_wait().unwrap() {
-            return st;
-        }
-        assert!(
-            Instant::now() < deadline,
-            "{} still running after {timeout:?}:\n{}",
-            s.name,
-            s.log_text()
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
 }
 
 fn strangers_cannot_open_a_session_with_the_tls_router() {
