@@ -1,22 +1,25 @@
 //! The energy–resolution trade-off of a mission: from the least-energy plan to the
 //! best-resolved plan, the best-effort plan under a rising cap on the extra energy.
 //!
-//! A mission with `altitude = "free"`, with [`PlanOptions::altitude_profile`] set, gets the
-//! curve of its free-altitude plans ([`crate::plan`] of each point, an altitude per slot in
-//! [`PlanResult::altitudes_m`]): the free least-energy plan, then the free best effort under
-//! each cap. A free best effort measures its cap against the least-energy plan at the fixed
-//! altitude `altitude_m` (its [`crate::BestEffort::least_energy_j`]; its altitude steps never
-//! add energy to the fixed plan they start from), so the curve's percentages are of that plan
-//! too: the first point's is at most 0 (what the free altitude saves), and every capped point
-//! meets its cap. Without the option a free mission is refused
-//! ([`PlanError::AltitudeConflict`]), as by [`crate::plan`].
+//! A mission with `altitude = "free"`, with [`PlanOptions::altitude_profile`] set, gets a curve
+//! of free-altitude plans (an altitude per slot in [`PlanResult::altitudes_m`]): the free
+//! least-energy plan, then under each cap the better, by the best effort's merit (energy plus
+//! [`PlanOptions::resolution_weight_j_per_m`] × the resolution deficit), of the free best
+//! effort ([`crate::plan`]) and the fixed-altitude curve's point (the same mission at its one
+//! altitude `altitude_m`, each capped plan started from the previous one), flown at
+//! `altitude_m`. A free best effort measures its cap against the least-energy plan at the fixed
+//! altitude (its [`crate::BestEffort::least_energy_j`]; its altitude steps never add energy to
+//! the fixed plan they start from), so the curve's percentages are of that plan too: the first
+//! point's is at most 0 (what the free altitude saves), and every capped point meets its cap.
+//! Without the option a free mission is refused ([`PlanError::AltitudeConflict`]), as by
+//! [`crate::plan`].
 
 use crate::altitude::AltitudeMode;
 use crate::driver::{
     best_effort_from, plan_with_observer, BestEffortBasis, NoObserver, Observer, PlanError,
     PlanOptions,
 };
-use crate::evaluate::ResolutionMode;
+use crate::evaluate::{evaluate_with_altitudes, ResolutionMode};
 use crate::shortfall::ResolutionShortfall;
 use crate::{Mission, PlanResult};
 
@@ -148,11 +151,14 @@ pub fn tradeoff_with_observer(
 }
 
 /// The curve of the free-altitude mission `mission` (`options` as [`tradeoff_with_observer`]
-/// set them, with the altitude profile): each point its own free plan. The plans cannot start
-/// from one another (a free plan starts from the fixed-altitude plan it refines), so a point
-/// whose plan leaves a larger resolution deficit than the previous point's takes that plan
-/// instead (it meets the larger cap): the deficit never rises along the curve, as on a fixed
-/// one. A cap not reached (by [`UNUSED_CAP_PCT`]) is repeated as on a fixed curve.
+/// set them, with the altitude profile; see the module documentation). A free plan starts from
+/// the fixed-altitude plan it refines, not from the previous point, so each cap's candidates
+/// are its own free best effort and the fixed curve's point (when the mission can be flown at
+/// `altitude_m`); of those that leave no larger resolution deficit than the previous point
+/// the one of least merit is taken, and the previous point's plan (which meets the larger cap
+/// too) when neither does: the deficit never rises along the curve, and no point is worse than
+/// the fixed curve's in both energy and deficit. A cap not reached (by [`UNUSED_CAP_PCT`]) is
+/// repeated as on a fixed curve.
 fn free_tradeoff(
     mission: &Mission,
     options: &PlanOptions,
@@ -160,6 +166,20 @@ fn free_tradeoff(
     observer: &mut dyn Observer,
 ) -> Result<Vec<TradeoffPoint>, PlanError> {
     let total = caps_pct.len() + 2;
+    let fixed_curve = at_fixed_altitude(mission).and_then(|fixed| {
+        let mut named = PointObserver {
+            inner: &mut *observer,
+            point: "fixed altitude".into(),
+        };
+        tradeoff_with_observer(&fixed, options, caps_pct, &mut named)
+    });
+    let fixed_curve = match fixed_curve {
+        Ok(points) => points,
+        Err(error) => {
+            tracing::info!(%error, "no fixed-altitude curve: the free plans alone");
+            Vec::new()
+        }
+    };
     let least = plan_with_observer(
         mission,
         &PlanOptions {
@@ -171,18 +191,21 @@ fn free_tradeoff(
             point: format!("point 1/{total} (least energy)"),
         },
     )?;
+    let merit = |plan: &PlanResult| {
+        plan.evaluation.energy_j + options.resolution_weight_j_per_m * total_deficit(mission, plan)
+    };
     let mut plans: Vec<(Option<f64>, PlanResult)> = vec![(Some(0.0), least)];
     // the basis of the percentages: the fixed-altitude least-energy plan that every free best
     // effort measures its cap against
-    let mut least_j: Option<f64> = None;
+    let mut least_j = fixed_curve.first().map(|p| p.plan.evaluation.energy_j);
     let caps = caps_pct.iter().copied().map(Some).chain([None]);
     let mut slack_pct = 0.0;
-    for cap in caps {
+    for (k, cap) in caps.enumerate() {
         let Some((_, previous)) = plans.last() else {
             break;
         };
-        let plan = if slack_pct > UNUSED_CAP_PCT {
-            // the previous cap was not reached: its plan is the best effort under this one
+        let free = if slack_pct > UNUSED_CAP_PCT {
+            // the previous cap was not reached: its plan is the free best effort under this one
             with_cap(previous.clone(), cap)
         } else {
             let capped = PlanOptions {
@@ -193,16 +216,27 @@ fn free_tradeoff(
                 inner: &mut *observer,
                 point: label(plans.len() + 1, total, cap),
             };
-            let plan = plan_with_observer(mission, &capped, &mut named)?;
-            if total_deficit(mission, &plan) > total_deficit(mission, previous) * (1.0 + 1e-9) {
+            plan_with_observer(mission, &capped, &mut named)?
+        };
+        let fixed = match fixed_curve.get(k + 1) {
+            Some(p) => Some(at_altitude_m(mission, p.plan.clone())?),
+            None => None,
+        };
+        let limit = total_deficit(mission, previous) * (1.0 + 1e-9);
+        let plan = match [Some(free), fixed]
+            .into_iter()
+            .flatten()
+            .filter(|p| total_deficit(mission, p) <= limit)
+            .min_by(|a, b| merit(a).total_cmp(&merit(b)))
+        {
+            Some(best) => best,
+            None => {
                 tracing::info!(
                     point = plans.len() + 1,
-                    "the free plan leaves a larger resolution deficit than the previous point's, \
+                    "both plans leave a larger resolution deficit than the previous point's, \
                      which meets this cap too: that plan is kept"
                 );
                 with_cap(previous.clone(), cap)
-            } else {
-                plan
             }
         };
         if let Some(b) = plan.best_effort.as_ref() {
@@ -226,6 +260,27 @@ fn free_tradeoff(
             plan,
         })
         .collect())
+}
+
+/// The free-altitude `mission` at its one altitude `altitude_m` (its bounds dropped).
+fn at_fixed_altitude(mission: &Mission) -> Result<Mission, PlanError> {
+    let mut p = mission.params().clone();
+    p.altitude = AltitudeMode::Fixed;
+    p.min_altitude_m = None;
+    p.max_altitude_m = None;
+    mission
+        .with_params(p)
+        .map_err(|e| PlanError::InvalidInit(format!("the mission at its fixed altitude: {e}")))
+}
+
+/// A plan of the mission at its fixed altitude as a plan of the free-altitude `mission`: flown
+/// at `altitude_m` in every slot, evaluated so.
+fn at_altitude_m(mission: &Mission, mut plan: PlanResult) -> Result<PlanResult, PlanError> {
+    let z = vec![mission.params().altitude_m; mission.slots()];
+    plan.evaluation = evaluate_with_altitudes(mission, &plan.trajectory, &z)
+        .map_err(|e| PlanError::InvalidInit(e.to_string()))?;
+    plan.altitudes_m = Some(z);
+    Ok(plan)
 }
 
 /// `plan` taken for the point of cap `cap` (its best-effort record says so).
