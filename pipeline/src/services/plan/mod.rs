@@ -28,6 +28,8 @@ mod bounded;
 mod cache;
 mod error;
 mod fair;
+#[cfg(test)]
+mod publisher_tests;
 mod status;
 
 use std::path::PathBuf;

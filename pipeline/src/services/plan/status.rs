@@ -44,6 +44,21 @@ impl StatusBoard {
         }
     }
 
+    /// How many per-mission publishers are held.
+    #[cfg(test)]
+    pub(super) fn publishers(&self) -> usize {
+        self.pubs.lock().map(|p| p.len()).unwrap_or_default()
+    }
+
+    /// Whether mission `id`'s publisher is held (its use not noted).
+    #[cfg(test)]
+    pub(super) fn has_publisher(&self, id: MissionId) -> bool {
+        self.pubs
+            .lock()
+            .map(|p| p.peek(id).is_some())
+            .unwrap_or_default()
+    }
+
     /// Seconds since the board was made (the service's uptime).
     pub(super) fn uptime_s(&self) -> f64 {
         self.started.elapsed().as_secs_f64()
