@@ -254,6 +254,8 @@ impl Processor {
             }
             None => Vec::new(),
         };
+        let started = std::time::Instant::now();
+        let edited = looks.is_some();
         let detections = cluster_edited(
             multilook,
             &map,
@@ -263,6 +265,12 @@ impl Processor {
             ap.index,
             Some(&model),
             looks,
+        );
+        tracing::debug!(
+            aperture = ap.index,
+            exact_editing = edited,
+            elapsed_ms = started.elapsed().as_secs_f64() * 1e3,
+            "peaks, non-maximum suppression and sidelobe editing"
         );
         Ok(Detected {
             detections,
