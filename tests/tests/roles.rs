@@ -12,7 +12,10 @@
 //! themselves in their role (liveliness), so the run neither aborts nor takes a forged result:
 //! it completes with the closed loop's detections, images and metrics, and the forgeries are
 //! counted as foreign. The same holds when the forger announces itself alive as another role
-//! (the echo) under the instance name its forgeries claim.
+//! (the echo) under the instance name its forgeries claim. A forger that answers the lookups
+//! of the run's plan with a changed plan under the run's id is skipped by the echo and the
+//! processor. The file has its own runner (`harness = false`): the test that starts a process
+//! as another user shows as ignored where the machine lacks root or `setpriv`.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -84,7 +87,6 @@ fn run_against_forger(d: &std::path::Path, extra: &[&str]) -> (Service, Launch, 
     (forger, l, log)
 }
 
-#[test]
 fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -153,7 +155,6 @@ fn forged_status_and_results_neither_abort_a_run_nor_displace_real_results() {
 /// A forger alive as the echo, whose forgeries claim its own (echo) instance: its images,
 /// metrics, detections and processor statuses are refused as another role's, and the run ends
 /// with the reference outputs.
-#[test]
 fn forged_images_and_metrics_from_another_role_are_skipped() {
     let dir = tempfile::tempdir().unwrap();
     let (forger, _l, log) = run_against_forger(
@@ -168,19 +169,32 @@ fn forged_images_and_metrics_from_another_role_are_skipped() {
     assert!(report.contains("forging for mission"), "{report}");
 }
 
+/// Why [`another_user_cannot_join_the_private_mesh`] cannot run here (`None`: it can): it
+/// needs root, to start a process as `nobody`, and `setpriv` to do it.
+fn another_user_unavailable() -> Option<String> {
+    use std::os::unix::fs::MetadataExt;
+    let me = std::fs::metadata("/proc/self").map(|m| m.uid()).ok();
+    if me != Some(0) {
+        Some(format!("not root (uid {me:?})"))
+    } else if !std::path::Path::new(SETPRIV).exists() {
+        Some(format!("no {SETPRIV}"))
+    } else {
+        None
+    }
+}
+
+/// What starts a process as another user.
+const SETPRIV: &str = "/usr/bin/setpriv";
+
 /// The launcher's own mesh (no Zenoh flag) is private to the user who started the run: every
 /// process listens only on a Unix socket in a per-run directory of mode 0700, owned by that
 /// user. A process of another user (`nobody`, by `setpriv`) cannot connect to any of the
 /// sockets (permission denied), while the same forger as this user joins and sees the mission;
 /// the directory is removed when the run ends.
-#[test]
 fn another_user_cannot_join_the_private_mesh() {
     use std::os::unix::fs::{MetadataExt, PermissionsExt};
     let me = std::fs::metadata("/proc/self").unwrap().uid();
-    if me != 0 || !std::path::Path::new("/usr/bin/setpriv").exists() {
-        eprintln!("SKIPPED: another_user_cannot_join_the_private_mesh needs root and setpriv");
-        return;
-    }
+    assert_eq!(another_user_unavailable(), None);
     const H: f64 = 30.0;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -216,12 +230,7 @@ fn another_user_cannot_join_the_private_mesh() {
         let mut cmd = std::process::Command::new("timeout");
         cmd.arg("60");
         if as_nobody {
-            cmd.args([
-                "setpriv",
-                "--reuid=65534",
-                "--regid=65534",
-                "--clear-groups",
-            ]);
+            cmd.args([SETPRIV, "--reuid=65534", "--regid=65534", "--clear-groups"]);
         }
         cmd.arg(harness::bin("cellsar-bridge-bench"))
             .args(["forge", "--duration-s", "2", "-m", "client", "-e"])
@@ -280,7 +289,6 @@ fn wait_for_text(what: &str, needle: &str, timeout: Duration, text: impl Fn() ->
 /// the same. Then the planner's real plan is held too and the run ends with the closed loop's
 /// outputs, both services counting the forgery (`plans_inconsistent` in their final counters)
 /// and logging it, the forger answering every lookup all along.
-#[test]
 fn a_plan_looked_up_whose_id_is_not_its_contents_is_skipped() {
     use bridge::net::{QueryOptions, SubscribeOptions};
     use bridge::{ZenohArgs, ZenohNode};
@@ -383,4 +391,43 @@ fn a_plan_looked_up_whose_id_is_not_its_contents_is_skipped() {
     drop((forgeries, holds));
     forger.close().unwrap();
     planner.close().unwrap();
+}
+
+/// Runs the tests as libtest would (filters, `--list`, `--ignored`, `--test-threads`):
+/// [`another_user_cannot_join_the_private_mesh`] shows as ignored (`test [root] NAME ...
+/// ignored`, the reason printed once above) where the machine cannot run it.
+fn main() {
+    use libtest_mimic::{Arguments, Trial};
+    let args = Arguments::from_args();
+    let why_not = another_user_unavailable();
+    if let Some(why) = &why_not {
+        println!("the [root] tests are ignored on this machine: {why}");
+    }
+    let trial = |name: &str, run: fn()| {
+        Trial::test(name, move || {
+            run();
+            Ok(())
+        })
+    };
+    let trials = vec![
+        trial(
+            "forged_status_and_results_neither_abort_a_run_nor_displace_real_results",
+            forged_status_and_results_neither_abort_a_run_nor_displace_real_results,
+        ),
+        trial(
+            "forged_images_and_metrics_from_another_role_are_skipped",
+            forged_images_and_metrics_from_another_role_are_skipped,
+        ),
+        trial(
+            "a_plan_looked_up_whose_id_is_not_its_contents_is_skipped",
+            a_plan_looked_up_whose_id_is_not_its_contents_is_skipped,
+        ),
+        trial(
+            "another_user_cannot_join_the_private_mesh",
+            another_user_cannot_join_the_private_mesh,
+        )
+        .with_kind("root")
+        .with_ignored_flag(why_not.is_some()),
+    ];
+    libtest_mimic::run(&args, trials).exit()
 }
