@@ -10,6 +10,11 @@
 //! (p6) is a pure feasibility problem whose set can shrink to a point (item 9): it is solved as
 //! one cone program, and any slot whose returned (w, u) fails our own check keeps its previous
 //! value, which (p5) guarantees to be feasible.
+//!
+//! With free altitude the state carries an altitude per slot ([`PaperState::with_altitudes`]),
+//! at which (p5) and (p6) take the centre offset, the sensing radius and V_min, and
+//! [`PaperState::solve_altitudes`] is the altitude step of the paper's alternating extension
+//! (the driver alternates the two).
 
 mod altitude;
 
