@@ -1080,7 +1080,10 @@ fn iox_shared_memory_files_are_private_to_their_user() {
     for (f, mode) in &modes {
         if f.ends_with(".global_mgmt") {
             let len = std::fs::metadata(format!("/dev/shm/{f}")).unwrap().len();
-            assert!(len <= 4096, "/dev/shm/{f}: {len} bytes, more than a node counter");
+            assert!(
+                len <= 4096,
+                "/dev/shm/{f}: {len} bytes, more than a node counter"
+            );
             continue;
         }
         assert_eq!(mode & 0o077, 0, "/dev/shm/{f} has mode {mode:o}");
