@@ -1,6 +1,7 @@
 """Free-altitude missions (``altitude = "free"``) through the package: the ``exact`` scheme plans
 an altitude per slot (``z_m``, ``climb_mps``) within the bounds and rates, the same plan as the
-CLI's; the other schemes refuse the mission with the library's message."""
+CLI's; ``paper`` plans one by the paper's alternation; ``baseline`` refuses the mission with the
+library's message."""
 
 import numpy as np
 import pytest
@@ -52,10 +53,22 @@ def test_a_free_mission_gets_an_altitude_per_slot_within_bounds_and_rates(cli_pl
     np.testing.assert_allclose(climb, table["climb_mps"], rtol=1e-9, atol=1e-12, equal_nan=True)
 
 
-@pytest.mark.parametrize("scheme", ["paper", "baseline"])
-def test_schemes_at_one_altitude_refuse_a_free_mission(scheme):
-    with pytest.raises(cellsar.PlanError, match=r'`altitude` = "free".*scheme ' + scheme):
-        cellsar.plan(free_mission(), scheme=scheme)
+def test_the_scheme_at_one_altitude_refuses_a_free_mission():
+    with pytest.raises(cellsar.PlanError, match=r'`altitude` = "free".*scheme baseline'):
+        cellsar.plan(free_mission(), scheme="baseline")
+
+
+def test_the_paper_scheme_plans_a_free_mission_within_its_bounds():
+    """The paper's alternation (scheme ``paper``) plans an altitude per slot, within the
+    mission's bounds, starting at ``altitude_m``."""
+    mission = cellsar.Mission.default(
+        200.0, horizon_s=60.0, altitude="free", min_altitude_m=LOW_M, max_altitude_m=HIGH_M
+    )
+    plan = cellsar.plan(mission, scheme="paper", resolution="paper")
+    z = np.asarray(plan.z_m)
+    assert len(z) > 1
+    assert z[0] == pytest.approx(mission.params["altitude_m"])
+    assert z.min() >= LOW_M - 1e-6 and z.max() <= HIGH_M + 1e-6
 
 
 def test_the_radar_flies_a_free_plan_at_its_altitudes():
