@@ -115,7 +115,7 @@ pub fn cluster_with_outside(
 }
 
 /// [`cluster_with_outside`] with, given the complex look images `exact`, sidelobe editing
-/// against the exact point response ([`super::exact`]): each peak taken (the grid's and the
+/// against the exact point response ([`super::ExactResponse`]): each peak taken (the grid's and the
 /// band's, detections or not) is a source whose per-look complex amplitude is its look values
 /// less the stronger sources' responses there (CLEAN at the peaks), at its sub-pixel position;
 /// a candidate peak of the grid is a detection only where its residual after subtracting every
