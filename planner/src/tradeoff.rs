@@ -8,9 +8,10 @@
 //! effort ([`crate::plan`]) and the fixed-altitude curve's point (the same mission at its one
 //! altitude `altitude_m`, each capped plan started from the previous one), flown at
 //! `altitude_m`. A free best effort measures its cap against the least-energy plan at the fixed
-//! altitude (its [`crate::BestEffort::least_energy_j`]; its altitude steps never add energy to
-//! the fixed plan they start from), so the curve's percentages are of that plan too: the first
-//! point's is at most 0 (what the free altitude saves), and every capped point meets its cap.
+//! altitude (its [`crate::driver::BestEffort::least_energy_j`]; its altitude steps never add
+//! energy to the fixed plan they start from), so the curve's percentages are of that plan too:
+//! the first point's is at most 0 (what the free altitude saves), and every capped point meets
+//! its cap.
 //! Without the option a free mission is refused ([`PlanError::AltitudeConflict`]), as by
 //! [`crate::plan`].
 
