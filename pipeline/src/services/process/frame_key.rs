@@ -144,4 +144,25 @@ mod tests {
         let k = FrameKey::from_bytes([5; 32]);
         assert!(matches!(g.admit(frame(Some(&k), 99, 0.0)), Admit::Take(_)));
     }
+
+    /// Frames waiting for the key hold at most `PARKED_MAX_BYTES` of samples: 1 MiB frames
+    /// overflow at the 17th, well before the count bound.
+    #[test]
+    fn parking_is_bounded_in_bytes_too() {
+        let big = |seq: u64| {
+            let mut f = frame(None, seq, 0.0);
+            f.samples = vec![Complex32::new(0.0, 0.0); (1 << 20) / 8];
+            f
+        };
+        let fit = PARKED_MAX_BYTES / (1 << 20);
+        assert!(fit < PARKED_MAX_FRAMES);
+        let mut g = KeyGate::default();
+        for s in 0..fit as u64 {
+            assert!(matches!(g.admit(big(s)), Admit::Parked), "frame {s}");
+        }
+        assert!(matches!(g.admit(big(fit as u64)), Admit::Overflow));
+        // a small frame still fits under the count bound but not under the bytes
+        assert!(matches!(g.admit(frame(None, 98, 0.0)), Admit::Overflow));
+        assert_eq!(g.on_ack(None).len(), fit);
+    }
 }
