@@ -212,3 +212,21 @@ fn every_tls_configuration_requires_certificates_and_closes_expired_links() {
     }
     assert_eq!(n, 6, "the router's and five roles' configurations");
 }
+
+/// `cellsar certs` refuses, before it writes anything, a router name a public certificate
+/// authority may certify and a role that is no role: exit 2, the flag named, no file made.
+#[test]
+fn certs_refuses_a_public_router_name_and_an_unknown_role() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("certs");
+    let out_s = out.display().to_string();
+    refused(
+        &["certs", "--out", &out_s, "--host", "router.example.com"],
+        "--host \"router.example.com\": a public certificate authority may certify this name",
+    );
+    refused(
+        &["certs", "--out", &out_s, "--role", "nosuch"],
+        "invalid value 'nosuch' for '--role <ROLE>'",
+    );
+    assert!(!out.exists(), "{} was made", out.display());
+}
