@@ -613,4 +613,95 @@ mod tests {
             "{why}"
         );
     }
+
+    /// The processor's detections of aperture `k` (of 2): landmark 0 detected, two
+    /// detections, one of them a false alarm.
+    fn scored(k: u32) -> ApertureDetections {
+        ApertureDetections {
+            landmark: Some(0),
+            landmark_detected: Some(true),
+            false_alarms: 1,
+            ..detections(k, 2, &[(k as usize, 5.0, 12.0), (k as usize, -3.0, 9.0)])
+        }
+    }
+
+    /// Metrics that agree with [`scored`] on both apertures, aperture 1's summary then
+    /// changed by `change`.
+    fn scored_metrics(change: impl Fn(&mut radar_sim::run::ApertureSummary)) -> MissionMetrics {
+        let mut m = metrics(&[Some(true), Some(true)]);
+        for a in &mut m.metrics.apertures {
+            a.detections = 2;
+            a.false_alarms = 1;
+        }
+        change(&mut m.metrics.apertures[1]);
+        m
+    }
+
+    /// Each of the landmark, the number of detections and the number of false alarms (not
+    /// only the verdict) must agree: metrics that disagree in any one of them are skipped and
+    /// counted, whether they come after every aperture's detections or are held before them,
+    /// and the processor's agreeing metrics are taken after them.
+    #[test]
+    fn metrics_disagreeing_in_landmark_detections_or_false_alarms_are_skipped() {
+        type Change = fn(&mut radar_sim::run::ApertureSummary);
+        let changes: [(Change, &str); 6] = [
+            (
+                |a| a.landmark = Some(1),
+                "landmark Some(1) detected Some(true), 2 detections",
+            ),
+            (
+                |a| a.landmark = None,
+                "landmark None detected Some(true), 2 detections",
+            ),
+            (
+                |a| a.detections = 1,
+                "detected Some(true), 1 detections, 1 false alarms",
+            ),
+            (
+                |a| a.detections = 3,
+                "detected Some(true), 3 detections, 1 false alarms",
+            ),
+            (
+                |a| a.false_alarms = 0,
+                "Some(true), 2 detections, 0 false alarms",
+            ),
+            (
+                |a| a.false_alarms = 2,
+                "Some(true), 2 detections, 2 false alarms",
+            ),
+        ];
+        let dir = tempfile::tempdir().unwrap();
+        let real = scored_metrics(|_| {});
+        for (change, claims) in changes {
+            let forged = scored_metrics(change);
+            let all = BTreeMap::from([(0, scored(0)), (1, scored(1))]);
+            let why = metrics_problem(&forged.metrics, &all, 2).unwrap();
+            let says = "where its detections say landmark Some(0) detected Some(true), 2, 1";
+            assert!(
+                why.starts_with("aperture 1: ") && why.contains(claims),
+                "{why}"
+            );
+            assert!(why.ends_with(says), "{why}");
+            // after the detections: skipped at once
+            let mut c = Collector::new(MissionId(7), 2, dir.path()).unwrap();
+            assert_eq!(c.add_detections(scored(0)), Added::New);
+            assert_eq!(c.add_detections(scored(1)), Added::New);
+            assert_eq!(c.add_metrics(forged.clone()), Added::Malformed, "{claims}");
+            assert!(!c.has_metrics(), "{claims}");
+            assert_eq!(c.malformed, 1, "{claims}");
+            assert_eq!(c.add_metrics(real.clone()), Added::New, "{claims}");
+            assert_eq!(c.metrics().unwrap().apertures[1].false_alarms, 1);
+            // before them: held, then skipped when the last detections come
+            let mut c = Collector::new(MissionId(7), 2, dir.path()).unwrap();
+            assert_eq!(c.add_metrics(forged), Added::Held, "{claims}");
+            c.add_detections(scored(0));
+            c.add_detections(scored(1));
+            assert!(!c.has_metrics(), "{claims}");
+            assert_eq!(c.malformed, 1, "{claims}");
+            assert_eq!(c.add_metrics(real.clone()), Added::New, "{claims}");
+        }
+        // the unchanged metrics agree
+        let all = BTreeMap::from([(0, scored(0)), (1, scored(1))]);
+        assert_eq!(metrics_problem(&real.metrics, &all, 2), None);
+    }
 }
