@@ -137,3 +137,112 @@ impl Wanted {
         self.lookups.retain(|(m, _)| *m != id);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use bridge::ZenohArgs;
+    use planner::{MissionFile, NoObserver};
+
+    use super::*;
+    use crate::protocol::PlanRequest;
+    use crate::services::plan::plan_request;
+
+    /// The plan of a small mission, planned here, under each of the ids `ids`.
+    fn plans(ids: impl IntoIterator<Item = u64>) -> Vec<Plan> {
+        let req = PlanRequest {
+            mission: MissionFile::from_toml_str(
+                "name = \"wanted\"\n[params]\nhorizon_s = 20.0\n[landmarks]\npoints = [{ x_m = \
+                 0.0, y_m = 0.0, from_s = 0.0, to_s = 10.0 }]\n",
+            )
+            .unwrap(),
+            options: Default::default(),
+        };
+        let plan = plan_request(&req, "p", &mut NoObserver).unwrap();
+        ids.into_iter()
+            .map(|n| Plan {
+                mission_id: MissionId(n),
+                ..plan.clone()
+            })
+            .collect()
+    }
+
+    /// The ids of the plans kept aside, in increasing order.
+    fn offered(w: &Wanted) -> Vec<u64> {
+        let mut ids: Vec<u64> = w.offered.values().map(|p| p.mission_id.0).collect();
+        ids.sort_unstable();
+        ids
+    }
+
+    /// At most [`MAX_OFFERED`] plans published are kept aside, the least recently published
+    /// dropped first (a plan published again is the most recent); one asked for is given
+    /// back without a lookup, one dropped is looked up and taken when published again.
+    #[test]
+    fn plans_kept_aside_are_bounded_by_count_the_least_recently_published_first() {
+        assert_eq!(MAX_OFFERED, 4);
+        let node = ZenohNode::open(
+            ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[])
+                .to_config()
+                .unwrap(),
+            "test",
+            "wanted",
+        )
+        .unwrap();
+        let mut w = Wanted::default();
+        let mut all = plans(1..=8).into_iter();
+        let mut plan = || all.next().unwrap();
+        let (p1, p2, p3) = (plan(), plan(), plan());
+        for p in [p1.clone(), p2, p3.clone(), plan(), plan(), plan()] {
+            assert!(w.published(p, 1000).is_none());
+        }
+        assert_eq!(offered(&w), [3, 4, 5, 6]);
+        assert_eq!(w.offered.bytes(), 4000);
+        // 3 published again: 4 is now the least recent and goes for 7
+        assert!(w.published(p3, 1000).is_none());
+        assert!(w.published(plan(), 1000).is_none());
+        assert_eq!(offered(&w), [3, 5, 6, 7]);
+        // asked for: given back from those kept aside, no longer kept
+        let got = w.ask(&node, MissionId(5)).unwrap();
+        assert_eq!(got.mission_id, MissionId(5));
+        assert_eq!(offered(&w), [3, 6, 7]);
+        assert!(w.lookups.is_empty());
+        // 1 was dropped: asked for, it is looked up, wanted, and taken when published
+        assert!(w.ask(&node, MissionId(1)).is_none());
+        assert_eq!(w.lookups.len(), 1);
+        assert_eq!(w.published(p1, 1000).unwrap().mission_id, MissionId(1));
+        assert_eq!(offered(&w), [3, 6, 7]);
+        w.forget(MissionId(1));
+        assert!(w.lookups.is_empty() && w.ids.is_empty());
+        // a plan of a mission nobody asked for is kept aside again
+        assert!(w.published(plan(), 1000).is_none());
+        assert_eq!(offered(&w), [3, 6, 7, 8]);
+        drop(w);
+        node.close().unwrap();
+    }
+
+    /// The plans kept aside hold at most [`MAX_PLAN_BYTES`] encoded together: fewer than
+    /// [`MAX_OFFERED`] when they are large, the least recently published dropped first.
+    #[test]
+    fn plans_kept_aside_are_bounded_by_bytes_the_least_recently_published_first() {
+        assert_eq!(MAX_PLAN_BYTES, 64 << 20);
+        let mut w = Wanted::default();
+        let third = MAX_PLAN_BYTES / 3;
+        let mut all = plans(1..=6).into_iter();
+        let mut plan = || all.next().unwrap();
+        for _ in 0..3 {
+            assert!(w.published(plan(), third).is_none());
+        }
+        assert_eq!(offered(&w), [1, 2, 3]);
+        // a fourth third does not fit: 1 goes
+        assert!(w.published(plan(), third).is_none());
+        assert_eq!(offered(&w), [2, 3, 4]);
+        assert_eq!(w.offered.bytes(), 3 * third);
+        // a plan of the whole bound: every other goes
+        assert!(w.published(plan(), MAX_PLAN_BYTES).is_none());
+        assert_eq!(offered(&w), [5]);
+        assert_eq!(w.offered.bytes(), MAX_PLAN_BYTES);
+        // a small one after it: the large one goes
+        assert!(w.published(plan(), 1).is_none());
+        assert_eq!(offered(&w), [6]);
+        assert!(w.offered.bytes() <= MAX_PLAN_BYTES);
+    }
+}
