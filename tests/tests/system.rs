@@ -627,11 +627,11 @@ fn client_without_router(dir: &std::path::Path) -> (std::path::PathBuf, std::net
     (file, held)
 }
 
-/// Sends SIGINT to `pid` once `wait` has passed (from a thread of its own).
-fn interrupt_after(pid: u32, wait: Duration) {
+/// Sends `sig` to `pid` once `wait` has passed (from a thread of its own).
+fn signal_after(pid: u32, sig: Signal, wait: Duration) {
     std::thread::spawn(move || {
         std::thread::sleep(wait);
-        signal(pid, Signal::SIGINT);
+        signal(pid, sig);
     });
 }
 
@@ -641,6 +641,18 @@ fn interrupt_after(pid: u32, wait: Duration) {
 /// serve`, `cellsar-radar-sim echo|process-service`, `cellsar-bridge`).
 #[test]
 fn services_waiting_for_their_router_stop_on_sigint() {
+    services_waiting_for_their_router_stop_on(Signal::SIGINT, "csnorouter_");
+}
+
+/// The same with SIGTERM (what a service manager sends): exit code 0 within a moment.
+#[test]
+fn services_waiting_for_their_router_stop_on_sigterm() {
+    services_waiting_for_their_router_stop_on(Signal::SIGTERM, "csnoroutert_");
+}
+
+/// Starts each service before its router, sends it `sig` after 3 s, and checks that it said
+/// what it waited for and stopped at once, exit code 0; `iox_prefix` is theirs in /dev/shm.
+fn services_waiting_for_their_router_stop_on(sig: Signal, iox_prefix: &str) {
     let dir = tempfile::tempdir().unwrap();
     let (cfg, _held) = client_without_router(dir.path());
     let cfg = cfg.to_str().unwrap();
@@ -651,7 +663,7 @@ fn services_waiting_for_their_router_stop_on_sigint() {
         "--iox-root",
         iox_root.to_str().unwrap(),
         "--iox-prefix",
-        "csnorouter_",
+        iox_prefix,
     ];
     let roles: Vec<(&str, Vec<&str>)> = vec![
         ("planner", vec!["planner"]),
@@ -669,7 +681,7 @@ fn services_waiting_for_their_router_stop_on_sigint() {
             .concat(),
         ),
     ];
-    let signal_after = Duration::from_millis(3000);
+    let sig_after = Duration::from_millis(3000);
     let ends: Vec<_> = roles
         .into_iter()
         .map(|(role, args)| {
@@ -683,7 +695,7 @@ fn services_waiting_for_their_router_stop_on_sigint() {
             std::fs::create_dir_all(&d).unwrap();
             std::thread::spawn(move || {
                 let e = cellsar_bounded(&args, &d, Duration::from_secs(30), |pid| {
-                    interrupt_after(pid, signal_after)
+                    signal_after(pid, sig, sig_after)
                 });
                 (role, e)
             })
@@ -691,10 +703,10 @@ fn services_waiting_for_their_router_stop_on_sigint() {
         .collect();
     for h in ends {
         let (role, e) = h.join().unwrap();
-        assert_eq!(e.code, Some(0), "{role}: {}", e.stderr);
+        assert_eq!(e.code, Some(0), "{role}, {sig}: {}", e.stderr);
         assert!(
-            e.elapsed < signal_after + Duration::from_secs(3),
-            "{role}: stopped {:?} after the start, SIGINT at {signal_after:?}",
+            e.elapsed < sig_after + Duration::from_secs(3),
+            "{role}: stopped {:?} after the start, {sig} at {sig_after:?}",
             e.elapsed
         );
         // the default log level (no RUST_LOG here) shows what it waited for, and the stop
@@ -710,40 +722,43 @@ fn services_waiting_for_their_router_stop_on_sigint() {
             );
         }
     }
-    assert!(shm_files("csnorouter_").is_empty());
+    assert!(shm_files(iox_prefix).is_empty());
 }
 
 /// The launcher of a deployment (`--external processor -c client.json5`) started before the
-/// router stops on SIGINT within a moment: exit 130, as documented, nothing left behind.
+/// router stops on SIGINT or SIGTERM within a moment: exit 130, as documented, nothing left
+/// behind.
 #[test]
-fn launcher_waiting_for_its_router_exits_130_on_sigint() {
+fn launcher_waiting_for_its_router_exits_130_on_sigint_or_sigterm() {
     let dir = tempfile::tempdir().unwrap();
     let (cfg, _held) = client_without_router(dir.path());
-    let signal_after = Duration::from_millis(3000);
-    let e = cellsar_bounded(
-        &run_args(
+    let sig_after = Duration::from_millis(3000);
+    for sig in [Signal::SIGINT, Signal::SIGTERM] {
+        let e = cellsar_bounded(
+            &run_args(
+                dir.path(),
+                "out",
+                &[
+                    "--transport",
+                    "zenoh",
+                    "--external",
+                    "processor",
+                    "-c",
+                    cfg.to_str().unwrap(),
+                ],
+            ),
             dir.path(),
-            "out",
-            &[
-                "--transport",
-                "zenoh",
-                "--external",
-                "processor",
-                "-c",
-                cfg.to_str().unwrap(),
-            ],
-        ),
-        dir.path(),
-        Duration::from_secs(40),
-        |pid| interrupt_after(pid, signal_after),
-    );
-    assert_eq!(e.code, Some(130), "{}", e.stderr);
-    assert!(
-        e.elapsed < signal_after + Duration::from_secs(3),
-        "stopped {:?} after the start, SIGINT at {signal_after:?}:\n{}",
-        e.elapsed,
-        e.stderr
-    );
-    assert!(e.stderr.contains("interrupted"), "{}", e.stderr);
-    assert!(shm_files(&format!("cs{}x", e.pid)).is_empty());
+            Duration::from_secs(40),
+            |pid| signal_after(pid, sig, sig_after),
+        );
+        assert_eq!(e.code, Some(130), "{sig}: {}", e.stderr);
+        assert!(
+            e.elapsed < sig_after + Duration::from_secs(3),
+            "stopped {:?} after the start, {sig} at {sig_after:?}:\n{}",
+            e.elapsed,
+            e.stderr
+        );
+        assert!(e.stderr.contains("interrupted"), "{sig}: {}", e.stderr);
+        assert!(shm_files(&format!("cs{}x", e.pid)).is_empty());
+    }
 }
