@@ -88,7 +88,12 @@ fn saw_only_itself(name: &str, l: &Launch, other: &[String]) {
 fn two_runs_on_one_host_do_not_see_each_other() {
     let (ref_a, ref_b) = (reference(H_A), reference(H_B));
     let (dir_a, dir_b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    let mut a = Launch::start(dir_a.path(), H_A, &["--external", "echo"]);
+    // A waits for its echo up to 180 s (B runs meanwhile, on a loaded machine too)
+    let mut a = Launch::start(
+        dir_a.path(),
+        H_A,
+        &["--external", "echo", "--peer-timeout-s", "180"],
+    );
     let net_a = a.event("network", Duration::from_secs(60));
     a.event("planned", Duration::from_secs(120));
     let mut b = Launch::start(dir_b.path(), H_B, &[]);
