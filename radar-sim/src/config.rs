@@ -45,7 +45,8 @@ pub use clutter::{ClutterConfig, Terrain, MAX_SCATTERERS_PER_CELL};
 pub use nr::{NrConfig, NR_PREFIX};
 pub use objects::ObjectsConfig;
 pub use processing::{
-    CancellerKind, ProcessingConfig, RangeFilter, Weighting, GUARD_BAND_PIXEL_FACTOR,
+    CancellerKind, ProcessingConfig, RangeFilter, Weighting, DEFAULT_GUARD_BAND_M,
+    GUARD_BAND_PIXEL_FACTOR,
 };
 pub use radar::{BsAntennaConfig, Modulation, MotionModel, RadarConfig};
 

@@ -11,12 +11,13 @@
 
 mod common;
 
-use radar_sim::config::{SceneFile, Weighting};
+use radar_sim::config::{ProcessingConfig, SceneFile, Weighting, DEFAULT_GUARD_BAND_M};
 use radar_sim::pipeline::ApertureResult;
 use radar_sim::synth::Components;
 
 /// Processes one aperture centred on the origin with a single object at `pos` (RCS 10 m²,
-/// about 45 dB in the multilook image), with a guard band of `guard_band_m` (None: automatic).
+/// about 45 dB in the multilook image), with a guard band of `guard_band_m` (None: the
+/// default, 100 m).
 fn image_one(pos: [f64; 2], guard_band_m: Option<f64>, heading_deg: f64) -> ApertureResult {
     let params = planner::Params::default();
     let mut sc = SceneFile::default();
@@ -121,4 +122,66 @@ fn the_reported_image_is_the_same_with_and_without_the_band() {
         .map(|(x, y)| ((x - y).abs() / (1.0 + y.abs())) as f64)
         .fold(0.0, f64::max);
     assert!(worst < 2e-3, "largest relative difference {worst}");
+}
+
+/// The default band is 100 m wide whatever the image's size (the reach of responses from
+/// beyond the edge is the resolution cell's, not the image's): the guard grid of a ±30 m image
+/// spans ±130 m at 4 × the pixel spacing; 0 turns it off and an explicit width is kept.
+#[test]
+fn the_default_band_is_100_m_whatever_the_grid() {
+    assert_eq!(DEFAULT_GUARD_BAND_M, 100.0);
+    let params = planner::Params::default();
+    let ap_centre = [12.0, -7.0];
+    for (grid_half_m, band, want_half_m) in [
+        (30.0, None, Some(130.0)),
+        (50.0, None, Some(150.0)),
+        (50.0, Some(50.0), Some(100.0)),
+        (50.0, Some(0.0), None),
+    ] {
+        let mut sc = SceneFile::default();
+        sc.processing.grid_half_m = grid_half_m;
+        sc.processing.guard_band_m = band;
+        let proc = common::processor(&params, &sc);
+        let setup = proc.setup().clone();
+        let ap = common::aperture(&setup, ap_centre, 0.0, 2);
+        let g = setup.guard_grid(&ap);
+        match want_half_m {
+            None => assert!(g.is_none(), "band {band:?}: a guard grid {g:?}"),
+            Some(half_m) => {
+                let g = g.expect("a guard grid");
+                let spacing_m = 4.0 * sc.processing.pixel_m;
+                assert!((g.spacing_m - spacing_m).abs() < 1e-12, "{g:?}");
+                let n = 2 * (half_m / spacing_m).round() as usize + 1;
+                assert_eq!((g.nx, g.ny), (n, n), "grid ±{grid_half_m} m, band {band:?}");
+                assert_eq!(g.centre_m, ap_centre);
+            }
+        }
+    }
+}
+
+/// The default band's grid is checked too: at a pixel spacing so fine that it would exceed
+/// the grid limit, the error names `processing.guard_band_m` and says it is the default.
+#[test]
+fn a_default_band_too_fine_to_image_is_refused_by_name() {
+    let pc = ProcessingConfig {
+        grid_half_m: 5.0,
+        pixel_m: 0.01,
+        ..ProcessingConfig::default()
+    };
+    let err = pc
+        .validate()
+        .expect_err("a 5250-pixel guard grid")
+        .to_string();
+    assert!(
+        err.contains("processing.guard_band_m") && err.contains("default"),
+        "{err}"
+    );
+    // a narrower band or none is accepted
+    for g in [10.0, 0.0] {
+        let pc = ProcessingConfig {
+            guard_band_m: Some(g),
+            ..pc.clone()
+        };
+        pc.validate().unwrap();
+    }
 }
