@@ -233,6 +233,22 @@ mod tests {
         assert_eq!(Full::Queue.message(), "server busy: request queue full");
     }
 
+    /// The service's own bounds: 16 requesters, one request each, fill the queue; the 17th
+    /// requester is refused as `Queue` and a second request of a queued one as `Requester`.
+    #[test]
+    fn the_services_queue_holds_sixteen_requesters_one_request_each() {
+        let mut q = FairQueue::new(MAX_QUEUED_REQUESTS, MAX_QUEUED_PER_REQUESTER);
+        for n in 0..MAX_QUEUED_REQUESTS {
+            assert_eq!(q.push(&format!("r{n}"), n), Ok(()));
+        }
+        assert_eq!(MAX_QUEUED_REQUESTS, 16);
+        assert_eq!(q.push("r16", 16), Err((16, Full::Queue)));
+        assert_eq!(q.push("r0", 17), Err((17, Full::Requester)));
+        assert_eq!(q.len(), MAX_QUEUED_REQUESTS);
+        assert_eq!(q.pop(), Some(("r0".to_string(), 0)));
+        assert_eq!(q.push("r16", 16), Ok(()));
+    }
+
     #[test]
     fn requester_names_are_bounded() {
         assert_eq!(requester_of(None), "");
