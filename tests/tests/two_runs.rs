@@ -84,6 +84,34 @@ fn saw_only_itself(name: &str, l: &Launch, other: &[String]) {
 /// runs to its end; then A's echo comes and A ends too. Had the runs shared a mesh, B's
 /// liveliness tokens, statuses and results (another mission's) would reach A's launcher,
 /// and A's would reach B's.
+/// The TCP and UDP sockets of process `pid` that listen or are bound unconnected (the
+/// `local address:port` of each, hexadecimal as `/proc/net/*` gives it).
+fn inet_listeners(pid: u32) -> Vec<String> {
+    let inodes: Vec<String> = std::fs::read_dir(format!("/proc/{pid}/fd"))
+        .unwrap()
+        .flatten()
+        .filter_map(|e| std::fs::read_link(e.path()).ok())
+        .filter_map(|l| {
+            let l = l.to_string_lossy().to_string();
+            l.strip_prefix("socket:[")
+                .and_then(|r| r.strip_suffix(']'))
+                .map(str::to_string)
+        })
+        .collect();
+    let mut found = Vec::new();
+    // TCP LISTEN is state 0A; a bound UDP socket without a peer is 07
+    for (table, state) in [("tcp", "0A"), ("tcp6", "0A"), ("udp", "07"), ("udp6", "07")] {
+        let text = std::fs::read_to_string(format!("/proc/{pid}/net/{table}")).unwrap_or_default();
+        for line in text.lines().skip(1) {
+            let f: Vec<&str> = line.split_whitespace().collect();
+            if f.len() > 9 && f[3] == state && inodes.iter().any(|i| i == f[9]) {
+                found.push(format!("{table} {}", f[1]));
+            }
+        }
+    }
+    found
+}
+
 #[test]
 fn two_runs_on_one_host_do_not_see_each_other() {
     let (ref_a, ref_b) = (reference(H_A), reference(H_B));
@@ -96,6 +124,15 @@ fn two_runs_on_one_host_do_not_see_each_other() {
     );
     let net_a = a.event("network", Duration::from_secs(60));
     a.event("planned", Duration::from_secs(120));
+    // the private mesh is Unix sockets only: no process of A listens on TCP or UDP
+    for (who, pid) in [
+        ("launcher", a.child.id()),
+        ("planner", a.pid("planner")),
+        ("processor", a.pid("processor")),
+    ] {
+        let inet = inet_listeners(pid);
+        assert!(inet.is_empty(), "A's {who} listens on {inet:?}");
+    }
     let mut b = Launch::start(dir_b.path(), H_B, &[]);
     let st = b.finish(Duration::from_secs(240));
     assert!(st.success(), "B: {st:?}\n{}", b.stderr_tail());
