@@ -28,6 +28,8 @@ use zenoh_protocol::{
 };
 use zenoh_result::ZResult;
 
+// PATCHED (cellsar): the stream shared by a link's two tasks
+mod locked;
 mod unicast;
 mod utils;
 pub use unicast::*;

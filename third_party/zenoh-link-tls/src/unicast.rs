@@ -16,17 +16,15 @@ use std::os::fd::RawFd;
 use std::{
     convert::TryInto,
     fmt::{self, Debug},
-    future::poll_fn,
     net::SocketAddr,
-    pin::Pin,
-    sync::{Arc, Mutex, MutexGuard},
+    sync::Arc,
     time::Duration,
 };
 
 use async_trait::async_trait;
 use time::OffsetDateTime;
 use tokio::{
-    io::{AsyncRead, AsyncWrite, AsyncWriteExt, ReadBuf},
+    io::AsyncWriteExt,
     net::{TcpListener, TcpStream},
     sync::Mutex as AsyncMutex,
 };
@@ -48,6 +46,7 @@ use zenoh_protocol::{
 use zenoh_result::{zerror, ZResult};
 
 use crate::{
+    locked::LockedStream,
     utils::{get_tls_addr, get_tls_host, get_tls_server_name, TlsClientConfig, TlsServerConfig},
     TLS_ACCEPT_THROTTLE_TIME, TLS_DEFAULT_MTU, TLS_LINGER_TIMEOUT, TLS_LOCATOR_PREFIX,
 };
@@ -57,14 +56,9 @@ pub struct TlsCommonName(String);
 
 pub struct LinkUnicastTls {
     // The underlying socket as returned from the async-rustls library.
-    // PATCHED (cellsar): upstream kept it in an `UnsafeCell` and let the reading and the
-    // writing task take `&mut` to it at the same time. A rustls connection is one state
-    // machine shared by both directions and does not allow that (rustls#288): under
-    // traffic both ways the two tasks race on it and the process crashes (zenoh#2557;
-    // seen here as SIGSEGV in `rustls::Error::clone` on a router's `tx-0` thread). Each
-    // poll of either direction now holds this mutex for the poll only, never across an
-    // `.await`, as `tokio::io::split` does (the way tokio-rustls supports full duplex).
-    inner: Mutex<TlsStream<TcpStream>>,
+    // PATCHED (cellsar): locked for one poll at a time (see `locked`), where the published
+    // crate let the reading and the writing task use it unlocked at once.
+    inner: LockedStream,
     // The source socket address of this link (address used on the local host)
     src_addr: SocketAddr,
     src_locator: Locator,
@@ -136,7 +130,7 @@ impl LinkUnicastTls {
 
         // Build the Tls object
         LinkUnicastTls {
-            inner: Mutex::new(socket),
+            inner: LockedStream::new(socket),
             src_addr,
             src_locator: Locator::new(TLS_LOCATOR_PREFIX, src_addr.to_string(), "").unwrap(),
             dst_addr,
@@ -149,33 +143,14 @@ impl LinkUnicastTls {
         }
     }
 
-    // PATCHED (cellsar): the stream, locked for one poll (a poisoned lock still holds a
-    // stream that a later poll reports errors on, as before the patch).
-    fn lock_socket(&self) -> MutexGuard<'_, TlsStream<TcpStream>> {
-        self.inner.lock().unwrap_or_else(|e| e.into_inner())
-    }
-
-    // PATCHED (cellsar): one read of at most `buffer.len()` bytes, the stream locked per poll.
-    async fn read_some(&self, buffer: &mut [u8]) -> std::io::Result<usize> {
-        let mut buf = ReadBuf::new(buffer);
-        poll_fn(|cx| Pin::new(&mut *self.lock_socket()).poll_read(cx, &mut buf)).await?;
-        Ok(buf.filled().len())
-    }
-
-    // PATCHED (cellsar): one write of at most `buffer.len()` bytes, the stream locked per poll.
-    async fn write_some(&self, buffer: &[u8]) -> std::io::Result<usize> {
-        poll_fn(|cx| Pin::new(&mut *self.lock_socket()).poll_write(cx, buffer)).await
-    }
-
     async fn close(&self) -> ZResult<()> {
         tracing::trace!("Closing TLS link: {}", self);
         // Flush the TLS stream
         let _guard = zasynclock!(self.write_mtx);
-        let res = poll_fn(|cx| Pin::new(&mut *self.lock_socket()).poll_flush(cx)).await;
+        let res = self.inner.flush().await;
         tracing::trace!("TLS link flush {}: {:?}", self, res);
         // Close the underlying TCP stream
-        let res =
-            poll_fn(|cx| Pin::new(&mut self.lock_socket().get_mut().0).poll_shutdown(cx)).await;
+        let res = self.inner.shutdown_tcp().await;
         tracing::trace!("TLS link shutdown {}: {:?}", self, res);
         res.map_err(|e| zerror!(e).into())
     }
@@ -200,7 +175,7 @@ impl LinkUnicastTrait for LinkUnicastTls {
 
     async fn write(&self, buffer: &[u8], _priority: Option<Priority>) -> ZResult<usize> {
         let _guard = zasynclock!(self.write_mtx);
-        self.write_some(buffer).await.map_err(|e| {
+        self.inner.write(buffer).await.map_err(|e| {
             tracing::trace!("Write error on TLS link {}: {}", self, e);
             zerror!(e).into()
         })
@@ -208,25 +183,15 @@ impl LinkUnicastTrait for LinkUnicastTls {
 
     async fn write_all(&self, buffer: &[u8], _priority: Option<Priority>) -> ZResult<()> {
         let _guard = zasynclock!(self.write_mtx);
-        let mut rest = buffer;
-        while !rest.is_empty() {
-            let n = self.write_some(rest).await.map_err(|e| {
-                tracing::trace!("Write error on TLS link {}: {}", self, e);
-                zerror!(e)
-            })?;
-            if n == 0 {
-                let e = std::io::Error::from(std::io::ErrorKind::WriteZero);
-                tracing::trace!("Write error on TLS link {}: {}", self, e);
-                return Err(zerror!(e).into());
-            }
-            rest = &rest[n..];
-        }
-        Ok(())
+        self.inner.write_all(buffer).await.map_err(|e| {
+            tracing::trace!("Write error on TLS link {}: {}", self, e);
+            zerror!(e).into()
+        })
     }
 
     async fn read(&self, buffer: &mut [u8], _priority: Option<Priority>) -> ZResult<usize> {
         let _guard = zasynclock!(self.read_mtx);
-        self.read_some(buffer).await.map_err(|e| {
+        self.inner.read(buffer).await.map_err(|e| {
             tracing::trace!("Read error on TLS link {}: {}", self, e);
             zerror!(e).into()
         })
@@ -234,20 +199,10 @@ impl LinkUnicastTrait for LinkUnicastTls {
 
     async fn read_exact(&self, buffer: &mut [u8], _priority: Option<Priority>) -> ZResult<()> {
         let _guard = zasynclock!(self.read_mtx);
-        let mut filled = 0;
-        while filled < buffer.len() {
-            let n = self.read_some(&mut buffer[filled..]).await.map_err(|e| {
-                tracing::trace!("Read error on TLS link {}: {}", self, e);
-                zerror!(e)
-            })?;
-            if n == 0 {
-                let e = std::io::Error::from(std::io::ErrorKind::UnexpectedEof);
-                tracing::trace!("Read error on TLS link {}: {}", self, e);
-                return Err(zerror!(e).into());
-            }
-            filled += n;
-        }
-        Ok(())
+        self.inner.read_exact(buffer).await.map_err(|e| {
+            tracing::trace!("Read error on TLS link {}: {}", self, e);
+            zerror!(e).into()
+        })
     }
 
     #[inline(always)]
@@ -309,11 +264,7 @@ impl LinkWithCertExpiration for LinkUnicastTls {
 impl Drop for LinkUnicastTls {
     fn drop(&mut self) {
         // Close the underlying TCP stream
-        let (tcp_stream, _) = self
-            .inner
-            .get_mut()
-            .unwrap_or_else(|e| e.into_inner())
-            .get_mut();
+        let (tcp_stream, _) = self.inner.get_mut().get_mut();
         let _ = zenoh_runtime::ZRuntime::Acceptor
             .block_in_place(async move { tcp_stream.shutdown().await });
     }
