@@ -203,15 +203,7 @@ impl PlanCache {
         selector: &str,
         timeout: Duration,
     ) -> Result<Vec<Plan>, ServiceError> {
-        let opts = QueryOptions {
-            timeout,
-            target: QueryTarget::All,
-            limits: DecodeLimits {
-                max_body_bytes: MAX_PLAN_BYTES,
-                verify_crc: true,
-            },
-            ..QueryOptions::default()
-        };
+        let opts = lookup_options(timeout);
         let mut out: BTreeMap<MissionId, Plan> = BTreeMap::new();
         for r in node.query::<PlanLookup, Plan>(selector, &PlanLookup {}, &opts)? {
             match r {
@@ -236,15 +228,7 @@ impl PlanCache {
         timeout: Duration,
         inconsistent: &mut u64,
     ) -> Option<Plan> {
-        let opts = QueryOptions {
-            timeout,
-            target: QueryTarget::All,
-            limits: DecodeLimits {
-                max_body_bytes: MAX_PLAN_BYTES,
-                verify_crc: true,
-            },
-            ..QueryOptions::default()
-        };
+        let opts = lookup_options(timeout);
         let started = crate::protocol::keys::plan(id)
             .map_err(|e| e.to_string())
             .and_then(|key| {
@@ -374,6 +358,20 @@ fn load_plan(path: &Path) -> Result<(Plan, usize), ServiceError> {
         what: path.display().to_string(),
         error,
     })
+}
+
+/// The options of a plan lookup: every holder asked, each reply bounded by the largest plan
+/// and its checksum verified.
+fn lookup_options(timeout: Duration) -> QueryOptions {
+    QueryOptions {
+        timeout,
+        target: QueryTarget::All,
+        limits: DecodeLimits {
+            max_body_bytes: MAX_PLAN_BYTES,
+            verify_crc: true,
+        },
+        ..QueryOptions::default()
+    }
 }
 
 #[cfg(test)]
