@@ -1,7 +1,9 @@
 //! The file-level steps behind the CLI: `simulate` (plan directory + scene → raw IQ, truth),
 //! `process` (recording → images, detections, metrics) and `closed_loop` (mission → plan →
-//! simulate → process → report). Every step streams one aperture at a time, so memory stays
-//! bounded by one aperture's IQ (~33 MB for 10 s at the defaults) whatever the mission length.
+//! simulate → process → report); [`landmark_snrs`] gives the closed loop's expected landmark
+//! SNRs of a plan without synthesising it. Every step streams one aperture at a time, so memory
+//! stays bounded by one aperture's IQ (~33 MB for 10 s at the defaults) whatever the mission
+//! length.
 //!
 //! Modules: [`simulate`](simulate_limited) writes a recording, [`process`](process_limited)
 //! reads one; the recording's CSV tables (`pulses.csv`, `truth.csv`, `detections.csv`) are
@@ -23,6 +25,7 @@ mod metrics;
 mod process;
 mod recording;
 mod simulate;
+mod snr;
 
 pub use closed_loop::{
     in_view_fractions, loop_report, shorten, LoopReport, LoopRow, IN_VIEW_MIN_FRACTION,
@@ -35,6 +38,7 @@ pub use recording::{
 pub use simulate::{
     planned_track, simulate, simulate_limited, simulate_profile_limited, SIMULATE_FRAME_BYTES,
 };
+pub use snr::{landmark_snrs, LandmarkSnr, SnrSummary};
 
 /// Format tag of a recording directory.
 pub const FORMAT: &str = "cellsar-radar-sim/1";
