@@ -9,24 +9,27 @@ use crate::error::{RadarError, Result};
 /// Most scatterers per resolution cell (`clutter.scatterers_per_cell`).
 pub const MAX_SCATTERERS_PER_CELL: f64 = 100.0;
 
-/// Terrain classes with a tabulated constant-γ reflectivity, at 10 GHz (scaled to the carrier by
-/// `5 log10(f / 10 GHz)` dB, Barton 1985). Sources: flatland, farmland and wooded hills from
-/// Nathanson, Reilly & Cohen, *Radar Design Principles* (2nd ed., 1999); woods, metropolitan and
-/// rugged mountains from Long, *Radar Reflectivity of Land and Sea* (3rd ed., 2001).
+/// Terrain classes with a tabulated constant-γ reflectivity, at 10 GHz, scaled to the carrier by
+/// `5 log10(f / 10 GHz)` dB (Barton, "Land clutter models for radar design and analysis",
+/// *Proc. IEEE* 73(2), 1985). The table is that of MathWorks' `surfacegamma` (Radar Toolbox),
+/// value for value and frequency law included, which takes flatland, farmland and wooded hills
+/// from Nathanson, Reilly & Cohen, *Radar Design Principles* (2nd ed., 1999) and woods,
+/// metropolitan and rugged mountains from Long, *Radar Reflectivity of Land and Sea* (3rd ed.,
+/// 2001).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Terrain {
-    /// Flat land, desert, short grass: γ = −20 dB.
+    /// Flatland: γ = −20 dB (Nathanson).
     Flatland,
-    /// Farmland, crops, grass fields: γ = −15 dB.
+    /// Farmland: γ = −15 dB (Nathanson).
     Farmland,
-    /// Woods on level ground: γ = −15 dB.
+    /// Woods: γ = −15 dB (Long).
     Woods,
-    /// Wooded hills: γ = −10 dB.
+    /// Wooded hills: γ = −10 dB (Nathanson).
     WoodedHills,
-    /// Metropolitan (built-up) area: γ = 0 dB.
+    /// Metropolitan: γ = 0 dB (Long).
     Metropolitan,
-    /// Rugged mountains: γ = 0 dB.
+    /// Rugged mountains: γ = 0 dB (Long).
     RuggedMountains,
 }
 
@@ -160,6 +163,42 @@ mod tests {
         // farmland at 10 GHz: −15 dB; at 3.5 GHz: −15 + 5 log10(0.35) = −17.28 dB
         assert!((10.0 * c.gamma_linear(10e9).log10() + 15.0).abs() < 1e-9);
         assert!((10.0 * c.gamma_linear(3.5e9).log10() + 17.2798).abs() < 1e-3);
+    }
+
+    #[test]
+    fn terrain_table_is_surfacegamma_s() {
+        // MathWorks' surfacegamma at 10 GHz, and its law γ0 + 5 log10(f / 10 GHz): at 1 GHz
+        // every class is 5 dB lower, at 3 GHz 2.6 dB lower.
+        let table = [
+            (Terrain::Flatland, -20.0),
+            (Terrain::Farmland, -15.0),
+            (Terrain::Woods, -15.0),
+            (Terrain::WoodedHills, -10.0),
+            (Terrain::Metropolitan, 0.0),
+            (Terrain::RuggedMountains, 0.0),
+        ];
+        for (t, db) in table {
+            assert_eq!(t.gamma_db_at_10ghz(), db, "{t:?}");
+            assert!((t.gamma_db(10e9) - db).abs() < 1e-12, "{t:?}");
+            assert!((t.gamma_db(1e9) - (db - 5.0)).abs() < 1e-12, "{t:?}");
+            assert!((t.gamma_db(3e9) - (db - 2.6144)).abs() < 1e-4, "{t:?}");
+        }
+        // the terrain names a scene file uses
+        let names: Vec<String> = table
+            .iter()
+            .map(|(t, _)| serde_json::to_string(t).unwrap())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "\"flatland\"",
+                "\"farmland\"",
+                "\"woods\"",
+                "\"wooded-hills\"",
+                "\"metropolitan\"",
+                "\"rugged-mountains\""
+            ]
+        );
     }
 
     #[test]
