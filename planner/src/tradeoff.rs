@@ -33,6 +33,21 @@ pub const DEFAULT_CAPS_PCT: [f64; 5] = [1.0, 2.0, 5.0, 10.0, 20.0];
 /// would only repeat the stopping rule's last steps from it).
 pub const UNUSED_CAP_PCT: f64 = 0.5;
 
+/// What a curve's percentages are of.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EnergyBasis {
+    /// The curve's first point, its least-energy plan (a mission at one altitude).
+    LeastEnergy,
+    /// The least-energy plan of the mission at one fixed altitude (a free-altitude curve, whose
+    /// first point is the free least-energy plan, no dearer): at `altitude_m`, or at
+    /// `min_altitude_m` where the mission cannot be planned at `altitude_m` and its free plans
+    /// start from its plan at the lowest altitude.
+    FixedAltitude {
+        /// That altitude, m.
+        altitude_m: f64,
+    },
+}
+
 /// One point of the curve.
 #[derive(Debug, Clone)]
 pub struct TradeoffPoint {
@@ -45,6 +60,39 @@ pub struct TradeoffPoint {
     /// Its energy above the least-energy plan's, % (of a free mission: of the least-energy
     /// plan at the fixed altitude, see the module documentation).
     pub extra_energy_pct: f64,
+    /// What `extra_energy_pct` is of (the same for every point of a curve).
+    pub basis: EnergyBasis,
+    /// The energy of that plan, J.
+    pub basis_energy_j: f64,
+}
+
+/// The title of the curve's plot for `mission_name`: its first point's plan and energy, and,
+/// for a free-altitude curve, the plan its percentages are of.
+pub fn plot_title(mission_name: &str, points: &[TradeoffPoint]) -> String {
+    let Some(first) = points.first() else {
+        return format!("{mission_name}: resolution against energy (no plan)");
+    };
+    let e0 = first.plan.evaluation.energy_j;
+    match first.basis {
+        EnergyBasis::LeastEnergy => {
+            format!("{mission_name}: resolution against energy (least-energy plan {e0:.0} J)")
+        }
+        EnergyBasis::FixedAltitude { altitude_m } => format!(
+            "{mission_name}: resolution against energy at free altitude (free least-energy plan \
+             {e0:.0} J; extra energy over the least-energy plan at {altitude_m:.0} m, {:.0} J)",
+            first.basis_energy_j
+        ),
+    }
+}
+
+/// The label of the plot's energy axis: the extra energy over the plan the percentages are of.
+pub fn energy_axis_label(points: &[TradeoffPoint]) -> String {
+    match points.first().map(|p| p.basis) {
+        Some(EnergyBasis::FixedAltitude { altitude_m }) => {
+            format!("extra energy over the least-energy plan at {altitude_m:.0} m / %")
+        }
+        _ => "extra energy over the least-energy plan / %".to_string(),
+    }
 }
 
 /// The curve for `caps_pct` (ascending, each ≥ 0): the least-energy plan, the best effort
@@ -115,6 +163,8 @@ pub fn tradeoff_with_observer(
         cap_pct,
         shortfall: ResolutionShortfall::new(mission, &plan.evaluation),
         extra_energy_pct: 100.0 * (plan.evaluation.energy_j / least_j - 1.0),
+        basis: EnergyBasis::LeastEnergy,
+        basis_energy_j: least_j,
         plan,
     };
     let mut points = vec![point(Some(0.0), basis.least_energy.clone())];
@@ -197,8 +247,13 @@ fn free_tradeoff(
     };
     let mut plans: Vec<(Option<f64>, PlanResult)> = vec![(Some(0.0), least)];
     // the basis of the percentages: the fixed-altitude least-energy plan that every free best
-    // effort measures its cap against
+    // effort measures its cap against (at the lowest altitude where the fixed curve fails)
     let mut least_j = fixed_curve.first().map(|p| p.plan.evaluation.energy_j);
+    let basis_altitude_m = if fixed_curve.is_empty() {
+        crate::altitude::bounds_m(mission.params()).0
+    } else {
+        mission.params().altitude_m
+    };
     let caps = caps_pct.iter().copied().map(Some).chain([None]);
     let mut slack_pct = 0.0;
     for (k, cap) in caps.enumerate() {
@@ -249,15 +304,28 @@ fn free_tradeoff(
         };
         plans.push((cap, plan));
     }
-    let least_j = least_j
-        .or_else(|| plans.first().map(|(_, p)| p.evaluation.energy_j))
-        .unwrap_or(f64::NAN);
+    let (basis, least_j) = match least_j {
+        Some(j) => (
+            EnergyBasis::FixedAltitude {
+                altitude_m: basis_altitude_m,
+            },
+            j,
+        ),
+        None => (
+            EnergyBasis::LeastEnergy,
+            plans
+                .first()
+                .map_or(f64::NAN, |(_, p)| p.evaluation.energy_j),
+        ),
+    };
     Ok(plans
         .into_iter()
         .map(|(cap_pct, plan)| TradeoffPoint {
             cap_pct,
             shortfall: ResolutionShortfall::new(mission, &plan.evaluation),
             extra_energy_pct: 100.0 * (plan.evaluation.energy_j / least_j - 1.0),
+            basis,
+            basis_energy_j: least_j,
             plan,
         })
         .collect())

@@ -4,11 +4,15 @@
 //! geometry at its own altitudes (bounds, rates, every constraint), each capped point within its
 //! cap of the least-energy plan at the fixed altitude (computed here independently), the first
 //! point the free least-energy plan, the resolution deficit never rising along the curve, and no
-//! point worse than the fixed-altitude curve's in both energy and deficit.
+//! point worse than the fixed-altitude curve's in both energy and deficit; the plot's title and
+//! energy axis say so (the first point the free least-energy plan, the percentages of the plan
+//! at the fixed altitude).
 
 use planner::evaluate::evaluate_with_altitudes;
 use planner::shortfall::ResolutionShortfall;
-use planner::tradeoff::{tradeoff, UNUSED_CAP_PCT};
+use planner::tradeoff::{
+    energy_axis_label, plot_title, tradeoff, EnergyBasis, TradeoffPoint, UNUSED_CAP_PCT,
+};
 use planner::{plan, AltitudeMode, Mission, PlanOptions, Preset};
 
 #[test]
@@ -44,6 +48,7 @@ fn a_free_mission_gets_a_curve_of_free_plans_within_their_caps() {
         .energy_j;
     let fixed_points = tradeoff(&fixed, &PlanOptions::least_energy(), &caps).unwrap();
     assert_eq!(fixed_points[0].plan.evaluation.energy_j, fixed_least_j);
+    labels_name_the_basis(&points, &fixed_points, fixed_least_j, p.altitude_m);
     let weight = options.resolution_weight_j_per_m;
     // the first point is the free least-energy plan, no dearer than the fixed one
     let free_least = plan(&m, &options).unwrap();
@@ -139,9 +144,8 @@ fn a_free_mission_gets_a_curve_of_free_plans_within_their_caps() {
     assert!(points[1].shortfall.total_deficit_m < points[0].shortfall.total_deficit_m);
     // a cap a point stays well below is not planned again: the next point is that plan or a
     // better one (of less merit)
-    let merit = |p: &planner::tradeoff::TradeoffPoint| {
-        p.plan.evaluation.energy_j + weight * p.shortfall.total_deficit_m
-    };
+    let merit =
+        |p: &TradeoffPoint| p.plan.evaluation.energy_j + weight * p.shortfall.total_deficit_m;
     for w in points.windows(2).skip(1) {
         if let Some(cap) = w[0].cap_pct {
             if cap - w[0].extra_energy_pct > UNUSED_CAP_PCT {
@@ -149,4 +153,42 @@ fn a_free_mission_gets_a_curve_of_free_plans_within_their_caps() {
             }
         }
     }
+}
+
+/// The plot's title and energy axis of the free curve `points` name the free least-energy plan
+/// and the fixed-altitude plan its percentages are of (`fixed_least_j` at `altitude_m`); the
+/// fixed curve's keep the least-energy plan.
+fn labels_name_the_basis(
+    points: &[TradeoffPoint],
+    fixed_points: &[TradeoffPoint],
+    fixed_least_j: f64,
+    altitude_m: f64,
+) {
+    for pt in points {
+        assert_eq!(pt.basis, EnergyBasis::FixedAltitude { altitude_m });
+        assert!((pt.basis_energy_j - fixed_least_j).abs() <= 1e-9 * fixed_least_j);
+    }
+    let title = plot_title("free", points);
+    let want = format!(
+        "free: resolution against energy at free altitude (free least-energy plan {:.0} J; \
+         extra energy over the least-energy plan at {altitude_m:.0} m, {fixed_least_j:.0} J)",
+        points[0].plan.evaluation.energy_j
+    );
+    assert_eq!(title, want);
+    assert_eq!(
+        energy_axis_label(points),
+        format!("extra energy over the least-energy plan at {altitude_m:.0} m / %")
+    );
+    for pt in fixed_points {
+        assert_eq!(pt.basis, EnergyBasis::LeastEnergy);
+        assert_eq!(pt.basis_energy_j, fixed_least_j);
+    }
+    assert_eq!(
+        plot_title("fixed", fixed_points),
+        format!("fixed: resolution against energy (least-energy plan {fixed_least_j:.0} J)")
+    );
+    assert_eq!(
+        energy_axis_label(fixed_points),
+        "extra energy over the least-energy plan / %"
+    );
 }

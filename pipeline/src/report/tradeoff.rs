@@ -56,14 +56,8 @@ pub fn write_tradeoff_dir(
     };
     line_plot(
         &path,
-        &format!(
-            "{}: resolution against energy (least-energy plan {:.0} J)",
-            mission.name(),
-            points
-                .first()
-                .map_or(f64::NAN, |p| p.plan.evaluation.energy_j)
-        ),
-        "extra energy over the least-energy plan / %",
+        &planner::tradeoff::plot_title(mission.name(), points),
+        &planner::tradeoff::energy_axis_label(points),
         "landmark windows (slots / 20) with a cell wider than d_min",
         &[
             series("unresolved windows", |p| {
