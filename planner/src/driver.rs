@@ -22,6 +22,7 @@ mod iterate;
 mod observer;
 mod options;
 mod phase_one;
+mod progress;
 mod result;
 
 pub use alternating::{ALTERNATION_PHASE, ALTERNATION_TOLERANCE, MAX_ALTERNATIONS};

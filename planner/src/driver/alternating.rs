@@ -38,6 +38,7 @@ use crate::Mission;
 use super::altitude::fixed_at;
 use super::iterate::{paper_bcd, Means};
 use super::options::Deadline;
+use super::progress::{relative_change, LoopEnd};
 use super::{Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason};
 
 /// Largest number of alternations (altitude step, then 2-D step).
@@ -130,26 +131,21 @@ fn alternate(
         state.altitudes_m().map(<[f64]>::to_vec).unwrap_or_default(),
         fixed_ev,
     );
-    let mut objective = fixed.objective;
-    let mut records = fixed.records.clone();
-    let mut obj_hist = fixed.objective_history.clone();
-    let mut energy_hist = fixed.true_energy_history.clone();
+    let mut end = LoopEnd::continuing(&fixed);
     let mut solver = SocpSolver::new(options.scheme_socp());
     let mut altitude_solver = SocpSolver::new(options.socp);
-    let mut programs = 0;
-    let mut termination = TerminationReason::MaxIterations;
     for alternation in 1..=MAX_ALTERNATIONS {
         if deadline.passed() {
-            termination = TerminationReason::TimeLimit;
+            end.termination = TerminationReason::TimeLimit;
             break;
         }
         observer.on_phase(ALTERNATION_PHASE);
         // (b) the altitudes with the track and its auxiliaries fixed
         let step = state.solve_altitudes(mission, &mut altitude_solver);
-        programs += 1;
+        end.cone_programs += 1;
         if step.max_change_m <= STAYED_M {
             tracing::debug!(alternation, "the altitude step stayed put");
-            termination = TerminationReason::Converged;
+            end.termination = TerminationReason::Converged;
             break;
         }
         let z = state.altitudes_m().map(<[f64]>::to_vec).unwrap_or_default();
@@ -166,17 +162,17 @@ fn alternate(
                 observer: &mut *observer,
                 deadline,
             },
-            records.len(),
+            end.records.len(),
         );
-        let (traj, end) = match run {
+        let (traj, run) = match run {
             Ok(run) => run,
             Err(error) => {
-                termination = TerminationReason::SubproblemFailed(error.to_string());
+                end.termination = TerminationReason::SubproblemFailed(error.to_string());
                 break;
             }
         };
-        programs += end.cone_programs;
-        records.extend(end.records);
+        end.cone_programs += run.cone_programs;
+        end.records.extend(run.records);
         let ev = evaluate_with_altitudes(mission, &traj, &z)
             .map_err(|e| PlanError::InvalidInit(format!("the altitude profile: {e}")))?;
         if !acceptable(&ev, &best.2) {
@@ -187,16 +183,16 @@ fn alternate(
                 out_of_view = ev.slots_out_of_view,
                 "alternation rejected"
             );
-            if let Some(last) = records.last_mut() {
+            if let Some(last) = end.records.last_mut() {
                 last.accepted = false;
             }
-            termination = TerminationReason::NoProgress;
+            end.termination = TerminationReason::NoProgress;
             break;
         }
-        let rel = (best.2.energy_j - ev.energy_j).abs() / best.2.energy_j.abs().max(1e-12);
-        objective = end.objective;
-        obj_hist.extend(end.objective_history);
-        energy_hist.extend(end.true_energy_history);
+        let rel = relative_change(best.2.energy_j, ev.energy_j);
+        end.objective = run.objective;
+        end.objective_history.extend(run.objective_history);
+        end.true_energy_history.extend(run.true_energy_history);
         tracing::debug!(
             alternation,
             energy_j = ev.energy_j,
@@ -205,24 +201,10 @@ fn alternate(
         );
         best = (traj, z, ev);
         if rel < ALTERNATION_TOLERANCE {
-            termination = TerminationReason::Converged;
+            end.termination = TerminationReason::Converged;
             break;
         }
     }
     let (trajectory, altitudes, evaluation) = best;
-    Ok(PlanResult {
-        scheme: Scheme::Paper,
-        trajectory,
-        evaluation,
-        objective,
-        objective_history: obj_hist,
-        true_energy_history: energy_hist,
-        iterations: records.len(),
-        records,
-        converged: termination == TerminationReason::Converged,
-        termination,
-        cone_programs: fixed.cone_programs + programs,
-        altitudes_m: Some(altitudes),
-        ..fixed
-    })
+    Ok(end.into_free_plan(fixed, Scheme::Paper, trajectory, altitudes, evaluation))
 }

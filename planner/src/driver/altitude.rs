@@ -26,10 +26,8 @@ use crate::{Mission, Params};
 
 use super::iterate::record;
 use super::options::Deadline;
+use super::progress::{relative_change, LoopEnd, TrustRegion};
 use super::{BestEffort, Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason};
-
-/// Rejected steps (each halving the trust radius) after which the loop stops.
-const MAX_REJECTS: usize = 8;
 
 /// The mission at one fixed altitude `altitude_m` (its bounds dropped), the sensing radius of
 /// the same antenna there.
@@ -148,17 +146,12 @@ fn refine(
     let mut value = merit(&ev);
     let mut tuning_now = tuning;
     let mut solver = SocpSolver::new(options.exact_socp);
-    let mut records = fixed.records.clone();
-    let mut obj_hist = fixed.objective_history.clone();
-    let mut energy_hist = fixed.true_energy_history.clone();
-    let mut objective = fixed.objective;
-    let mut programs = 0;
-    let mut rejects = 0;
-    let mut termination = TerminationReason::MaxIterations;
-    let first = records.len();
+    let mut end = LoopEnd::continuing(&fixed);
+    let mut trust = TrustRegion::default();
+    let first = end.records.len();
     for it in first + 1..=first + options.max_iterations {
         if deadline.passed() {
-            termination = TerminationReason::TimeLimit;
+            end.termination = TerminationReason::TimeLimit;
             break;
         }
         let t0 = Instant::now();
@@ -169,7 +162,7 @@ fn refine(
             ExactObjective::Energy,
             &tuning_now,
         );
-        programs += 1;
+        end.cone_programs += 1;
         let step = solver.solve(&sub.builder).map(|sol| {
             let cand = sub.trajectory(&sol.x, &current);
             let z = sub.altitudes_m(&sol.x).unwrap_or_else(|| altitudes.clone());
@@ -194,7 +187,7 @@ fn refine(
                     ok,
                 );
                 observer.on_iteration(&rec);
-                records.push(rec);
+                end.records.push(rec);
                 match cand_ev {
                     Some(cand_ev) if ok => Some((cand, z, cand_ev, own)),
                     _ => None,
@@ -202,7 +195,7 @@ fn refine(
             }
             Err(error) => {
                 tracing::debug!(%error, iteration = it, "free-altitude subproblem failed");
-                records.push(record(
+                end.records.push(record(
                     it,
                     f64::NAN,
                     &ev,
@@ -214,24 +207,19 @@ fn refine(
             }
         };
         let Some((cand, z, cand_ev, own)) = accepted else {
-            rejects += 1;
-            if rejects > MAX_REJECTS {
-                termination = TerminationReason::NoProgress;
+            if trust.reject(&mut tuning_now.trust_radius_m) {
+                end.termination = TerminationReason::NoProgress;
                 break;
             }
-            tuning_now.trust_radius_m = Some(tuning_now.trust_radius_m.map_or(2.0, |r| r * 0.5));
             continue;
         };
-        rejects = 0;
         let cand_value = merit(&cand_ev);
-        let rel = (value - cand_value).abs() / value.abs().max(1e-12);
+        let rel = relative_change(value, cand_value);
         current = cand;
         altitudes = z;
         ev = cand_ev;
         value = cand_value;
-        objective = own;
-        obj_hist.push(own);
-        energy_hist.push(ev.energy_j);
+        end.accept(own, ev.energy_j);
         tracing::debug!(
             iteration = it,
             objective = own,
@@ -240,13 +228,10 @@ fn refine(
             "accepted"
         );
         if rel < options.tolerance {
-            termination = TerminationReason::Converged;
+            end.termination = TerminationReason::Converged;
             break;
         }
-        tuning_now.trust_radius_m = tuning_now
-            .trust_radius_m
-            .map(|r| r * 4.0)
-            .filter(|r| *r < 50.0);
+        trust.accept(&mut tuning_now.trust_radius_m);
     }
     // a best effort's refusal names a slot the free plan leaves unresolved
     let best_effort = best_effort.map(|b| BestEffort {
@@ -257,19 +242,7 @@ fn refine(
         ..b
     });
     Ok(PlanResult {
-        scheme: Scheme::Exact,
         best_effort,
-        trajectory: current,
-        evaluation: ev,
-        objective,
-        objective_history: obj_hist,
-        true_energy_history: energy_hist,
-        iterations: records.len(),
-        records,
-        converged: termination == TerminationReason::Converged,
-        termination,
-        cone_programs: fixed.cone_programs + programs,
-        altitudes_m: Some(altitudes),
-        ..fixed
+        ..end.into_free_plan(fixed, Scheme::Exact, current, altitudes, ev)
     })
 }

@@ -10,6 +10,8 @@ use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
 use super::options::Deadline;
+pub(super) use super::progress::LoopEnd;
+use super::progress::{relative_change, TrustRegion, MAX_REJECTS};
 use super::{
     IterationRecord, Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason,
 };
@@ -40,17 +42,6 @@ pub(super) struct Means<'s> {
     pub solver: &'s mut SocpSolver,
     pub observer: &'s mut dyn Observer,
     pub deadline: Deadline<'s>,
-}
-
-/// What an iteration loop leaves: its last own objective, its histories, why it stopped, the
-/// cone programs it solved.
-pub(super) struct LoopEnd {
-    pub objective: f64,
-    pub objective_history: Vec<f64>,
-    pub true_energy_history: Vec<f64>,
-    pub records: Vec<IterationRecord>,
-    pub termination: TerminationReason,
-    pub cone_programs: usize,
 }
 
 /// The result of a loop that ended with `trajectory`.
@@ -112,31 +103,25 @@ pub(super) fn run_exact(
     let mut ev = evaluate(mission, &current);
     let mut value = true_value(&ev);
     let mut tuning = *base;
-    let mut records = Vec::new();
-    let mut obj_hist = Vec::new();
-    let mut energy_hist = Vec::new();
-    let mut last_objective = value;
+    let mut end = LoopEnd::starting(value);
     let mut merits = vec![value];
-    let mut rejects = 0;
-    let mut programs = 0;
-    let mut termination = TerminationReason::MaxIterations;
+    let mut trust = TrustRegion::default();
     for it in 1..=options.max_iterations {
         if deadline.passed() {
-            termination = TerminationReason::TimeLimit;
+            end.termination = TerminationReason::TimeLimit;
             break;
         }
         let t0 = Instant::now();
         let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
-        programs += 1;
+        end.cone_programs += 1;
         let sol = match solver.solve(&sub.builder) {
             Ok(s) => s,
             Err(e) => {
-                if it == 1 && tuning.trust_radius_m.is_none() && records.is_empty() {
+                if it == 1 && tuning.trust_radius_m.is_none() && end.records.is_empty() {
                     tracing::warn!(error = %e, "first subproblem failed; retrying with a trust region");
                 }
-                rejects += 1;
-                tuning.trust_radius_m = Some(tuning.trust_radius_m.map_or(2.0, |r| r * 0.5));
-                records.push(record(
+                let stop = trust.reject(&mut tuning.trust_radius_m);
+                end.records.push(record(
                     it,
                     f64::NAN,
                     &ev,
@@ -144,14 +129,14 @@ pub(super) fn run_exact(
                     t0.elapsed().as_secs_f64(),
                     false,
                 ));
-                if rejects > 8 {
-                    if obj_hist.is_empty() && it <= 9 {
+                if stop {
+                    if end.objective_history.is_empty() && it <= MAX_REJECTS + 1 {
                         return Err(PlanError::Solver {
                             iteration: it,
                             error: e,
                         });
                     }
-                    termination = TerminationReason::SubproblemFailed(e.to_string());
+                    end.termination = TerminationReason::SubproblemFailed(e.to_string());
                     break;
                 }
                 continue;
@@ -176,14 +161,13 @@ pub(super) fn run_exact(
             ok,
         );
         observer.on_iteration(&rec);
-        records.push(rec);
+        end.records.push(rec);
         if !ok && tuning.kappa_scale < 1.0 {
             // the optimistic model overreached: fall back to the proven bound and re-solve
             tuning.kappa_scale = (tuning.kappa_scale * 2.0).min(1.0);
             continue;
         }
         if !ok {
-            rejects += 1;
             tracing::debug!(
                 iteration = it,
                 feasible = judge.feasible(&cand_ev),
@@ -191,21 +175,17 @@ pub(super) fn run_exact(
                 previous = value,
                 "step rejected"
             );
-            tuning.trust_radius_m = Some(tuning.trust_radius_m.map_or(2.0, |r| r * 0.5));
-            if rejects > 8 {
-                termination = TerminationReason::NoProgress;
+            if trust.reject(&mut tuning.trust_radius_m) {
+                end.termination = TerminationReason::NoProgress;
                 break;
             }
             continue;
         }
-        rejects = 0;
-        let rel = (value - cand_value).abs() / value.abs().max(1e-12);
+        let rel = relative_change(value, cand_value);
         current = cand;
         ev = cand_ev;
         value = cand_value;
-        last_objective = own;
-        obj_hist.push(own);
-        energy_hist.push(ev.energy_j);
+        end.accept(own, ev.energy_j);
         tracing::debug!(
             iteration = it,
             objective = own,
@@ -215,25 +195,14 @@ pub(super) fn run_exact(
         );
         merits.push(value);
         if rel < options.tolerance || best_effort_stalled(base, &merits) {
-            termination = TerminationReason::Converged;
+            end.termination = TerminationReason::Converged;
             break;
         }
         // a successful step relaxes the trust region again and makes the centre model bolder
-        tuning.trust_radius_m = tuning.trust_radius_m.map(|r| r * 4.0).filter(|r| *r < 50.0);
+        trust.accept(&mut tuning.trust_radius_m);
         tuning.kappa_scale = (tuning.kappa_scale * 0.8).max(options.min_kappa_scale);
     }
-    Ok(finish(
-        mission,
-        current,
-        LoopEnd {
-            objective: last_objective,
-            objective_history: obj_hist,
-            true_energy_history: energy_hist,
-            records,
-            termination,
-            cone_programs: programs,
-        },
-    ))
+    Ok(finish(mission, current, end))
 }
 
 /// Best effort: the loop stops once the true merit (energy + weight × deficit) fell by less than
@@ -384,35 +353,31 @@ pub(super) fn paper_bcd(
         deadline,
     } = means;
     let mut p6_solver = SocpSolver::new(options.socp);
-    let mut records = Vec::new();
-    let mut obj_hist: Vec<f64> = Vec::new();
-    let mut energy_hist = Vec::new();
-    let mut termination = TerminationReason::MaxIterations;
-    let mut programs = 0;
+    let mut end = LoopEnd::starting(f64::NAN);
     let mut traj = start;
     for it in done + 1..=done + options.max_iterations {
         if deadline.passed() {
-            termination = TerminationReason::TimeLimit;
+            end.termination = TerminationReason::TimeLimit;
             break;
         }
         let t0 = Instant::now();
         let p5 = state.solve_p5(mission, objective, solver);
-        programs += 1;
+        end.cone_programs += 1;
         let (own, ipm) = match p5 {
             Ok(v) => v,
             Err(e) => {
-                if obj_hist.is_empty() {
+                if end.objective_history.is_empty() {
                     return Err(PlanError::Solver {
                         iteration: it,
                         error: e,
                     });
                 }
-                termination = TerminationReason::SubproblemFailed(e.to_string());
+                end.termination = TerminationReason::SubproblemFailed(e.to_string());
                 break;
             }
         };
         let ipm6 = state.solve_p6(mission, &mut p6_solver);
-        programs += 1;
+        end.cone_programs += 1;
         traj = state.trajectory(&traj);
         let ev = match state.altitudes_m() {
             Some(z) => evaluate_with_altitudes(mission, &traj, z)
@@ -421,27 +386,13 @@ pub(super) fn paper_bcd(
         };
         let rec = record(it, own, &ev, ipm + ipm6, t0.elapsed().as_secs_f64(), true);
         observer.on_iteration(&rec);
-        records.push(rec);
-        let prev = obj_hist.last().copied();
-        obj_hist.push(own);
-        energy_hist.push(ev.energy_j);
-        if let Some(prev) = prev {
-            if (prev - own).abs() / prev.abs().max(1e-12) < options.tolerance {
-                termination = TerminationReason::Converged;
-                break;
-            }
+        end.records.push(rec);
+        let prev = end.objective_history.last().copied();
+        end.accept(own, ev.energy_j);
+        if prev.is_some_and(|prev| relative_change(prev, own) < options.tolerance) {
+            end.termination = TerminationReason::Converged;
+            break;
         }
     }
-    let last = obj_hist.last().copied().unwrap_or(f64::NAN);
-    Ok((
-        traj,
-        LoopEnd {
-            objective: last,
-            objective_history: obj_hist,
-            true_energy_history: energy_hist,
-            records,
-            termination,
-            cone_programs: programs,
-        },
-    ))
+    Ok((traj, end))
 }
