@@ -5,7 +5,8 @@
 //! landmark slots and the expected SNR of each landmark at its aperture from the radar's link
 //! budget (`radar_sim::run::landmark_snrs`: the closed loop's apertures, looks and pulses at the
 //! flown altitudes, `Processor::expected_snr_db` per look, the mean over looks as the closed
-//! loop reports it), min / mean over the landmark apertures in view.
+//! loop reports it), min / mean over the landmark apertures in view, with the mean over them of
+//! the UAV antenna's gain towards the landmark (dB off its peak) and of the slant range.
 //!
 //! `cargo run --release -p radar-sim --example landmark_snr -- MISSION.toml [LO-HI ...]
 //! [paper] [apertures] [--scene SCENE.toml]`
@@ -115,7 +116,7 @@ fn row(label: &str, plan: &PlanResult, snr: &[LandmarkSnr]) {
         });
     let s = SnrSummary::of(snr);
     println!(
-        "{label:<11} {:>10.1} {:>6.0}-{:<6.0} {:>8} {:>10} {:>8} {:>7.2}/{:<6.2}",
+        "{label:<11} {:>10.1} {:>6.0}-{:<6.0} {:>8} {:>10} {:>8} {:>7.2}/{:<6.2} {:>8.2} {:>9.1}",
         plan.evaluation.energy_j,
         lo,
         hi,
@@ -123,12 +124,16 @@ fn row(label: &str, plan: &PlanResult, snr: &[LandmarkSnr]) {
         plan.evaluation.slots_unresolved,
         s.apertures_in_view,
         s.min_db,
-        s.mean_db
+        s.mean_db,
+        s.mean_gain_db,
+        s.mean_slant_range_m
     );
 }
 
 fn aperture_rows(label: &str, snr: &[LandmarkSnr]) {
-    println!("  {label}: aperture landmark in_view altitude_m snr_db (looks min/max)");
+    println!(
+        "  {label}: aperture landmark in_view altitude_m range_m gain_db snr_db (looks min/max)"
+    );
     for r in snr {
         let (lo, hi) = r
             .look_snr_db
@@ -137,8 +142,14 @@ fn aperture_rows(label: &str, snr: &[LandmarkSnr]) {
                 (a.min(v), b.max(v))
             });
         println!(
-            "  {:>8} {:>8} {:>7.2} {:>10.1} {:>6.2} ({lo:.2}/{hi:.2})",
-            r.aperture, r.landmark, r.in_view_fraction, r.mean_altitude_m, r.snr_db
+            "  {:>8} {:>8} {:>7.2} {:>10.1} {:>7.1} {:>7.2} {:>6.2} ({lo:.2}/{hi:.2})",
+            r.aperture,
+            r.landmark,
+            r.in_view_fraction,
+            r.mean_altitude_m,
+            r.mean_slant_range_m,
+            r.gain_db,
+            r.snr_db
         );
     }
 }
@@ -165,7 +176,9 @@ fn main() -> Result<(), Error> {
         options.resolution,
         args.scene.display()
     );
-    println!("plan          energy_j  altitude_m  feasible unresolved in_view snr_db min/mean");
+    println!(
+        "plan          energy_j  altitude_m  feasible unresolved in_view snr_db min/mean  gain_db  range_m"
+    );
     let at_fixed = fixed(&mission)?;
     let (plan, snr) = case(&at_fixed, &options, &scene)?;
     row("fixed", &plan, &snr);

@@ -36,19 +36,20 @@ fn sinc(x: f64) -> f64 {
     }
 }
 
-/// Σ over one look's pulses of w f √G / R_r (√G left out without `gain`) for a UAV flying north at `speed_mps` at
-/// `x_m`, through y = `y_mid_m` at `t_mid_s`, climbing linearly from `start_m` at t = 0 to
-/// `altitude_m` at t = `slot_s` and level after, towards the landmark `lm`; pulse i of look `l`
-/// at t = `t0_s` + l T + (i + ½)/PRF.
-fn look_amplitude(
+/// One pulse's terms of the link budget that depend on the UAV's position: the Hann weight w,
+/// the cyclic-prefix overlap f, the UAV antenna's gain towards the landmark relative to its peak
+/// G and the slant range R_r, m, for each pulse of look `look` (pulse i at t = `t0_s` + l T +
+/// (i + ½)/PRF) of a UAV flying north at `speed_mps` at `x_m`, through y = `y_mid_m` at
+/// `t_mid_s`, climbing linearly from `start_m` at t = 0 to `altitude_m` at t = `slot_s` and
+/// level after, towards the landmark `lm`.
+fn look_terms(
     p: &planner::Params,
     scene: &SceneFile,
     lm: [f64; 2],
     (x_m, y_mid_m, t_mid_s, speed_mps): (f64, f64, f64, f64),
     (start_m, altitude_m): (f64, f64),
     (t0_s, look, pulses_per_look): (f64, usize, usize),
-    with_gain: bool,
-) -> f64 {
+) -> Vec<[f64; 4]> {
     let r = &scene.radar;
     let lam = p.wavelength_m;
     let eta = p.observation_angle_rad;
@@ -80,10 +81,9 @@ fn look_amplitude(
             let overlap = (1.0 - spill / r.fft_size as f64).max(0.0);
             let x = (i as f64 + 0.5) / pulses_per_look as f64;
             let hann = 0.5 - 0.5 * (std::f64::consts::TAU * x).cos();
-            let g = if with_gain { gain.sqrt() } else { 1.0 };
-            hann * overlap * g / rr
+            [hann, overlap, gain, rr]
         })
-        .sum()
+        .collect()
 }
 
 #[test]
@@ -125,19 +125,17 @@ fn the_same_track_at_800_and_1200_m_changes_each_looks_snr_by_the_closed_form() 
     let ppl = (p.integration_time_s * scene.radar.prf_hz).round() as usize;
     let t0 = 0.5 * (10.0 - looks as f64 * p.integration_time_s);
     let track = (x, lm[1], t_mid, speed);
+    let terms =
+        |l: usize, h: f64| look_terms(&p, &scene, lm, track, (p.altitude_m, h), (t0, l, ppl));
+    // Σ w f √G / R_r, the gain left out without `with_gain`
+    let amplitude = |l: usize, h: f64, with_gain: bool| -> f64 {
+        terms(l, h)
+            .iter()
+            .map(|[w, f, g, rr]| w * f * if with_gain { g.sqrt() } else { 1.0 } / rr)
+            .sum()
+    };
     let difference_db = |l: usize, with_gain: bool| {
-        let a = |h: f64| {
-            look_amplitude(
-                &p,
-                &scene,
-                lm,
-                track,
-                (p.altitude_m, h),
-                (t0, l, ppl),
-                with_gain,
-            )
-        };
-        20.0 * (a(800.0) / a(1200.0)).log10()
+        20.0 * (amplitude(l, 800.0, with_gain) / amplitude(l, 1200.0, with_gain)).log10()
     };
     let mut largest: f64 = 0.0;
     for l in 0..looks {
@@ -171,8 +169,19 @@ fn the_same_track_at_800_and_1200_m_changes_each_looks_snr_by_the_closed_form() 
             / looks as f64;
         assert!((r.snr_db - 10.0 * mean.log10()).abs() < 1e-9);
     }
-    assert!((low.mean_altitude_m - 800.0).abs() < 30.0);
-    assert!((high.mean_altitude_m - 1200.0).abs() < 30.0);
+    // the aperture's mean slant range and gain towards the landmark
+    for (r, h) in [(&low, 800.0), (&high, 1200.0)] {
+        let all: Vec<[f64; 4]> = (0..looks).flat_map(|l| terms(l, h)).collect();
+        let n = all.len() as f64;
+        let range_m = all.iter().map(|t| t[3]).sum::<f64>() / n;
+        let gain_db = 10.0 * (all.iter().map(|t| t[2]).sum::<f64>() / n).log10();
+        assert!(
+            (r.mean_slant_range_m - range_m).abs() < 1e-6,
+            "{h} m: {r:?}"
+        );
+        assert!((r.gain_db - gain_db).abs() < 1e-9, "{h} m: {r:?}");
+        assert!((r.mean_altitude_m - h).abs() < 30.0, "{h} m: {r:?}");
+    }
     // the summary is over the landmark apertures in view
     let s = SnrSummary::of(std::slice::from_ref(&low));
     if low.in_view() {

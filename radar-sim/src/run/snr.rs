@@ -25,6 +25,11 @@ pub struct LandmarkSnr {
     pub in_view_fraction: f64,
     /// Mean flown altitude over the aperture's pulses, m.
     pub mean_altitude_m: f64,
+    /// Mean slant range from the UAV to the landmark over the aperture's pulses, m.
+    pub mean_slant_range_m: f64,
+    /// The UAV antenna's gain towards the landmark relative to its peak, mean over the
+    /// aperture's pulses (of the linear gain), dB.
+    pub gain_db: f64,
     /// Expected per-look image SNR of each look, dB.
     pub look_snr_db: Vec<f64>,
     /// Expected per-look SNR of the aperture, dB: the mean over its looks of the linear SNR
@@ -49,27 +54,37 @@ pub struct SnrSummary {
     pub min_db: f64,
     /// Mean of their aperture SNRs in dB, dB (NaN when there are none).
     pub mean_db: f64,
+    /// Mean of their [`LandmarkSnr::gain_db`], dB (NaN when there are none).
+    pub mean_gain_db: f64,
+    /// Mean of their [`LandmarkSnr::mean_slant_range_m`], m (NaN when there are none).
+    pub mean_slant_range_m: f64,
 }
 
 impl SnrSummary {
     /// The summary of `rows` over those in view.
     pub fn of(rows: &[LandmarkSnr]) -> Self {
-        let db: Vec<f64> = rows
-            .iter()
-            .filter(|r| r.in_view())
-            .map(|r| r.snr_db)
-            .collect();
-        if db.is_empty() {
-            return Self {
-                apertures_in_view: 0,
-                min_db: f64::NAN,
-                mean_db: f64::NAN,
-            };
-        }
+        let in_view: Vec<&LandmarkSnr> = rows.iter().filter(|r| r.in_view()).collect();
+        let n = in_view.len();
+        let mean = |f: fn(&LandmarkSnr) -> f64| {
+            if n == 0 {
+                f64::NAN
+            } else {
+                in_view.iter().map(|r| f(r)).sum::<f64>() / n as f64
+            }
+        };
         Self {
-            apertures_in_view: db.len(),
-            min_db: db.iter().copied().fold(f64::INFINITY, f64::min),
-            mean_db: db.iter().sum::<f64>() / db.len() as f64,
+            apertures_in_view: n,
+            min_db: if n == 0 {
+                f64::NAN
+            } else {
+                in_view
+                    .iter()
+                    .map(|r| r.snr_db)
+                    .fold(f64::INFINITY, f64::min)
+            },
+            mean_db: mean(|r| r.snr_db),
+            mean_gain_db: mean(|r| r.gain_db),
+            mean_slant_range_m: mean(|r| r.mean_slant_range_m),
         }
     }
 }
@@ -125,13 +140,27 @@ pub fn landmark_snrs(
             .map(|db| 10f64.powf(db / 10.0))
             .sum::<f64>()
             / ap.looks.max(1) as f64;
-        let mean_altitude_m =
-            pulses.iter().map(|p| p.pos_m[2]).sum::<f64>() / pulses.len().max(1) as f64;
+        let n = pulses.len().max(1) as f64;
+        let mean_altitude_m = pulses.iter().map(|p| p.pos_m[2]).sum::<f64>() / n;
+        let target = [object.x_m, object.y_m, 0.0];
+        let mean_slant_range_m = pulses
+            .iter()
+            .map(|p| crate::track::dist3(p.pos_m, target))
+            .sum::<f64>()
+            / n;
+        let antenna = &proc.setup().antenna;
+        let gain = pulses
+            .iter()
+            .map(|p| antenna.gain_towards(p.pos_m, p.heading, target))
+            .sum::<f64>()
+            / n;
         rows.push(LandmarkSnr {
             aperture: ap.index,
             landmark,
             in_view_fraction: fractions.get(landmark).copied().unwrap_or(0.0),
             mean_altitude_m,
+            mean_slant_range_m,
+            gain_db: 10.0 * (gain / antenna.peak_gain).log10(),
             look_snr_db,
             snr_db: 10.0 * mean_lin.log10(),
         });
