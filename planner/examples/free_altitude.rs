@@ -3,9 +3,10 @@
 //! [`PlanOptions::altitude_profile`]), and prints each plan's true energy, wall time, altitude
 //! range, feasibility, slots out of view and unresolved (worst width, the cell's longest chord,
 //! over d_min), cone programs, iterations and alternations, with the floor T min_V P(V) that no
-//! plan at any altitudes goes below, and the receive path's spreading term of the landmark
-//! echoes' SNR, −20 log10(R_r / 1 km) dB, min/mean over the landmark slots in view. With `paper` it also plans the scheme `paper` at the fixed
+//! plan at any altitudes goes below. With `paper` it also plans the scheme `paper` at the fixed
 //! altitude and by the paper's alternation (altitude step, then Algorithm 1), in the same run.
+//! The landmarks' SNR of such plans, from the radar's link budget, is the radar simulator's
+//! (`cargo run --release -p radar-sim --example landmark_snr`).
 //!
 //! `cargo run --release -p planner --example free_altitude -- MISSION.toml MIN_M MAX_M [paper] [records]`
 //! (`paper`: the least-energy plans, the paper's resolution; default: the default options, the
@@ -42,30 +43,6 @@ fn timed(mission: &Mission, options: &PlanOptions) -> Result<(PlanResult, f64, u
     Ok((r, started.elapsed().as_secs_f64(), count.0))
 }
 
-/// The receive path's spreading term of the radar equation, −20 log10(R_r / 1 km) dB, min and
-/// mean over the landmark slots in view (R_r the slant range from the UAV at its altitude to
-/// the landmark): the SNR of a landmark echo changes between plans by the change of this term
-/// (the BS–landmark range is the plan's no matter the track) plus that of the antenna gain
-/// towards the landmark, which the planner does not model.
-fn rx_spreading_db(r: &PlanResult) -> (f64, f64) {
-    let db: Vec<f64> = r
-        .evaluation
-        .slots
-        .iter()
-        .filter(|s| s.in_view)
-        .filter_map(|s| {
-            let g = s.landmark_m?;
-            let ground = (s.pos_m[0] - g[0]).hypot(s.pos_m[1] - g[1]);
-            Some(-20.0 * (ground.hypot(s.z_m) / 1000.0).log10())
-        })
-        .collect();
-    if db.is_empty() {
-        return (f64::NAN, f64::NAN);
-    }
-    let min = db.iter().copied().fold(f64::INFINITY, f64::min);
-    (min, db.iter().sum::<f64>() / db.len() as f64)
-}
-
 fn row(label: &str, r: &PlanResult, seconds: f64, alternations: usize) {
     let (lo, hi) = match &r.altitudes_m {
         Some(z) => z
@@ -75,9 +52,8 @@ fn row(label: &str, r: &PlanResult, seconds: f64, alternations: usize) {
             }),
         None => (r.evaluation.start_altitude_m, r.evaluation.start_altitude_m),
     };
-    let rx = rx_spreading_db(r);
     println!(
-        "{label:<7} {:>10.1} {:>8.2} {:>6.0}-{:<6.0} {:>8} {:>11} {:>10} {:>8} {:>10} {:>12} {:>7.2}/{:<6.2}",
+        "{label:<7} {:>10.1} {:>8.2} {:>6.0}-{:<6.0} {:>8} {:>11} {:>10} {:>8} {:>10} {:>12}",
         r.evaluation.energy_j,
         seconds,
         lo,
@@ -87,9 +63,7 @@ fn row(label: &str, r: &PlanResult, seconds: f64, alternations: usize) {
         r.evaluation.slots_unresolved,
         r.cone_programs,
         r.iterations,
-        alternations,
-        rx.0,
-        rx.1
+        alternations
     );
 }
 
@@ -112,7 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         options.resolution
     );
     println!(
-        "plan      energy_j   time_s  altitude_m  feasible out_of_view unresolved programs iterations alternations rx_db min/mean"
+        "plan      energy_j   time_s  altitude_m  feasible out_of_view unresolved programs iterations alternations"
     );
     let paper = rest.iter().any(|a| a == "paper");
     let (fixed, seconds, _) = timed(&mission, &options)?;
