@@ -598,3 +598,15 @@ impl Drop for LogsOnFailure {
         }
     }
 }
+
+/// The arguments of `cellsar run` on the default mission and scene over 30 s, writing to
+/// `dir/out`, followed by `extra`.
+pub fn run_args(dir: &std::path::Path, out: &str, extra: &[&str]) -> Vec<std::ffi::OsString> {
+    let mut a: Vec<std::ffi::OsString> = vec!["run".into(), mission().into(), "--scene".into()];
+    a.push(scene().into());
+    a.push("--out".into());
+    a.push(dir.join(out).into());
+    a.extend(["--horizon-s", "30"].iter().map(std::ffi::OsString::from));
+    a.extend(extra.iter().map(std::ffi::OsString::from));
+    a
+}
