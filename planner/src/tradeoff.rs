@@ -66,8 +66,8 @@ pub struct TradeoffPoint {
     pub basis_energy_j: f64,
 }
 
-/// The title of the curve's plot for `mission_name`: its first point's plan and energy, and,
-/// for a free-altitude curve, the plan its percentages are of.
+/// The title of the curve's plot for `mission_name`: its first point's plan and energy (for a
+/// free-altitude curve, the free least-energy plan).
 pub fn plot_title(mission_name: &str, points: &[TradeoffPoint]) -> String {
     let Some(first) = points.first() else {
         return format!("{mission_name}: resolution against energy (no plan)");
@@ -77,20 +77,22 @@ pub fn plot_title(mission_name: &str, points: &[TradeoffPoint]) -> String {
         EnergyBasis::LeastEnergy => {
             format!("{mission_name}: resolution against energy (least-energy plan {e0:.0} J)")
         }
-        EnergyBasis::FixedAltitude { altitude_m } => format!(
-            "{mission_name}: resolution against energy at free altitude (free least-energy plan \
-             {e0:.0} J; extra energy over the least-energy plan at {altitude_m:.0} m, {:.0} J)",
-            first.basis_energy_j
-        ),
+        // the plan the percentages are of is on the energy axis ([`energy_axis_label`]): the
+        // title stays within the plot's width
+        EnergyBasis::FixedAltitude { .. } => {
+            format!("{mission_name}: free altitude (free least-energy plan {e0:.0} J)")
+        }
     }
 }
 
-/// The label of the plot's energy axis: the extra energy over the plan the percentages are of.
+/// The label of the plot's energy axis: the extra energy over the plan the percentages are of
+/// (for a free-altitude curve, the least-energy plan at the fixed altitude, with its energy).
 pub fn energy_axis_label(points: &[TradeoffPoint]) -> String {
     match points.first().map(|p| p.basis) {
-        Some(EnergyBasis::FixedAltitude { altitude_m }) => {
-            format!("extra energy over the least-energy plan at {altitude_m:.0} m / %")
-        }
+        Some(EnergyBasis::FixedAltitude { altitude_m }) => format!(
+            "extra energy over the least-energy plan at {altitude_m:.0} m ({:.0} J) / %",
+            points.first().map_or(f64::NAN, |p| p.basis_energy_j)
+        ),
         _ => "extra energy over the least-energy plan / %".to_string(),
     }
 }
