@@ -1,5 +1,5 @@
 //! NPY files (v1 written; v1–v3 read): complex64 `<c8`, `<f4` and `<f8` arrays in C order.
-//! Reading and header parsing by [`npyz`]; writing streams whole slices to an atomic file.
+//! Header parsing by [`npyz`]; reading and writing stream whole slices (files of gigabytes).
 
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom, Write};
@@ -38,7 +38,7 @@ impl NpyType {
         }
     }
 
-    /// The type of a header's dtype (either byte order: npyz swaps on reading).
+    /// The type of a header's dtype (either byte order: the reader swaps).
     fn of(dtype: &DType) -> Option<Self> {
         let DType::Plain(t) = dtype else {
             return None;
@@ -177,6 +177,19 @@ impl NpyWriter {
     }
 }
 
+/// Bytes read from an NPY file per `read_exact` call.
+const READ_CHUNK_BYTES: usize = 8 << 20;
+
+/// The f32 of 4 bytes (big- or little-endian).
+fn f32_bytes(c: &[u8], big_endian: bool) -> f32 {
+    let a: [u8; 4] = std::array::from_fn(|i| c[i]);
+    if big_endian {
+        f32::from_be_bytes(a)
+    } else {
+        f32::from_le_bytes(a)
+    }
+}
+
 /// An NPY file opened for reading: type, shape and the data offset.
 #[derive(Debug)]
 pub struct NpyReader {
@@ -186,19 +199,9 @@ pub struct NpyReader {
     pub t: NpyType,
     /// Shape.
     pub shape: Vec<usize>,
-    header: HeaderOf,
     data_offset: u64,
-}
-
-/// npyz's header (which has no `Debug`).
-struct HeaderOf(NpyHeader);
-
-impl std::fmt::Debug for HeaderOf {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("NpyHeader")
-            .field("shape", &self.0.shape())
-            .finish_non_exhaustive()
-    }
+    /// The data is big-endian (`>` in the dtype).
+    big_endian: bool,
 }
 
 /// The header's bytes (preamble and dictionary), at most the file's length: the NPY framing
@@ -311,22 +314,28 @@ impl NpyReader {
         if len < data_offset.saturating_add(bytes) {
             return Err(bad("data", format!("file too short for shape {shape:?}")));
         }
+        let big_endian =
+            matches!(header.dtype(), DType::Plain(p) if p.to_string().starts_with('>'));
         Ok(Self {
             file,
             path: shown,
             t,
             shape,
-            header: HeaderOf(header),
             data_offset,
+            big_endian,
         })
     }
 
-    /// `count` elements of type `t` from element `first`, read by npyz.
-    fn read<T: npyz::Deserialize>(
+    /// `count` elements of type `t` from element `first`, as their raw bytes converted by
+    /// `convert` (its second argument: the file is big-endian) into `out`, in chunks of at most
+    /// [`READ_CHUNK_BYTES`]: one `read_exact` per chunk, no per-element reader (the IQ arrays
+    /// are gigabytes).
+    fn read<T>(
         &mut self,
         first: usize,
         count: usize,
         t: NpyType,
+        convert: fn(&[u8], bool, &mut Vec<T>),
     ) -> Result<Vec<T>> {
         if t != self.t {
             return Err(RadarError::format(
@@ -348,32 +357,55 @@ impl NpyReader {
             path: path.clone(),
             error: e,
         };
+        let size = t.size();
+        let big_endian = self.big_endian;
+        // first + count ≤ n and the file holds n elements (checked at open): no overflow
         self.file
-            .seek(SeekFrom::Start(self.data_offset))
+            .seek(SeekFrom::Start(self.data_offset + (first * size) as u64))
             .map_err(io)?;
-        let mut data = npyz::NpyFile::with_header(self.header.0.clone(), &mut self.file)
-            .data::<T>()
-            .map_err(|e| RadarError::format(&path, "descr", e.to_string()))?;
-        // first ≤ n, checked above (npyz panics beyond the end)
-        data.seek_to(first as u64).map_err(io)?;
-        data.take(count)
-            .collect::<std::io::Result<Vec<T>>>()
-            .map_err(io)
+        let mut out = Vec::with_capacity(count);
+        let per_chunk = (READ_CHUNK_BYTES / size).max(1);
+        let mut buf = vec![0u8; per_chunk.min(count) * size];
+        let mut left = count;
+        while left > 0 {
+            let k = left.min(per_chunk);
+            let bytes = &mut buf[..k * size];
+            self.file.read_exact(bytes).map_err(io)?;
+            convert(bytes, big_endian, &mut out);
+            left -= k;
+        }
+        Ok(out)
     }
 
     /// Reads `count` complex64 elements starting at element `first`.
     pub fn read_c8(&mut self, first: usize, count: usize) -> Result<Vec<Complex32>> {
-        self.read(first, count, NpyType::C8)
+        self.read(first, count, NpyType::C8, |b, be, out| {
+            out.extend(b.chunks_exact(8).map(|c| {
+                let (re, im) = (f32_bytes(&c[..4], be), f32_bytes(&c[4..], be));
+                Complex32::new(re, im)
+            }))
+        })
     }
 
     /// Reads `count` f32 elements starting at element `first`.
     pub fn read_f4(&mut self, first: usize, count: usize) -> Result<Vec<f32>> {
-        self.read(first, count, NpyType::F4)
+        self.read(first, count, NpyType::F4, |b, be, out| {
+            out.extend(b.chunks_exact(4).map(|c| f32_bytes(c, be)))
+        })
     }
 
     /// Reads `count` f64 elements starting at element `first`.
     pub fn read_f8(&mut self, first: usize, count: usize) -> Result<Vec<f64>> {
-        self.read(first, count, NpyType::F8)
+        self.read(first, count, NpyType::F8, |b, be, out| {
+            out.extend(b.chunks_exact(8).map(|c| {
+                let a: [u8; 8] = std::array::from_fn(|i| c[i]);
+                if be {
+                    f64::from_be_bytes(a)
+                } else {
+                    f64::from_le_bytes(a)
+                }
+            }))
+        })
     }
 }
 

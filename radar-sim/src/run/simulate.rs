@@ -13,6 +13,7 @@ use crate::pipeline::RadarSetup;
 use crate::scene::SceneObject;
 use crate::synth::{Components, Synthesizer};
 use crate::track::{Aperture, PlannedTrack, PulseMeta};
+use rustfft::num_complex::Complex32;
 
 /// Frames of `run::simulate` hold at most this many bytes of IQ (and 100 pulses).
 pub const SIMULATE_FRAME_BYTES: usize = 64 << 20;
@@ -131,20 +132,17 @@ pub fn simulate_profile_limited(
             Some(c) => Some(c.synthesizer(&setup, &objects, ap, &pulses)?),
             None => None,
         };
-        let mut w = NpyWriter::create(&iq_path(out, ap.index), NpyType::C8, &[pulses.len(), spp])?;
-        crate::pipeline::synthesize_frames(
+        let w = NpyWriter::create(&iq_path(out, ap.index), NpyType::C8, &[pulses.len(), spp])?;
+        write_overlapped(
+            w,
             cluttered.as_ref().unwrap_or(&synth),
             &pulses,
             frame_pulses,
-            Components::ALL,
-            &mut |ps, iq| {
-                w.write_c8(iq)?;
-                done += ps.len() as u64;
+            &mut |n| {
+                done += n as u64;
                 progress(done, total);
-                Ok(())
             },
         )?;
-        w.finish()?;
         all_pulses.extend(pulses);
     }
     if !truths.is_empty()
@@ -173,6 +171,50 @@ pub fn simulate_profile_limited(
     };
     write_json(&out.join("meta.json"), &meta)?;
     Ok(meta)
+}
+
+/// Synthesises `pulses` in frames of `frame_pulses` into `w` and finishes it; a writer thread
+/// writes each frame while the next is synthesised (the recording's bytes, gigabytes under NR,
+/// then cost no synthesis time). `done(pulses)` is called as each frame is handed over.
+fn write_overlapped(
+    mut w: NpyWriter,
+    synth: &Synthesizer,
+    pulses: &[PulseMeta],
+    frame_pulses: usize,
+    done: &mut dyn FnMut(usize),
+) -> Result<()> {
+    std::thread::scope(|scope| {
+        // one frame in the channel, one being written: at most three frames in memory
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Complex32>>(1);
+        let writer = scope.spawn(move || -> Result<NpyWriter> {
+            for iq in rx {
+                w.write_c8(&iq)?;
+            }
+            Ok(w)
+        });
+        let mut made = Ok(());
+        for chunk in pulses.chunks(frame_pulses.max(1)) {
+            match synth.synthesize_frame(chunk, Components::ALL) {
+                // a closed channel: the writer failed, its error is reported below
+                Ok(iq) => {
+                    if tx.send(iq).is_err() {
+                        break;
+                    }
+                }
+                Err(e) => {
+                    made = Err(e);
+                    break;
+                }
+            }
+            done(chunk.len());
+        }
+        drop(tx);
+        let written = writer
+            .join()
+            .map_err(|_| RadarError::Mismatch("the IQ writer thread panicked".into()))?;
+        made?;
+        written?.finish()
+    })
 }
 
 /// The truth-side facts of one aperture at its middle pulse, and a warning when its landmark
