@@ -94,6 +94,49 @@ enum SplitMethod {
     Corrections,
 }
 
+/// The path sums ([`path_sums`]) of a window's groups of paths, kept for the next window while
+/// its paths are the same (the windows of one pulse under stop-and-hop share every path, so
+/// their sums are computed once per pulse).
+#[derive(Debug, Default)]
+struct SumCache {
+    /// The paths the sums belong to.
+    paths: Vec<Path>,
+    /// (the group's path indices, Taylor terms, its sums).
+    sums: Vec<(Vec<usize>, usize, Vec<Complex64>)>,
+}
+
+impl SumCache {
+    /// The path sums of `paths[group]` with `terms` terms, computed unless kept.
+    fn get(
+        &mut self,
+        paths: &[Path],
+        group: &[usize],
+        terms: usize,
+        k0: f64,
+        n: usize,
+        nsc: usize,
+    ) -> &[Complex64] {
+        if self.paths != paths {
+            self.paths = paths.to_vec();
+            self.sums.clear();
+        }
+        let pos = match self
+            .sums
+            .iter()
+            .position(|(g, t, _)| g == group && *t == terms)
+        {
+            Some(pos) => pos,
+            None => {
+                let refs: Vec<&Path> = group.iter().map(|&i| &paths[i]).collect();
+                let acc = path_sums(&refs, terms, k0, n, nsc);
+                self.sums.push((group.to_vec(), terms, acc));
+                self.sums.len() - 1
+            }
+        };
+        &self.sums[pos].2
+    }
+}
+
 /// The echo synthesiser for one scene and radar.
 pub struct Synthesizer {
     num: Numerology,
@@ -109,6 +152,9 @@ pub struct Synthesizer {
     seed: u64,
     symbols_per_pulse: usize,
     ifft: Arc<dyn Fft<f64>>,
+    /// Terms of the split-path series ([`split`]) and its weights ε_q J_q(πk_i/N), q-major.
+    split_terms: usize,
+    split_weights: Vec<f64>,
 }
 
 impl std::fmt::Debug for Synthesizer {
@@ -144,7 +190,13 @@ impl Synthesizer {
             ));
         }
         let ifft = crate::kernels::FftMaker::new().inverse(num.fft_size);
+        let split_terms = split::series_terms(
+            std::f64::consts::PI * split::max_index(&num) / num.fft_size as f64,
+        );
+        let split_weights = split::basis_weights(&num, split_terms);
         Ok(Self {
+            split_terms,
+            split_weights,
             motion: radar.motion,
             antenna,
             bs_sector: radar.bs_antenna.as_ref().map(|a| a.sector(bs_m)),
@@ -283,7 +335,8 @@ impl Synthesizer {
         data: &mut dyn FnMut(i64) -> Option<Arc<Vec<Complex32>>>,
         out: &mut [Complex64],
     ) {
-        self.synthesize_window_by(m, paths, data, out, SplitMethod::Auto);
+        let mut sums = SumCache::default();
+        self.synthesize_window_by(m, paths, data, out, SplitMethod::Auto, &mut sums);
     }
 
     /// [`Self::synthesize_window`] with the method for split paths chosen by `method`.
@@ -294,6 +347,7 @@ impl Synthesizer {
         data: &mut dyn FnMut(i64) -> Option<Arc<Vec<Complex32>>>,
         out: &mut [Complex64],
         method: SplitMethod,
+        sums: &mut SumCache,
     ) {
         if paths.is_empty() {
             return;
@@ -347,7 +401,7 @@ impl Synthesizer {
         };
         // each path's first piece and its change point (if any)
         let j_of = |k: f64, d: f64| timing.j_of(k - d);
-        let mut groups: Vec<(i64, Vec<&Path>)> = Vec::new();
+        let mut groups: Vec<(i64, Vec<usize>)> = Vec::new(); // (base symbol, path indices)
         let mut events: Vec<(usize, &Path, i64, i64)> = Vec::new(); // (first sample, path, j0, j1)
         let pieces: Vec<(i64, i64, usize)> = paths
             .iter()
@@ -362,8 +416,7 @@ impl Synthesizer {
                 (j0, j1, s)
             })
             .collect();
-        let split_terms =
-            split::series_terms(std::f64::consts::PI * split::max_index(num) / n as f64);
+        let split_terms = self.split_terms;
         let corrected = match method {
             SplitMethod::Auto => pieces.iter().filter(|(j0, j1, _)| j0 != j1).count() > split_terms,
             SplitMethod::Segments => false,
@@ -371,7 +424,7 @@ impl Synthesizer {
         };
         // (j0, j1) → the corrections of the paths of that transition
         let mut corrections: Vec<((i64, i64), Vec<split::Correction<'_>>)> = Vec::new();
-        for (p, &(j0, j1, s)) in paths.iter().zip(&pieces) {
+        for (pi, (p, &(j0, j1, s))) in paths.iter().zip(&pieces).enumerate() {
             let (base, corr) = if j1 == j0 {
                 (j0, None)
             } else if !corrected {
@@ -383,8 +436,8 @@ impl Synthesizer {
                 (j1, Some((-1.0, 0..s)))
             };
             match groups.iter_mut().find(|(j, _)| *j == base) {
-                Some((_, g)) => g.push(p),
-                None => groups.push((base, vec![p])),
+                Some((_, g)) => g.push(pi),
+                None => groups.push((base, vec![pi])),
             }
             if let Some((sign, range)) = corr {
                 let c = split::Correction {
@@ -407,7 +460,7 @@ impl Synthesizer {
                 .zip(&ys[b].1)
                 .map(|(y1, y0)| y1 - y0)
                 .collect();
-            let g = split::basis(num, self.ifft.as_ref(), &d, split_terms);
+            let g = split::basis(n, self.ifft.as_ref(), &d, &self.split_weights, split_terms);
             split::apply(num, &g, split_terms, cs, out);
         }
         // initial spectra Z_q
@@ -415,7 +468,7 @@ impl Synthesizer {
         for (j, g) in &groups {
             let yi = y_of(*j, &mut ys);
             let y = &ys[yi].1;
-            let acc = path_sums(g, terms, k0 as f64, n, nsc);
+            let acc = sums.get(paths, g, terms, k0 as f64, n, nsc);
             for q in 0..terms {
                 for ((zv, a), yv) in z[q * nsc..(q + 1) * nsc]
                     .iter_mut()
@@ -479,10 +532,7 @@ impl Synthesizer {
             let vals: Vec<Complex64> = if direct {
                 direct_sums(zq, num.subcarrier_index(0), n, ks.clone())
             } else {
-                spec.fill(Complex64::new(0.0, 0.0));
-                for (i, v) in zq.iter().enumerate() {
-                    spec[num.bin(i)] = *v;
-                }
+                split::to_bins(zq, spec);
                 self.ifft.process(spec);
                 spec[ks.clone()].to_vec()
             };
@@ -517,6 +567,22 @@ impl Synthesizer {
         let fs = self.num.sample_rate_hz();
         let mut cache: HashMap<i64, Arc<Vec<Complex32>>> = HashMap::new();
         let num = &self.num;
+        if let Some(ill) = num.nr.as_deref() {
+            // the pulse's symbols and the one before (which beyond-CP echoes reach), each slot's
+            // reference signals generated once
+            let first = (pulse.symbol as i64 - 1).max(0);
+            let last = pulse.symbol as i64 + s_count as i64;
+            for (m, sym) in
+                (first..last).zip(ill.grid.symbols(first as u64, (last - first) as usize))
+            {
+                let v = sym
+                    .values
+                    .iter()
+                    .map(|v| Complex32::new(v.re as f32, v.im as f32))
+                    .collect();
+                cache.insert(m, Arc::new(v));
+            }
+        }
         let mut data = |m: i64| -> Option<Arc<Vec<Complex32>>> {
             if m < 0 {
                 return None;
@@ -529,6 +595,7 @@ impl Synthesizer {
             )
         };
         let mut buf = vec![Complex64::new(0.0, 0.0); n];
+        let mut sums = SumCache::default();
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x5EED_0000_0000_0001);
         rng.set_stream(pulse.index as u64);
         let sigma = (self.noise_w / 2.0).sqrt();
@@ -556,7 +623,7 @@ impl Synthesizer {
             };
             let paths = self.paths(pos, vel, pulse.heading, pulse.window_delay_samples, comps);
             buf.fill(Complex64::new(0.0, 0.0));
-            self.synthesize_window(m, &paths, &mut data, &mut buf);
+            self.synthesize_window_by(m, &paths, &mut data, &mut buf, SplitMethod::Auto, &mut sums);
             let dst = &mut out[s * n..(s + 1) * n];
             if comps.noise && self.thermal_noise {
                 for (o, v) in dst.iter_mut().zip(&buf) {

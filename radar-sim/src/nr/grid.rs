@@ -72,11 +72,28 @@ impl NrSymbol {
             .collect()
     }
 
+    /// A symbol that carries nothing (N_sc subcarriers).
+    fn empty(nsc: usize) -> Self {
+        Self {
+            values: vec![Complex64::default(); nsc],
+            roles: vec![Role::Empty; nsc],
+        }
+    }
+
     /// Share of subcarriers that carry anything.
     pub fn occupancy(&self) -> f64 {
         let used = self.roles.iter().filter(|r| **r != Role::Empty).count();
         used as f64 / self.roles.len().max(1) as f64
     }
+}
+
+/// One slot's reference signals (SSB, TRS, PRS: the order in which they claim REs), its
+/// PDSCH DMRS and the symbols that carry it, and its loaded PRBs.
+struct SlotRes {
+    signals: Vec<Vec<Re>>,
+    dmrs_symbols: Vec<usize>,
+    dmrs: Vec<Re>,
+    prbs: Vec<usize>,
 }
 
 /// The cell's downlink: frame, signals, PDSCH load and QAM orders, data seed.
@@ -148,18 +165,72 @@ impl NrGrid {
 
     /// Symbol `m` (counted from symbol 0 of frame 0) as the BS sends it.
     pub fn symbol(&self, m: u64) -> NrSymbol {
+        self.symbols(m, 1).remove(0)
+    }
+
+    /// Symbols `first .. first + count` as the BS sends them ([`Self::symbol`] of each): the
+    /// reference signals' REs of each slot are generated once for all its symbols.
+    pub fn symbols(&self, first: u64, count: usize) -> Vec<NrSymbol> {
+        let sps = self.frame.symbols_per_slot() as u64;
+        let end = first + count as u64;
+        let mut out = Vec::with_capacity(count);
+        let mut m = first;
+        while m < end {
+            let slot = m / sps;
+            let slot_end = ((slot + 1) * sps).min(end);
+            let mut res: Option<SlotRes> = None;
+            for mm in m..slot_end {
+                if self.frame.symbol_use(mm) != SymbolUse::Downlink {
+                    out.push(NrSymbol::empty(self.frame.subcarriers()));
+                    continue;
+                }
+                let r = res.get_or_insert_with(|| self.slot_res(slot));
+                out.push(self.symbol_in_slot(mm, r));
+            }
+            m = slot_end;
+        }
+        out
+    }
+
+    /// The reference signals' REs of slot `slot`, in the order they claim REs, and its PDSCH.
+    fn slot_res(&self, slot: u64) -> SlotRes {
+        let mut signals = Vec::new();
+        if let Some(s) = &self.ssb {
+            signals.push(s.res_in_slot(&self.frame, slot));
+        }
+        if let Some(t) = &self.trs {
+            signals.push(t.res_in_slot(&self.frame, slot));
+        }
+        if let Some(p) = &self.prs {
+            signals.push(p.res_in_slot(&self.frame, slot));
+        }
+        let duration = self.downlink_symbols(slot);
+        let prbs = self.loaded_prbs(slot);
+        let dmrs_symbols = self.dmrs.symbols(duration);
+        let dmrs = if dmrs_symbols.is_empty() {
+            Vec::new()
+        } else {
+            self.dmrs.res_in_slot(&self.frame, slot, duration, &prbs)
+        };
+        SlotRes {
+            signals,
+            dmrs_symbols,
+            dmrs,
+            prbs,
+        }
+    }
+
+    /// Downlink symbol `m` of the slot whose REs are `res`.
+    fn symbol_in_slot(&self, m: u64, res: &SlotRes) -> NrSymbol {
         let nsc = self.frame.subcarriers();
         let mut values = vec![Complex64::default(); nsc];
         let mut roles = vec![Role::Empty; nsc];
-        if self.frame.symbol_use(m) != SymbolUse::Downlink {
-            return NrSymbol { values, roles };
-        }
         let sps = self.frame.symbols_per_slot() as u64;
-        let (slot, l) = (m / sps, (m % sps) as usize);
+        let l = (m % sps) as usize;
         let mut data_rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x0DA7_A000_0000_0000);
         data_rng.set_stream(m);
-        let mut put = |res: Vec<Re>, values: &mut [Complex64], roles: &mut [Role]| {
-            for re in res.into_iter().filter(|r| r.l == l && r.k < nsc) {
+        let mut put = |res: &[Re], values: &mut [Complex64], roles: &mut [Role]| {
+            for re in res.iter().filter(|r| r.l == l && r.k < nsc) {
                 if roles[re.k] != Role::Empty {
                     continue;
                 }
@@ -173,30 +244,17 @@ impl NrGrid {
                 }
             }
         };
-        if let Some(s) = &self.ssb {
-            put(s.res_in_slot(&self.frame, slot), &mut values, &mut roles);
+        for sig in &res.signals {
+            put(sig, &mut values, &mut roles);
         }
-        if let Some(t) = &self.trs {
-            put(t.res_in_slot(&self.frame, slot), &mut values, &mut roles);
-        }
-        if let Some(p) = &self.prs {
-            put(p.res_in_slot(&self.frame, slot), &mut values, &mut roles);
-        }
-        let duration = self.downlink_symbols(slot);
-        let prbs = self.loaded_prbs(slot);
-        let dmrs_symbols = self.dmrs.symbols(duration);
-        if dmrs_symbols.is_empty() {
+        if res.dmrs_symbols.is_empty() {
             return NrSymbol { values, roles };
         }
-        if dmrs_symbols.contains(&l) {
-            put(
-                self.dmrs.res_in_slot(&self.frame, slot, duration, &prbs),
-                &mut values,
-                &mut roles,
-            );
+        if res.dmrs_symbols.contains(&l) {
+            put(&res.dmrs, &mut values, &mut roles);
             return NrSymbol { values, roles }; // no data beside a DMRS (two CDM groups)
         }
-        for n in prbs {
+        for &n in &res.prbs {
             let modulation = self.modulations[n % self.modulations.len()];
             let q = modulation.bits() as usize;
             for k in SUBCARRIERS_PER_PRB * n..SUBCARRIERS_PER_PRB * (n + 1) {
@@ -297,6 +355,20 @@ pub(crate) mod tests {
         let s = g.symbol(14 * 2 + 5);
         assert_eq!(s.occupancy(), 1.0);
         assert_eq!(g.symbol(99), g.symbol(99), "reproducible");
+    }
+
+    /// Symbols made a slot at a time are the symbols made one by one, across slot boundaries
+    /// and uplink symbols.
+    #[test]
+    fn symbols_of_a_run_are_the_symbols_one_by_one() {
+        let g = grid(0.6);
+        for (first, count) in [(0u64, 5usize), (12, 20), (2 * 14 + 9, 6), (4 * 14 + 3, 15)] {
+            let run = g.symbols(first, count);
+            assert_eq!(run.len(), count);
+            for (m, s) in (first..).zip(&run) {
+                assert_eq!(*s, g.symbol(m), "symbol {m}");
+            }
+        }
     }
 
     #[test]

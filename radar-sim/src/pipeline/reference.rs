@@ -124,9 +124,7 @@ impl Processor {
                 .map(|s| num.symbol_data(m0 + s))
                 .collect();
         };
-        let symbols: Vec<NrSymbol> = (0..spectra.len() as u64)
-            .map(|s| ill.grid.symbol(m0 + s))
-            .collect();
+        let symbols: Vec<NrSymbol> = ill.grid.symbols(m0, spectra.len());
         if reference == Reference::Pilots {
             return symbols.iter().map(|s| c32(&s.pilots())).collect();
         }

@@ -353,7 +353,14 @@ fn corrections_agree_with_brute_force_and_the_segment_spectra() {
         let mut data = |m: i64| (m >= 0).then(|| Arc::new(s.numerology().symbol_data(m as u64)));
         let mut by = |method| {
             let mut out = vec![Complex64::new(0.0, 0.0); 64];
-            s.synthesize_window_by(7, &paths, &mut data, &mut out, method);
+            s.synthesize_window_by(
+                7,
+                &paths,
+                &mut data,
+                &mut out,
+                method,
+                &mut Default::default(),
+            );
             out
         };
         let (seg, corr, auto) = (
@@ -386,19 +393,148 @@ fn corrections_are_exact_under_nr() {
             &mut data,
             &mut out,
             SplitMethod::Corrections,
+            &mut Default::default(),
         );
         let e = relative_error(&out, &brute_nr(&s, m, &paths));
         assert!(e < 1e-20, "m {m}: relative error {e}");
     }
 }
 
-/// The series' terms hold the truncation bound: x^Q/Q!·e^x < 1e-16, and one term fewer does not.
+/// The series' terms hold the truncation bound: 2 Σ_{q≥Q} (x/2)^q/q! < 1e-16, and one term
+/// fewer does not; about 15 terms where a Taylor series in the fraction needs 19.
 #[test]
 fn series_terms_meet_the_bound() {
-    for x in [0.1, 0.96, 1.35, 2.0] {
+    for x in [0.1, 0.96, 1.35, std::f64::consts::FRAC_PI_2] {
         let q = split::series_terms(x);
-        let tail = |q: usize| x.powi(q as i32) / (1..=q).map(|v| v as f64).product::<f64>();
-        assert!(tail(q) * x.exp() < 1e-16, "x {x}: {q}");
-        assert!(tail(q - 1) * x.exp() >= 1e-16, "x {x}: {q}");
+        assert!(split::series_tail(x, q) < 1e-16, "x {x}: {q}");
+        assert!(split::series_tail(x, q - 1) >= 1e-16, "x {x}: {q}");
+        let taylor = |q: usize| x.powi(q as i32) / (1..=q).map(|v| v as f64).product::<f64>();
+        assert!(
+            taylor(q) * x.exp() > 1e-16,
+            "x {x}: the Taylor bound with {q} terms"
+        );
+    }
+    assert_eq!(split::series_terms(0.96), 15);
+    // the tail is the sum it claims: 2 (x/2)^Q/Q! (1 + (x/2)/(Q+1) + ...)
+    let t = split::series_tail(1.0, 3);
+    let want: f64 = (3..40)
+        .map(|q| 2.0 * 0.5f64.powi(q) / (1..=q).map(f64::from).product::<f64>())
+        .sum();
+    assert!((t / want - 1.0).abs() < 1e-14, "{t} vs {want}");
+}
+
+/// ε_q J_q(x): the Jacobi–Anger sum Σ_q ε_q (−j)^q J_q(x) T_q(t) is e^{−jxt}, and J_0, J_1 match
+/// tabulated values.
+#[test]
+fn bessel_weights_expand_the_fractional_delay() {
+    let w = split::bessel_weights(1.0, 20);
+    assert!(
+        (w[0] - 0.765_197_686_557_966_6).abs() < 1e-15,
+        "J0(1) {}",
+        w[0]
+    );
+    assert!(
+        (w[1] / 2.0 - 0.440_050_585_744_933_5).abs() < 1e-15,
+        "J1(1)"
+    );
+    for x in [-1.5, -0.3, 0.0, 0.96, 1.5] {
+        let w = split::bessel_weights(x, split::series_terms(1.5));
+        for t in [-1.0, -0.37, 0.0, 0.5, 1.0] {
+            let (mut t0, mut t1) = (1.0, t);
+            let mut sum = Complex64::new(0.0, 0.0);
+            for (q, wq) in w.iter().enumerate() {
+                let tq = if q == 0 { 1.0 } else { t1 };
+                if q > 0 {
+                    (t0, t1) = (t1, 2.0 * t * t1 - t0);
+                }
+                sum += Complex64::new(0.0, -1.0).powu(q as u32) * wq * tq;
+            }
+            let want = Complex64::from_polar(1.0, -x * t);
+            assert!((sum - want).norm() < 1e-15, "x {x} t {t}: {sum} vs {want}");
+        }
+    }
+}
+
+/// The occupied subcarriers land in the bins of `Numerology::bin`; every other bin is zero.
+#[test]
+fn to_bins_places_every_subcarrier() {
+    let num = nr_synth().numerology().clone();
+    let v: Vec<Complex64> = (0..num.subcarriers)
+        .map(|i| Complex64::new(i as f64 + 1.0, -(i as f64)))
+        .collect();
+    let mut dst = vec![Complex64::new(7.0, 7.0); num.fft_size];
+    split::to_bins(&v, &mut dst);
+    let mut want = vec![Complex64::new(0.0, 0.0); num.fft_size];
+    for (i, x) in v.iter().enumerate() {
+        want[num.bin(i)] = *x;
+    }
+    assert_eq!(dst, want);
+}
+
+/// A pulse of four windows (stop-and-hop: the same paths in each, their sums computed once)
+/// is, sample for sample, the four windows synthesised one by one.
+#[test]
+fn a_pulse_is_its_windows_synthesised_one_by_one() {
+    let r = RadarConfig {
+        symbols_per_pulse: 4,
+        prf_hz: 1e3,
+        ..small_radar(MotionModel::StopAndHop)
+    };
+    let num = Numerology::new(&r, 40e6, 0.1).unwrap();
+    let ant = Antenna::new(&r, 0.1, std::f64::consts::FRAC_PI_4);
+    // objects 0..~60 samples of excess delay: inside the 16-sample CP and beyond it
+    let objects: Vec<SceneObject> = (0..30)
+        .map(|i| SceneObject {
+            id: i,
+            x_m: 200.0 + 37.0 * i as f64,
+            y_m: -150.0 + 11.0 * (i % 7) as f64,
+            rcs_m2: 1.0 + i as f64,
+            phase_rad: 0.3 * i as f64,
+            landmark: None,
+        })
+        .collect();
+    let s = Synthesizer::new(num, &r, ant, [1000.0, -1000.0, 50.0], objects).unwrap();
+    let pos_m = [0.0, 0.0, 100.0];
+    let fs = s.numerology().sample_rate_hz();
+    let d = (dist3(pos_m, [1000.0, -1000.0, 50.0]) * fs / C_MPS).floor() as i64;
+    let pulse = PulseMeta {
+        index: 3,
+        aperture: 0,
+        look: 0,
+        t_s: 0.0,
+        symbol: 40,
+        pos_m,
+        vel_mps: [20.0, 0.0, 0.0],
+        heading: [1.0, 0.0],
+        window_delay_samples: d,
+    };
+    let comps = Components {
+        noise: false,
+        ..Components::ALL
+    };
+    let n = s.numerology().fft_size;
+    let mut got = vec![Complex32::new(0.0, 0.0); 4 * n];
+    s.synthesize_pulse(&pulse, comps, &mut got).unwrap();
+    let paths = s.paths(pos_m, pulse.vel_mps, pulse.heading, d, comps);
+    let split = paths
+        .iter()
+        .filter(|p| p.delay_samples > s.numerology().cp_samples as f64)
+        .count();
+    // more split paths than the series has terms (the corrections), beside paths in the CP
+    assert!(
+        split > s.split_terms && split < paths.len(),
+        "{split} of {}",
+        paths.len()
+    );
+    let num = s.numerology().clone();
+    let mut data = |m: i64| (m >= 0).then(|| Arc::new(num.symbol_data(m as u64)));
+    for w in 0..4 {
+        let mut out = vec![Complex64::new(0.0, 0.0); n];
+        s.synthesize_window(40 + w as i64, &paths, &mut data, &mut out);
+        let want: Vec<Complex32> = out
+            .iter()
+            .map(|v| Complex32::new(v.re as f32, v.im as f32))
+            .collect();
+        assert_eq!(&got[w * n..(w + 1) * n], &want[..], "window {w}");
     }
 }
