@@ -2,7 +2,7 @@
 //! with `altitude = "free"` within each pair of bounds given (the `exact` scheme with the
 //! altitude profile, as `planner/examples/free_altitude.rs` and `cellsar-radar-sim closed-loop`
 //! plan it), and prints per plan its true energy, altitude range, feasibility, unresolved
-//! landmark slots and the expected SNR of each landmark at its aperture from the radar's link
+//! landmark windows (median longest chord over d_min) and slots, and the expected SNR of each landmark at its aperture from the radar's link
 //! budget (`radar_sim::run::landmark_snrs`: the closed loop's apertures, looks and pulses at the
 //! flown altitudes, `Processor::expected_snr_db` per look, the mean over looks as the closed
 //! loop reports it), min / mean over the landmark apertures in view, with the mean over them of
@@ -19,6 +19,7 @@
 use std::path::{Path, PathBuf};
 
 use planner::evaluate::ResolutionMode;
+use planner::shortfall::ResolutionShortfall;
 use planner::{AltitudeMode, Mission, PlanOptions, PlanResult};
 use radar_sim::config::SceneFile;
 use radar_sim::run::{landmark_snrs, LandmarkSnr, SnrSummary};
@@ -104,7 +105,7 @@ fn case(
     Ok((plan, snr))
 }
 
-fn row(label: &str, plan: &PlanResult, snr: &[LandmarkSnr]) {
+fn row(label: &str, mission: &Mission, plan: &PlanResult, snr: &[LandmarkSnr]) {
     let start = plan.evaluation.start_altitude_m;
     let (lo, hi) = plan
         .altitudes_m
@@ -115,12 +116,14 @@ fn row(label: &str, plan: &PlanResult, snr: &[LandmarkSnr]) {
             (a.min(v), b.max(v))
         });
     let s = SnrSummary::of(snr);
+    let short = ResolutionShortfall::new(mission, &plan.evaluation);
     println!(
-        "{label:<11} {:>10.1} {:>6.0}-{:<6.0} {:>8} {:>10} {:>8} {:>7.2}/{:<6.2} {:>8.2} {:>9.1}",
+        "{label:<11} {:>10.1} {:>6.0}-{:<6.0} {:>8} {:>5}/{:<5} {:>8} {:>7.2}/{:<6.2} {:>8.2} {:>9.1}",
         plan.evaluation.energy_j,
         lo,
         hi,
         plan.is_feasible(),
+        short.unresolved_windows,
         plan.evaluation.slots_unresolved,
         s.apertures_in_view,
         s.min_db,
@@ -177,16 +180,17 @@ fn main() -> Result<(), Error> {
         args.scene.display()
     );
     println!(
-        "plan          energy_j  altitude_m  feasible unresolved in_view snr_db min/mean  gain_db  range_m"
+        "plan          energy_j  altitude_m  feasible unres w/slots in_view snr_db min/mean  gain_db  range_m"
     );
     let at_fixed = fixed(&mission)?;
     let (plan, snr) = case(&at_fixed, &options, &scene)?;
-    row("fixed", &plan, &snr);
+    row("fixed", &at_fixed, &plan, &snr);
     let mut details = vec![("fixed".to_string(), snr)];
     for b in bounds {
         let label = format!("{:.0}-{:.0}", b.0, b.1);
-        let (plan, snr) = case(&free(&mission, b)?, &options, &scene)?;
-        row(&label, &plan, &snr);
+        let free_mission = free(&mission, b)?;
+        let (plan, snr) = case(&free_mission, &options, &scene)?;
+        row(&label, &free_mission, &plan, &snr);
         details.push((label, snr));
     }
     if args.apertures {
