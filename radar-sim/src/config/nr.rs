@@ -228,9 +228,52 @@ impl NrConfig {
             first_symbol: self.pulse_first_symbol,
             symbols: self.pulse_symbols,
         };
-        Ok(NrIllumination::new(grid, pulse, NR_PREFIX)?)
+        let ill = NrIllumination::new(grid, pulse, NR_PREFIX)?;
+        if self.prs {
+            self.check_prs_period()?;
+        }
+        Ok(ill)
+    }
+
+    /// Refuses a PRS period that no cell can configure: TS 37.355's
+    /// `dl-PRS-Periodicity-and-ResourceSetSlotOffset` (TS 38.214 5.1.6.5) allows
+    /// 2^μ × [`PRS_PERIODS_AT_15KHZ`] slots.
+    fn check_prs_period(&self) -> Result<()> {
+        let (period, name) = match self.prs_period_slots {
+            Some(p) => (p, "prs_period_slots"),
+            None => (self.pulse_period_slots, "pulse_period_slots"),
+        };
+        let scale = 1u64 << self.numerology.min(3);
+        if PRS_PERIODS_AT_15KHZ.iter().any(|b| b * scale == period) {
+            return Ok(());
+        }
+        let allowed: Vec<String> = PRS_PERIODS_AT_15KHZ
+            .iter()
+            .take(10)
+            .map(|b| (b * scale).to_string())
+            .collect();
+        Err(RadarError::config(
+            field(name),
+            format!(
+                "a PRS every {period} slots: TS 38.214 allows a PRS period of {}, … slots at \
+                 μ = {} (2^μ × {{4, 5, 8, 10, 16, 20, 32, 40, …}}){}",
+                allowed.join(", "),
+                self.numerology,
+                if self.prs_period_slots.is_none() {
+                    "; the PRS period is the pulse period unless radar.nr.prs_period_slots is set"
+                } else {
+                    ""
+                }
+            ),
+        ))
     }
 }
+
+/// The PRS periods of a 15 kHz carrier, slots (TS 37.355 `dl-PRS-Periodicity-and-
+/// ResourceSetSlotOffset`); numerology μ multiplies them by 2^μ.
+pub const PRS_PERIODS_AT_15KHZ: [u64; 17] = [
+    4, 5, 8, 10, 16, 20, 32, 40, 64, 80, 160, 320, 640, 1280, 2560, 5120, 10240,
+];
 
 /// A `[radar]` key that the NR frame sets: refused when given with a value other than its
 /// default and the frame's.
@@ -346,6 +389,36 @@ mod tests {
     }
 
     #[test]
+    fn prs_periods_are_those_of_ts_38_214() {
+        for mu in 0..=3u8 {
+            for p in 1..=20_480u64 {
+                let nr = NrConfig {
+                    numerology: mu,
+                    prs_period_slots: Some(p),
+                    ..NrConfig::default()
+                };
+                // 2^μ × {4, 5, 8, 10, 16, 20, 32, 40, 64, 80, 160, …, 10240}
+                let base = p % (1 << mu) == 0 && {
+                    let b = p >> mu;
+                    [4, 5, 8, 10, 16, 20, 32, 40, 64, 80].contains(&b)
+                        || ((160..=10_240).contains(&b)
+                            && b % 160 == 0
+                            && (b / 160).is_power_of_two())
+                };
+                assert_eq!(nr.check_prs_period().is_ok(), base, "μ = {mu}, {p} slots");
+            }
+        }
+        // the default pulse period is a PRS period at every numerology
+        for mu in 0..=3u8 {
+            let nr = NrConfig {
+                numerology: mu,
+                ..NrConfig::default()
+            };
+            nr.check_prs_period().unwrap();
+        }
+    }
+
+    #[test]
     fn bad_values_name_their_field() {
         let f = |t: &str| {
             let s = scene(t)?;
@@ -374,6 +447,14 @@ mod tests {
                 "radar.nr.pulse_slot",
             ),
             ("[radar.nr]\npulse_symbols = 0\n", "radar.nr.pulse_symbols"),
+            (
+                "[radar.nr]\npulse_period_slots = 30\n",
+                "radar.nr.pulse_period_slots",
+            ),
+            (
+                "[radar.nr]\nprs_period_slots = 30\n",
+                "radar.nr.prs_period_slots",
+            ),
             ("[radar.nr]\ncell_id = 2000\n", "radar.nr.cell_id"),
             (
                 "[radar.nr]\nssb_first_prb = 200\n",

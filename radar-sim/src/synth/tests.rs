@@ -186,7 +186,8 @@ fn nr_synth() -> Synthesizer {
         prbs: Some(8),
         ssb: false,
         load: 1.0,
-        pulse_period_slots: 5,
+        // a PRS period of TS 38.214 at μ = 1 (2^μ × 5) that keeps the pulses on DDDSU's D slots
+        pulse_period_slots: 10,
         ..Default::default()
     };
     let ill = nr.illumination(8, 3).unwrap();
