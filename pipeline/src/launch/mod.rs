@@ -132,7 +132,8 @@ pub struct RunArgs {
     /// Apertures the processor asks for at once (at least 1).
     #[arg(long, default_value_t = 2)]
     pub window: usize,
-    /// The processor asks again for an aperture after this many seconds without frames.
+    /// The processor asks again for an aperture after this many seconds without frames (after
+    /// 1 s, if shorter, once frames were lost in transport since the request).
     #[arg(long, default_value = "10", value_parser = flags::parse_seconds)]
     pub resend_after_s: Seconds,
     /// Exit with code 4 when a landmark in view was not detected (default: report it in

@@ -78,7 +78,8 @@ pub struct ProcessArgs {
     /// Apertures asked for at once.
     #[arg(long, default_value_t = 2)]
     pub window: usize,
-    /// Ask again for an aperture when no frame of its mission arrived for this long, s.
+    /// Ask again for an aperture when no frame of its mission arrived for this long, s (after
+    /// 1 s, if shorter, once frames were lost in transport since the request).
     #[arg(long, default_value = "10", value_parser = bridge::flags::parse_seconds)]
     pub resend_after_s: Seconds,
     /// Store finished apertures here; after a restart, resume with the next one.

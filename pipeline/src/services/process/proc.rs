@@ -505,7 +505,8 @@ impl Proc<'_> {
         let id = run.ctx.base.mission_id;
         let fp = run.ctx.base.layout.frame_pulses();
         let now = Instant::now();
-        let idle = run.last_frame.elapsed() >= resend;
+        let quiet_since = run.last_frame;
+        let lost_now = self.report.transport_lost;
         let mut sent = Vec::new();
         let look_entry = run.look.as_mut().map(|la| (la.0, &mut la.1));
         let asm = run
@@ -517,17 +518,13 @@ impl Proc<'_> {
             if a.request_pending {
                 continue;
             }
-            let due = match (a.requested, a.retry_at) {
-                (None, _) => true,
-                (Some(_), Some(t)) => now >= t,
-                (Some(t), None) => idle && t.elapsed() >= resend,
-            };
-            if due {
+            if a.due(now, quiet_since, resend, lost_now) {
                 if a.requested.is_some() {
                     self.report.resends += 1;
                     tracing::info!(mission = %id, aperture = k, look = ?a.look, missing = a.want.len(), "asking again");
                 }
                 a.requested = Some(now);
+                a.lost_at_request = lost_now;
                 a.retry_at = None;
                 a.request_pending = true;
                 a.attempts += 1;
