@@ -159,14 +159,8 @@ impl Processor {
         let margin = grid.spacing_m;
         let half_x = (grid.nx as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
         let half_y = (grid.ny as f64 - 1.0) / 2.0 * grid.spacing_m - margin;
-        let snr_lin = |o: &SceneObject| -> f64 {
-            (0..ap.looks)
-                .map(|l| {
-                    10f64.powf(self.expected_snr_db(o, &pulses[l * ppl..(l + 1) * ppl]) / 10.0)
-                })
-                .sum::<f64>()
-                / ap.looks as f64
-        };
+        let snr_lin =
+            |o: &SceneObject| Self::mean_look_snr(&self.look_snrs_db(o, pulses, ppl, ap.looks));
         let reach = NEAR_OBJECT_REACH * half_x.max(half_y);
         let near: Vec<(&SceneObject, f64)> = objects
             .iter()

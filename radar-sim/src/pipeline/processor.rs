@@ -146,6 +146,32 @@ impl Processor {
         10.0 * (amp * amp / self.look_noise_var(pulses.len())).log10()
     }
 
+    /// [`Self::expected_snr_db`] of `obj` in each of the `looks` looks of `pulses`
+    /// (`pulses_per_look` each), dB.
+    pub fn look_snrs_db(
+        &self,
+        obj: &SceneObject,
+        pulses: &[PulseMeta],
+        pulses_per_look: usize,
+        looks: usize,
+    ) -> Vec<f64> {
+        (0..looks)
+            .map(|l| {
+                self.expected_snr_db(obj, &pulses[l * pulses_per_look..(l + 1) * pulses_per_look])
+            })
+            .collect()
+    }
+
+    /// The mean over looks of the linear per-look SNR of [`Self::look_snrs_db`] (what the closed
+    /// loop reports for an object at its aperture), linear.
+    pub fn mean_look_snr(look_snrs_db: &[f64]) -> f64 {
+        look_snrs_db
+            .iter()
+            .map(|db| 10f64.powf(db / 10.0))
+            .sum::<f64>()
+            / look_snrs_db.len().max(1) as f64
+    }
+
     /// Predicted echo power per sample at the receiver, W: the link budget of `objects`
     /// summed, mean over `pulses`.
     pub fn echo_power_w(&self, objects: &[SceneObject], pulses: &[PulseMeta]) -> f64 {

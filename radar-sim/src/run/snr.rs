@@ -131,15 +131,8 @@ pub fn landmark_snrs(
             },
         };
         let pulses = proc.setup().pulses(&track, ap);
-        let ppl = ap.pulses_per_look;
-        let look_snr_db: Vec<f64> = (0..ap.looks)
-            .map(|l| proc.expected_snr_db(&object, &pulses[l * ppl..(l + 1) * ppl]))
-            .collect();
-        let mean_lin = look_snr_db
-            .iter()
-            .map(|db| 10f64.powf(db / 10.0))
-            .sum::<f64>()
-            / ap.looks.max(1) as f64;
+        let look_snr_db = proc.look_snrs_db(&object, &pulses, ap.pulses_per_look, ap.looks);
+        let mean_lin = Processor::mean_look_snr(&look_snr_db);
         let n = pulses.len().max(1) as f64;
         let mean_altitude_m = pulses.iter().map(|p| p.pos_m[2]).sum::<f64>() / n;
         let target = [object.x_m, object.y_m, 0.0];
