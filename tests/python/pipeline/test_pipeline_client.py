@@ -209,11 +209,11 @@ class PipelineClientTest(unittest.TestCase):
         wait_for(lambda: statuses.get("processor", {}).get("state") == "done", "the processor's status 'done'")
         with lock:
             self.assertEqual(statuses["processor"]["done"], 2)
-            # "malformed" also counts the frames lost in transport ("transport_lost": on a
-            # loaded machine the echo's iceoryx2 buffer can overflow; the processor asks for
-            # them again): nothing else may be malformed
+            # a healthy run decodes everything it receives (frames lost in transport,
+            # "transport_lost", are allowed: a loaded machine's full iceoryx2 buffer, asked
+            # for again)
             c = statuses["processor"]["counters"]
-            self.assertEqual(c["malformed"] - c["transport_lost"], 0, c)
+            self.assertEqual(c["malformed"], 0, c)
         # the echo service publishes its status periodically (not on each frame): wait for one
         # that counts every frame of the 20-s mission, rather than read whichever came last
         wait_for(lambda: statuses.get("echo", {}).get("counters", {}).get("frames", 0) >= 20,

@@ -33,7 +33,8 @@ pub(super) struct Assembly {
     pub(super) request_pending: bool,
     /// Requests sent.
     pub(super) attempts: u32,
-    /// The process's count of frames lost in transport when it was last asked for.
+    /// The process's count of frames lost in transport or arrived malformed when it was last
+    /// asked for.
     pub(super) lost_at_request: u64,
 }
 
@@ -77,7 +78,7 @@ impl Assembly {
     /// Whether to ask for it (again) at `now`: never asked; a failed request's retry time
     /// reached; or the mission's frames paused since `quiet_since` and the request as long
     /// ago as `resend`, or [`LOST_QUIET`] (if shorter) once the process's count of frames
-    /// lost in transport, `lost_now`, has grown since the request.
+    /// lost in transport or arrived malformed, `lost_now`, has grown since the request.
     pub(super) fn due(
         &self,
         now: Instant,

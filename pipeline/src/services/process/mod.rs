@@ -129,8 +129,13 @@ pub struct ProcessReport {
     pub forged: u64,
     /// Frames dropped because the receive queue was full.
     pub dropped: u64,
-    /// Frames the transport reported as missed (sequence gaps) or malformed.
+    /// Frames the transport lost: sequence gaps (iceoryx2) or a full subscriber queue (Zenoh).
+    /// Never a frame that arrived: those that fail to decode are `frames_malformed`.
     pub transport_lost: u64,
+    /// Frames that arrived but failed to decode or validate (a header inconsistent with the
+    /// payload, a bad checksum, a payload that is not complex f32), dropped.
+    #[serde(default)]
+    pub frames_malformed: u64,
     /// Requests sent to the echo (first requests and re-requests).
     pub requests: u64,
     /// Re-requests.

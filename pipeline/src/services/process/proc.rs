@@ -160,6 +160,7 @@ impl Proc<'_> {
             self.dispatch();
             self.drive_requests();
             self.report.transport_lost = loss.lost.load(Ordering::Relaxed);
+            self.report.frames_malformed = loss.malformed.load(Ordering::Relaxed);
             self.report.dropped = loss.dropped.load(Ordering::Relaxed);
             self.malformed = plans.counters().snapshot().malformed
                 + result_requests.counters().snapshot().malformed
@@ -506,7 +507,11 @@ impl Proc<'_> {
         let fp = run.ctx.base.layout.frame_pulses();
         let now = Instant::now();
         let quiet_since = run.last_frame;
-        let lost_now = self.report.transport_lost;
+        // a frame that arrived malformed will not come either: both make a request due sooner
+        let lost_now = self
+            .report
+            .transport_lost
+            .saturating_add(self.report.frames_malformed);
         let mut sent = Vec::new();
         let look_entry = run.look.as_mut().map(|la| (la.0, &mut la.1));
         let asm = run

@@ -200,26 +200,11 @@ impl Proc<'_> {
             s.done = run.outcomes.len() as u64;
             s.done_items = run.outcomes.keys().map(|k| *k as u64).collect();
             let r = &self.report;
-            for (k, v) in [
-                ("apertures", r.apertures),
-                ("restored", r.restored),
-                ("frames", r.frames),
-                ("used", r.used),
-                ("duplicates", r.duplicates),
-                ("unsolicited", r.unsolicited),
-                ("bad", r.bad),
-                ("forged", r.forged),
-                ("dropped", r.dropped),
-                ("transport_lost", r.transport_lost),
-                ("requests", r.requests),
-                ("resends", r.resends),
-                ("request_errors", r.request_errors),
-                ("republished", r.republished),
-                ("metrics", u64::from(run.metrics.is_some())),
-                ("malformed", self.malformed + r.transport_lost),
-            ] {
+            for (k, v) in status_counters(r, self.malformed) {
                 s.counters.insert(k.to_string(), v);
             }
+            s.counters
+                .insert("metrics".to_string(), u64::from(run.metrics.is_some()));
             if let Some(f) = &run.failed {
                 s.message = format!("failed: {f}");
                 self.board.publish(self.node, &s);
@@ -255,6 +240,7 @@ impl Proc<'_> {
             forged = r.forged,
             dropped = r.dropped,
             transport_lost = r.transport_lost,
+            frames_malformed = r.frames_malformed,
             requests = r.requests,
             resends = r.resends,
             request_errors = r.request_errors,
@@ -268,5 +254,67 @@ impl Proc<'_> {
             lookups_malformed = self.cache.malformed(),
             "processor stopping"
         );
+    }
+}
+
+/// The processor's counters in a mission's status. `malformed` counts the messages that arrived
+/// and failed to decode or validate: the frames (`report.frames_malformed`) and the plans,
+/// result requests and plan lookups (`other_malformed`); `transport_lost` counts only the frames
+/// the transport lost (sequence gaps, a full subscriber queue). Neither includes the other.
+pub(super) fn status_counters(
+    report: &super::ProcessReport,
+    other_malformed: u64,
+) -> [(&'static str, u64); 16] {
+    let r = report;
+    [
+        ("apertures", r.apertures),
+        ("restored", r.restored),
+        ("frames", r.frames),
+        ("used", r.used),
+        ("duplicates", r.duplicates),
+        ("unsolicited", r.unsolicited),
+        ("bad", r.bad),
+        ("forged", r.forged),
+        ("dropped", r.dropped),
+        ("transport_lost", r.transport_lost),
+        ("frames_malformed", r.frames_malformed),
+        ("requests", r.requests),
+        ("resends", r.resends),
+        ("request_errors", r.request_errors),
+        ("republished", r.republished),
+        (
+            "malformed",
+            other_malformed.saturating_add(r.frames_malformed),
+        ),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::status_counters;
+    use crate::services::process::ProcessReport;
+
+    /// Frames lost in transport are not malformed messages, and malformed frames are not lost
+    /// ones: each count shows under its own name only.
+    #[test]
+    fn lost_and_malformed_frames_are_counted_apart_in_the_status() {
+        let report = ProcessReport {
+            transport_lost: 3,
+            frames_malformed: 5,
+            dropped: 7,
+            ..ProcessReport::default()
+        };
+        let c: std::collections::HashMap<_, _> = status_counters(&report, 11).into_iter().collect();
+        assert_eq!(c["transport_lost"], 3);
+        assert_eq!(c["frames_malformed"], 5);
+        assert_eq!(c["malformed"], 5 + 11);
+        assert_eq!(c["dropped"], 7);
+        // nothing lost, nothing malformed: a healthy run on a loaded machine still shows 0
+        let lossy = ProcessReport {
+            transport_lost: 9,
+            ..ProcessReport::default()
+        };
+        let c: std::collections::HashMap<_, _> = status_counters(&lossy, 0).into_iter().collect();
+        assert_eq!((c["malformed"], c["transport_lost"]), (0, 9));
     }
 }
