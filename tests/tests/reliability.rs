@@ -475,8 +475,14 @@ fn ten_thousand_malformed_payloads_on_every_key() {
     at_least(&p, "processor stopping", "plans_malformed", n);
     at_least(&p, "processor stopping", "result_requests_malformed", n);
     at_least(&p, "processor stopping", "lookups_malformed", n);
-    // the malformed frames on the echo key arrived: malformed, not lost in transport
+    // the malformed frames on the echo key arrived: malformed, not lost in transport (which
+    // counts only the mission's own frames, far fewer than the flood)
     at_least(&p, "processor stopping", "frames_malformed", n);
+    let lost = counter(&p, "processor stopping", "transport_lost").unwrap();
+    assert!(
+        lost < n,
+        "transport_lost = {lost}: the flood counted as lost"
+    );
     let e = echo.log_text();
     at_least(&e, "echo stopping", "requests_malformed", n);
     at_least(&e, "echo stopping", "plans_malformed", n);
