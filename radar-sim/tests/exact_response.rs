@@ -216,6 +216,7 @@ fn detections(
                 band: &[],
                 scale,
                 gains: &gains,
+                ghosts: None,
             }),
         )
         .unwrap();

@@ -17,7 +17,9 @@ use std::sync::Arc;
 use radar_sim::cancel::SymbolWindow;
 use radar_sim::config::{NrConfig, SceneFile};
 use radar_sim::nr::Reference;
-use radar_sim::pipeline::{cp_overlap_factor, Processor, RadarSetup};
+use radar_sim::pipeline::{
+    cp_overlap_factor, Processor, RadarSetup, GHOST_PEAK_OVER_MEAN, PATTERN_SAMPLES,
+};
 use rustfft::num_complex::{Complex32, Complex64};
 use rustfft::FftPlanner;
 
@@ -32,6 +34,12 @@ struct Ghosts {
     coherent_share: f64,
     /// The processor's prediction of `per_pulse`: (1 − f²) × profile noise variance / σ².
     predicted: f64,
+    /// The mean over pulses of the compressed spectrum less the exact response's share of it
+    /// (`f z0`, f the overlap factor at the numerology's CP), over the main peak's value
+    /// `f z0(delay)`: the measured coherent ghost, as [`Processor::pilot_ghost`] models it.
+    mean_ghost: Vec<Complex64>,
+    /// The pulses' first symbols.
+    first_symbols: Vec<u64>,
 }
 
 /// An echo of unit amplitude at integer delay `delay` (samples from the window's start) in
@@ -80,6 +88,9 @@ fn ghosts(reference: Reference, delay: usize) -> Ghosts {
     let mut ghosts: Vec<Vec<Complex64>> = Vec::with_capacity(PULSES);
     let mut peak = 0.0;
     let mut f_mean = 0.0;
+    let f_model = cp_overlap_factor(delay as f64, n, num.cp_samples);
+    let mut model_share: Vec<Complex64> = vec![Complex64::default(); nsc];
+    let mut main_peak = Complex64::default();
     for q in 0..PULSES {
         let m0 = ill.pulse_symbol(q as f64 / ill.prf_hz());
         let (mut real, mut cyclic) = (Vec::new(), Vec::new());
@@ -114,6 +125,10 @@ fn ghosts(reference: Reference, delay: usize) -> Ghosts {
         let z0 = proc.compressor().spectrum(&cyclic);
         let f = cp_overlap_factor(delay as f64, n, ill.grid.frame.cp_samples(m0));
         peak += proc.compressor().evaluate(&z0, delay as f64).norm_sqr() / PULSES as f64;
+        main_peak += proc.compressor().evaluate(&z0, delay as f64) * f_model / PULSES as f64;
+        for ((m, a), b) in model_share.iter_mut().zip(&z).zip(&z0) {
+            *m += (a - b * f_model) / PULSES as f64;
+        }
         ghosts.push(z.iter().zip(&z0).map(|(a, b)| a - b * f).collect());
     }
     // Parseval: the mean over the N profile samples of |Σ_i G_i e^{j2πk_i x/N}|² is Σ |G_i|²
@@ -137,6 +152,10 @@ fn ghosts(reference: Reference, delay: usize) -> Ghosts {
         per_pulse,
         coherent_share,
         predicted: (1.0 - f_mean * f_mean) * p_echo * noise_gain,
+        mean_ghost: model_share.iter().map(|v| v / main_peak).collect(),
+        first_symbols: (0..PULSES)
+            .map(|q| ill.pulse_symbol(q as f64 / ill.prf_hz()))
+            .collect(),
     }
 }
 
@@ -194,5 +213,103 @@ fn echoes_inside_the_cp_leave_no_ghost() {
         let g = ghosts(reference, 200);
         assert!(g.per_pulse < 1e-20, "{reference:?}: {}", g.per_pulse);
         assert!(g.predicted.abs() < 1e-12, "{reference:?}: {}", g.predicted);
+    }
+}
+
+/// The processor's model of the ghost ([`Processor::pilot_ghost`], from the pilots' waveform
+/// alone) against the mean over pulses of the ghost synthesised with the data: their profiles
+/// compared at every delay over the profile's period (not only near the echo).
+#[test]
+fn the_pilots_ghost_model_is_the_ghost_that_repeats() {
+    let mut scene = SceneFile::default();
+    scene.radar.reference = Reference::Pilots;
+    scene.radar.nr = Some(NrConfig::default());
+    let setup = RadarSetup::new(&planner::Params::default(), &scene).unwrap();
+    let proc = Processor::new(setup.clone()).unwrap();
+    let num = &setup.num;
+    let n = num.fft_size;
+    // (the measured profile at x samples from the echo)
+    let profile = |z: &[Complex64], delay: usize, x: f64| -> Complex64 {
+        z.iter()
+            .enumerate()
+            .map(|(i, v)| {
+                let k = num.subcarrier_index(i) as f64;
+                v * Complex64::from_polar(
+                    1.0,
+                    std::f64::consts::TAU * k * (delay as f64 + x) / n as f64,
+                )
+            })
+            .sum()
+    };
+    let xs: Vec<f64> = (0..(n as f64 / 0.37) as usize)
+        .map(|t| -(n as f64) / 2.0 + t as f64 * 0.37)
+        .collect();
+    // ‖a − b‖² / ‖a‖² over every delay
+    let misfit = |measured: &[Complex64], delay: usize, model: &radar_sim::cfar::GhostProfile| {
+        let (mut err, mut pw) = (0.0, 0.0);
+        for x in &xs {
+            let a = profile(measured, delay, *x);
+            err += (a - model.at(*x)).norm_sqr();
+            pw += a.norm_sqr();
+        }
+        err / pw
+    };
+    for delay in [288 + 800, 288 + 150] {
+        let g = ghosts(Reference::Pilots, delay);
+        let model = proc.pilot_ghost(&g.first_symbols, delay as f64).unwrap();
+        let fit = misfit(&g.mean_ghost, delay, &model);
+        // the data's share of the ghost does not repeat: over 48 pulses its power is about
+        // (1 − 0.37) / 48 of a pulse's ghost against the pilots' 0.37 (0.035)
+        eprintln!(
+            "delay {delay}: misfit {fit:.4}, ghost peak {:.1} dB under the main peak",
+            -20.0 * model.peak().log10()
+        );
+        assert!(fit < 0.1, "delay {delay}: {fit}");
+        // the bound on its peak that decides which sources' ghosts are modelled holds
+        let f = cp_overlap_factor(delay as f64, n, num.cp_samples);
+        let mean = (1.0 - f * f) / num.subcarriers as f64;
+        let over = model.peak().powi(2) / mean;
+        eprintln!(
+            "delay {delay}: ghost peak {:.1} dB over its mean",
+            10.0 * over.log10()
+        );
+        assert!(over < GHOST_PEAK_OVER_MEAN, "delay {delay}: {over}");
+        // the model with half the excess delay does not fit: the ghost grows with the part of
+        // the window the previous symbol holds
+        let half = delay as f64 - (delay - 288) as f64 / 2.0;
+        let wrong = proc.pilot_ghost(&g.first_symbols, half).unwrap();
+        let off = misfit(&g.mean_ghost, delay, &wrong);
+        eprintln!("delay {delay}: misfit at {half}: {off:.4}");
+        assert!(off > 0.2, "delay {delay}: {off}");
+        // the processor's estimate from a few pulses' pilots fits as well
+        let sampled: Vec<u64> = (0..PATTERN_SAMPLES)
+            .map(|j| g.first_symbols[(2 * j + 1) * PULSES / (2 * PATTERN_SAMPLES)])
+            .collect();
+        let few = proc.pilot_ghost(&sampled, delay as f64).unwrap();
+        let est = misfit(&g.mean_ghost, delay, &few);
+        eprintln!("delay {delay}: misfit of {PATTERN_SAMPLES} pulses' pilots: {est:.4}");
+        assert!(est < 0.1, "delay {delay}: {est}");
+        // but not the first pulse's alone: the PDSCH's DMRS lies on other PRBs every slot
+        let first = proc
+            .pilot_ghost(&g.first_symbols[..1], delay as f64)
+            .unwrap();
+        let one = misfit(&g.mean_ghost, delay, &first);
+        eprintln!("delay {delay}: misfit of the first pulse's pattern: {one:.4}");
+        assert!(one > 2.0 * fit, "delay {delay}: {one}");
+    }
+    // inside the CP there is none
+    assert!(proc.pilot_ghost(&[0], 200.0).is_none());
+    // under `ideal` the pilots' ghost is the part of the ghost that repeats too
+    let mut ideal = scene.clone();
+    ideal.radar.reference = Reference::Ideal;
+    let ideal = Processor::new(RadarSetup::new(&planner::Params::default(), &ideal).unwrap());
+    let ideal = ideal.unwrap();
+    for delay in [288 + 800, 288 + 150] {
+        let g = ghosts(Reference::Ideal, delay);
+        let model = ideal.pilot_ghost(&g.first_symbols, delay as f64).unwrap();
+        let fit = misfit(&g.mean_ghost, delay, &model);
+        eprintln!("ideal, delay {delay}: misfit {fit:.4}");
+        // (measured 0.067 and 0.049: the data's share that does not repeat is larger)
+        assert!(fit < 0.15, "ideal, delay {delay}: {fit}");
     }
 }

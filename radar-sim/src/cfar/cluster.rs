@@ -249,10 +249,11 @@ pub fn cluster_edited(
                     continue;
                 }
             }
-            let gains = (e.gains)(source_pos);
-            sources.push(source(
-                e.response, &sources, pos, source_pos, &values, gains,
-            ));
+            let echo = (
+                (e.gains)(source_pos),
+                e.ghosts.map(|g| g(source_pos, v)).unwrap_or_default(),
+            );
+            sources.push(source(e.response, &sources, pos, source_pos, &values, echo));
         }
         taken.push((pos, v));
         let Ok(i) = which else {

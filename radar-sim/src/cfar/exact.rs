@@ -15,6 +15,7 @@
 
 use rustfft::num_complex::{Complex32, Complex64};
 
+use super::ghost::GhostProfile;
 use crate::backproject::{BpGeometry, BpPulse};
 use crate::waveform::C_MPS;
 
@@ -141,6 +142,19 @@ impl ExactResponse {
     /// not give every pulse), normalised to 1 at `p = q` (0 for a look that does not exist or
     /// has no weight).
     pub fn response(&self, look: usize, p: [f64; 2], q: [f64; 2], gains: &[f64]) -> Complex64 {
+        self.response_with(look, p, q, gains, None)
+    }
+
+    /// [`Self::response`] with the point's coherent ghost in this look added to the range
+    /// response (`h(x) + g(x)`: an echo beyond the cyclic prefix, [`GhostProfile`]).
+    pub fn response_with(
+        &self,
+        look: usize,
+        p: [f64; 2],
+        q: [f64; 2],
+        gains: &[f64],
+        ghost: Option<&GhostProfile>,
+    ) -> Complex64 {
         let Some(r) = self.looks.get(look) else {
             return Complex64::new(0.0, 0.0);
         };
@@ -158,8 +172,12 @@ impl ExactResponse {
             let dr =
                 self.geom.bistatic_range_m(p, pl.pos_m) - self.geom.bistatic_range_m(q, pl.pos_m);
             let cyc = dr / self.geom.wavelength_m;
-            acc += self.range.at(dr * self.geom.fs_hz / C_MPS)
-                * Complex64::from_polar(w, std::f64::consts::TAU * (cyc - cyc.floor()));
+            let x = dr * self.geom.fs_hz / C_MPS;
+            let h = match ghost {
+                Some(g) => self.range.at(x) + g.at(x),
+                None => self.range.at(x),
+            };
+            acc += h * Complex64::from_polar(w, std::f64::consts::TAU * (cyc - cyc.floor()));
             wsum += w;
         }
         if wsum == 0.0 {
@@ -168,6 +186,10 @@ impl ExactResponse {
         acc / wsum
     }
 }
+
+/// Per look the coherent ghost of a point at a ground position, given its peak in the
+/// multilook image ([`LookImages::ghosts`]).
+pub type GhostsOf<'a> = dyn Fn([f64; 2], f64) -> Vec<Option<GhostProfile>> + Sync + 'a;
 
 /// The complex look images a detection pass edits against: per look the grid's image and the
 /// guard band's (on the band's grid), scaled by `scale` into the multilook image's units
@@ -187,6 +209,10 @@ pub struct LookImages<'a> {
     /// Per pulse the echo amplitude of a unit point at a ground position (the link budget), for
     /// [`ExactResponse::response`]'s `gains`.
     pub gains: &'a (dyn Fn([f64; 2]) -> Vec<f64> + Sync),
+    /// Per look the coherent ghost of a point at a ground position whose echo lies beyond the
+    /// cyclic prefix, given its peak in the multilook image (`None` in a look where it has
+    /// none, where it is too weak to matter, or without a model of it).
+    pub ghosts: Option<&'a GhostsOf<'a>>,
 }
 
 impl std::fmt::Debug for LookImages<'_> {
@@ -195,6 +221,7 @@ impl std::fmt::Debug for LookImages<'_> {
             .field("looks", &self.grid.len())
             .field("band_grid", &self.band_grid)
             .field("scale", &self.scale)
+            .field("ghosts", &self.ghosts.is_some())
             .finish_non_exhaustive()
     }
 }
@@ -206,6 +233,13 @@ pub(super) struct Source {
     pos: [f64; 2],
     amp: Vec<Complex64>,
     gains: Vec<f64>,
+    ghosts: Vec<Option<GhostProfile>>,
+}
+
+impl Source {
+    fn ghost(&self, look: usize) -> Option<&GhostProfile> {
+        self.ghosts.get(look).and_then(Option::as_ref)
+    }
 }
 
 /// The per-look prediction of the sources' responses at `p`.
@@ -214,26 +248,28 @@ pub(super) fn predict(resp: &ExactResponse, sources: &[Source], p: [f64; 2]) -> 
         .map(|l| {
             sources
                 .iter()
-                .map(|s| s.amp[l] * resp.response(l, p, s.pos, &s.gains))
+                .map(|s| s.amp[l] * resp.response_with(l, p, s.pos, &s.gains, s.ghost(l)))
                 .sum()
         })
         .collect()
 }
 
 /// The source of a peak measured at `at` (pixel position) with per-look values `values`,
-/// refined to `pos` (its echo's per-pulse amplitudes `gains`), after subtracting the responses of the stronger `sources` there.
+/// refined to `pos` (its echo's per-pulse amplitudes `gains`, its per-look ghosts `ghosts`),
+/// after subtracting the responses of the stronger `sources` there.
 pub(super) fn source(
     resp: &ExactResponse,
     sources: &[Source],
     at: [f64; 2],
     pos: [f64; 2],
     values: &[Complex64],
-    gains: Vec<f64>,
+    (gains, ghosts): (Vec<f64>, Vec<Option<GhostProfile>>),
 ) -> Source {
     let pred = predict(resp, sources, at);
     let amp = (0..resp.looks())
         .map(|l| {
-            let own = resp.response(l, at, pos, &gains);
+            let ghost = ghosts.get(l).and_then(Option::as_ref);
+            let own = resp.response_with(l, at, pos, &gains, ghost);
             let v = values.get(l).copied().unwrap_or_default() - pred[l];
             if own.norm() > 1e-6 {
                 v / own
@@ -242,7 +278,12 @@ pub(super) fn source(
             }
         })
         .collect();
-    Source { pos, amp, gains }
+    Source {
+        pos,
+        amp,
+        gains,
+        ghosts,
+    }
 }
 
 /// `(residual, predicted)` power of a candidate with per-look values `values` at `at`, in the

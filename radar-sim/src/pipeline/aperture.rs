@@ -86,6 +86,13 @@ impl Processor {
         }
         let exact = self.exact_response(&c, ap);
         let gains = |q: [f64; 2]| self.pulse_gains(pulses, q);
+        let ghost_model = super::ghost::GhostModel::new(self, pulses, ppl, ap.looks);
+        let ghosts = |q: [f64; 2], peak: f64| {
+            ghost_model
+                .as_ref()
+                .map(|g| g.profiles(q, peak))
+                .unwrap_or_default()
+        };
         let det = self.detect_edited(
             ap,
             pulses,
@@ -98,6 +105,7 @@ impl Processor {
                 band: &band_looks,
                 scale: f64::from(s),
                 gains: &gains,
+                ghosts: ghost_model.is_some().then_some(&ghosts as _),
             }),
         )?;
         if !pc.save_complex {
