@@ -61,7 +61,7 @@ fn a_strong_echo_beyond_the_cp_leaves_no_ghost_detection() {
         landmark: Some(0),
     };
     let iq = setup
-        .synthesizer(vec![object.clone()])
+        .synthesizer(vec![object])
         .unwrap()
         .synthesize_frame(&pulses, Components::ALL)
         .unwrap();
