@@ -94,8 +94,8 @@ const NEGLIGIBLE_GHOST: f64 = 0.1;
 const SYMBOLS_BEFORE: u64 = 2;
 
 /// The pilots' waveform around one pulse: from symbol `first` on, the useful part (N samples,
-/// unnormalised inverse FFT of the pilots at their bins) of each symbol, and each of the
-/// pulse's symbols' reference values.
+/// unnormalised inverse FFT of the pilots at their bins) of each symbol, and what range
+/// compression does with each of the pulse's windows.
 struct PulseWaveforms {
     first: u64,
     /// Per symbol from `first`: the sample (of the BS's stream) where it starts, its CP first,
@@ -103,11 +103,14 @@ struct PulseWaveforms {
     bounds: Vec<(i64, i64)>,
     useful: Vec<Vec<Complex64>>,
     /// Per symbol of the pulse, per subcarrier, what range compression multiplies that
-    /// symbol's spectrum with (the filter of its reference, the taper, the normalisation).
+    /// symbol's spectrum with (the filter of its reference, the taper, the normalisation) on
+    /// the pilots' REs, zero on the others.
     filters: Vec<Vec<Complex64>>,
-    /// The compressed spectrum of the pulse's windows of the pilots made cyclic, at delay 0,
-    /// and its main peak's value.
+    /// The compressed spectrum (by `filters`) of the pulse's windows of the pilots made
+    /// cyclic, at delay 0.
     cyclic0: Vec<Complex64>,
+    /// The main peak of the whole signal's echo made cyclic, at delay 0, as the processor
+    /// compresses it.
     peak0: Complex64,
 }
 
