@@ -21,6 +21,24 @@ fn reply_len(reply: &Reply) -> usize {
     }
 }
 
+/// Whether `reply` is the error Zenoh itself delivers when a query's timeout passes before
+/// every queryable answered (the text `Timeout`, Zenoh's string encoding, no replier): the end
+/// of the query, not a peer's answer. A peer that sends the same is taken at its word: as no
+/// reply.
+fn is_query_timeout(reply: &Reply) -> bool {
+    match reply.result() {
+        Err(e) => {
+            *e.encoding() == zenoh::bytes::Encoding::ZENOH_STRING
+                && e.payload().len() == QUERY_TIMEOUT_TEXT.len()
+                && e.payload().to_bytes().as_ref() == QUERY_TIMEOUT_TEXT
+        }
+        Ok(_) => false,
+    }
+}
+
+/// What Zenoh's own error reply at a query's timeout says.
+const QUERY_TIMEOUT_TEXT: &[u8] = b"Timeout";
+
 fn decode_reply<Rep: Message>(
     key: &str,
     reply: &Reply,
@@ -134,6 +152,8 @@ impl<Rep: Message> PendingQuery<Rep> {
         let mut wait = wait;
         loop {
             match self.replies.recv_timeout(wait) {
+                // the query's own end at its timeout: what came before decides
+                Ok(Some(reply)) if is_query_timeout(&reply) => wait = Duration::ZERO,
                 Ok(Some(reply)) => match decode_reply::<Rep>(&self.key, &reply, &self.limits) {
                     Ok(r) => return Some(Ok(r)),
                     Err(e) => {
@@ -170,6 +190,9 @@ impl ZenohNode {
         let mut out = Vec::new();
         let mut bytes = 0usize;
         while let Ok(reply) = replies.recv() {
+            if is_query_timeout(&reply) {
+                continue;
+            }
             bytes = bytes.saturating_add(reply_len(&reply));
             let past = if out.len() >= opts.max_replies {
                 Some(("replies", opts.max_replies))
@@ -347,6 +370,40 @@ mod tests {
             &by_bytes[2],
             Err(NetError::TooManyReplies { what: "bytes", .. })
         ));
+        node.close().unwrap();
+    }
+
+    /// A queryable that holds its queries past their timeout: Zenoh ends the query with an
+    /// error reply of its own, which is no reply, not a peer's error.
+    #[test]
+    fn a_query_that_times_out_has_no_reply() {
+        use crate::zconfig::ZenohArgs;
+        let config = ZenohArgs::isolated(&["tcp/127.0.0.1:0".to_string()], &[])
+            .to_config()
+            .unwrap();
+        let node = ZenohNode::open(config, "test", "silent").unwrap();
+        let held = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let keep = held.clone();
+        let _queryable = node
+            .session()
+            .declare_queryable("cellsar/test/silent")
+            .callback(move |q| keep.lock().unwrap().push(q))
+            .wait()
+            .unwrap();
+        let request = Refusal::new(RefusalKind::Busy, "r");
+        let opts = QueryOptions {
+            timeout: Duration::from_millis(300),
+            ..QueryOptions::default()
+        };
+        let one = node.query_one::<Refusal, Refusal>("cellsar/test/silent", &request, &opts);
+        assert!(matches!(one, Err(NetError::NoReply { .. })), "{one:?}");
+        let all = node
+            .query::<Refusal, Refusal>("cellsar/test/silent", &request, &opts)
+            .unwrap();
+        assert!(all.is_empty(), "{all:?}");
+        // the queryable got both and answered neither
+        assert_eq!(held.lock().unwrap().len(), 2);
+        held.lock().unwrap().clear();
         node.close().unwrap();
     }
 }
