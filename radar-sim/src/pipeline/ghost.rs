@@ -89,6 +89,13 @@ pub const GHOST_PEAK_OVER_MEAN: f64 = 20.0;
 /// moves no CFAR decision by more than noise's own spread, and most sources' ghosts are.
 const NEGLIGIBLE_GHOST: f64 = 0.1;
 
+/// Sources of one aperture whose ghosts are modelled, the strongest first (the editing takes
+/// its sources in that order): each holds a table of N × [`crate::cfar::GHOST_OVERSAMPLE`]
+/// values per look (256 KiB at the defaults), so this bounds the aperture's tables, whatever
+/// the scene (a cluttered one can have hundreds of strong peaks), to 64 × 4 × 256 KiB at 4
+/// looks. No aperture of the main mission under NR reaches it (its debug log says when one does).
+pub const MAX_GHOST_SOURCES: usize = 64;
+
 /// Symbols before the pulse's first whose waveform a window may reach (an echo up to one whole
 /// symbol beyond the CP).
 const SYMBOLS_BEFORE: u64 = 2;
@@ -125,6 +132,8 @@ pub(super) struct GhostModel<'a> {
     /// first symbol) and the share of the sampled pulses that have it.
     patterns: Vec<Vec<(u64, f64)>>,
     cache: Mutex<HashMap<u64, Arc<PulseWaveforms>>>,
+    /// Sources whose ghosts were modelled ([`MAX_GHOST_SOURCES`] at most).
+    modelled: std::sync::atomic::AtomicUsize,
 }
 
 impl<'a> GhostModel<'a> {
@@ -156,6 +165,7 @@ impl<'a> GhostModel<'a> {
             pulses_per_look,
             patterns,
             cache: Mutex::new(HashMap::new()),
+            modelled: std::sync::atomic::AtomicUsize::new(0),
         })
     }
 
@@ -163,14 +173,14 @@ impl<'a> GhostModel<'a> {
     /// is `peak` (in units of the noise), at the look's middle pulse's delay, the mean over the
     /// look's pilot patterns: `None` in a look where its echo lies within every window's CP (or
     /// too far beyond it to be seen at all), or where the ghost's bound
-    /// ([`GHOST_PEAK_OVER_MEAN`]) puts it under [`NEGLIGIBLE_GHOST`] of the noise.
+    /// ([`GHOST_PEAK_OVER_MEAN`]) puts it under [`NEGLIGIBLE_GHOST`] of the noise; none at all
+    /// past the aperture's first [`MAX_GHOST_SOURCES`] sources that have one.
     pub(super) fn profiles(&self, q_m: [f64; 2], peak: f64) -> Vec<Option<GhostProfile>> {
         let num = &self.proc.setup.num;
         let geom = self.proc.setup.geometry();
-        self.patterns
-            .iter()
-            .enumerate()
-            .map(|(l, patterns)| {
+        // per look the source's delay in the middle pulse, where its ghost may matter
+        let delays: Vec<Option<f64>> = (0..self.patterns.len())
+            .map(|l| {
                 let start = l * self.pulses_per_look;
                 let end = (start + self.pulses_per_look).min(self.pulses.len());
                 let look = self.pulses.get(start..end)?;
@@ -178,11 +188,28 @@ impl<'a> GhostModel<'a> {
                 let delay = geom.delay_samples(q_m, p.pos_m, p.window_delay_samples);
                 let f = cp_overlap_factor(delay, num.fft_size, num.cp_samples);
                 let bound = GHOST_PEAK_OVER_MEAN * (1.0 - f * f) / num.subcarriers as f64;
-                if peak * bound < NEGLIGIBLE_GHOST {
-                    return None;
-                }
-                self.mean_profile(patterns, delay)
+                (peak * bound >= NEGLIGIBLE_GHOST).then_some(delay)
             })
+            .collect();
+        if delays.iter().all(Option::is_none) {
+            return Vec::new();
+        }
+        let n = self
+            .modelled
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if n >= MAX_GHOST_SOURCES {
+            if n == MAX_GHOST_SOURCES {
+                tracing::debug!(
+                    max = MAX_GHOST_SOURCES,
+                    "ghosts of the aperture's weaker sources not modelled"
+                );
+            }
+            return Vec::new();
+        }
+        self.patterns
+            .iter()
+            .zip(delays)
+            .map(|(patterns, delay)| self.mean_profile(patterns, delay?))
             .collect()
     }
 
