@@ -40,7 +40,7 @@ pub use cluster::{
 };
 pub use detector::{ca_cfar, CfarMap, CfarParams, CLUTTER_FLOOR_RATIO};
 pub use exact::{ExactResponse, LookImages, RangeResponse, EXACT_MODEL_ERROR};
-pub use ghost::{GhostProfile, GHOST_OVERSAMPLE};
+pub use ghost::GhostProfile;
 pub use model::{ResponseModel, MODEL_CELL_MARGIN, MODEL_SCALE_MARGIN};
 pub use stats::{
     averaged_pfa, ca_alpha, ca_pfa, censored_mean, expected_peaks_per_m2, gamma_sf, image_floor,

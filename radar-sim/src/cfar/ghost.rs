@@ -11,51 +11,27 @@
 //! point response.
 
 use rustfft::num_complex::{Complex32, Complex64};
-use rustfft::FftPlanner;
-
-/// Table samples per profile sample: linear interpolation between them errs by at most
-/// `(π b / U)² / 8` in amplitude for a band `b` of the sample rate (0.5 % at b = 0.8).
-pub const GHOST_OVERSAMPLE: usize = 8;
 
 /// The ghost of one source in one look: `g(x)`, the compressed profile's expected value at `x`
 /// samples from the source's delay with the main peak's share taken out, over the main peak's
 /// value for the same echo inside the CP (unit factor: it multiplies the source's per-pulse
-/// gain, the overlap factor included), tabulated over one period of the profile.
+/// gain, the overlap factor included), tabulated over one period of the profile at the
+/// processor's upsampling (as the range profiles the images are formed from:
+/// `RangeCompressor::profile_window`). Linear interpolation between the samples errs by at most
+/// `(π b / U)² / 8` in amplitude for a band `b` of the sample rate (0.5 % at b = 0.8, U = 8).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GhostProfile {
     table: Vec<Complex32>,
-    period_samples: f64,
+    per_sample: usize,
 }
 
 impl GhostProfile {
-    /// The profile `Σ_i z_i e^{j2π k_i (centre + x)/N} · scale` (k_i = `first_index + i`, N =
-    /// `fft_size`) tabulated at x = t/[`GHOST_OVERSAMPLE`], t = 0 .. N·U: one inverse FFT.
-    pub fn from_spectrum(
-        z: &[Complex64],
-        first_index: i64,
-        fft_size: usize,
-        centre_samples: f64,
-        scale: Complex64,
-    ) -> Self {
-        let nu = fft_size.max(1) * GHOST_OVERSAMPLE;
-        let mut buf = vec![Complex64::default(); nu];
-        // e^{j2π k centre/N} by recurrence over k
-        let cycles = |k: i64| (k as f64 * centre_samples / fft_size.max(1) as f64).fract();
-        let step = Complex64::from_polar(1.0, std::f64::consts::TAU * cycles(1));
-        let mut ramp =
-            scale * Complex64::from_polar(1.0, std::f64::consts::TAU * cycles(first_index));
-        for (i, v) in z.iter().enumerate() {
-            let b = (first_index + i as i64).rem_euclid(nu as i64) as usize;
-            buf[b] += v * ramp;
-            ramp *= step;
-        }
-        FftPlanner::new().plan_fft_inverse(nu).process(&mut buf);
+    /// The profile whose value at `x = t / per_sample` samples is `table[t]`, t = 0 .. N ·
+    /// `per_sample` (one period of N samples).
+    pub fn from_table(table: Vec<Complex32>, per_sample: usize) -> Self {
         Self {
-            table: buf
-                .iter()
-                .map(|v| Complex32::new(v.re as f32, v.im as f32))
-                .collect(),
-            period_samples: fft_size.max(1) as f64,
+            table,
+            per_sample: per_sample.max(1),
         }
     }
 
@@ -65,7 +41,7 @@ impl GhostProfile {
         if nu == 0 || !x.is_finite() {
             return Complex64::default();
         }
-        let t = x.rem_euclid(self.period_samples) * GHOST_OVERSAMPLE as f64;
+        let t = (x * self.per_sample as f64).rem_euclid(nu as f64);
         let i = (t.floor() as usize).min(nu - 1);
         let frac = t - i as f64;
         let (a, b) = (self.table[i], self.table[(i + 1) % nu]);
@@ -96,7 +72,6 @@ mod tests {
             .collect();
         let centre = 13.3;
         let scale = Complex64::new(0.5, -0.25);
-        let g = GhostProfile::from_spectrum(&z, first, n, centre, scale);
         let direct = |x: f64| -> Complex64 {
             z.iter()
                 .enumerate()
@@ -110,9 +85,19 @@ mod tests {
                 })
                 .sum()
         };
+        const U: usize = 8;
+        let g = GhostProfile::from_table(
+            (0..n * U)
+                .map(|t| {
+                    let v = direct(t as f64 / U as f64);
+                    Complex32::new(v.re as f32, v.im as f32)
+                })
+                .collect(),
+            U,
+        );
         // linear interpolation errs by at most |v| θ²/8 per subcarrier, θ its phase step
         // between table samples (2π 20/64/8 at the band's edge)
-        let theta = std::f64::consts::TAU * 20.0 / n as f64 / GHOST_OVERSAMPLE as f64;
+        let theta = std::f64::consts::TAU * 20.0 / n as f64 / U as f64;
         let bound = z.iter().map(|v| (v * scale).norm()).sum::<f64>() * theta * theta / 8.0;
         for t in 0..997 {
             let x = -70.0 + t as f64 * 0.173;
@@ -120,15 +105,15 @@ mod tests {
             assert!(err <= bound * 1.0001 + 1e-9, "x = {x}: {err} > {bound}");
         }
         // and where x falls on the table's samples, exactly (to f32)
-        for t in 0..n * GHOST_OVERSAMPLE {
-            let x = t as f64 / GHOST_OVERSAMPLE as f64;
+        for t in 0..n * U {
+            let x = t as f64 / U as f64;
             assert!(
                 (g.at(x) - direct(x)).norm() < 1e-5 * bound / theta.powi(2),
                 "x = {x}"
             );
         }
-        let peak = (0..n * GHOST_OVERSAMPLE)
-            .map(|t| direct(t as f64 / GHOST_OVERSAMPLE as f64).norm())
+        let peak = (0..n * U)
+            .map(|t| direct(t as f64 / U as f64).norm())
             .fold(0.0, f64::max);
         assert!((g.peak() - peak).abs() / peak < 1e-5);
     }

@@ -90,8 +90,8 @@ pub const GHOST_PEAK_OVER_MEAN: f64 = 20.0;
 const NEGLIGIBLE_GHOST: f64 = 0.1;
 
 /// Sources of one aperture whose ghosts are modelled, the strongest first (the editing takes
-/// its sources in that order): each holds a table of N × [`crate::cfar::GHOST_OVERSAMPLE`]
-/// values per look (256 KiB at the defaults), so this bounds the aperture's tables, whatever
+/// its sources in that order): each holds a table of N × `processing.upsample` values per
+/// look (256 KiB at the defaults), so this bounds the aperture's tables, whatever
 /// the scene (a cluttered one can have hundreds of strong peaks), to 64 × 4 × 256 KiB at 4
 /// looks. No aperture of the main mission under NR reaches it (its debug log says when one does).
 pub const MAX_GHOST_SOURCES: usize = 64;
@@ -225,14 +225,11 @@ impl<'a> GhostModel<'a> {
             }
         }
         let (zg, d) = mean?;
-        let num = &self.proc.setup.num;
-        Some(GhostProfile::from_spectrum(
-            &zg,
-            num.subcarrier_index(0),
-            num.fft_size,
-            d as f64,
-            Complex64::new(1.0, 0.0),
-        ))
+        // tabulated as the processor's range profiles are: N U samples from the echo's delay
+        let c = &self.proc.compressor;
+        let u = c.upsample();
+        let table = c.profile_window(&zg, d * u as i64, c.profile_len());
+        Some(GhostProfile::from_table(table, u))
     }
 
     /// The ghost's compressed spectrum of an echo `delay` samples into the windows of the
