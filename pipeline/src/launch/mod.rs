@@ -33,7 +33,7 @@ mod outputs;
 mod plan;
 mod private;
 mod session;
-mod shm;
+pub(crate) mod shm;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};

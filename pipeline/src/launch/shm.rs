@@ -142,7 +142,7 @@ fn clean_dead_runs_in(
 pub(super) fn clean_after(iox: &IoxArgs, own: bool) {
     if own {
         if let Some(prefix) = &iox.prefix {
-            remove_prefixed(Path::new(SHM_DIR), prefix);
+            remove_own(prefix);
         }
         return;
     }
@@ -156,6 +156,12 @@ pub(super) fn clean_after(iox: &IoxArgs, own: bool) {
         }
         Err(e) => tracing::warn!(error = %e, "iceoryx2 environment for the clean-up"),
     }
+}
+
+/// Removes every `/dev/shm` entry whose name starts with `prefix` (a run's own prefix, or a
+/// test's).
+pub(crate) fn remove_own(prefix: &str) {
+    remove_prefixed(Path::new(SHM_DIR), prefix);
 }
 
 fn remove_prefixed(dir: &Path, prefix: &str) {

@@ -260,14 +260,7 @@ mod tests {
 
     impl Drop for ShmCleanup {
         fn drop(&mut self) {
-            let Ok(entries) = std::fs::read_dir("/dev/shm") else {
-                return;
-            };
-            for e in entries.flatten() {
-                if e.file_name().to_string_lossy().starts_with(&self.0) {
-                    let _ = std::fs::remove_file(e.path());
-                }
-            }
+            crate::launch::shm::remove_own(&self.0);
         }
     }
 
