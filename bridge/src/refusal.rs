@@ -10,9 +10,10 @@
 //! older or foreign queryable) stays a [`crate::NetError::Remote`] naming the key.
 //!
 //! Schema versions: 1 has the kinds `bad_request`, `infeasible`, `internal`; 2 adds `busy`
-//! (the queryable's request queue is full, or it is stopping: ask again later). A refusal is
-//! sent with the lowest version that has its kind ([`Refusal::schema_version`]: so a querier
-//! built before version 2 still reads every refusal but `busy`), and read in either version
+//! (the queryable's request queue is full, or it is stopping: ask again later); 3 adds
+//! `not_found` (no plan meets every constraint, none proven impossible). A refusal is sent with
+//! the lowest version that has its kind ([`Refusal::schema_version`]: so a querier built before
+//! a kind was added still reads every refusal of the kinds it knows), and read in any version
 //! ([`Refusal::decode`]).
 
 use std::fmt;
@@ -33,8 +34,8 @@ pub enum RefusalKind {
     /// The request is invalid (a field out of range, a mission that does not validate); the
     /// message names the field. The binaries' exit code 2.
     BadRequest,
-    /// The request is valid but cannot be fulfilled (a mission that cannot be flown); the
-    /// message says why. The binaries' exit code 3.
+    /// The request is valid but cannot be fulfilled (a mission that cannot be flown, proven);
+    /// the message says why. The binaries' exit code 3.
     Infeasible,
     /// The service failed while handling a valid request (a solver or worker failure). The
     /// binaries' exit code 1.
@@ -42,25 +43,31 @@ pub enum RefusalKind {
     /// The service cannot take the request now (its request queue is full, or it is
     /// stopping); the same request may succeed later. Since schema version 2.
     Busy,
+    /// The planner found no plan that meets every constraint, and none is proven impossible;
+    /// the message names the first slot the best plan found violates. The binaries' exit
+    /// code 5. Since schema version 3.
+    NotFound,
 }
 
 impl RefusalKind {
     /// Every kind, in wire order.
-    pub const ALL: [RefusalKind; 4] = [
+    pub const ALL: [RefusalKind; 5] = [
         RefusalKind::BadRequest,
         RefusalKind::Infeasible,
         RefusalKind::Internal,
         RefusalKind::Busy,
+        RefusalKind::NotFound,
     ];
 
     /// The name used in the JSON form and in messages (`bad_request`, `infeasible`,
-    /// `internal`, `busy`).
+    /// `internal`, `busy`, `not_found`).
     pub fn as_str(self) -> &'static str {
         match self {
             RefusalKind::BadRequest => "bad_request",
             RefusalKind::Infeasible => "infeasible",
             RefusalKind::Internal => "internal",
             RefusalKind::Busy => "busy",
+            RefusalKind::NotFound => "not_found",
         }
     }
 
@@ -69,6 +76,7 @@ impl RefusalKind {
         match self {
             RefusalKind::BadRequest | RefusalKind::Infeasible | RefusalKind::Internal => 1,
             RefusalKind::Busy => 2,
+            RefusalKind::NotFound => 3,
         }
     }
 }
@@ -97,9 +105,9 @@ impl Refusal {
         }
     }
 
-    /// The schema version this refusal is sent with: the lowest that has its kind (1 for
-    /// every kind but `busy`), so that queriers built before a kind was added still read the
-    /// refusals they know.
+    /// The schema version this refusal is sent with: the lowest that has its kind (1 for the
+    /// first three kinds, 2 for `busy`, 3 for `not_found`), so that queriers built before a
+    /// kind was added still read the refusals they know.
     pub fn schema_version(&self) -> u16 {
         self.kind.since_schema_version()
     }
@@ -111,15 +119,20 @@ impl Refusal {
         format: WireFormat,
         meta: Meta,
     ) -> Result<(Vec<u8>, zenoh::bytes::Encoding), CodecError> {
-        if self.schema_version() == RefusalV1::SCHEMA_VERSION {
-            let v1 = RefusalV1(self.clone());
-            Ok((format.encode(&v1, meta)?, format.encoding::<RefusalV1>()))
-        } else {
-            Ok((format.encode(self, meta)?, format.encoding::<Refusal>()))
+        match self.schema_version() {
+            RefusalV1::SCHEMA_VERSION => {
+                let v1 = RefusalV1(self.clone());
+                Ok((format.encode(&v1, meta)?, format.encoding::<RefusalV1>()))
+            }
+            RefusalV2::SCHEMA_VERSION => {
+                let v2 = RefusalV2(self.clone());
+                Ok((format.encode(&v2, meta)?, format.encoding::<RefusalV2>()))
+            }
+            _ => Ok((format.encode(self, meta)?, format.encoding::<Refusal>())),
         }
     }
 
-    /// Decodes a refusal of any schema version this build reads (1 and 2) from a payload in
+    /// Decodes a refusal of any schema version this build reads (1 to 3) from a payload in
     /// `format`.
     pub fn decode(
         payload: &[u8],
@@ -134,6 +147,13 @@ impl Refusal {
                     message: env.message.0,
                 })
             }
+            Err(CodecError::SchemaVersion { found: 2, .. }) => {
+                let env = format.decode::<RefusalV2>(payload, limits)?;
+                Ok(Envelope {
+                    header: env.header,
+                    message: env.message.0,
+                })
+            }
             other => other,
         }
     }
@@ -142,11 +162,23 @@ impl Refusal {
 impl Message for Refusal {
     const KIND: u16 = 0x1002;
     const NAME: &'static str = "bridge.refusal";
+    const SCHEMA_VERSION: u16 = 3;
+}
+
+/// A [`Refusal`] in schema version 2: the same layout (its kinds are the first four of
+/// version 3, at the same places), under the version-2 header.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(transparent)]
+struct RefusalV2(Refusal);
+
+impl Message for RefusalV2 {
+    const KIND: u16 = Refusal::KIND;
+    const NAME: &'static str = Refusal::NAME;
     const SCHEMA_VERSION: u16 = 2;
 }
 
 /// A [`Refusal`] in schema version 1: the same layout (its kinds are the first three of
-/// version 2, at the same places), under the version-1 header.
+/// version 3, at the same places), under the version-1 header.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(transparent)]
 struct RefusalV1(Refusal);
@@ -186,15 +218,16 @@ mod tests {
         }
     }
 
-    /// Schema version 2 added `busy`: every other kind is still sent as version 1 (what a
-    /// querier built before version 2 reads), `busy` as version 2, and both versions are
-    /// read back, in both forms — also a version-1 refusal as an older service wrote it.
+    /// Schema version 2 added `busy`, 3 `not_found`: the first three kinds are still sent as
+    /// version 1 (what a querier built before version 2 reads), `busy` as version 2,
+    /// `not_found` as version 3, and every version is read back, in both forms — also a
+    /// version-1 refusal as an older service wrote it.
     #[test]
     fn refusals_are_sent_with_the_lowest_version_and_read_in_both() {
         let l = DecodeLimits::default();
         for kind in RefusalKind::ALL {
             let r = Refusal::new(kind, format!("{kind} happened"));
-            let want = if kind == RefusalKind::Busy { 2 } else { 1 };
+            let want = kind.since_schema_version();
             assert_eq!(r.schema_version(), want);
             for format in [WireFormat::Bincode, WireFormat::Json] {
                 let (bytes, encoding) = r.encode(format, Meta::default()).unwrap();
@@ -213,9 +246,19 @@ mod tests {
                     assert_eq!(old.unwrap().message.0, r);
                 } else {
                     assert!(
-                        matches!(old, Err(CodecError::SchemaVersion { found: 2, .. })),
+                        matches!(old, Err(CodecError::SchemaVersion { found, .. }) if found == want),
                         "{old:?}"
                     );
+                }
+                // what a querier of version 2 decodes
+                let v2 = format.decode::<RefusalV2>(&bytes, &l);
+                if want == 3 {
+                    assert!(
+                        matches!(v2, Err(CodecError::SchemaVersion { found: 3, .. })),
+                        "{v2:?}"
+                    );
+                } else if want == 2 {
+                    assert_eq!(v2.unwrap().message.0, r);
                 }
             }
             // the plain encoding of the current version is read too
@@ -235,10 +278,10 @@ mod tests {
         assert_eq!(r, Refusal::new(RefusalKind::Infeasible, "slot 23"));
         // a version this build does not know stays an error naming both versions
         let future =
-            String::from_utf8_lossy(old).replace("\"schema_version\": 1", "\"schema_version\": 3");
+            String::from_utf8_lossy(old).replace("\"schema_version\": 1", "\"schema_version\": 4");
         let e = Refusal::decode(future.as_bytes(), WireFormat::Json, &l).unwrap_err();
         assert!(
-            matches!(e, CodecError::SchemaVersion { found: 3, .. }),
+            matches!(e, CodecError::SchemaVersion { found: 4, .. }),
             "{e:?}"
         );
     }

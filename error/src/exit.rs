@@ -5,8 +5,9 @@
 //! | 0 | done |
 //! | 1 | failure at run time (a solver, I/O, Zenoh, a child that keeps failing) |
 //! | 2 | bad input: an option, a mission, scene or plan file (the message names it); nothing was done |
-//! | 3 | the mission cannot be flown (the message names the first slot and the reason) |
+//! | 3 | the mission cannot be flown, proven (the message names the first slot and the reason) |
 //! | 4 | completed, but a landmark in view was not detected (`cellsar run --strict`, `cellsar-radar-sim closed-loop`) |
+//! | 5 | no plan found that meets every constraint, none proven impossible (`cellsar-planner plan` writes the best plan found, marked infeasible) |
 //! | 130 | interrupted (SIGINT/SIGTERM) |
 //!
 //! A binary's `main` returns [`Failure::report`]'s [`std::process::ExitCode`], so that every
@@ -24,6 +25,8 @@ pub const BAD_INPUT: u8 = 2;
 pub const INFEASIBLE: u8 = 3;
 /// Exit code of a run that completed but did not detect a landmark in view.
 pub const MISSED_LANDMARK: u8 = 4;
+/// Exit code of a plan that was not found (and not proven impossible).
+pub const PLAN_NOT_FOUND: u8 = 5;
 /// Exit code after SIGINT or SIGTERM.
 pub const INTERRUPTED: u8 = 130;
 
@@ -38,6 +41,9 @@ pub enum FailureKind {
     Infeasible,
     /// The run completed, but a landmark in view was not detected (exit code 4).
     MissedLandmark,
+    /// The planner found no plan that meets every constraint, and none is proven impossible
+    /// (exit code 5).
+    PlanNotFound,
 }
 
 impl FailureKind {
@@ -48,6 +54,7 @@ impl FailureKind {
             FailureKind::BadInput => BAD_INPUT,
             FailureKind::Infeasible => INFEASIBLE,
             FailureKind::MissedLandmark => MISSED_LANDMARK,
+            FailureKind::PlanNotFound => PLAN_NOT_FOUND,
         }
     }
 }

@@ -293,6 +293,10 @@ pub mod planner_vr {
     pub const CLIMB: u32 = 323;
     /// `plan_solve_time_s` (local).
     pub const SOLVE_TIME: u32 = 400;
+    /// `plan_lower_bound_j` (local).
+    pub const LOWER_BOUND: u32 = 401;
+    /// `plan_bound_gap_pct` (local).
+    pub const BOUND_GAP: u32 = 402;
     /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests, settable only in
     /// a build with the `test-hooks` feature (elsewhere an unknown value reference): setting it
     /// to [`crate::core::PANIC_IN_DO_STEP`] makes the next doStep panic inside the model core,
@@ -499,9 +503,9 @@ pub const PLANNER_VARS: &[Var] = &[
     output("replan_count", pv::REPLAN_COUNT, VarType::Integer, None, "Receding-horizon re-plans so far"),
     output("slots_out_of_view", pv::SLOTS_OUT_OF_VIEW, VarType::Integer, None, "Slots of the plan (whole horizon, flown ones included) whose landmark is not within r_s of the sensing centre at the slot end, against the landmarks in effect (moved ones included); 0 for a plan that keeps every landmark in view"),
     output("plan_resolution", pv::PLAN_RESOLUTION, VarType::Integer, None, "Resolution requirement of the plan flown now: 1 = general, 0 = paper. Before any re-plan it is the parameter resolution (default general: the general cell as a best effort, the default of cellsar-planner plan, cellsar run and the Python package); after a re-plan (a landmark move) 0: every re-plan plans the least-energy plan for the paper's resolution, to stay fast"),
-    output("commanded_accel_mps2", pv::COMMANDED_ACCEL, VarType::Real, Some("m/s2"), "Commanded horizontal acceleration of the current slot t, |v_t - v_(t-1)| / slot_s: the plan's slot-to-slot velocity difference over the slot duration (v_0 = start_velocity_mps), the accel_mps2 of trajectory.csv; at most max_accel_mps2 (to 1e-6 relative) under dynamics = vehicle"),
-    output("commanded_accel_x_mps2", pv::COMMANDED_ACCEL_X, VarType::Real, Some("m/s2"), "x component of commanded_accel_mps2: (v_t - v_(t-1)) / slot_s, x"),
-    output("commanded_accel_y_mps2", pv::COMMANDED_ACCEL_Y, VarType::Real, Some("m/s2"), "y component of commanded_accel_mps2: (v_t - v_(t-1)) / slot_s, y"),
+    output("commanded_accel_mps2", pv::COMMANDED_ACCEL, VarType::Real, Some("m/s2"), "Commanded horizontal acceleration of the current slot t, |v_t - v_(t-1)| / slot_s: the plan's slot-to-slot velocity difference over the slot duration, and |v_1 - v_0| / (slot_s / 2) into the first slot from the instantaneous start velocity v_0 = start_velocity_mps; the accel_mps2 of trajectory.csv; at most max_accel_mps2 (to 1e-6 relative) under dynamics = vehicle"),
+    output("commanded_accel_x_mps2", pv::COMMANDED_ACCEL_X, VarType::Real, Some("m/s2"), "x component of commanded_accel_mps2: (v_t - v_(t-1)) / slot_s (slot_s / 2 for t = 1), x"),
+    output("commanded_accel_y_mps2", pv::COMMANDED_ACCEL_Y, VarType::Real, Some("m/s2"), "y component of commanded_accel_mps2: (v_t - v_(t-1)) / slot_s (slot_s / 2 for t = 1), y"),
     output("z_m", pv::Z, VarType::Real, Some("m"), "UAV altitude (linear within a slot): the plan's altitude per slot for a mission with altitude = free (planned by the exact scheme, as cellsar-planner plan does), altitude_m for a fixed one; the z_m of trajectory.csv"),
     output("climb_mps", pv::CLIMB, VarType::Real, Some("m/s"), "Climb rate of the current slot, (z_t - z_(t-1)) / slot_s (negative: descent; 0 for a fixed altitude); the climb_mps of trajectory.csv"),
     Var {
@@ -513,6 +517,26 @@ pub const PLANNER_VARS: &[Var] = &[
         len: 1,
         unit: Some("s"),
         description: "Wall time of the last plan or re-plan, all its planner calls included",
+    },
+    Var {
+        name: "plan_lower_bound_j",
+        vr: pv::LOWER_BOUND,
+        ty: VarType::Real,
+        causality: Causality::Local,
+        variability: Variability::Discrete,
+        len: 1,
+        unit: Some("J"),
+        description: "A lower bound on the energy of every trajectory that meets the mission (landmarks as moved) under the plan's vehicle model: the per-slot power floor over the speeds each slot must keep and the distances to fly between the start and the landmarks (docs/paper-notes.md); NaN where none holds",
+    },
+    Var {
+        name: "plan_bound_gap_pct",
+        vr: pv::BOUND_GAP,
+        ty: VarType::Real,
+        causality: Causality::Local,
+        variability: Variability::Discrete,
+        len: 1,
+        unit: None,
+        description: "How far the plan's energy over the whole horizon lies above plan_lower_bound_j, in % of the plan's energy",
     },
 ];
 

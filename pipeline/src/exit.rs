@@ -8,6 +8,7 @@
 //! | 2 | bad input: an option, the mission or the scene file (the message names it); nothing started (or the planner refused the request as `bad_request`) |
 //! | 3 | the mission cannot be flown (the message names the first slot and the reason), found before anything starts or by the planner (an `infeasible` refusal) |
 //! | 4 | `run --strict`: completed, but a landmark in view was not detected |
+//! | 5 | the planner found no plan that meets every constraint (none proven impossible) |
 //! | 130 | interrupted (SIGINT/SIGTERM); every child stopped |
 
 pub use cellsar_error::exit::*;
@@ -15,12 +16,13 @@ pub use cellsar_error::exit::*;
 use planner::PlanError;
 use radar_sim::RadarError;
 
-/// The failure of a planning error: an infeasible mission exits 3, a start trajectory that does
-/// not fit, a bad option or a free altitude the scheme does not plan 2, a solver failure or a
-/// time limit 1 (and any later variant 1).
+/// The failure of a planning error: a mission proven infeasible exits 3, a plan not found 5, a
+/// start trajectory that does not fit, a bad option or a free altitude the scheme does not
+/// plan 2, a solver failure or a time limit 1 (and any later variant 1).
 pub fn plan_failure(e: PlanError) -> Failure {
     let kind = match &e {
         PlanError::Infeasible(_) => FailureKind::Infeasible,
+        PlanError::NotFound(_) => FailureKind::PlanNotFound,
         PlanError::InvalidInit(_)
         | PlanError::InvalidOption { .. }
         | PlanError::OptionConflict(_)

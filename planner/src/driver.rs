@@ -24,10 +24,11 @@ mod options;
 mod phase_one;
 mod progress;
 mod result;
+mod starts;
 
 pub use alternating::{ALTERNATION_PHASE, ALTERNATION_TOLERANCE, MAX_ALTERNATIONS};
 pub use best_effort::{best_effort_from, BestEffortBasis};
-pub use error::PlanError;
+pub use error::{NotFound, PlanError};
 pub use observer::{IterationRecord, NoObserver, Observer};
 pub use options::{
     OptionConflict, OptionName, PlanOptions, Scheme, DEFAULT_DYNAMICS, DEFAULT_RESOLUTION,
@@ -38,7 +39,7 @@ pub use result::{BestEffort, PlanResult, TerminationReason};
 use coarse::{coarse_start, coarse_start_from, LevelStart};
 use iterate::{run_exact, run_paper, Means};
 use options::Deadline;
-use phase_one::make_feasible;
+use starts::StartSearch;
 
 /// Plans `mission` with `options`.
 pub fn plan(mission: &Mission, options: &PlanOptions) -> Result<PlanResult, PlanError> {
@@ -77,6 +78,9 @@ fn run_plan(
     stop: Option<&AtomicBool>,
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
+    options.validate()?;
+    // the bound, or the proof that no trajectory meets the mission (a certified refusal)
+    let bound = crate::bound::energy_bound(mission, options.dynamics)?;
     let free = mission.params().altitude == AltitudeMode::Free && options.altitude_profile;
     let mut out = if free && options.scheme == Scheme::Exact {
         options.validate()?;
@@ -87,6 +91,7 @@ fn run_plan(
     } else {
         run_plan_from(started, mission, options, observer, stop)?
     };
+    out.bound = Some(bound);
     out.solve_seconds = started.elapsed().as_secs_f64();
     Ok(out)
 }
@@ -112,11 +117,12 @@ fn run_plan_from(
     observer: &mut dyn Observer,
     stop: Option<&AtomicBool>,
 ) -> Result<PlanResult, PlanError> {
-    run_plan_capture(started, mission, options, observer, stop, None)
+    run_plan_capture(started, mission, options, observer, stop, None, true)
 }
 
 /// [`run_plan_from`]; the paper's schemes leave the BCD state of their last iterate in
-/// `paper_state`.
+/// `paper_state`. `best_effort_start`: whether a strict general plan whose phase I stalls may
+/// start from the best effort's plan (not when the best effort itself asks for the strict plan).
 fn run_plan_capture(
     started: Instant,
     mission: &Mission,
@@ -124,6 +130,7 @@ fn run_plan_capture(
     observer: &mut dyn Observer,
     stop: Option<&AtomicBool>,
     mut paper_state: Option<&mut Option<PaperState>>,
+    best_effort_start: bool,
 ) -> Result<PlanResult, PlanError> {
     options.validate()?;
     check_altitude(mission, options)?;
@@ -161,57 +168,32 @@ fn run_plan_capture(
         dynamics: options.dynamics,
         ..ExactTuning::default()
     };
-    let mut init_replaced = None;
-    let (start, repair_iterations) = match phase1 {
+    let (start, repair_iterations, init_replaced) = match phase1 {
         Some(objective) => {
-            let exact_rules = options.scheme == Scheme::Exact;
-            match make_feasible(
+            let search = StartSearch {
                 mission,
-                start,
+                options,
                 objective,
-                &base,
-                exact_rules,
-                Means {
-                    solver: &mut repair_solver,
-                    observer: &mut *observer,
-                    deadline,
-                },
-            ) {
-                Ok(repaired) => repaired,
-                // A given path phase I cannot repair (far outside the speed limits, or so far
-                // from the landmarks that the elastic program is numerically infeasible): plan
-                // from the built-in start rather than fail, and say so (unless told not to, or
-                // out of time).
-                Err(failure)
-                    if options.init.is_some()
-                        && options.replace_unrepairable_init
-                        && !matches!(failure.error, PlanError::TimeLimit { .. }) =>
-                {
-                    let reason = failure.error.to_string();
-                    tracing::warn!(
-                        error = %reason,
-                        "the given start cannot be repaired; planning from the built-in start"
-                    );
-                    init_replaced = Some(reason);
-                    let start = built_in_start(mission, options, deadline);
-                    start_energy_j = evaluate(mission, &start).energy_j;
-                    make_feasible(
-                        mission,
-                        start,
-                        objective,
-                        &base,
-                        exact_rules,
-                        Means {
-                            solver: &mut repair_solver,
-                            observer: &mut *observer,
-                            deadline,
-                        },
-                    )?
-                }
-                Err(failure) => return Err(failure.into()),
-            }
+                base: &base,
+                exact_rules: options.scheme == Scheme::Exact,
+                deadline,
+                stop,
+                best_effort_start,
+            };
+            let found = search.run(
+                start,
+                || built_in_start(mission, options, deadline),
+                &mut repair_solver,
+                observer,
+            )?;
+            start_energy_j = found.start_energy_j;
+            (
+                found.trajectory,
+                found.repair_iterations,
+                found.init_replaced,
+            )
         }
-        None => (start, 0),
+        None => (start, 0, None),
     };
     observer.on_phase("solve");
     let mut out = match options.scheme {

@@ -16,6 +16,7 @@
 //! crate, which also holds the `cellsar-planner` binary).
 
 pub mod altitude;
+pub mod bound;
 pub mod dmin;
 pub mod driver;
 pub mod evaluate;
@@ -34,8 +35,9 @@ pub mod tradeoff;
 pub mod trajectory;
 
 pub use altitude::AltitudeMode;
+pub use bound::{energy_bound, EnergyBound};
 pub use driver::{
-    plan, plan_with_observer, plan_with_stop, IterationRecord, NoObserver, Observer,
+    plan, plan_with_observer, plan_with_stop, IterationRecord, NoObserver, NotFound, Observer,
     OptionConflict, OptionName, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason,
     DEFAULT_DYNAMICS, DEFAULT_RESOLUTION,
 };

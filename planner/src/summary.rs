@@ -38,6 +38,16 @@ pub struct Summary {
     pub floor_energy_j: f64,
     /// energy_j / floor_energy_j − 1.
     pub energy_over_floor: f64,
+    /// A lower bound on the true energy of every trajectory that meets the mission's
+    /// constraints under the plan's vehicle model, J ([`crate::bound`]: the per-slot power
+    /// floor under the speed range each slot must keep, and the distances the UAV must fly
+    /// between the start and the landmarks); null where the result carries none.
+    #[serde(default)]
+    pub lower_bound_j: Option<f64>,
+    /// How far `energy_j` lies above `lower_bound_j`, % of `energy_j`: no trajectory meeting the
+    /// constraints uses less than `energy_j` × (1 − this / 100).
+    #[serde(default)]
+    pub bound_gap_pct: Option<f64>,
     /// Iterations run.
     pub iterations: usize,
     /// Stopped by the tolerance.
@@ -214,6 +224,8 @@ impl Summary {
             start_energy_j: result.start_energy_j,
             floor_energy_j: floor,
             energy_over_floor: ev.energy_j / floor - 1.0,
+            lower_bound_j: result.bound.map(|b| b.energy_j),
+            bound_gap_pct: result.bound.map(|b| b.gap_pct(ev.energy_j)),
             iterations: result.iterations,
             converged: result.converged,
             termination: result.termination.clone(),
@@ -488,6 +500,7 @@ mod tests {
             best_effort: None,
             dynamics: crate::Dynamics::Vehicle,
             altitudes_m,
+            bound: None,
         }
     }
 

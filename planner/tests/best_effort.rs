@@ -154,14 +154,14 @@ fn default_mission_best_effort_leaves_two_windows_and_half_of_them_within_ten_pe
         within.unresolved_windows
     );
     assert!(within.total_deficit_m > after.total_deficit_m);
-    // a strict request is still refused
+    // a strict request still finds no plan (and proves nothing: not a refusal)
     let strict = PlanOptions {
         strict_resolution: true,
         ..best_effort(None)
     };
     assert!(matches!(
         plan(&m, &strict),
-        Err(planner::PlanError::Infeasible(_))
+        Err(planner::PlanError::NotFound(_))
     ));
 }
 

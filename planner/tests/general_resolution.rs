@@ -86,7 +86,7 @@ fn first_landmark_is_seen_from_the_default_start_only_near_the_blind_arc() {
 }
 
 #[test]
-fn default_mission_under_strict_general_resolution_is_refused_naming_an_early_slot() {
+fn default_mission_under_strict_general_resolution_is_not_found_naming_an_early_slot() {
     let m = Mission::preset(Preset::Default, 30.0).unwrap();
     let options = PlanOptions {
         resolution: ResolutionMode::General,
@@ -94,14 +94,30 @@ fn default_mission_under_strict_general_resolution_is_refused_naming_an_early_sl
         ..Default::default()
     };
     match plan(&m, &options) {
-        Err(PlanError::Infeasible(i)) => {
+        Err(PlanError::NotFound(i)) => {
             // within the first three landmark windows (30 s = 60 slots)
             assert!(i.slot >= 1 && i.slot <= 60, "slot {}: {}", i.slot, i.reason);
             assert!(i.reason.contains("resolution"), "{}", i.reason);
+            // after the coarse start, the guidance start and the best effort's plan
+            assert!(i.starts >= 3, "{i}");
+            let best = i.best.as_ref().expect("the best plan found");
+            assert!(!best.is_feasible());
+            // it violates what it says it violates, at the slot it names
+            let s = &best.evaluation.slots[i.slot - 1];
+            let p = m.params();
+            assert!(
+                !s.in_view
+                    || s.worst_width_m > p.d_min_m + 1e-4
+                    || s.speed_mps < p.min_speed_mps() - 1e-4
+                    || s.accel_mps2 > p.max_accel_mps2 * (1.0 + 1e-7),
+                "slot {}: {s:?}",
+                i.slot
+            );
+            assert!(i.to_string().contains("not proven impossible"), "{i}");
         }
         Ok(r) => panic!(
-            "a general-resolution plan of the default mission was found ({} J): README.md's \
-             'Resolution' section and issue 6's notes say it does not exist; update them",
+            "a general-resolution plan of the default mission was found ({} J): the user \
+             guide's 'Resolution' and 'Refusals' sections say none is found; update them",
             r.evaluation.energy_j
         ),
         Err(e) => panic!("unexpected error: {e}"),

@@ -22,6 +22,7 @@ from ._cellsar import (
     MissionError,
     Plan,
     PlanError,
+    PlanNotFound,
     RadarError,
     dmin,
     evaluate,
@@ -38,6 +39,7 @@ __all__ = [
     "MissionError",
     "PlanError",
     "InfeasibleMission",
+    "PlanNotFound",
     "RadarError",
     "radar",
 ]
@@ -70,9 +72,9 @@ def plan(
             default, the same as ``cellsar-planner plan``, ``cellsar run`` and a plan request
             on the wire: ``"general"`` for ``"exact"``, ``"paper"`` for the comparison schemes.
             :attr:`Plan.resolution` names the one planned for.
-        strict_resolution: under ``"general"`` with ``"exact"``: raise
-            :class:`InfeasibleMission` where the cell cannot be held within d_min in every
-            landmark slot, instead of planning the best effort.
+        strict_resolution: under ``"general"`` with ``"exact"``: plan with the cell within
+            d_min in every landmark slot, raising :class:`PlanNotFound` where no such plan is
+            found, instead of planning the best effort.
         max_extra_energy_pct: best effort only: the best-resolved plan within this many
             percent more energy than the least-energy (``"paper"``) plan.
         init: a start: a :class:`Plan`, a trajectory CSV path (as ``cellsar-planner plan
@@ -94,7 +96,9 @@ def plan(
     columns); the other schemes refuse it with a :class:`PlanError`.
 
     Raises:
-        InfeasibleMission: the mission cannot be flown (``slot``, ``t_s``, ``reason``).
+        InfeasibleMission: the mission cannot be flown, proven (``slot``, ``t_s``, ``reason``).
+        PlanNotFound: no plan meeting every constraint was found, none proven impossible
+            (``slot``, ``t_s``, ``reason``, ``best_energy_j``, ``best_violations``).
         PlanError: the solver failed, the time limit passed before a feasible start, or a
             scheme other than ``"exact"`` was given a free-altitude mission.
         ValueError: a bad option or start; ``strict_resolution`` or ``max_extra_energy_pct``

@@ -20,7 +20,7 @@ class PlanError(RuntimeError):
     """A plan that failed: the solver, the time limit, or an internal error."""
 
 class InfeasibleMission(PlanError):
-    """A mission that cannot be flown."""
+    """A mission that cannot be flown, proven (a closed-form bound rules out every trajectory)."""
 
     slot: int
     """The first slot (1-based) that cannot be met."""
@@ -28,6 +28,20 @@ class InfeasibleMission(PlanError):
     """End time of that slot, s."""
     reason: str
     """What cannot be met."""
+
+class PlanNotFound(PlanError):
+    """No plan meets every constraint, and none is proven impossible."""
+
+    slot: int
+    """The first slot (1-based) that the best plan found violates."""
+    t_s: float
+    """End time of that slot, s."""
+    reason: str
+    """What that plan violates."""
+    best_energy_j: Optional[float]
+    """The best plan's true energy, J (None when there is none)."""
+    best_violations: Optional[dict[str, float]]
+    """The best plan's largest violations (the keys of `Evaluation.violations`)."""
 
 class RadarError(ValueError):
     """A radar simulation or processing step that failed."""

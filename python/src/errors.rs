@@ -24,6 +24,14 @@ create_exception!(
 );
 create_exception!(
     cellsar,
+    PlanNotFound,
+    PlanError,
+    "No plan meets every constraint, and none is proven impossible; `slot` (1-based), `t_s` and \
+     `reason` name the first slot the best plan found violates, `best_energy_j` and \
+     `best_violations` (a dict) describe that plan (None when there is none)."
+);
+create_exception!(
+    cellsar,
     RadarError,
     PyValueError,
     "A radar simulation or processing step that failed; the message names the field, pulse or aperture."
@@ -47,6 +55,26 @@ pub fn plan_error(py: Python<'_>, e: &planner::PlanError) -> PyErr {
                 .setattr("slot", inf.slot)
                 .and_then(|()| value.setattr("t_s", inf.t_s))
                 .and_then(|()| value.setattr("reason", inf.reason.as_str()));
+            match set {
+                Ok(()) => err,
+                Err(e) => e,
+            }
+        }
+        planner::PlanError::NotFound(nf) => {
+            let err = PlanNotFound::new_err(message);
+            let value = err.value(py);
+            let best = nf.best.as_ref();
+            let violations = best
+                .map(|b| crate::json::to_py(py, &b.evaluation.violations))
+                .transpose();
+            let set = violations.and_then(|violations| {
+                value
+                    .setattr("slot", nf.slot)
+                    .and_then(|()| value.setattr("t_s", nf.t_s))
+                    .and_then(|()| value.setattr("reason", nf.reason.as_str()))
+                    .and_then(|()| value.setattr("best_energy_j", best.map(|b| b.evaluation.energy_j)))
+                    .and_then(|()| value.setattr("best_violations", violations))
+            });
             match set {
                 Ok(()) => err,
                 Err(e) => e,

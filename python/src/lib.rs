@@ -35,6 +35,7 @@ fn _cellsar(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "InfeasibleMission",
         py.get_type::<errors::InfeasibleMission>(),
     )?;
+    m.add("PlanNotFound", py.get_type::<errors::PlanNotFound>())?;
     m.add("RadarError", py.get_type::<errors::RadarError>())?;
     Ok(())
 }

@@ -75,8 +75,13 @@ impl PlannerCore {
                 var.name
             ))
         })?;
-        if var.vr == pv::SOLVE_TIME {
-            return Ok(run.solve_s);
+        match var.vr {
+            pv::SOLVE_TIME => return Ok(run.solve_s),
+            pv::LOWER_BOUND => return Ok(run.bound.map_or(f64::NAN, |b| b.energy_j)),
+            pv::BOUND_GAP => {
+                return Ok(run.bound.map_or(f64::NAN, |b| b.gap_pct(run.eval.energy_j)))
+            }
+            _ => {}
         }
         let s = run.sample(tau_s);
         Ok(match var.vr {
@@ -389,7 +394,9 @@ impl PlannerCore {
             ),
         );
         self.params = mission.params().clone();
+        let bound = planner::energy_bound(&mission, self.initial.dynamics).ok();
         self.run = Some(Run {
+            bound,
             mission,
             source,
             traj: planned.trajectory,
@@ -556,6 +563,7 @@ fn replan_after_move(
             run.eval = evaluate_at(&re.mission, &re.trajectory, re.altitudes_m.as_deref())
                 .map_err(|m| mv.reject(m))?;
             run.moved.insert(window);
+            run.bound = planner::energy_bound(&re.mission, run.dynamics).ok();
             run.mission = re.mission;
             run.traj = re.trajectory;
             run.altitudes_m = re.altitudes_m;

@@ -91,6 +91,7 @@ fn run_of(pos_m: Vec<[f64; 2]>) -> Run {
         moved: BTreeSet::new(),
         dynamics: planner::DEFAULT_DYNAMICS,
         altitudes_m: None,
+        bound: None,
     }
 }
 

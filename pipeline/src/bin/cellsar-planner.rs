@@ -276,7 +276,21 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let pb = spinner();
             let result = plan_with_observer(&m, &options, &mut Progress(pb.clone()));
             pb.finish_and_clear();
-            let result = result.map_err(plan_failure)?;
+            let result = match result {
+                Ok(result) => result,
+                // no plan meets every constraint: write the best one found, marked infeasible
+                // (summary.json's `feasible` is false; its violations say where), then fail
+                Err(planner::PlanError::NotFound(nf)) => {
+                    if let Some(best) = &nf.best {
+                        let files = report::write_plan_dir(&out, &m, best)
+                            .with_context(|| format!("writing {}", out.display()))?;
+                        print_plan(&m, best, &files);
+                        out!("the plan written is the best found and is infeasible");
+                    }
+                    return Err(plan_failure(planner::PlanError::NotFound(nf)));
+                }
+                Err(e) => return Err(plan_failure(e)),
+            };
             let files = report::write_plan_dir(&out, &m, &result)
                 .with_context(|| format!("writing {}", out.display()))?;
             print_plan(&m, &result, &files);
@@ -360,12 +374,18 @@ fn run(cli: Cli) -> Result<(), Failure> {
 fn print_plan(m: &Mission, result: &PlanResult, files: &[PathBuf]) {
     let s = Summary::new(m, result);
     out!(
-        "{}: scheme {}, true energy {:.1} J ({:+.2}% vs floor {:.1} J), own objective {}, {} iterations ({}), {:.3} s",
+        "{}: scheme {}, true energy {:.1} J ({}), own objective {}, {} iterations ({}), {:.3} s",
         m.name(),
         s.scheme,
         s.energy_j,
-        100.0 * s.energy_over_floor,
-        s.floor_energy_j,
+        match (s.lower_bound_j, s.bound_gap_pct) {
+            (Some(b), Some(gap)) => format!("lower bound {b:.1} J, gap {gap:.2} %"),
+            _ => format!(
+                "{:+.2}% vs floor {:.1} J",
+                100.0 * s.energy_over_floor,
+                s.floor_energy_j
+            ),
+        },
         own_objective(&s),
         s.iterations,
         s.termination,

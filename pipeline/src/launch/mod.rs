@@ -205,13 +205,14 @@ pub struct PlanRefused {
 }
 
 impl PlanRefused {
-    /// What kind of failure the refusal is: a mission that cannot be flown exits 3, a request
-    /// the planner found invalid 2, a planner that failed 1, a planner that stayed busy (its
+    /// What kind of failure the refusal is: a mission that cannot be flown exits 3, a plan not
+    /// found 5, a request the planner found invalid 2, a planner that failed 1, a planner that stayed busy (its
     /// request queue full each time it was asked) 1.
     pub fn failure_kind(&self) -> FailureKind {
         match self.refusal.kind {
             RefusalKind::Infeasible => FailureKind::Infeasible,
             RefusalKind::BadRequest => FailureKind::BadInput,
+            RefusalKind::NotFound => FailureKind::PlanNotFound,
             RefusalKind::Internal | RefusalKind::Busy => FailureKind::Runtime,
         }
     }
@@ -504,6 +505,7 @@ mod tests {
             (RefusalKind::BadRequest, FailureKind::BadInput),
             (RefusalKind::Internal, FailureKind::Runtime),
             (RefusalKind::Busy, FailureKind::Runtime),
+            (RefusalKind::NotFound, FailureKind::PlanNotFound),
         ] {
             // the text no longer decides: an internal failure that mentions infeasibility
             // stays a failure at run time

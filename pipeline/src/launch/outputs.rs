@@ -268,10 +268,16 @@ fn write_report_md(
     let _ = writeln!(s, "# cellsar run: {}\n", mission.name());
     let _ = writeln!(
         s,
-        "- plan: {} slots, energy {:.0} J (feasible {}), planned in {:.1} s",
+        "- plan: {} slots, energy {:.0} J (feasible {}; {}), planned in {:.1} s",
         mission.slots(),
         plan.summary.energy_j,
         plan.summary.feasible,
+        match (plan.summary.lower_bound_j, plan.summary.bound_gap_pct) {
+            (Some(b), Some(gap)) => format!(
+                "no feasible trajectory uses less than {b:.0} J: the plan is at most {gap:.1} % above it"
+            ),
+            _ => "no energy bound".to_string(),
+        },
         pipeline["plan_s"].as_f64().unwrap_or(f64::NAN)
     );
     let sm = &plan.summary;

@@ -74,6 +74,7 @@ pub(super) fn plan_free_paper(
         observer,
         stop,
         Some(&mut state),
+        true,
     )?;
     let profile = vec![p.altitude_m; n];
     let ev = evaluate_with_altitudes(mission, &fixed.trajectory, &profile)
@@ -83,6 +84,7 @@ pub(super) fn plan_free_paper(
         return Ok(PlanResult {
             evaluation: ev,
             altitudes_m: Some(profile),
+            bound: None,
             ..fixed
         });
     };

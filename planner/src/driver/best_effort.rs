@@ -55,7 +55,17 @@ fn strict_plan(
         max_extra_energy_pct: None,
         ..options.clone()
     };
-    match super::run_plan(mission, &strict_options, observer, stop) {
+    // not from the best effort's plan: this is the best effort's own basis
+    let started = Instant::now();
+    match super::run_plan_capture(
+        started,
+        mission,
+        &strict_options,
+        observer,
+        stop,
+        None,
+        false,
+    ) {
         Ok(plan) => Some(plan.trajectory),
         Err(e) => {
             tracing::debug!(error = %e, "no strict general plan");
@@ -199,6 +209,7 @@ fn best_effort_until(
         out.start_energy_j = least_j;
         out.cone_programs += programs;
         out.best_effort = Some(info);
+        out.bound = crate::bound::energy_bound(mission, options.dynamics).ok();
         out.solve_seconds = started.elapsed().as_secs_f64();
         out
     };

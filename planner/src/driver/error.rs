@@ -3,13 +3,40 @@
 use crate::init::Infeasibility;
 use crate::socp::SolveError;
 
+/// No plan meets every constraint, and none is proven impossible ([`PlanError::NotFound`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "no plan found that meets every constraint, from {starts} starts (not proven impossible): \
+     slot {slot} (t = {t_s} s): {reason}"
+)]
+pub struct NotFound {
+    /// The first slot (1-based) that the best plan found violates.
+    pub slot: usize,
+    /// End time of that slot, s.
+    pub t_s: f64,
+    /// What that plan violates there and overall.
+    pub reason: String,
+    /// How many starts phase I tried.
+    pub starts: usize,
+    /// The best plan found: the iterate of least total violation (infeasible; its evaluation
+    /// names what it violates). `None` when no start got as far as an iterate.
+    pub best: Option<super::PlanResult>,
+}
+
 /// Why planning failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum PlanError {
-    /// The mission cannot be flown (found before or during phase I).
+    /// The mission cannot be flown, proven: a closed-form bound (the speed limits, the reach of
+    /// the UAV from the start and between landmarks, V_min above V_m; [`crate::init::precheck`],
+    /// [`crate::bound::energy_bound`]) rules out every trajectory. Only this is a refusal.
     #[error(transparent)]
     Infeasible(#[from] Infeasibility),
+    /// The planner found no trajectory that meets every constraint, from any of its starts, but
+    /// has no proof that none exists. It carries the best plan it found (least violation),
+    /// which is infeasible.
+    #[error(transparent)]
+    NotFound(Box<NotFound>),
     /// The given start trajectory does not fit the mission.
     #[error("start trajectory: {0}")]
     InvalidInit(String),

@@ -75,6 +75,7 @@ pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) ->
         best_effort: None,
         dynamics: Dynamics::Paper,
         altitudes_m: None,
+        bound: None,
     }
 }
 
@@ -118,7 +119,7 @@ pub(super) fn run_exact(
             Ok(s) => s,
             Err(e) => {
                 if it == 1 && tuning.trust_radius_m.is_none() && end.records.is_empty() {
-                    tracing::warn!(error = %e, "first subproblem failed; retrying with a trust region");
+                    tracing::debug!(error = %e, "first subproblem failed; retrying with a trust region");
                 }
                 let stop = trust.reject(&mut tuning.trust_radius_m);
                 end.records.push(record(

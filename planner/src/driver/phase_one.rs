@@ -2,10 +2,10 @@
 
 use crate::evaluate::{evaluate, Dynamics, Evaluation, ResolutionMode, ACCEL_TOL_REL};
 use crate::geometry::{distance, Point2, Vector2};
-use crate::init::Infeasibility;
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::{Mission, Trajectory};
 
+use super::error::NotFound;
 use super::iterate::{extrapolate, Means};
 use super::PlanError;
 
@@ -16,7 +16,8 @@ use super::PlanError;
 /// centre's (straight flight at the slot's heading), as [`ExactTuning::whole_slot_sensing`] imposes.
 ///
 /// Under [`Dynamics::Vehicle`] it adds, over all slots, the velocity change beyond the limit,
-/// (‖v_t − v_{t−1}‖ − a_max δ)⁺ in m/s (what the acceleration slack τ_t/δ bounds).
+/// ([`crate::evaluate::SlotEval::accel_mps2`] − a_max)⁺ δ in m/s (what the acceleration slack
+/// τ_t/δ bounds, twice that in the first slot).
 pub(super) fn total_violation(
     mission: &Mission,
     ev: &Evaluation,
@@ -205,10 +206,11 @@ pub(super) fn make_feasible(
     })
 }
 
-/// The refusal of a phase I that stalled at `ev`: the first slot that is out of view, too slow,
-/// (under the general resolution) wider than d_min or (under the vehicle dynamics) above the
-/// acceleration limit.
-fn stalled_error(
+/// What a phase I that stalled at `ev` reports ([`PlanError::NotFound`], its best plan filled in
+/// by the driver): the first slot that is out of view, too slow, (under the general resolution)
+/// wider than d_min or (under the vehicle dynamics) above the acceleration limit. A stall proves
+/// nothing about the mission.
+pub(super) fn stalled_error(
     mission: &Mission,
     ev: &Evaluation,
     (mode, dynamics): (ResolutionMode, Dynamics),
@@ -238,20 +240,22 @@ fn stalled_error(
     } else {
         String::new()
     };
-    PlanError::Infeasible(Infeasibility {
+    PlanError::NotFound(Box::new(NotFound {
         slot: first,
         t_s: first as f64 * p.slot_s,
         reason: format!(
-            "no trajectory found that keeps every landmark in view at the required resolution \
-             ({} resolution, {} dynamics; phase I stalled with a sensing violation of {:.2} m, a \
-             speed shortfall of {:.3} m/s{accel} and a worst cell width of d_min + {:.2} m)",
+            "the best trajectory found ({} resolution, {} dynamics) has a sensing violation of \
+             {:.2} m, a speed shortfall of {:.3} m/s{accel} and a worst cell width of d_min + \
+             {:.2} m",
             mode.name(),
             dynamics.name(),
             ev.violations.sensing_m,
             ev.violations.min_speed_mps,
             ev.violations.worst_width_m
         ),
-    })
+        starts: 1,
+        best: None,
+    }))
 }
 
 /// Why phase I gave no feasible start.

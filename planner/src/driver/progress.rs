@@ -118,6 +118,7 @@ impl LoopEnd {
             termination: self.termination,
             cone_programs: self.cone_programs,
             altitudes_m: Some(altitudes_m),
+            bound: None,
             ..fixed
         }
     }

@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::bound::EnergyBound;
 use crate::evaluate::{Dynamics, Evaluation, ResolutionMode};
 use crate::shortfall::ResolutionShortfall;
 use crate::Trajectory;
@@ -103,6 +104,12 @@ pub struct PlanResult {
     /// is then at these altitudes); `None` for a plan at the mission's fixed altitude.
     #[serde(default)]
     pub altitudes_m: Option<Vec<f64>>,
+    /// A lower bound on the energy of every trajectory that meets the mission's constraints
+    /// under the plan's vehicle model ([`crate::bound`]); the plan's energy is at most
+    /// [`EnergyBound::gap_pct`] above the least any such trajectory can have. `None` only in a
+    /// result not made by the planner.
+    #[serde(default)]
+    pub bound: Option<EnergyBound>,
 }
 
 impl PlanResult {

@@ -77,9 +77,9 @@ impl ServiceError {
     }
 
     /// The typed refusal a plan request is answered with: a request that names a bad field
-    /// (or a start trajectory that does not fit) is `bad_request`, a mission that cannot be
-    /// flown `infeasible`, the rest (a solver or worker failure) `internal`; the message is
-    /// this error's.
+    /// (or a start trajectory that does not fit) is `bad_request`, a mission proven impossible
+    /// `infeasible`, a plan not found `not_found`, the rest (a solver or worker failure)
+    /// `internal`; the message is this error's.
     pub fn refusal(&self) -> Refusal {
         let kind = match self {
             ServiceError::BadRequest(_)
@@ -95,6 +95,10 @@ impl ServiceError {
                 error: PlanError::Infeasible(_),
                 ..
             } => RefusalKind::Infeasible,
+            ServiceError::Plan {
+                error: PlanError::NotFound(_),
+                ..
+            } => RefusalKind::NotFound,
             _ => RefusalKind::Internal,
         };
         Refusal::new(kind, self.to_string())
