@@ -7,7 +7,13 @@
 //! digit). A failure names the command and prints the value to write, so that a change of the
 //! planner that moves a figure is a one-line change of the notes.
 //!
-//! The notes' timings are not figures of a plan: they live in BENCHMARKS.md.
+//! The notes' timings are not figures of a plan: they live in BENCHMARKS.md. The user guide's
+//! walk-through ("Plan your own mission in ten minutes") is checked the same way. Most figures
+//! are of plans with the paper's dynamics (`--dynamics paper`, as `reproduce` plans); those of
+//! the vehicle model (the default of `exact`) are named so in their test.
+//!
+//! `cargo test -p planner --test paper_notes_figures`: about 2 CPU-minutes in the debug build
+//! (5 minutes on a loaded 2-core machine); `-- --include-ignored` adds five best-effort plans.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -26,11 +32,20 @@ fn repo() -> PathBuf {
         .to_path_buf()
 }
 
-fn notes() -> &'static str {
-    static TEXT: OnceLock<String> = OnceLock::new();
-    TEXT.get_or_init(|| {
-        let text = std::fs::read_to_string(repo().join(NOTES)).expect("docs/paper-notes.md");
-        // line breaks are where the text wraps: patterns are written with single spaces
+const GUIDE: &str = "docs/user-guide.md";
+
+/// The text of `doc` (NOTES or GUIDE) with every run of white space made one space: line
+/// breaks are where the text wraps, and patterns are written with single spaces.
+fn text_of(doc: &str) -> &'static str {
+    static NOTES_TEXT: OnceLock<String> = OnceLock::new();
+    static GUIDE_TEXT: OnceLock<String> = OnceLock::new();
+    let cell = if doc == NOTES {
+        &NOTES_TEXT
+    } else {
+        &GUIDE_TEXT
+    };
+    cell.get_or_init(|| {
+        let text = std::fs::read_to_string(repo().join(doc)).expect(doc);
         text.split_whitespace().collect::<Vec<_>>().join(" ")
     })
 }
@@ -160,7 +175,12 @@ fn match_at(text: &str, start: usize, pattern: &[Token]) -> Option<(f64, String)
 
 /// The figure the notes quote where `pattern` matches (exactly once): its value and its text.
 fn quoted(pattern: &str) -> Result<(f64, String), String> {
-    let text = notes();
+    quoted_in(NOTES, pattern)
+}
+
+/// The figure `doc` quotes where `pattern` matches (exactly once).
+fn quoted_in(doc: &str, pattern: &str) -> Result<(f64, String), String> {
+    let text = text_of(doc);
     let toks = tokens(pattern);
     let hits: Vec<_> = text
         .char_indices()
@@ -169,11 +189,11 @@ fn quoted(pattern: &str) -> Result<(f64, String), String> {
     match hits.as_slice() {
         [one] => Ok(one.clone()),
         [] => Err(format!(
-            "{NOTES}: no text matches `{pattern}` (its figure was moved or reworded: update \
+            "{doc}: no text matches `{pattern}` (its figure was moved or reworded: update \
              this test's pattern)"
         )),
         many => Err(format!(
-            "{NOTES}: `{pattern}` matches {} times; make it unique",
+            "{doc}: `{pattern}` matches {} times; make it unique",
             many.len()
         )),
     }
@@ -203,16 +223,21 @@ fn shown(value: f64, decimals: usize, grouped: bool) -> String {
 /// Checks the figures of one run: each `(pattern, value)` against the notes. `command` is
 /// what makes the run, for the message.
 fn check(command: &str, figures: &[(&str, f64)]) {
+    check_in(NOTES, command, figures);
+}
+
+/// [`check`] against `doc`.
+fn check_in(doc: &str, command: &str, figures: &[(&str, f64)]) {
     let mut failures = Vec::new();
     for &(pattern, value) in figures {
-        match quoted(pattern) {
+        match quoted_in(doc, pattern) {
             Err(e) => failures.push(e),
             Ok((q, text)) => {
                 let decimals = text.split_once('.').map_or(0, |(_, f)| f.len());
                 let half_unit = 0.5 * 10f64.powi(-(decimals as i32));
                 if (value - q).abs() > half_unit * (1.0 + 1e-9) {
                     failures.push(format!(
-                        "{NOTES} quotes {text} at `{pattern}`; `{command}` gives {value}: \
+                        "{doc} quotes {text} at `{pattern}`; `{command}` gives {value}: \
                          write {}",
                         shown(value, decimals, text.contains(' '))
                     ));
@@ -731,5 +756,115 @@ fn best_efforts() {
             ("best effort peaks at about {} m/s²", peak),
             ("m/s², {} g)", peak / 9.80665),
         ],
+    );
+}
+
+/// The user guide's "Plan your own mission in ten minutes": the mission it saves as
+/// `corner.toml` (read out of the guide), planned as each step says. These are plans for the
+/// vehicle (the default of `exact`).
+#[test]
+fn user_guide_street_corner() {
+    let guide = std::fs::read_to_string(repo().join(GUIDE)).expect(GUIDE);
+    let toml = guide
+        .split_once("Save as `corner.toml`:")
+        .and_then(|(_, rest)| rest.split_once("```toml\n"))
+        .and_then(|(_, rest)| rest.split_once("```"))
+        .map(|(toml, _)| toml)
+        .expect("the user guide's corner.toml");
+    let file = MissionFile::from_toml_str(toml).expect("corner.toml");
+    let m = Mission::from_file_struct(&file).unwrap();
+    let best = run(&m, &PlanOptions::default());
+    let least = run(&m, &PlanOptions::least_energy());
+    let (b, l) = (&best.evaluation, &least.evaluation);
+    let floor_pct = |e: &planner::Evaluation| {
+        let s = planner::Summary::new(&m, &best);
+        100.0 * (e.energy_j / s.floor_energy_j - 1.0)
+    };
+    let windows = |e: &planner::Evaluation| {
+        planner::shortfall::ResolutionShortfall::new(&m, e).unresolved_windows as f64
+    };
+    let strict = PlanOptions {
+        strict_resolution: true,
+        ..PlanOptions::default()
+    };
+    let refused_at = match plan(&m, &strict) {
+        Err(planner::PlanError::Infeasible(i)) => i.slot as f64,
+        other => panic!(
+            "a strict general plan of corner.toml: {:?}",
+            other.map(|r| r.evaluation.energy_j)
+        ),
+    };
+    let mut east = file.clone();
+    east.params.start_m = Some([1000.0, 0.0]);
+    let east = run(
+        &Mission::from_file_struct(&east).unwrap(),
+        &PlanOptions::default(),
+    );
+    let largest = |e: &planner::Evaluation| {
+        e.slots
+            .iter()
+            .filter(|s| s.landmark_m.is_some())
+            .map(|s| s.worst_width_m)
+            .fold(0.0, f64::max)
+    };
+    let extra = 100.0 * (b.energy_j / l.energy_j - 1.0);
+    let own = "own objective # J (energy model";
+    let b1 = format!("street corner: scheme exact, true energy {{}} J (+#% vs floor # J), {own}");
+    let b2 = format!("street corner: scheme exact, true energy # J (+{{}}% vs floor # J), {own}");
+    check_in(
+        GUIDE,
+        "cellsar-planner plan corner.toml [--resolution paper | --strict-resolution] (start_m \
+         [1000, 0] for step 4)",
+        &[
+            (&b1, b.energy_j),
+            (&b2, floor_pct(b)),
+            ("own objective {} J (energy model", best.objective),
+            ("resolution deficit), {} iterations", best.iterations as f64),
+            ("speeds #..{} m/s resolution (best effort)", b.max_speed_mps),
+            ("resolution (best effort): {} of # windows", windows(b)),
+            (
+                "resolution (best effort): # of # windows and {} landmark slots",
+                b.slots_unresolved as f64,
+            ),
+            ("the least-energy plan: {} windows, # slots", windows(l)),
+            (
+                "the least-energy plan: # windows, {} slots at",
+                l.slots_unresolved as f64,
+            ),
+            ("(this plan +{}%)", extra),
+            ("in {} of the 5 windows, all but", 5.0 - windows(b)),
+            (
+                "windows, all but {} of its 100 slots",
+                b.slots_unresolved as f64,
+            ),
+            ("for {} % more energy than the least-energy plan", extra),
+            ("'slots_unresolved_general': {},", b.slots_unresolved as f64),
+            ("'slots_blind': {},", b.slots_blind as f64),
+            ("'max_worst_width_m': {}...", largest(b)),
+            ("true energy {} J (+0.00% vs floor", l.energy_j),
+            (
+                "own objective {} J, # iterations (converged)",
+                least.objective,
+            ),
+            (
+                "own objective # J, {} iterations (converged)",
+                least.iterations as f64,
+            ),
+            (
+                "but {} of its 100 landmark slots",
+                l.slots_unresolved as f64,
+            ),
+            (
+                "have a cell wider than $d_{\\min}$, {} of them blind",
+                l.slots_blind as f64,
+            ),
+            ("(exit 3, naming slot {}, t =", refused_at),
+            ("the plan costs the floor, {} J", east.evaluation.energy_j),
+            ("its largest worst width is {} m", largest(&east.evaluation)),
+        ],
+    );
+    assert_eq!(
+        east.evaluation.slots_unresolved, 0,
+        "step 4: every slot resolved"
     );
 }
