@@ -776,9 +776,10 @@ fn user_guide_street_corner() {
     let best = run(&m, &PlanOptions::default());
     let least = run(&m, &PlanOptions::least_energy());
     let (b, l) = (&best.evaluation, &least.evaluation);
-    let floor_pct = |e: &planner::Evaluation| {
-        let s = planner::Summary::new(&m, &best);
-        100.0 * (e.energy_j / s.floor_energy_j - 1.0)
+    let gap_pct = |r: &planner::PlanResult| {
+        r.bound
+            .expect("every plan carries its bound")
+            .gap_pct(r.evaluation.energy_j)
     };
     let windows = |e: &planner::Evaluation| {
         planner::shortfall::ResolutionShortfall::new(&m, e).unresolved_windows as f64
@@ -788,7 +789,7 @@ fn user_guide_street_corner() {
         ..PlanOptions::default()
     };
     let refused_at = match plan(&m, &strict) {
-        Err(planner::PlanError::Infeasible(i)) => i.slot as f64,
+        Err(planner::PlanError::NotFound(i)) => i.slot as f64,
         other => panic!(
             "a strict general plan of corner.toml: {:?}",
             other.map(|r| r.evaluation.energy_j)
@@ -809,15 +810,19 @@ fn user_guide_street_corner() {
     };
     let extra = 100.0 * (b.energy_j / l.energy_j - 1.0);
     let own = "own objective # J (energy model";
-    let b1 = format!("street corner: scheme exact, true energy {{}} J (+#% vs floor # J), {own}");
-    let b2 = format!("street corner: scheme exact, true energy # J (+{{}}% vs floor # J), {own}");
+    let b1 = format!(
+        "street corner: scheme exact, true energy {{}} J (lower bound # J, gap # %), {own}"
+    );
+    let b2 = format!(
+        "street corner: scheme exact, true energy # J (lower bound # J, gap {{}} %), {own}"
+    );
     check_in(
         GUIDE,
         "cellsar-planner plan corner.toml [--resolution paper | --strict-resolution] (start_m \
          [1000, 0] for step 4)",
         &[
             (&b1, b.energy_j),
-            (&b2, floor_pct(b)),
+            (&b2, gap_pct(&best)),
             ("own objective {} J (energy model", best.objective),
             ("resolution deficit), {} iterations", best.iterations as f64),
             ("speeds #..{} m/s resolution (best effort)", b.max_speed_mps),
@@ -841,7 +846,8 @@ fn user_guide_street_corner() {
             ("'slots_unresolved_general': {},", b.slots_unresolved as f64),
             ("'slots_blind': {},", b.slots_blind as f64),
             ("'max_worst_width_m': {}...", largest(b)),
-            ("true energy {} J (+0.00% vs floor", l.energy_j),
+            ("true energy {} J (lower bound # J, gap # %), own objective # J, # iterations (converged)", l.energy_j),
+            ("true energy # J (lower bound # J, gap {} %), own objective # J, # iterations (converged)", gap_pct(&least)),
             (
                 "own objective {} J, # iterations (converged)",
                 least.objective,
@@ -858,7 +864,7 @@ fn user_guide_street_corner() {
                 "have a cell wider than $d_{\\min}$, {} of them blind",
                 l.slots_blind as f64,
             ),
-            ("(exit 3, naming slot {}, t =", refused_at),
+            ("finds no plan (exit 5, naming slot {}, t =", refused_at),
             ("the plan costs the floor, {} J", east.evaluation.energy_j),
             ("its largest worst width is {} m", largest(&east.evaluation)),
         ],

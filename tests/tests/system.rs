@@ -512,9 +512,10 @@ fn sigint_while_waiting_for_the_planner_exits_130() {
 }
 
 /// `--resolution` and `--strict-resolution` reach the planner: under the strict general cell
-/// the default mission cannot be planned from its start (docs/user-guide.md, "Resolution: paper
-/// or general": the planner stops at slot 23), so the run exits 3 naming the resolution; with
-/// the default best effort the same mission is planned (every other test here).
+/// the planner finds no plan of the default mission from its start (docs/user-guide.md,
+/// "Refusals and plans not found"), so the run exits 5 naming the resolution (the planner's
+/// `not_found` refusal); with the default best effort the same mission is planned (every other
+/// test here).
 #[test]
 fn resolution_general_reaches_the_planner() {
     let dir = tempfile::tempdir().unwrap();
@@ -532,8 +533,9 @@ fn resolution_general_reaches_the_planner() {
         "general".into(),
     ];
     let e = cellsar_bounded(&args, dir.path(), Duration::from_secs(120), |_| {});
-    assert_eq!(e.code, Some(3), "{}", e.stderr);
+    assert_eq!(e.code, Some(5), "{}", e.stderr);
     assert!(e.stderr.contains("resolution"), "{}", e.stderr);
+    assert!(e.stderr.contains("not proven impossible"), "{}", e.stderr);
     // an unknown mode is bad input, named, before anything starts
     let mut bad = args.clone();
     if let Some(last) = bad.last_mut() {

@@ -4,9 +4,9 @@
 //!
 //! In order: the start the scheme chose (a given `--init` path, or the coarse levels' track);
 //! the built-in start in place of a given path phase I cannot repair
-//! ([`PlanOptions::replace_unrepairable_init`]); the guidance law's track; and, for a strict
-//! general plan of the `exact` scheme, the best effort's plan, which keeps every constraint
-//! but the resolution hard and often resolves every slot too.
+//! ([`PlanOptions::replace_unrepairable_init`]; without it a given path is the only start); the
+//! guidance law's track; and, for a strict general plan of the `exact` scheme, the best effort's
+//! plan, which keeps every constraint but the resolution hard and often resolves every slot too.
 
 use std::sync::atomic::AtomicBool;
 
@@ -109,6 +109,8 @@ impl<'a> StartSearch<'a> {
                     });
                 }
             }
+            // a given path and no fallback asked for: that path alone
+            None if self.options.init.is_some() => return Err(self.not_found(stalls)),
             None => {}
         }
         for other in [OtherStart::Guidance, OtherStart::BestEffort] {
