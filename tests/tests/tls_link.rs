@@ -36,7 +36,7 @@ fn config(dir: &Path, certs: &Path, me: &str, port: u16) -> String {
          scouting: {{ multicast: {{ enabled: false }} }}, transport: {{ link: {{ tls: {{ \
          root_ca_certificate: {}, listen_private_key: {}, listen_certificate: {}, \
          connect_private_key: {}, connect_certificate: {}, enable_mtls: true, \
-         verify_name_on_connect: true }} }} }} }}",
+         verify_name_on_connect: true, close_link_on_expiration: true }} }} }} }}",
         serde_json::json!(listen),
         serde_json::json!(connect),
         p("ca.pem"),
