@@ -7,8 +7,9 @@
 //! ([`ROUTER_ROLE`]) is a server certificate only (extended key usage serverAuth) and names the
 //! `--host` names and addresses, which a client checks against the address it connects to;
 //! these must be names no public certificate authority may certify
-//! ([`bridge::zconfig::is_private_name`]: Zenoh's TLS client also trusts the public Web PKI
-//! roots, so the name is what keeps a publicly trusted certificate out). Every other role's
+//! ([`bridge::zconfig::is_private_name`]: cellsar's TLS link trusts only the deployment's CA,
+//! but a client on upstream Zenoh's link also trusts the public Web PKI roots, and then the
+//! name is what keeps a publicly trusted certificate out). Every other role's
 //! certificate is a client certificate only (clientAuth, no host names): a stolen role key
 //! cannot serve as the router. Keys are ECDSA P-256, PKCS#8 PEM, mode 0600. Every file is
 //! written atomically (a unique temporary file, synced, renamed), and nothing is written when
@@ -199,8 +200,9 @@ fn router_hosts(args: &CertsArgs) -> Result<Vec<String>, CertsError> {
             flag: "--host",
             value: h.clone(),
             reason: format!(
-                "a public certificate authority may certify this name, and Zenoh's TLS client \
-                 trusts the public roots besides the deployment's CA; give the router a private \
+                "a public certificate authority may certify this name, and a client on \
+                 upstream Zenoh's TLS link trusts the public roots besides the deployment's CA \
+                 (cellsar's does not); give the router a private \
                  address (10/8, 172.16/12, 192.168/16, loopback) or a name under one of .{}",
                 bridge::zconfig::PRIVATE_DNS_SUFFIXES.join(", .")
             ),

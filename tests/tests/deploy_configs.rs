@@ -178,6 +178,81 @@ fn no_flag_downgrades_the_tls_deployment() {
     assert!(!out.exists(), "a refused run created its output directory");
 }
 
+/// An endpoint option that could weaken TLS is refused wherever an endpoint enters, each process
+/// as `cellsar` runs it (exit 2, the flag or file, the endpoint and the option named): on `-e`
+/// over a role's file and over none, on the router's `-l`, in a `-c` file and in a
+/// `--child-config` file of `cellsar run`.
+#[test]
+fn no_endpoint_option_weakens_the_tls_deployment() {
+    let deploy = root().join("pipeline/deploy/tls");
+    let cfg = |r: &str| deploy.join(format!("{r}.json5")).display().to_string();
+    let (planner, router) = (cfg("planner"), cfg("router"));
+    let noverify = "tls/127.0.0.1:17449#verify_name_on_connect=false";
+    let named = |flag: &str, ep: &str, option: &str| {
+        format!("{flag} {ep}: endpoint option {option} is not allowed")
+    };
+    refused(
+        &["planner", "-c", &planner, "-e", noverify],
+        &named("--connect", noverify, "#verify_name_on_connect"),
+    );
+    refused(
+        &["planner", "-e", noverify],
+        &named("--connect", noverify, "#verify_name_on_connect"),
+    );
+    let no_mtls = "tls/127.0.0.1:17449#enable_mtls=false";
+    refused(
+        &["router", "-c", &router, "-l", no_mtls],
+        &named("--listen", no_mtls, "#enable_mtls"),
+    );
+    refused(
+        &["router", "-l", no_mtls],
+        &named("--listen", no_mtls, "#enable_mtls"),
+    );
+    let other_ca = "tls/127.0.0.1:17449#root_ca_certificate=/tmp/other-ca.pem";
+    refused(
+        &["planner", "-c", &planner, "-e", other_ca],
+        &named("--connect", other_ca, "#root_ca_certificate"),
+    );
+    // the same endpoint in a role's file: as -c of the service, and as --child-config of a run
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(&planner)
+        .unwrap()
+        .replace("tls/192.168.1.10:7447", noverify);
+    let file = dir.path().join("planner-noverify.json5");
+    std::fs::write(&file, text).unwrap();
+    let file = file.display().to_string();
+    let in_file = format!(
+        "-c {file}: connect endpoint {noverify}: endpoint option #verify_name_on_connect is not \
+         allowed"
+    );
+    refused(&["planner", "-c", &file], &in_file);
+    let out = dir.path().join("out").display().to_string();
+    let (scene, mission) = (
+        harness::pipeline::scene().display().to_string(),
+        harness::pipeline::mission().display().to_string(),
+    );
+    let child = format!("planner={file}");
+    refused(
+        &[
+            "run",
+            &mission,
+            "--scene",
+            &scene,
+            "--out",
+            &out,
+            "--transport",
+            "zenoh",
+            "--external",
+            "processor",
+            "-c",
+            &cfg("launcher"),
+            "--child-config",
+            &child,
+        ],
+        &format!("{file}: connect endpoint {noverify}: endpoint option #verify_name_on_connect"),
+    );
+}
+
 /// Every configuration of the mutual-TLS deployment, as Zenoh reads it, requires client
 /// certificates, checks the router's name, and closes a link when its certificate expires
 /// (the promises of `docs/deployment.md`, "Secure deployment across hosts").

@@ -54,6 +54,21 @@ pub enum ConfigError {
         #[source]
         source: ZenohError,
     },
+    /// An option of an endpoint (after its `?` or `#`) that is not on the allow-list
+    /// (`zconfig::ALLOWED_ENDPOINT_OPTIONS`): one that could change whom a link trusts or
+    /// what it accepts (`#verify_name_on_connect=false`, `#enable_mtls=false`,
+    /// `#root_ca_certificate_file=...`), or one this crate does not know.
+    #[error(
+        "invalid Zenoh configuration: {what}: endpoint option {option} is not allowed: {reason}"
+    )]
+    EndpointOption {
+        /// The flag and its endpoint, or the file and its endpoint.
+        what: String,
+        /// The option, as written (`#verify_name_on_connect`).
+        option: String,
+        /// Why it is refused, and what is allowed.
+        reason: String,
+    },
     /// A flag or setting that would silently downgrade a configuration that enables TLS or
     /// access control (a plain endpoint, multicast scouting, no check of the router's name).
     #[error("invalid Zenoh configuration: {what}: {reason}")]

@@ -21,16 +21,21 @@
 //! `scouting.multicast.enabled` itself (Zenoh's own default is on): a process joins only the
 //! peers and routers it is told about (module `scouting`).
 //!
-//! Once a `--config` file enables TLS or access control, nothing may downgrade it: a non-`tls/`
-//! endpoint (of `-e`, `-l` or the file), multicast scouting, a client that does not check the
-//! router's name, or one that connects to a name a public CA may certify are refused, naming
-//! the flag or the file's setting (module `secure`, [`ConfigError::Downgrade`]).
+//! Every endpoint (of `-e`, `-l` or the file) may carry only the options of an allow-list
+//! ([`ALLOWED_ENDPOINT_METADATA`], [`ALLOWED_ENDPOINT_CONFIG`]; [`ConfigError::EndpointOption`]
+//! names the option). Once a `--config` file enables TLS or access control, nothing may
+//! downgrade it: a non-`tls/` endpoint, multicast scouting, a client that does not check the
+//! router's name, one that connects to a name a public CA may certify, a TLS listener without
+//! mutual TLS, access control that allows by default, and any TLS or access-control setting
+//! not on the allow-list are refused, naming the flag or the file's setting (module `secure`,
+//! [`ConfigError::Downgrade`]).
 //!
 //! Every configuration built here bounds what a peer can make this process allocate: Zenoh
 //! reassembles a fragmented message in memory before anyone sees it, up to
 //! `transport/link/rx/max_message_size` (1 GiB by Zenoh's default). It is set to
 //! [`DEFAULT_MAX_MESSAGE_BYTES`], room for the largest message this crate decodes, unless
-//! `--zenoh-max-message-bytes` says otherwise or a `--config` file sets a value of its own.
+//! `--zenoh-max-message-bytes` says otherwise (at most [`MAX_MAX_MESSAGE_BYTES`], 256 MiB +
+//! 64 KiB) or a `--config` file sets a value of its own.
 
 use std::path::PathBuf;
 
@@ -48,7 +53,10 @@ mod secure;
 pub use describe::{describe, effective_endpoints, effective_mode, waiting_client_json5};
 pub use error::ConfigError;
 pub use scouting::MULTICAST_SCOUTING_KEY;
-pub use secure::{is_private_name, what_secures, PRIVATE_DNS_SUFFIXES};
+pub use secure::{
+    is_private_name, what_secures, ALLOWED_ENDPOINT_CONFIG, ALLOWED_ENDPOINT_METADATA,
+    PRIVATE_DNS_SUFFIXES,
+};
 
 /// The Zenoh session mode.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -89,14 +97,21 @@ pub const DEFAULT_MAX_MESSAGE_BYTES: usize = (64 << 20) + (64 << 10);
 /// Smallest `--zenoh-max-message-bytes` accepted (64 KiB: one Zenoh batch).
 pub const MIN_MAX_MESSAGE_BYTES: usize = 64 << 10;
 
-/// Largest `--zenoh-max-message-bytes` accepted: the largest frame any process takes
-/// ([`MAX_FRAME_HARD_LIMIT`], 1 GiB) with 64 KiB for its headers.
-pub const MAX_MAX_MESSAGE_BYTES: usize = MAX_FRAME_HARD_LIMIT + (64 << 10);
+/// Largest `--zenoh-max-message-bytes` accepted: 256 MiB + 64 KiB, four times the default.
+/// Zenoh keeps a reassembly buffer for each priority and reliability of each link (16 per
+/// session), each up to this size, so a peer can make a process hold many times it; Zenoh's
+/// own 1 GiB would let one session claim more memory than the hosts have. 256 MiB is room
+/// for frames four times the largest this crate decodes by default ([`DEFAULT_MAX_FRAME_BYTES`])
+/// and far above any frame a mission needs (a frame need hold only one pulse; the services'
+/// frames default to 4 MiB). Frames above 256 MiB (up to [`MAX_FRAME_HARD_LIMIT`]) still
+/// travel over iceoryx2 on one host, but not over Zenoh.
+pub const MAX_MAX_MESSAGE_BYTES: usize = (256 << 20) + (64 << 10);
 
 const _: () = assert!(DEFAULT_MAX_MESSAGE_BYTES >= MAX_BODY_BYTES + HEADER_LEN);
 const _: () = assert!(DEFAULT_MAX_MESSAGE_BYTES >= DEFAULT_MAX_FRAME_BYTES + WIRE_PREFIX_LEN);
 const _: () = assert!(MIN_MAX_MESSAGE_BYTES <= DEFAULT_MAX_MESSAGE_BYTES);
 const _: () = assert!(DEFAULT_MAX_MESSAGE_BYTES <= MAX_MAX_MESSAGE_BYTES);
+const _: () = assert!(MAX_MAX_MESSAGE_BYTES <= MAX_FRAME_HARD_LIMIT + WIRE_PREFIX_LEN);
 
 /// Zenoh flags shared by every cellsar binary (flatten with `#[command(flatten)]`).
 #[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
@@ -136,7 +151,8 @@ pub struct ZenohArgs {
     pub no_multicast_scouting: bool,
     /// Largest message Zenoh reassembles from its fragments, in bytes; larger ones are
     /// dropped before they are allocated [default: 67174400 (64 MiB + 64 KiB), or the
-    /// --config file's own value]. Raise it with --max-frame-bytes above 64 MiB.
+    /// --config file's own value; at most 268500992 (256 MiB + 64 KiB)]. Raise it with
+    /// --max-frame-bytes above 64 MiB.
     #[arg(
         id = "zenoh_max_message_bytes",
         long = "zenoh-max-message-bytes",
@@ -162,7 +178,8 @@ impl ZenohArgs {
 
     /// The same flags with room for messages of `bytes` bytes: `--zenoh-max-message-bytes`
     /// raised to `bytes` if it (or its default) is smaller. For a process that takes frames
-    /// of `--max-frame-bytes` N: `with_room_for(N + frame::WIRE_PREFIX_LEN)`.
+    /// of `--max-frame-bytes` N: `with_room_for(N + frame::WIRE_PREFIX_LEN)`. Above
+    /// [`MAX_MAX_MESSAGE_BYTES`], [`to_config`](Self::to_config) refuses the result.
     #[must_use]
     pub fn with_room_for(mut self, bytes: usize) -> Self {
         let now = self.max_message_bytes.unwrap_or(DEFAULT_MAX_MESSAGE_BYTES);
@@ -263,9 +280,7 @@ impl ZenohArgs {
                 "--zenoh-max-message-bytes",
             )?;
         }
-        if let Some(why) = secured {
-            secure::check(self, &config, why)?;
-        }
+        secure::check(self, &config, secured)?;
         Ok(config)
     }
 
@@ -489,7 +504,8 @@ mod tests {
     }
 
     /// Zenoh reassembles at most 64 MiB + 64 KiB by default (not its own 1 GiB); the flag
-    /// sets it within bounds, and passes on to a child; a file's own value is kept.
+    /// sets it within bounds (at most 256 MiB + 64 KiB: 1 GiB is refused), and passes on to a
+    /// child; a file's own value is kept.
     #[test]
     fn the_largest_message_is_bounded() {
         let size = |a: &ZenohArgs| -> usize {
@@ -522,7 +538,7 @@ mod tests {
             size(&ZenohArgs::default().with_room_for(1 << 20)),
             DEFAULT_MAX_MESSAGE_BYTES
         );
-        for bad in [0, 1000, MAX_MAX_MESSAGE_BYTES + 1, usize::MAX] {
+        for bad in [0, 1000, MAX_MAX_MESSAGE_BYTES + 1, 1 << 30, usize::MAX] {
             let a = ZenohArgs {
                 max_message_bytes: Some(bad),
                 ..Default::default()

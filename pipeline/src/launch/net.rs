@@ -676,7 +676,7 @@ mod tests {
 
     const TLS: &str = "transport: { link: { tls: { root_ca_certificate: '/c/ca.pem', \
         connect_private_key: '/c/x.key', connect_certificate: '/c/x.pem', \
-        enable_mtls: true } } }";
+        enable_mtls: true, close_link_on_expiration: true } } }";
 
     /// With TLS or access control the launcher is a client of the router, and every child it
     /// starts has its own configuration that enables them too; anything else is refused,

@@ -346,16 +346,11 @@ impl<'a> TlsClientConfig<'a> {
             None => TLS_CLOSE_LINK_ON_EXPIRATION_DEFAULT,
         };
 
-        // Allows mixed user-generated CA and webPKI CA
-        tracing::debug!("Loading default Web PKI certificates.");
-        let mut root_cert_store = RootCertStore {
-            roots: webpki_roots::TLS_SERVER_ROOTS.to_vec(),
-        };
-
-        if let Some(custom_root_cert) = load_trust_anchors(config)? {
-            tracing::debug!("Loading user-generated certificates.");
-            root_cert_store.extend(custom_root_cert.roots);
-        }
+        // PATCHED (cellsar): only the configured CA is trusted. The published crate adds the
+        // public Web PKI roots (webpki_roots::TLS_SERVER_ROOTS) to the configured CA, so that
+        // a client would accept any certificate a public authority issued for the name it
+        // connects to; here a client without a configured CA is refused.
+        let root_cert_store = client_trust_anchors(config)?;
 
         // Install ring based rustls CryptoProvider.
         rustls::crypto::ring::default_provider()
@@ -552,6 +547,23 @@ async fn load_tls_certificate(
             .map_err(|e| zerror!("Invalid TLS certificate file: {}", e))?);
     }
     Err(zerror!("Missing tls certificates.").into())
+}
+
+// PATCHED (cellsar): the roots a TLS client trusts: the configured CA's and nothing else (no
+// Web PKI roots); an error when no CA is configured or the configured one holds no
+// certificate.
+pub(crate) fn client_trust_anchors(config: &Config<'_>) -> ZResult<RootCertStore> {
+    let store = load_trust_anchors(config)?.ok_or_else(|| {
+        zerror!(
+            "Missing root CA certificate (root_ca_certificate): this TLS link trusts only the \
+             configured CA, not the public Web PKI."
+        )
+    })?;
+    if store.is_empty() {
+        bail!("The root CA certificate (root_ca_certificate) holds no certificate.");
+    }
+    tracing::debug!("Loading the configured root CA certificates only.");
+    Ok(store)
 }
 
 fn load_trust_anchors(config: &Config<'_>) -> ZResult<Option<RootCertStore>> {

@@ -136,7 +136,7 @@ impl TlsConfigs {
                 "{{ mode: 'peer', listen: {{ endpoints: {} }}, transport: {{ link: {{ tls: {{ \
                  root_ca_certificate: {}, listen_private_key: {}, listen_certificate: {}, \
                  connect_private_key: {}, connect_certificate: {}, enable_mtls: true, \
-                 verify_name_on_connect: true }} }} }} }}",
+                 verify_name_on_connect: true, close_link_on_expiration: true }} }} }} }}",
                 serde_json::to_string(listen)?,
                 path(&ca),
                 path(&certs.join(format!("{server}.key"))),
