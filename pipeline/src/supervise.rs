@@ -100,6 +100,8 @@ pub struct Supervised {
     pub failures: u32,
     restart_at: Option<Instant>,
     last_exit: Option<String>,
+    /// The length of the log when the child was last started: what it wrote since is its own.
+    log_start: u64,
 }
 
 /// What happened to a child during a poll.
@@ -133,6 +135,7 @@ impl Supervised {
             failures: 0,
             restart_at: None,
             last_exit: None,
+            log_start: 0,
         };
         s.spawn(events)?;
         Ok(s)
@@ -140,6 +143,7 @@ impl Supervised {
 
     fn spawn(&mut self, events: &Events) -> Result<u32, SuperviseError> {
         let log = open_log(&self.spec.log)?;
+        self.log_start = log.metadata().map(|m| m.len()).unwrap_or(0);
         let log2 = log.try_clone().map_err(|error| SuperviseError::Log {
             path: self.spec.log.clone(),
             error,
@@ -188,7 +192,12 @@ impl Supervised {
                 Ok(Some(status)) => {
                     self.child = None;
                     self.failures += 1;
-                    let st = describe(status);
+                    // with the error it printed, so that the launcher's own output names the
+                    // cause
+                    let st = match last_error(&self.spec.log, self.log_start) {
+                        Some(e) => format!("{}: {e}", describe(status)),
+                        None => describe(status),
+                    };
                     tracing::warn!(role = %self.spec.role, status = %st, "child exited");
                     events.emit(&Event::ChildExited {
                         role: self.spec.role.to_string(),
@@ -300,6 +309,23 @@ fn open_log(path: &Path) -> Result<std::fs::File, SuperviseError> {
         })
 }
 
+/// The last line starting with `error: ` (how every binary prints the error it exits with)
+/// that a child wrote to `log` from byte `from` on, within the last 64 KiB, without the
+/// prefix and cut to 1000 characters.
+fn last_error(log: &Path, from: u64) -> Option<String> {
+    use std::io::{Read, Seek, SeekFrom};
+    const TAIL: u64 = 64 * 1024;
+    let mut f = std::fs::File::open(log).ok()?;
+    let len = f.metadata().ok()?.len();
+    let start = from.max(len.saturating_sub(TAIL));
+    f.seek(SeekFrom::Start(start)).ok()?;
+    let mut bytes = Vec::new();
+    f.take(TAIL).read_to_end(&mut bytes).ok()?;
+    let text = String::from_utf8_lossy(&bytes);
+    let line = text.lines().rev().find_map(|l| l.strip_prefix("error: "))?;
+    Some(line.chars().take(1000).collect())
+}
+
 fn describe(s: ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (s.code(), s.signal()) {
@@ -313,5 +339,33 @@ fn describe(s: ExitStatus) -> String {
 pub fn signal(pid: u32, sig: Signal) {
     if let Ok(pid) = i32::try_from(pid) {
         let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(pid), sig);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::last_error;
+
+    #[test]
+    fn a_childs_last_error_is_read_from_what_it_wrote_since_its_start() {
+        let dir = tempfile::tempdir().unwrap();
+        let log = dir.path().join("processor.log");
+        let earlier = "error: an earlier start's failure\n";
+        std::fs::write(
+            &log,
+            format!(
+                "{earlier}INFO started\nerror: the frame receiver thread stopped: create node\n\
+                 WARN the launcher is gone\n"
+            ),
+        )
+        .unwrap();
+        assert_eq!(
+            last_error(&log, 0).as_deref(),
+            Some("the frame receiver thread stopped: create node")
+        );
+        // a child that printed no error since its start: none, not the earlier one's
+        std::fs::write(&log, format!("{earlier}INFO started\n")).unwrap();
+        assert_eq!(last_error(&log, earlier.len() as u64), None);
+        assert_eq!(last_error(&dir.path().join("missing.log"), 0), None);
     }
 }

@@ -52,10 +52,19 @@ fn report_of(log: &str) -> Value {
     serde_json::from_str(line).unwrap()
 }
 
-/// Waits for the forger to exit (at most `forge_s` + 120 s), asserts it succeeded and gives
-/// its report.
+/// Rounds of forgeries the forger does at least for the run's mission, past its
+/// `--duration-s` if need be (a loaded machine can spend all of it on the flood before the
+/// first round).
+const MIN_ROUNDS: u64 = 20;
+
+/// The longest a run, or one of its steps, may take in these tests: generous enough for a
+/// debug build on a 2-core machine at load 10 (the run alone takes about 45 s on an idle one).
+const LOADED: Duration = Duration::from_secs(900);
+
+/// Waits for the forger to exit (at most `forge_s` + [`LOADED`]), asserts it succeeded and
+/// gives its report.
 fn forger_report(forger: &mut Service, forge_s: u64) -> Value {
-    let deadline = Instant::now() + Duration::from_secs(forge_s + 120);
+    let deadline = Instant::now() + Duration::from_secs(forge_s) + LOADED;
     let st = loop {
         if let Some(st) = forger.child.try_wait().unwrap() {
             break st;
@@ -106,10 +115,25 @@ fn a_hostile_peer_of_every_kind_leaves_the_run_exact_and_bounded() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // no echo yet: the mission waits while the forger works
-    let mut l = Launch::start(d, H, &["--external", "echo"]);
-    let net = l.event("network", Duration::from_secs(60));
+    let timeout = LOADED.as_secs().to_string();
+    let mut l = Launch::start(
+        d,
+        H,
+        &[
+            "--external",
+            "echo",
+            "--timeout-s",
+            &timeout,
+            "--peer-timeout-s",
+            &timeout,
+        ],
+    );
+    let net = l.event("network", LOADED);
     let hub = hub_of(&net);
-    l.event("planned", Duration::from_secs(120));
+    // the forger is told the mission (besides learning it), and forges for it at least
+    // MIN_ROUNDS rounds however long its flood takes: the event, not a time, is waited for
+    let planned = l.event("planned", LOADED);
+    let mission = planned["mission_id"].as_str().unwrap().to_string();
     let before: Vec<(&str, Baseline)> = vec![
         ("planner", Baseline::take(l.pid("planner"))),
         ("processor", Baseline::take(l.pid("processor"))),
@@ -130,6 +154,10 @@ fn a_hostile_peer_of_every_kind_leaves_the_run_exact_and_bounded() {
         "--flood-plans",
         &FLOOD_PLANS.to_string(),
         "--flood-queries",
+        "--mission",
+        &mission,
+        "--min-rounds",
+        &MIN_ROUNDS.to_string(),
         "-m",
         "client",
         "-e",
@@ -148,6 +176,11 @@ fn a_hostile_peer_of_every_kind_leaves_the_run_exact_and_bounded() {
         &args,
     );
     let r = forger_report(&mut forger, FORGE_S);
+    assert!(
+        r["missions"].as_u64().unwrap() >= 1,
+        "the forger saw no mission: {r}"
+    );
+    assert!(r["rounds"].as_u64().unwrap() >= MIN_ROUNDS, "{r}");
     assert_eq!(r["flood"]["plans"], FLOOD_PLANS, "{r}");
     assert!(r["flood"]["queries"].as_u64().unwrap() > 0, "{r}");
     for kind in ["statuses", "detections", "images", "metrics", "plans"] {
@@ -166,7 +199,7 @@ fn a_hostile_peer_of_every_kind_leaves_the_run_exact_and_bounded() {
     // now the echo: the run completes with the closed loop's outputs
     let ea = echo_args(&net);
     let mut echo = Service::start("echo", d, &ea);
-    let st = l.finish(Duration::from_secs(300));
+    let st = l.finish(LOADED);
     assert!(st.success(), "{st:?}\n{}", l.stderr_tail());
     assert_same_as_reference(&l.out, &reference);
     assert!(echo.stop(Duration::from_secs(20)).success());

@@ -28,6 +28,7 @@
 //!    Shared memory: only what this run made is removed (module `shm`).
 
 mod imaging;
+mod mode;
 mod net;
 mod outputs;
 mod plan;
@@ -50,11 +51,13 @@ use crate::exit::{Failure, FailureKind};
 use crate::protocol::{self, FrameLayout, Role};
 use crate::services::process::MissionContext;
 use crate::supervise::{stop_all, ChildSpec, Supervised};
+pub use mode::OutputMode;
 use net::{free_port, open_with_retry};
 pub use net::{network, Hub, Net};
 use outputs::Planned;
 pub use private::PrivateDir;
 use session::{Session, Setup};
+pub use shm::node_counter_name as iox_node_counter_name;
 
 /// How IQ frames reach the processor.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -160,6 +163,12 @@ pub struct RunArgs {
     /// Keep the services' state directory (`.state/`) after a successful run.
     #[arg(long)]
     pub keep_state: bool,
+    /// Who may read what the run writes (outputs, logs, state): `private`, the user who
+    /// started it only (directories 0700, files 0600: umask 077 for the launcher and its
+    /// children), or `umask`, as the caller's umask says. An output directory that exists
+    /// already keeps its mode.
+    #[arg(long, value_enum, default_value_t = OutputMode::Private)]
+    pub output_mode: OutputMode,
     /// `RUST_LOG` of the children (their logs go to `<out>/logs/`); a valid filter.
     #[arg(long, default_value = "info")]
     pub child_log: String,
@@ -350,6 +359,8 @@ fn launch(
     stop: Arc<AtomicBool>,
     wall: Instant,
 ) -> Result<Outcome> {
+    // before anything is created: the children inherit it
+    mode::apply(args.output_mode);
     let out = absolute(&args.out)?;
     let state = out.join(".state");
     let logs = out.join("logs");
@@ -364,9 +375,14 @@ fn launch(
     let own_iox = args.iox.root.is_none() && args.iox.prefix.is_none() && args.iox.config.is_none();
     let iox = if own_iox {
         shm::clean_dead_runs();
+        let prefix = shm::own_prefix();
+        // before any iceoryx2 node: iceoryx2 would make it writable by every user
+        shm::claim_node_counter(&prefix).with_context(|| {
+            format!("creating the run's iceoryx2 node counter (prefix {prefix})")
+        })?;
         IoxArgs {
             root: Some(state.join("iox")),
-            prefix: Some(shm::own_prefix()),
+            prefix: Some(prefix),
             config: None,
         }
     } else {

@@ -10,6 +10,7 @@
 //! - [`os`]: what every service needs from the OS (stop on signals, atomic state files);
 //! - [`radar`]: what the two radar services share (their error, the frame size);
 //! - [`bridge`]: the iceoryx2 <-> Zenoh bridge as a process (`cellsar-bridge`, `cellsar bridge`);
+//! - [`threads`]: the threads a service depends on, each reporting how it ended;
 //! - [`wait`]: what a service waits for, said in its log.
 //!
 //! Their messages and keys are in [`crate::protocol`].
@@ -23,4 +24,5 @@ pub mod process;
 pub mod radar;
 #[cfg(test)]
 mod radar_tests;
+pub mod threads;
 pub mod wait;

@@ -11,6 +11,12 @@ from cellsar import study
 from conftest import BIN, rows
 
 
+def default_sigint():
+    """In a child, before it runs: SIGINT's default disposition (Python then installs its
+    KeyboardInterrupt handler), whatever the test process inherited."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_interrupted_study_resumes_with_only_the_missing_runs(plan_study, tmp_path):
     path = plan_study(realisations=8, spacings=(20, 40))
     ids = {r.run_id for r in study.load(path).runs()}
@@ -85,6 +91,9 @@ def test_ctrl_c_leaves_a_complete_table(plan_study, tmp_path):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # SIGINT as a terminal delivers it, also where the tests run with it ignored
+        # (`nohup ... &`), which a child would inherit
+        preexec_fn=default_sigint,
     )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:

@@ -61,6 +61,15 @@ pub enum ServiceError {
     /// A worker thread failed.
     #[error("{0}")]
     Internal(String),
+    /// A thread the service depends on ended while the service ran
+    /// ([`crate::services::threads`]).
+    #[error("the {thread} thread stopped: {cause}")]
+    ThreadStopped {
+        /// The thread, in words.
+        thread: String,
+        /// Its error, its panic's message, or that it returned.
+        cause: String,
+    },
 }
 
 impl From<BadRequest> for ServiceError {

@@ -199,19 +199,26 @@ fn serve_on(
     let busy = AtomicU64::new(0);
     let done = AtomicBool::new(false);
     let (queue, busy, done) = (&queue, &busy, &done);
+    // the taker reports its end: the service fails naming it, instead of waiting for
+    // requests that nothing takes any more
+    let (exit_tx, exits) = crate::services::threads::thread_exits();
     let report = std::thread::scope(|scope| {
         let taker = std::thread::Builder::new()
             .name("plan-requests".into())
             .spawn_scoped(scope, move || {
-                fair::take_requests(requests, queue, busy, done)
+                crate::services::threads::report_exit("plan request taker", &exit_tx, || {
+                    Ok::<u64, ServiceError>(fair::take_requests(requests, queue, busy, done))
+                })
             })
             .map_err(|e| ServiceError::Internal(format!("starting the request thread: {e}")));
         let (report, taker) = match taker {
-            Ok(t) => (answer_requests(node, args, queue, stop), Some(t)),
+            Ok(t) => (answer_requests(node, args, queue, &exits, stop), Some(t)),
             Err(e) => (Err(e), None),
         };
         done.store(true, Ordering::Relaxed);
-        let malformed = taker.and_then(|t| t.join().ok()).unwrap_or_default();
+        let malformed = taker
+            .and_then(|t| t.join().ok().flatten())
+            .unwrap_or_default();
         report.map(|r| ServeReport {
             malformed: r.malformed + malformed,
             busy: busy.load(Ordering::Relaxed),
@@ -237,6 +244,7 @@ fn answer_requests(
     node: &ZenohNode,
     args: &ServeArgs,
     queue: &fair::SharedQueue<bridge::net::IncomingQuery<PlanRequest>>,
+    threads: &crate::services::threads::ThreadExits,
     stop: &AtomicBool,
 ) -> Result<ServeReport, ServiceError> {
     let cache = PlanCache::new(node, args.state_dir.as_deref())?;
@@ -253,6 +261,7 @@ fn answer_requests(
     let mut waits = super::wait::WaitLog::default();
     let waiting = format!("a plan request on {PLAN_KEY}");
     while !stop.load(Ordering::Relaxed) {
+        threads.check()?;
         let Some((requester, q)) = queue.pop_timeout(Duration::from_millis(100)) else {
             // nobody asked yet: say so (a client that cannot reach this planner is the usual cause)
             if report.plans + report.errors == 0 {

@@ -39,6 +39,7 @@ use crate::protocol::Role;
 use crate::services::admission::DEFAULT_MAX_MISSIONS;
 use crate::services::plan::{PlanCache, StatusBoard};
 use crate::services::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
+use crate::services::threads::{report_exit, thread_exits};
 use proc::{Inbox, Proc};
 use publish::Publishers;
 use receive::{
@@ -50,6 +51,11 @@ pub use context::{
     detections_message, fold_metrics, object_as_recorded, pulse_as_recorded, ApertureOutcome,
     MissionContext, ProcContext, StoredOutcome,
 };
+
+/// The frame receiver thread, in the processor's errors.
+const FRAME_RECEIVER: &str = "frame receiver";
+/// The requester thread, in the processor's errors.
+const REQUESTER: &str = "aperture requester";
 
 /// Where the processor takes frames from.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -193,11 +199,13 @@ fn serve(
     let (done_tx, done_rx) = mpsc::channel::<RequestDone>();
     let (job_tx, job_rx) = mpsc::channel::<Job>();
     let (res_tx, res_rx) = mpsc::channel::<JobResult>();
+    let (exit_tx, threads) = thread_exits();
     let inbox = Inbox {
         frames: frame_rx,
         watching: watch_rx,
         requests_done: done_rx,
         results: res_rx,
+        threads,
     };
     let loss = FrameLoss::default();
 
@@ -229,17 +237,24 @@ fn serve(
             cmds: cmd_rx,
             watching: watch_tx,
         };
+        // each reports its end to the service loop, which then fails naming it
+        let receiver_exit = exit_tx.clone();
         let receiver = std::thread::Builder::new()
             .name("frames".into())
-            .spawn_scoped(scope, move || match zenoh_frames {
-                Some(sub) => receive_zenoh(sub, out),
-                None => receive_iox(env, args, control, out),
+            .spawn_scoped(scope, move || {
+                report_exit(FRAME_RECEIVER, &receiver_exit, || match zenoh_frames {
+                    Some(sub) => receive_zenoh(sub, out),
+                    None => receive_iox(env, args, control, out),
+                })
             })
             .map_err(|e| ServiceError::Internal(format!("starting the frame receiver: {e}")))?;
         let requester = std::thread::Builder::new()
             .name("requests".into())
             .spawn_scoped(scope, move || {
-                requester(node, &args.instance, req_rx, done_tx)
+                report_exit(REQUESTER, &exit_tx, || {
+                    requester(node, &args.instance, req_rx, done_tx);
+                    Ok::<(), ServiceError>(())
+                })
             })
             .map_err(|e| ServiceError::Internal(format!("starting the requester: {e}")))?;
         let mut p = Proc {
@@ -265,11 +280,9 @@ fn serve(
         let result = p.run(stop, &inbox, &loss);
         recv_stop.store(true, Ordering::Relaxed);
         drop(p);
-        let r1 = receiver
-            .join()
-            .map_err(|_| ServiceError::Internal("the frame receiver panicked".into()))?;
+        // their errors and panics were reported (and caught) in the threads
+        let _ = receiver.join();
         let _ = requester.join();
-        r1?;
         result
     })
 }

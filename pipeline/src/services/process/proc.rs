@@ -39,6 +39,8 @@ pub(super) struct Inbox {
     pub(super) requests_done: Receiver<RequestDone>,
     /// The worker's results.
     pub(super) results: Receiver<JobResult>,
+    /// How the frame receiver and the requester ended: either one ending stops the service.
+    pub(super) threads: crate::services::threads::ThreadExits,
 }
 
 /// The processor's state: the missions, the publishers, the counters and the channels to its
@@ -110,6 +112,8 @@ impl Proc<'_> {
         let interval = self.args.status_interval_s.duration();
         let mut last_status = Instant::now();
         while !stop.load(Ordering::Relaxed) {
+            // a thread the service depends on is gone: fail now, naming it
+            inbox.threads.check()?;
             // a mission is taken on only when asked for (wanted.rs): the plans published for
             // others are not
             while let Some(p) = plans.try_recv() {

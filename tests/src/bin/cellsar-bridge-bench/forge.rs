@@ -112,6 +112,14 @@ pub(super) struct ForgeArgs {
     /// Forge for this mission (16 hexadecimal digits) from the start, besides those it sees.
     #[arg(long, value_parser = parse_mission)]
     mission: Option<MissionId>,
+    /// Forge at least this many rounds for the missions it knows, past --duration-s if need
+    /// be (on a loaded machine the flood of plans before the first round can take all of it),
+    /// for at most --max-extra-s more.
+    #[arg(long, default_value_t = 0)]
+    min_rounds: u64,
+    /// The longest it forges past --duration-s to complete --min-rounds, s.
+    #[arg(long, default_value = "600", value_parser = bridge::flags::parse_seconds)]
+    max_extra_s: bridge::flags::Seconds,
     #[command(flatten)]
     flood: flood::FloodArgs,
     #[command(flatten)]
@@ -127,6 +135,8 @@ pub(super) struct ForgeArgs {
 #[derive(Debug, Default, Serialize)]
 struct ForgeReport {
     missions: usize,
+    /// Rounds of forgeries for at least one mission.
+    rounds: u64,
     statuses: u64,
     detections: u64,
     images: u64,
@@ -331,7 +341,8 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
     let mut forgers: Vec<(MissionId, Forger)> = Vec::new();
     let mut echo = echo::Echo::default();
     let mut progress = Instant::now();
-    while Instant::now() < end {
+    let hard_end = end + a.max_extra_s.duration();
+    while Instant::now() < end || (r.rounds < a.min_rounds && Instant::now() < hard_end) {
         if let Some((l, plan)) = &lookups {
             l.answer(plan, &mut r.lookups);
         }
@@ -421,6 +432,9 @@ pub(super) fn forge(a: &ForgeArgs) -> Result<()> {
             flood::flood_queries(&node, *id, &a.flood, &mut r.flood);
             iq::forge_round(&node, *id, &a.instance, &a.iq, &mut r.iq);
             echo.round(&node, *id, &a.instance, (&a.echo, &a.iq), &mut r.echo);
+        }
+        if !forgers.is_empty() {
+            r.rounds += 1;
         }
         r.missions = forgers.len();
         r.received = received.load(std::sync::atomic::Ordering::Relaxed);
