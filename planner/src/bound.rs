@@ -5,9 +5,8 @@
 //! slot-average speed V_t = ‖q_t − q_{t−1}‖/δ in a range [lo_t, hi_t] that the constraints imply:
 //! - lo_t = V_min (the azimuth requirement, at the lowest altitude allowed) in a landmark slot,
 //!   0 elsewhere;
-//! - hi_t = V_m, and under [`Dynamics::Vehicle`] also ‖v₀‖ + a_max δ (t − ½): a speed change of at
-//!   most a_max δ/2 into the first slot (constant acceleration from the instantaneous start velocity
-//!   v₀) and a_max δ between slot averages after it.
+//! - hi_t = V_m, and under [`Dynamics::Vehicle`] also ‖v₀‖ + a_max δ t: the vehicle model
+//!   changes the velocity by at most a_max δ from slot to slot, from the start velocity v₀ on.
 //!
 //! It also covers distance: at a landmark slot the UAV lies within R = r_s + H tan η of the
 //! landmark (its sensing centre within r_s, the centre H tan η from it; at the highest altitude
@@ -157,7 +156,7 @@ impl Ranges {
             .map(|t| {
                 let mut hi = p.max_speed_mps + FEASIBILITY_TOL;
                 if dynamics == Dynamics::Vehicle {
-                    hi = hi.min(speed0 + a_max * p.slot_s * (t as f64 - 0.5));
+                    hi = hi.min(speed0 + a_max * p.slot_s * t as f64);
                 }
                 let lo = if mission.target_m(t).is_some() {
                     v_min.max(0.0)

@@ -14,8 +14,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// A flight of `n` slots from `start_m` at the start velocity `v0`, its slot-average velocities
-/// changing by less than a_max δ/2 into the first slot and a_max δ after, its speeds within
-/// [v_lo, v_hi].
+/// changing by less than a_max δ/2 into the first slot (what constant acceleration from v₀ gives)
+/// and a_max δ after, its speeds within [v_lo, v_hi].
 fn random_flight(
     p: &Params,
     n: usize,
@@ -224,7 +224,7 @@ fn unreachable_missions_are_certified() {
     let e = energy_bound(&m, Dynamics::Paper).unwrap_err();
     assert_eq!(e.slot, 61, "{e}");
     assert!(e.reason.contains("cannot be in view"), "{e}");
-    // from rest, slot 1's average speed is at most a_max δ/2 = 1.4 m/s < V_min = 7.07 m/s
+    // from rest, slot 1's speed is at most a_max δ = 2.8 m/s < V_min = 7.07 m/s
     p.start_m = [-1000.0, 0.0];
     let soon = LandmarksSpec {
         points: Some(vec![LandmarkWindow {

@@ -120,8 +120,8 @@ pub(super) fn coarse_start_from(
         whole_slot_sensing: true,
         dynamics: options.dynamics,
         // the first coarse slot's velocity, placed at its middle, is interpolated from the start
-        // velocity at t = 0 (where the finer grid's constraint puts it too)
-        first_accel_window_s: Some(0.5 * coarse.params().slot_s),
+        // velocity placed δ/2 before the start (where the finer grid's constraint puts it)
+        first_accel_window_s: Some(0.5 * (coarse.params().slot_s + delta)),
         resolution: if best_effort {
             ResolutionMode::Paper
         } else {
@@ -270,15 +270,15 @@ pub(super) fn coarse_start_from(
 }
 
 /// A coarse track on `n` slots of `delta` with the velocity interpolated linearly between the
-/// coarse slots' middles (the start velocity `v0_mps` at t = 0, where it is) and the positions
-/// integrated from the start: where the coarse track changes its velocity by at most a_max Δ per
-/// slot Δ (and its first slot by a_max Δ/2 from `v0_mps`), the fine track changes it by at most
-/// a_max δ per slot δ (and its first slot by a_max δ/2).
+/// coarse slots' middles (the start velocity `v0_mps` placed δ/2 before the start, as the fine
+/// grid's first-slot constraint places it) and the positions integrated from the start: where
+/// the coarse track changes its velocity by at most a_max Δ per slot Δ (and its first slot by
+/// a_max (Δ + δ)/2 from `v0_mps`), the fine track changes it by at most a_max δ per slot δ.
 /// The positions depart from the coarse track by about Δ/8 of a slot's velocity change (phase I
 /// repairs what that costs the sensing).
 fn smooth_to_fine(coarse: &Trajectory, v0_mps: [f64; 2], delta: f64, n: usize) -> Trajectory {
     let big = coarse.slot_s;
-    let knots: Vec<(f64, Vector2<f64>)> = std::iter::once((0.0, Vector2::from(v0_mps)))
+    let knots: Vec<(f64, Vector2<f64>)> = std::iter::once((-0.5 * delta, Vector2::from(v0_mps)))
         .chain((1..=coarse.slots()).map(|k| {
             (
                 (k as f64 - 0.5) * big,
@@ -314,13 +314,12 @@ mod tests {
     use super::*;
 
     /// A coarse track that changes its velocity by a_max Δ per slot (and its first slot by
-    /// a_max Δ/2) becomes a fine track that changes it by at most a_max δ per slot (and its
-    /// first slot by a_max δ/2).
+    /// a_max (Δ + δ)/2) becomes a fine track that changes it by at most a_max δ per slot.
     #[test]
     fn smooth_interpolation_keeps_the_acceleration_limit() {
         let (a, big, delta, k) = (5.0, 2.5, 0.5, 5usize);
         let v0 = Vector2::new(10.0, 0.0);
-        let mut v = v0 + Vector2::new(0.0, a * 0.5 * big);
+        let mut v = v0 + Vector2::new(0.0, a * 0.5 * (big + delta));
         let mut q = Vector2::new(0.0, 0.0);
         let mut pos_m = Vec::new();
         for i in 0..8 {
@@ -338,8 +337,7 @@ mod tests {
         let mut prev = v0;
         for t in 1..=fine.slots() {
             let vt = Vector2::from(fine.velocity_mps(t));
-            let window = if t == 1 { 0.5 * delta } else { delta };
-            assert!((vt - prev).norm() <= a * window * (1.0 + 1e-9), "slot {t}");
+            assert!((vt - prev).norm() <= a * delta * (1.0 + 1e-9), "slot {t}");
             prev = vt;
         }
     }
