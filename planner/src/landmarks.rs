@@ -6,6 +6,8 @@
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
+use crate::params::bounds::{MAX_COORDINATE_M, MAX_LANDMARKS};
+
 /// How long each preset landmark is held, s (20 slots of 0.5 s).
 pub const PRESET_HOLD_S: f64 = 10.0;
 
@@ -208,6 +210,15 @@ impl Schedule {
     ) -> Result<Self, ScheduleError> {
         let horizon_s = slots as f64 * slot_s;
         let eps = 1e-9 * horizon_s.max(1.0);
+        if landmarks.len() > MAX_LANDMARKS {
+            return Err(ScheduleError::Invalid {
+                field: "points".into(),
+                reason: format!(
+                    "{} landmarks, more than the {MAX_LANDMARKS} a mission may have",
+                    landmarks.len()
+                ),
+            });
+        }
         for (i, w) in landmarks.iter().enumerate() {
             for (name, v) in [
                 ("x_m", w.x_m),
@@ -219,6 +230,17 @@ impl Schedule {
                     return Err(ScheduleError::Invalid {
                         field: format!("points[{i}].{name}"),
                         reason: format!("{v} is not a finite number"),
+                    });
+                }
+            }
+            for (name, v) in [("x_m", w.x_m), ("y_m", w.y_m)] {
+                if v.abs() > MAX_COORDINATE_M {
+                    return Err(ScheduleError::Invalid {
+                        field: format!("points[{i}].{name}"),
+                        reason: format!(
+                            "{v} m is farther than {MAX_COORDINATE_M} m from the origin (the \
+                             largest LTE cell radius)"
+                        ),
                     });
                 }
             }
@@ -247,25 +269,46 @@ impl Schedule {
                 });
             }
         }
-        let mut slot_landmark = vec![None; slots];
-        for (t0, slot) in slot_landmark.iter_mut().enumerate() {
-            let t_s = (t0 + 1) as f64 * slot_s;
-            for (i, w) in landmarks.iter().enumerate() {
-                if w.from_s < t_s - eps && t_s <= w.to_s + eps {
-                    if let Some(first) = *slot {
-                        return Err(ScheduleError::Overlap {
-                            slot: t0 + 1,
-                            t_s,
-                            first,
-                            second: i,
-                        });
+        // Each window visits only the slots near its own (one either side of the rounding),
+        // and none after the first slot found claimed twice (an overlap there or later cannot
+        // be the first): the work is the slots plus the landmarks, not their product. Windows
+        // are taken in order, so a slot's first claimant is its lowest landmark and its second
+        // the next.
+        let mut slot_landmark: Vec<Option<usize>> = vec![None; slots];
+        let mut holds = vec![false; landmarks.len()];
+        let mut overlap: Option<(usize, usize, usize)> = None;
+        for (i, w) in landmarks.iter().enumerate() {
+            let from_t = ((w.from_s - eps) / slot_s).floor().max(1.0) as usize - 1;
+            let to_t = (((w.to_s + eps) / slot_s).ceil() + 1.0).min(slots as f64) as usize;
+            let end = overlap.map_or(to_t, |(t0, ..)| to_t.min(t0 + 1));
+            let near = slot_landmark.iter_mut().enumerate().take(end).skip(from_t);
+            for (t0, slot) in near {
+                let t_s = (t0 + 1) as f64 * slot_s;
+                if !(w.from_s < t_s - eps && t_s <= w.to_s + eps) {
+                    continue;
+                }
+                holds[i] = true;
+                match *slot {
+                    None => *slot = Some(i),
+                    Some(first) => {
+                        if overlap.is_none_or(|(t, ..)| t0 < t) {
+                            overlap = Some((t0, first, i));
+                        }
+                        break;
                     }
-                    *slot = Some(i);
                 }
             }
         }
+        if let Some((t0, first, second)) = overlap {
+            return Err(ScheduleError::Overlap {
+                slot: t0 + 1,
+                t_s: (t0 + 1) as f64 * slot_s,
+                first,
+                second,
+            });
+        }
         for (i, w) in landmarks.iter().enumerate() {
-            if !slot_landmark.contains(&Some(i)) {
+            if !holds[i] {
                 return Err(ScheduleError::Invalid {
                     field: format!("points[{i}]"),
                     reason: format!(
@@ -329,8 +372,21 @@ impl Schedule {
                     });
                 }
                 let horizon_s = slots as f64 * slot_s;
-                let windows = preset
-                    .positions(spacing, spec.seed.unwrap_or(0))
+                let positions = preset.positions(spacing, spec.seed.unwrap_or(0));
+                let extent = positions
+                    .iter()
+                    .flatten()
+                    .fold(0.0_f64, |m, v| m.max(v.abs()));
+                if extent > MAX_COORDINATE_M {
+                    return Err(ScheduleError::Invalid {
+                        field: "spacing_m".into(),
+                        reason: format!(
+                            "{spacing} m places landmarks {extent} m from the origin, farther \
+                             than {MAX_COORDINATE_M} m (the largest LTE cell radius)"
+                        ),
+                    });
+                }
+                let windows = positions
                     .into_iter()
                     .enumerate()
                     .map(|(k, p)| LandmarkWindow {
@@ -441,6 +497,82 @@ mod tests {
         ];
         let e = Schedule::from_windows(w, 6, 0.5).unwrap_err();
         assert!(matches!(e, ScheduleError::Overlap { slot: 3, .. }), "{e}");
+    }
+
+    /// Many landmarks, far landmarks and a preset spread beyond the operating area are refused
+    /// by name; the largest allowed schedule (every landmark's window over every slot, the most
+    /// landmarks) is resolved without visiting each slot once per landmark, and names the
+    /// first slot two windows claim with its two lowest landmarks.
+    #[test]
+    fn landmark_counts_and_positions_are_bounded() {
+        let w = |x_m: f64, from_s: f64, to_s: f64| LandmarkWindow {
+            x_m,
+            y_m: 0.0,
+            from_s,
+            to_s,
+        };
+        let many = vec![w(0.0, 0.0, 1.0); MAX_LANDMARKS + 1];
+        let e = Schedule::from_windows(many, 2, 0.5)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "landmarks.points: 10001 landmarks, more than the 10000 a mission may have"
+        );
+        let e = Schedule::from_windows(vec![w(-100_001.0, 0.0, 1.0)], 2, 0.5)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("points[0].x_m") && e.contains("100000"), "{e}");
+        let spec = LandmarksSpec {
+            preset: Some(Preset::Staircase),
+            spacing_m: Some(4000.0),
+            ..Default::default()
+        };
+        let e = Schedule::from_spec(&spec, 1200, 0.5)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("landmarks.spacing_m") && e.contains("120000"),
+            "{e}"
+        );
+        let slots = crate::params::MAX_SLOTS;
+        let all = vec![w(0.0, 0.0, slots as f64 * 0.5); MAX_LANDMARKS];
+        let started = std::time::Instant::now();
+        let e = Schedule::from_windows(all, slots, 0.5).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                ScheduleError::Overlap {
+                    slot: 1,
+                    first: 0,
+                    second: 1,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        // the overlap found late: windows that each start one slot earlier
+        let late: Vec<_> = (0..100)
+            .map(|k| w(0.0, (99 - k) as f64 * 0.5, 100.0))
+            .collect();
+        let e = Schedule::from_windows(late, 200, 0.5).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                ScheduleError::Overlap {
+                    slot: 2,
+                    first: 98,
+                    second: 99,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert!(
+            started.elapsed().as_secs_f64() < 5.0,
+            "{:?}",
+            started.elapsed()
+        );
     }
 
     #[test]

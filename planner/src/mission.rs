@@ -392,6 +392,21 @@ mod tests {
         assert!(e.contains("max_speed_mps"), "{e}");
     }
 
+    /// Every shipped mission lies within the physical envelope (`params::bounds`).
+    #[test]
+    fn shipped_missions_validate() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions");
+        let mut n = 0;
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let path = e.unwrap().path();
+            if path.extension().is_some_and(|x| x == "toml") {
+                Mission::from_path(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                n += 1;
+            }
+        }
+        assert!(n >= 9, "{n} missions in {}", dir.display());
+    }
+
     #[test]
     fn json_and_toml_round_trip() {
         let m = Mission::preset(Preset::Square, 100.0).unwrap();

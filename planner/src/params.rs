@@ -8,6 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::altitude::{AltitudeMode, DEFAULT_MAX_CLIMB_MPS, DEFAULT_MAX_DESCENT_MPS};
 
+pub mod bounds;
+
 /// Speed of light in vacuum, m/s.
 pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 
@@ -15,8 +17,8 @@ pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ParamError {
-    /// A value is NaN, infinite, or outside its allowed range.
-    #[error("parameter `{field}` = {value}: {reason}")]
+    /// A value is NaN, infinite, or outside its allowed range (the reason names the bound).
+    #[error("parameter `{field}` = {}: {reason}", Shown(*value))]
     Invalid {
         /// The parameter's name as it appears in a mission file's `[params]` table.
         field: &'static str,
@@ -190,6 +192,21 @@ pub struct ParamsOverride {
     pub max_descent_mps: Option<f64>,
 }
 
+/// A value as refusals show it: in full between 1e-4 and 1e15 (`1.5707963267948966`), with an
+/// exponent outside (`1e300`, not 301 digits).
+struct Shown(f64);
+
+impl std::fmt::Display for Shown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
+}
+
 /// Which values a scalar parameter may take.
 #[derive(Debug, Clone, Copy)]
 enum Range {
@@ -199,6 +216,12 @@ enum Range {
     NonNegative,
     /// Open interval (lo, hi).
     Open(f64, f64),
+    /// Positive and at most the bound; the text says where the bound comes from.
+    PositiveAtMost(f64, &'static str),
+    /// Zero or more and at most the bound; the text says where the bound comes from.
+    NonNegativeAtMost(f64, &'static str),
+    /// Within [lo, hi]; the text says where the bounds come from.
+    Closed(f64, f64, &'static str),
 }
 
 /// One entry of the parameter table: name, accessor.
@@ -212,9 +235,11 @@ type Field = (
 macro_rules! scalar_fields {
     ($( $name:ident : $range:expr ),* $(,)?) => {
         /// Every scalar parameter with its name, getter, setter and allowed range.
-        const SCALAR_FIELDS: &[Field] = &[
-            $( (stringify!($name), |p: &Params| p.$name, |p: &mut Params, v: f64| p.$name = v, $range) ),*
-        ];
+        fn scalar_fields() -> [Field; [$( stringify!($name) ),*].len()] {
+            [
+                $( (stringify!($name), |p: &Params| p.$name, |p: &mut Params, v: f64| p.$name = v, $range) ),*
+            ]
+        }
         impl Params {
             /// Overwrites every field that `o` sets.
             pub fn apply(&mut self, o: &ParamsOverride) {
@@ -233,27 +258,62 @@ macro_rules! scalar_fields {
 }
 
 scalar_fields! {
-    bandwidth_hz: Range::Positive,
-    wavelength_m: Range::Positive,
-    integration_time_s: Range::Positive,
+    bandwidth_hz: Range::Closed(
+        bounds::MIN_BANDWIDTH_HZ,
+        bounds::MAX_BANDWIDTH_HZ,
+        "from the narrowest LTE channel to the widest NR channel",
+    ),
+    wavelength_m: Range::Closed(
+        bounds::min_wavelength_m(),
+        bounds::max_wavelength_m(),
+        "the carriers of NR, 410 MHz to 71 GHz",
+    ),
+    integration_time_s: Range::PositiveAtMost(
+        bounds::MAX_HORIZON_S,
+        "no aperture outlasts the longest multirotor flight",
+    ),
     observation_angle_rad: Range::Open(0.0, std::f64::consts::FRAC_PI_2),
     d_min_m: Range::Positive,
-    altitude_m: Range::Positive,
-    max_speed_mps: Range::Positive,
+    altitude_m: Range::PositiveAtMost(bounds::MAX_ALTITUDE_M, bounds::ALTITUDE_WHY),
+    max_speed_mps: Range::PositiveAtMost(bounds::MAX_SPEED_MPS, bounds::SPEED_WHY),
     slot_s: Range::Positive,
-    horizon_s: Range::Positive,
-    bs_height_m: Range::NonNegative,
-    sensing_radius_m: Range::Positive,
+    horizon_s: Range::PositiveAtMost(
+        bounds::MAX_HORIZON_S,
+        "above the endurance record of a multirotor, 4 h 34 min",
+    ),
+    bs_height_m: Range::NonNegativeAtMost(
+        bounds::MAX_BS_HEIGHT_M,
+        "the highest BS of 3GPP TR 38.901's rural macro cell",
+    ),
+    sensing_radius_m: Range::PositiveAtMost(
+        bounds::MAX_COORDINATE_M,
+        "the largest LTE cell radius",
+    ),
     blade_power_w: Range::NonNegative,
-    tip_speed_mps: Range::Positive,
+    tip_speed_mps: Range::PositiveAtMost(
+        bounds::SPEED_OF_SOUND_MPS,
+        "rotor blade tips stay below the speed of sound",
+    ),
     induced_power_w: Range::NonNegative,
     induced_velocity_mps: Range::Positive,
-    rotor_solidity: Range::NonNegative,
+    rotor_solidity: Range::NonNegativeAtMost(
+        1.0,
+        "the blades' area over the disc's",
+    ),
     rotor_disc_area_m2: Range::NonNegative,
-    air_density_kgpm3: Range::NonNegative,
+    air_density_kgpm3: Range::NonNegativeAtMost(
+        bounds::MAX_AIR_DENSITY_KGPM3,
+        "above dry air at sea level and -50 °C",
+    ),
     fuselage_drag_ratio: Range::NonNegative,
-    uav_mass_kg: Range::Positive,
-    max_accel_mps2: Range::Positive,
+    uav_mass_kg: Range::PositiveAtMost(
+        bounds::MAX_UAV_MASS_KG,
+        "above the largest rotary-wing UAV in service",
+    ),
+    max_accel_mps2: Range::PositiveAtMost(
+        bounds::max_accel_mps2(),
+        "g tan 80°, the largest lean angle ArduPilot allows",
+    ),
 }
 
 /// `x` with at most six significant digits and no trailing zeros (`1.5708`, `600.001`, `2`),
@@ -277,8 +337,8 @@ pub const MAX_SLOTS: usize = 200_000;
 impl Params {
     /// Sets a scalar parameter by its mission-file name; `Err` names an unknown field.
     pub fn set_by_name(&mut self, name: &str, value: f64) -> Result<(), ParamError> {
-        for (field, _, set, _) in SCALAR_FIELDS {
-            if *field == name {
+        for (field, _, set, _) in scalar_fields() {
+            if field == name {
                 set(self, value);
                 return Ok(());
             }
@@ -292,20 +352,21 @@ impl Params {
 
     /// Reads a scalar parameter by its mission-file name.
     pub fn get_by_name(&self, name: &str) -> Option<f64> {
-        SCALAR_FIELDS
-            .iter()
+        scalar_fields()
+            .into_iter()
             .find(|(field, ..)| *field == name)
             .map(|(_, get, ..)| get(self))
     }
 
     /// Names of all scalar parameters, in table order.
     pub fn scalar_names() -> impl Iterator<Item = &'static str> {
-        SCALAR_FIELDS.iter().map(|(name, ..)| *name)
+        scalar_fields().into_iter().map(|(name, ..)| name)
     }
 
-    /// Checks every value; the error names the first bad field.
+    /// Checks every value, against the physical envelope too ([`bounds`]); the error names the
+    /// first bad field, its value and the bound.
     pub fn validate(&self) -> Result<(), ParamError> {
-        for (field, get, _, range) in SCALAR_FIELDS {
+        for (field, get, _, range) in scalar_fields() {
             let value = get(self);
             let bad = |reason: &str| ParamError::Invalid {
                 field,
@@ -315,12 +376,28 @@ impl Params {
             if !value.is_finite() {
                 return Err(bad("must be a finite number"));
             }
-            match *range {
-                Range::Positive if value <= 0.0 => return Err(bad("must be > 0")),
-                Range::NonNegative if value < 0.0 => return Err(bad("must be >= 0")),
+            match range {
+                Range::Positive | Range::PositiveAtMost(..) if value <= 0.0 => {
+                    return Err(bad("must be > 0"))
+                }
+                Range::NonNegative | Range::NonNegativeAtMost(..) if value < 0.0 => {
+                    return Err(bad("must be >= 0"))
+                }
+                Range::PositiveAtMost(hi, why) | Range::NonNegativeAtMost(hi, why)
+                    if value > hi =>
+                {
+                    return Err(bounds::above(field, value, hi, why))
+                }
                 Range::Open(lo, hi) if !(value > lo && value < hi) => {
                     return Err(bad(&format!(
                         "must lie in the open interval ({}, {})",
+                        short(lo),
+                        short(hi)
+                    )))
+                }
+                Range::Closed(lo, hi, why) if !(lo..=hi).contains(&value) => {
+                    return Err(bad(&format!(
+                        "must lie in [{}, {}] ({why})",
                         short(lo),
                         short(hi)
                     )))
@@ -381,7 +458,8 @@ impl Params {
                 reason: format!("gives {slots} slots, more than the supported {MAX_SLOTS}"),
             });
         }
-        crate::altitude::validate(self)
+        crate::altitude::validate(self)?;
+        bounds::check_others(self)
     }
 
     /// Number of slots T_w = T / δ.
@@ -486,6 +564,85 @@ mod tests {
                     "{name}={bad}: {msg}"
                 );
             }
+        }
+    }
+
+    /// A mission of finite but absurd numbers (1e300 m/s planned for ten minutes) is refused
+    /// at once: every scalar just above its bound names the field, the value and the bound.
+    #[test]
+    fn values_beyond_the_physical_envelope_name_field_value_and_bound() {
+        let mut p = Params::default();
+        p.max_speed_mps = 1e300;
+        assert_eq!(
+            p.validate().unwrap_err().to_string(),
+            "parameter `max_speed_mps` = 1e300: must be at most 150 (above the fastest \
+             rotary-wing flight on record, 131 m/s)"
+        );
+        let mut bounded = 0;
+        for (name, .., range) in scalar_fields() {
+            let (value, bound) = match range {
+                Range::PositiveAtMost(hi, _)
+                | Range::NonNegativeAtMost(hi, _)
+                | Range::Closed(_, hi, _) => (hi * 1.001, hi),
+                Range::Positive | Range::NonNegative | Range::Open(..) => continue,
+            };
+            bounded += 1;
+            let mut p = Params::default();
+            p.set_by_name(name, value).unwrap();
+            let msg = p.validate().unwrap_err().to_string();
+            assert!(
+                msg.starts_with(&format!("parameter `{name}` = {}", Shown(value)))
+                    && msg.contains(&short(bound)),
+                "{name}: {msg}"
+            );
+            // the bound itself is allowed
+            p.set_by_name(name, bound).unwrap();
+            if name != "slot_s" && name != "integration_time_s" {
+                assert!(
+                    p.validate()
+                        .err()
+                        .is_none_or(|e| !e.to_string().contains(name)),
+                    "{name} = {bound}"
+                );
+            }
+        }
+        assert!(bounded >= 12, "{bounded}");
+        // below the least bandwidth and wavelength too
+        for (name, value) in [("bandwidth_hz", 1e6), ("wavelength_m", 1e-3)] {
+            let mut p = Params::default();
+            p.set_by_name(name, value).unwrap();
+            let msg = p.validate().unwrap_err().to_string();
+            assert!(msg.contains(name) && msg.contains("must lie in ["), "{msg}");
+        }
+        // the fields that are not plain scalars
+        let far = 100_001.0;
+        for (set, name) in [
+            (
+                Box::new(|p: &mut Params| p.start_m = [far, 0.0]) as Box<dyn Fn(&mut Params)>,
+                "start_m",
+            ),
+            (Box::new(|p: &mut Params| p.bs_m = [0.0, -far]), "bs_m"),
+            (
+                Box::new(|p: &mut Params| p.max_climb_mps = 151.0),
+                "max_climb_mps",
+            ),
+            (
+                Box::new(|p: &mut Params| p.max_descent_mps = 151.0),
+                "max_descent_mps",
+            ),
+            (
+                Box::new(|p: &mut Params| {
+                    p.altitude = AltitudeMode::Free;
+                    p.min_altitude_m = Some(600.0);
+                    p.max_altitude_m = Some(7001.0);
+                }),
+                "max_altitude_m",
+            ),
+        ] {
+            let mut p = Params::default();
+            set(&mut p);
+            let msg = p.validate().unwrap_err().to_string();
+            assert!(msg.starts_with(&format!("parameter `{name}`")), "{msg}");
         }
     }
 

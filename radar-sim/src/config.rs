@@ -48,7 +48,10 @@ pub use processing::{
     CancellerKind, ProcessingConfig, RangeFilter, Weighting, DEFAULT_GUARD_BAND_M,
     GUARD_BAND_PIXEL_FACTOR,
 };
-pub use radar::{BsAntennaConfig, Modulation, MotionModel, RadarConfig};
+pub use radar::{
+    BsAntennaConfig, Modulation, MotionModel, RadarConfig, MAX_BANDWIDTH_HZ,
+    MAX_SUBCARRIER_SPACING_HZ, MIN_SUBCARRIER_SPACING_HZ,
+};
 
 /// Boltzmann constant, J/K.
 pub const BOLTZMANN_J_PER_K: f64 = 1.380_649e-23;

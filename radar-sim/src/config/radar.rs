@@ -7,6 +7,16 @@ use super::{finite, positive, NrConfig, BOLTZMANN_J_PER_K, MAX_SAMPLES_PER_PULSE
 use crate::error::{RadarError, Result};
 use crate::nr::Reference;
 
+/// Widest occupied band, Hz: 400 MHz, the widest NR channel (FR2, 3GPP TS 38.101-2 Table
+/// 5.3.5-1; the mission's `bandwidth_hz` has the same bound).
+pub const MAX_BANDWIDTH_HZ: f64 = planner::params::bounds::MAX_BANDWIDTH_HZ;
+
+/// Least subcarrier spacing, Hz: 3.75 kHz, LTE NB-IoT's narrowest (3GPP TS 36.211 10.1).
+pub const MIN_SUBCARRIER_SPACING_HZ: f64 = 3.75e3;
+
+/// Largest subcarrier spacing, Hz: 960 kHz, NR numerology μ = 6 (3GPP TS 38.211 Table 4.2-1).
+pub const MAX_SUBCARRIER_SPACING_HZ: f64 = 960e3;
+
 /// QAM order of the BS data symbols.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -233,6 +243,18 @@ impl RadarConfig {
             ));
         }
         positive("radar.subcarrier_spacing_hz", self.subcarrier_spacing_hz)?;
+        if !(MIN_SUBCARRIER_SPACING_HZ..=MAX_SUBCARRIER_SPACING_HZ)
+            .contains(&self.subcarrier_spacing_hz)
+        {
+            return Err(RadarError::config(
+                "radar.subcarrier_spacing_hz",
+                format!(
+                    "{} Hz must lie in [{MIN_SUBCARRIER_SPACING_HZ}, {MAX_SUBCARRIER_SPACING_HZ}] \
+                     Hz (from NB-IoT's 3.75 kHz to NR's 960 kHz)",
+                    self.subcarrier_spacing_hz
+                ),
+            ));
+        }
         if !(16..=1 << 20).contains(&self.fft_size) {
             return Err(RadarError::config(
                 "radar.fft_size",
@@ -282,8 +304,26 @@ impl RadarConfig {
         }
         positive("radar.tx_power_w", self.tx_power_w)?;
         finite("radar.tx_gain_dbi", self.tx_gain_dbi)?;
-        finite("radar.system_loss_db", self.system_loss_db)?;
-        finite("radar.noise_figure_db", self.noise_figure_db)?;
+        for (field, v, what) in [
+            (
+                "radar.system_loss_db",
+                self.system_loss_db,
+                "a loss: a negative one would be a gain",
+            ),
+            (
+                "radar.noise_figure_db",
+                self.noise_figure_db,
+                "a receiver adds noise: F >= 1",
+            ),
+        ] {
+            finite(field, v)?;
+            if v < 0.0 {
+                return Err(RadarError::config(
+                    field,
+                    format!("{v} dB must be >= 0 dB ({what})"),
+                ));
+            }
+        }
         positive("radar.noise_temperature_k", self.noise_temperature_k)?;
         positive("radar.antenna_length_m", self.antenna_length_m)?;
         positive("radar.antenna_height_m", self.antenna_height_m)?;
@@ -347,9 +387,19 @@ impl RadarConfig {
     }
 
     /// The number of subcarriers that occupy bandwidth `bandwidth_hz` (B / Δf, rounded): an
-    /// error naming `field` unless B is finite, > 0 and gives 2 ..= fft_size − 2 of them.
+    /// error naming `field` unless B is finite, > 0, at most [`MAX_BANDWIDTH_HZ`] and gives
+    /// 2 ..= fft_size − 2 of them.
     pub fn subcarriers_for(&self, field: &str, bandwidth_hz: f64) -> Result<usize> {
         positive(field, bandwidth_hz)?;
+        if bandwidth_hz > MAX_BANDWIDTH_HZ {
+            return Err(RadarError::config(
+                field,
+                format!(
+                    "B = {bandwidth_hz} Hz is wider than {MAX_BANDWIDTH_HZ} Hz, the widest NR \
+                     channel (3GPP TS 38.101-2)"
+                ),
+            ));
+        }
         let sc = (bandwidth_hz / self.subcarrier_spacing_hz).round();
         if sc < 2.0 || sc > self.fft_size.saturating_sub(2) as f64 {
             return Err(RadarError::config(

@@ -145,3 +145,42 @@ fn bs_antenna_errors_name_the_field() {
     let e = err("[radar.bs_antenna]\ntilt = 3\n");
     assert!(e.contains("tilt"), "{e}");
 }
+
+/// Values no real cell has are refused, naming the field, the value and the bound; every
+/// shipped scene (and the system tests' small scene) lies within them.
+#[test]
+fn scenes_beyond_a_real_cell_name_field_value_and_bound() {
+    let e = err("[radar]\nbandwidth_hz = 500e6\nsubcarrier_spacing_hz = 240e3\n");
+    assert!(
+        e.contains("radar.bandwidth_hz") && e.contains("500000000") && e.contains("400000000"),
+        "{e}"
+    );
+    let e = err("[radar]\nsubcarrier_spacing_hz = 2e6\nfft_size = 64\ncp_samples = 16\n");
+    assert!(
+        e.contains("radar.subcarrier_spacing_hz") && e.contains("2000000") && e.contains("960000"),
+        "{e}"
+    );
+    let e = err("[radar]\nnoise_figure_db = -3\n");
+    assert!(e.contains("radar.noise_figure_db") && e.contains(">= 0 dB"), "{e}");
+    let e = err("[radar]\nsystem_loss_db = -1\n");
+    assert!(e.contains("radar.system_loss_db") && e.contains(">= 0 dB"), "{e}");
+    // the mission's band, when the scene has none, has the same bound
+    let r = RadarConfig::default();
+    let e = r
+        .subcarriers_for("params.bandwidth_hz", 401e6)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("params.bandwidth_hz"), "{e}");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut n = 0;
+    for dir in ["radar-sim/scenes", "tests/data"] {
+        for entry in std::fs::read_dir(root.join(dir)).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|x| x == "toml") {
+                SceneFile::from_path(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                n += 1;
+            }
+        }
+    }
+    assert!(n >= 6, "{n} scenes");
+}
