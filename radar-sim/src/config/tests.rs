@@ -161,9 +161,15 @@ fn scenes_beyond_a_real_cell_name_field_value_and_bound() {
         "{e}"
     );
     let e = err("[radar]\nnoise_figure_db = -3\n");
-    assert!(e.contains("radar.noise_figure_db") && e.contains(">= 0 dB"), "{e}");
+    assert!(
+        e.contains("radar.noise_figure_db") && e.contains(">= 0 dB"),
+        "{e}"
+    );
     let e = err("[radar]\nsystem_loss_db = -1\n");
-    assert!(e.contains("radar.system_loss_db") && e.contains(">= 0 dB"), "{e}");
+    assert!(
+        e.contains("radar.system_loss_db") && e.contains(">= 0 dB"),
+        "{e}"
+    );
     // the mission's band, when the scene has none, has the same bound
     let r = RadarConfig::default();
     let e = r
