@@ -232,7 +232,7 @@ fn move_out_of_reach_warns_and_counts_slots_out_of_view() {
     r.unwrap();
     let out_of_view = |c: &Core| c.get_int(var(PLANNER_VARS, "slots_out_of_view")).unwrap();
     assert_eq!(out_of_view(&core), 0);
-    set_input(&mut core, 1e7, 0.0);
+    set_input(&mut core, 9e4, 0.0);
     let log = Collect::default();
     let report = core.step(2.5, 0.5, &log).unwrap();
     let warning = report

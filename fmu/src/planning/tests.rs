@@ -83,7 +83,7 @@ fn replan_leaves_an_unreachable_window_out() {
         &current,
         5,
         0,
-        [1e7, 0.0],
+        [9e4, 0.0],
         &ReplanOptions::default(),
     )
     .unwrap();

@@ -334,7 +334,7 @@ def test_persistent_far_input_warns_at_every_window(version, short_mission):
     statuses = []
     while f.time < 20.0 - 1e-9:
         if f.time >= 2.5:
-            f.set(landmark_x_in_m=1e7, landmark_y_in_m=0.0)
+            f.set(landmark_x_in_m=9e4, landmark_y_in_m=0.0)
         statuses.append((f.time, f.step_status(0.5)))
     assert [t for t, s in statuses if s == WARNING] == [2.5, 10.5], statuses
     assert all(s in (0, WARNING) for _, s in statuses)
