@@ -83,10 +83,8 @@ fn run_plan(
     let bound = crate::bound::energy_bound(mission, options.dynamics)?;
     let free = mission.params().altitude == AltitudeMode::Free && options.altitude_profile;
     let mut out = if free && options.scheme == Scheme::Exact {
-        options.validate()?;
         altitude::plan_free(started, mission, options, observer, stop)?
     } else if free && options.scheme == Scheme::Paper {
-        options.validate()?;
         alternating::plan_free_paper(started, mission, options, observer, stop)?
     } else {
         run_plan_from(started, mission, options, observer, stop)?

@@ -176,7 +176,10 @@ pub fn best_effort_from(
     start: Option<&Trajectory>,
     observer: &mut dyn Observer,
 ) -> Result<PlanResult, PlanError> {
-    best_effort_until(mission, options, basis, start, observer, None)
+    // `run_plan` gives its plans their bound; this entry point gives its own
+    let mut out = best_effort_until(mission, options, basis, start, observer, None)?;
+    out.bound = Some(crate::bound::energy_bound(mission, options.dynamics)?);
+    Ok(out)
 }
 
 /// [`best_effort_from`], stopping early once `stop` is set.
@@ -209,7 +212,6 @@ fn best_effort_until(
         out.start_energy_j = least_j;
         out.cone_programs += programs;
         out.best_effort = Some(info);
-        out.bound = crate::bound::energy_bound(mission, options.dynamics).ok();
         out.solve_seconds = started.elapsed().as_secs_f64();
         out
     };
