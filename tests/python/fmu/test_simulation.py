@@ -296,7 +296,7 @@ WARNING = 1
 
 
 def test_move_out_of_reach_leaves_the_window_out_with_a_warning(version, short_mission):
-    """A landmark moved 10 000 km away cannot be kept in view: the re-plan leaves its window out
+    """A landmark moved 90 km away cannot be kept in view: the re-plan leaves its window out
     and the step returns Warning naming the landmark and slots (it returned OK with nothing
     logged); `slots_out_of_view` counts the slots. The next window is planned as usual."""
     f = Fmu(version)
@@ -305,13 +305,13 @@ def test_move_out_of_reach_leaves_the_window_out_with_a_warning(version, short_m
     for k in range(5):
         assert f.step_status(0.5) == 0
     assert f.get("slots_out_of_view") == 0
-    f.set(landmark_x_in_m=1e16, landmark_y_in_m=0.0)
+    f.set(landmark_x_in_m=9e4, landmark_y_in_m=0.0)
     n = len(f.logs)
     assert f.step_status(0.5) == WARNING  # the doStep from t = 2.5 s
     warnings = [m for c, s, m in f.logs[n:] if s == WARNING]
     assert len(warnings) == 1, f.logs[n:]
     assert "landmark 0" in warnings[0] and "slots 6..20" in warnings[0], warnings[0]
-    assert "to (1e16, 0) m" in warnings[0]  # not 17 digits
+    assert "to (90000, 0) m" in warnings[0]
     # the plan's slots 6..20 (t = 3..10 s) cannot see it; flown slots count against it too
     assert f.get("slots_out_of_view") == 20
     assert f.get("replan_count") == 1
@@ -319,14 +319,34 @@ def test_move_out_of_reach_leaves_the_window_out_with_a_warning(version, short_m
     while f.time < 20.0 - 1e-9:
         assert f.step_status(0.5) == 0
         if f.time <= 10.0:
-            assert not f.get("in_view") and f.get("landmark_x_m") == 1e16, f.time
+            assert not f.get("in_view") and f.get("landmark_x_m") == 9e4, f.time
         else:
             assert f.get("in_view") and f.get("landmark_y_m") == 30.0, f.time
     f.unload()
 
 
+ERROR = 3
+
+
+def test_move_beyond_the_physical_bounds_is_an_error_naming_the_input(version, short_mission):
+    """A landmark input 1e16 m away is no place on Earth: the physical bounds refuse it, the
+    doStep returns Error, and the log names the input as given (not 17 digits)."""
+    f = Fmu(version)
+    assert f.instantiate()
+    f.init(stop=20.0, strings={"mission_file": str(short_mission)})
+    for k in range(5):
+        assert f.step_status(0.5) == 0
+    f.set(landmark_x_in_m=1e16, landmark_y_in_m=0.0)
+    n = len(f.logs)
+    assert f.step_status(0.5) == ERROR
+    errors = [m for c, s, m in f.logs[n:] if s == ERROR]
+    assert len(errors) == 1, f.logs[n:]
+    assert "landmark input (1e16, 0) m rejected" in errors[0], errors[0]
+    f.unload()
+
+
 def test_persistent_far_input_warns_at_every_window(version, short_mission):
-    """An input that keeps a landmark 10 000 km away re-plans each window without it, and each
+    """An input that keeps a landmark 90 km away re-plans each window without it, and each
     such doStep returns Warning (every step returned OK before)."""
     f = Fmu(version)
     assert f.instantiate()
