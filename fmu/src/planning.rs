@@ -579,6 +579,9 @@ fn remainder(
     sub_params.horizon_s = remaining as f64 * slot_s;
     if from_slot > 0 {
         sub_params.start_velocity_mps = Some(splice_velocity_mps(current, from_slot, p));
+        // a slot average, not the velocity at the splice instant: the next slot's average may
+        // differ from it by a_max δ
+        sub_params.start_velocity_kind = planner::StartVelocityKind::PreviousSlot;
     }
     // the altitude flown at q_{from_slot}, within the bounds (a plan meets them to rounding)
     if let Some(h) = from_slot
@@ -611,7 +614,8 @@ fn remainder(
 
 /// The UAV's velocity as it passes q_{from_slot} on `current` (`from_slot` ≥ 1): that of the
 /// last committed slot, (q_{from_slot} − q_{from_slot−1})/δ, at most the speed limit (a plan may
-/// pass it by rounding). It is the sub-mission's start velocity, so that a re-plan under the
+/// pass it by rounding). It is the sub-mission's start velocity (of kind
+/// [`planner::StartVelocityKind::PreviousSlot`]), so that a re-plan under the
 /// vehicle dynamics (`planner::PlanOptions::dynamics`) continues from the velocity flown instead
 /// of the mission's start rule; the paper's dynamics ignore it.
 fn splice_velocity_mps(current: &Trajectory, from_slot: usize, p: &planner::Params) -> [f64; 2] {

@@ -462,7 +462,7 @@ pub const PLANNER_VARS: &[Var] = &[
         variability: Variability::Fixed,
         len: 1,
         unit: None,
-        description: "Vehicle model of every plan, the initial plan and the re-plans inside a step (cellsar-planner plan --dynamics): vehicle (the velocity changes by at most max_accel_mps2 times slot_s from slot to slot, from start_velocity_mps on; a re-plan continues from the velocity flown) or paper (the paper's model: the velocity may jump). The start value is the library's default (planner::DEFAULT_DYNAMICS).",
+        description: "Vehicle model of every plan, the initial plan and the re-plans inside a step (cellsar-planner plan --dynamics): vehicle (the velocity changes by at most max_accel_mps2 times slot_s from slot to slot, and by half that from start_velocity_mps into the first slot; a re-plan continues from the velocity flown, a slot average, with the whole max_accel_mps2 times slot_s) or paper (the paper's model: the velocity may jump). The start value is the library's default (planner::DEFAULT_DYNAMICS).",
     },
     Var {
         name: "landmark_x_in_m",

@@ -5,8 +5,9 @@
 //! slot-average speed V_t = ‖q_t − q_{t−1}‖/δ in a range [lo_t, hi_t] that the constraints imply:
 //! - lo_t = V_min (the azimuth requirement, at the lowest altitude allowed) in a landmark slot,
 //!   0 elsewhere;
-//! - hi_t = V_m, and under [`Dynamics::Vehicle`] also ‖v₀‖ + a_max δ t: the vehicle model
-//!   changes the velocity by at most a_max δ from slot to slot, from the start velocity v₀ on.
+//! - hi_t = V_m, and under [`Dynamics::Vehicle`] also ‖v₀‖ + a_max δ (t − ½): the vehicle model
+//!   changes the velocity by at most a_max δ/2 from the instantaneous start velocity v₀ into the
+//!   first slot's average and by a_max δ from slot to slot after it.
 //!
 //! It also covers distance: at a landmark slot the UAV lies within R = r_s + H tan η of the
 //! landmark (its sensing centre within r_s, the centre H tan η from it; at the highest altitude
@@ -156,7 +157,8 @@ impl Ranges {
             .map(|t| {
                 let mut hi = p.max_speed_mps + FEASIBILITY_TOL;
                 if dynamics == Dynamics::Vehicle {
-                    hi = hi.min(speed0 + a_max * p.slot_s * t as f64);
+                    // slot t's average velocity is that of its middle
+                    hi = hi.min(speed0 + a_max * crate::evaluate::start_to_slot_middle_s(p, t));
                 }
                 let lo = if mission.target_m(t).is_some() {
                     v_min.max(0.0)

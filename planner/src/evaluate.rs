@@ -85,8 +85,9 @@ pub enum Dynamics {
     /// (the reproduction and the comparison schemes `paper`, `baseline`).
     #[default]
     Paper,
-    /// A multirotor: the velocity changes by at most `max_accel_mps2` × δ from slot to slot,
-    /// from the start velocity on (`Params::max_accel_mps2`, `Params::start_velocity_mps`).
+    /// A multirotor: the velocity changes by at most `max_accel_mps2` × δ from slot to slot, and
+    /// by `max_accel_mps2` × δ/2 from the (instantaneous) start velocity into the first slot
+    /// ([`accel_window_s`]; `Params::max_accel_mps2`, `Params::start_velocity_mps`).
     Vehicle,
 }
 
@@ -97,6 +98,30 @@ impl Dynamics {
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         self.into()
+    }
+}
+
+/// The time from the start velocity's instant to the middle of slot `t` (≥ 1), s: (t − ½) δ from
+/// an instantaneous start velocity at t = 0, (t − ½) δ + δ/2 from the average of the slot flown
+/// before the start ([`crate::params::StartVelocityKind`]). At the acceleration limit the
+/// UAV's slot-t velocity differs from the start velocity by at most a_max times this.
+pub fn start_to_slot_middle_s(p: &crate::Params, t: usize) -> f64 {
+    let lead_s = match p.start_velocity_kind {
+        crate::params::StartVelocityKind::Instant => 0.0,
+        crate::params::StartVelocityKind::PreviousSlot => 0.5 * p.slot_s,
+    };
+    (t as f64 - 0.5) * p.slot_s + lead_s
+}
+
+/// The time over which slot `t`'s (average) velocity changes from the previous one, s: δ between
+/// slot averages, and into the first slot [`start_to_slot_middle_s`] (δ/2 from an instantaneous
+/// start velocity: from v₀ at constant acceleration a the UAV is at q₀ + v₀ δ + a δ²/2 after one
+/// slot, so its average velocity there is v₀ + a δ/2).
+pub fn accel_window_s(p: &crate::Params, t: usize) -> f64 {
+    if t == 1 {
+        start_to_slot_middle_s(p, 1)
+    } else {
+        p.slot_s
     }
 }
 
@@ -161,7 +186,8 @@ pub struct SlotEval {
     pub cross_track_width_m: f64,
     /// Worst width of the resolution cell, m (erratum 12 (docs/paper-notes.md)).
     pub worst_width_m: f64,
-    /// Acceleration into this slot, ‖v_t − v_{t−1}‖ / δ with v_0 the start velocity, m/s².
+    /// Acceleration into this slot, ‖v_t − v_{t−1}‖ / δ, and for the first slot ‖v_1 − v_0‖ / (δ/2)
+    /// with v_0 the start velocity ([`accel_window_s`]), m/s².
     #[serde(default)]
     pub accel_mps2: f64,
     /// Altitude H_t at the end of the slot, m: the mission's `altitude_m` unless a profile is
@@ -187,7 +213,7 @@ pub struct Violations {
     pub range_paper_m: f64,
     /// max over landmark slots of (worst cell width − d_min)⁺ (general cell, erratum 12 (docs/paper-notes.md)), m.
     pub worst_width_m: f64,
-    /// max over all slots of (‖v_t − v_{t−1}‖/δ − a_max)⁺ (the vehicle's acceleration limit;
+    /// max over all slots of ([`SlotEval::accel_mps2`] − a_max)⁺ (the vehicle's acceleration limit;
     /// counted in feasibility only under [`Dynamics::Vehicle`]), m/s².
     #[serde(default)]
     pub accel_mps2: f64,
@@ -347,7 +373,7 @@ fn evaluate_profile(
     for t in 1..=traj.slots() {
         let pos = traj.q(t);
         let vel = traj.velocity_mps(t);
-        let accel = (Vector2::from(vel) - Vector2::from(prev_vel)).length() / p.slot_s;
+        let accel = (Vector2::from(vel) - Vector2::from(prev_vel)).length() / accel_window_s(p, t);
         prev_vel = vel;
         max_accel = max_accel.max(accel);
         let speed = Vector2::from(vel).length();

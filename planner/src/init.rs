@@ -72,7 +72,8 @@ pub fn reachable_between(p: &crate::Params, g1_m: [f64; 2], g2_m: [f64; 2], slot
 
 /// [`precheck`], and under [`Dynamics::Vehicle`] also: the azimuth speed V_min reachable by the
 /// first landmark slot t₀ from the start velocity v₀ at the acceleration limit,
-/// ‖v₀‖ + a_max δ t₀ ≥ V_min (a necessary condition).
+/// ‖v₀‖ + a_max δ (t₀ − ½) ≥ V_min (a necessary condition: slot t₀'s average velocity is that of
+/// its middle, (t₀ − ½) δ after the start).
 pub fn precheck_with(mission: &Mission, dynamics: Dynamics) -> Result<(), Infeasibility> {
     precheck(mission)?;
     if dynamics == Dynamics::Paper {
@@ -84,7 +85,7 @@ pub fn precheck_with(mission: &Mission, dynamics: Dynamics) -> Result<(), Infeas
     };
     let v0 = mission.start_velocity_mps();
     let speed0 = v0[0].hypot(v0[1]);
-    let reach = speed0 + p.max_accel_mps2 * p.slot_s * t0 as f64;
+    let reach = speed0 + p.max_accel_mps2 * crate::evaluate::start_to_slot_middle_s(p, t0);
     let v_min = p.min_speed_mps();
     if reach < v_min - crate::evaluate::FEASIBILITY_TOL {
         return Err(Infeasibility {
@@ -93,7 +94,7 @@ pub fn precheck_with(mission: &Mission, dynamics: Dynamics) -> Result<(), Infeas
             reason: format!(
                 "the first landmark's slot needs the azimuth speed {v_min:.3} m/s, but from \
                  start_velocity_mps = ({}, {}) m/s at max_accel_mps2 = {:.3} m/s² the UAV \
-                 reaches at most {reach:.3} m/s by t = {} s (state a start velocity, a larger \
+                 reaches at most {reach:.3} m/s on average in that slot, ending at t = {} s (state a start velocity, a larger \
                  max_accel_mps2, or plan with the paper's dynamics)",
                 v0[0],
                 v0[1],
@@ -265,20 +266,24 @@ pub fn guidance_start(mission: &Mission, resolution: ResolutionMode) -> Trajecto
 }
 
 /// [`guidance_start`] for a vehicle model: under [`Dynamics::Vehicle`] each slot's velocity is
-/// the guidance law's choice moved into the disc of radius a_max δ around the previous one (the
-/// mission's start velocity first), so the start meets the acceleration limit in every slot.
+/// the guidance law's choice moved into the disc of radius a_max δ around the previous one (of
+/// radius a_max δ/2 around the mission's start velocity for the first slot,
+/// [`crate::evaluate::accel_window_s`]), so the start meets the acceleration limit in every slot.
 pub fn guidance_start_with(
     mission: &Mission,
     resolution: ResolutionMode,
     dynamics: Dynamics,
 ) -> Trajectory {
     let p = mission.params();
-    let max_change = p.max_accel_mps2 * p.slot_s * (1.0 - 2.0 * ACCEL_MARGIN_REL);
+    let max_change_in = |t: usize| {
+        p.max_accel_mps2 * crate::evaluate::accel_window_s(p, t) * (1.0 - 2.0 * ACCEL_MARGIN_REL)
+    };
     let mut velocity = Vector2::from(mission.start_velocity_mps());
-    let limit = |q: Point2<f64>, qn: Point2<f64>, velocity: &mut Vector2<f64>| -> Point2<f64> {
+    let limit = |t: usize, q: Point2<f64>, qn: Point2<f64>, velocity: &mut Vector2<f64>| {
         if dynamics == Dynamics::Paper {
             return qn;
         }
+        let max_change = max_change_in(t);
         let wanted = (qn - q) / p.slot_s;
         let change = wanted - *velocity;
         let norm = change.norm();
@@ -308,7 +313,7 @@ pub fn guidance_start_with(
     for t in 1..=mission.slots() {
         let Some((reference, landmark)) = reference_m(mission, t) else {
             // no landmark at all: cruise east at the least-power speed
-            q = limit(q, q + Vector2::x() * (delta * v_star), &mut velocity);
+            q = limit(t, q, q + Vector2::x() * (delta * v_star), &mut velocity);
             pos.push(q.into());
             continue;
         };
@@ -347,7 +352,7 @@ pub fn guidance_start_with(
                 }
             }
         }
-        q = limit(q, best.1, &mut velocity);
+        q = limit(t, q, best.1, &mut velocity);
         pos.push(q.into());
     }
     Trajectory {

@@ -44,7 +44,7 @@ pub use driver::{
 pub use evaluate::{evaluate, Dynamics, Evaluation, SlotEval, Violations};
 pub use landmarks::{LandmarkWindow, LandmarksSpec, Preset, Schedule};
 pub use mission::{Mission, MissionError, MissionFile};
-pub use params::{ParamError, Params, ParamsOverride};
+pub use params::{ParamError, Params, ParamsOverride, StartVelocityKind};
 pub use power::PowerModel;
 pub use summary::Summary;
 pub use trajectory::{Trajectory, TrajectoryError};

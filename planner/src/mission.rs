@@ -212,9 +212,10 @@ impl Mission {
     /// state the same value:
     ///
     /// - at rest when the UAV can reach the azimuth speed V_min from rest by the first landmark
-    ///   slot t₀ at the acceleration limit (a_max t₀ δ ≥ V_min; no landmark: at rest);
+    ///   slot t₀ at the acceleration limit (a_max (t₀ − ½) δ ≥ V_min: slot t₀'s average velocity is
+    ///   that of its middle; no landmark: at rest);
     /// - otherwise (the paper's missions, whose first window opens at t = 0: from rest the first
-    ///   slot could reach only a_max δ ≈ 2.8 m/s of the 7.07 m/s required) already flying, as
+    ///   slot could reach only a_max δ/2 ≈ 1.4 m/s of the 7.07 m/s required) already flying, as
     ///   the paper's model assumes, at the least-power speed within [V_min, V_m] with the first
     ///   landmark on the sensing side: heading h with J h pointing from q₀ to the landmark
     ///   (J the rotation by −90°, so the landmark lies H tan η away, where the sensing centre is);
@@ -223,7 +224,7 @@ impl Mission {
     ///   quarter turn; the search is `mission::start::StartSearch`) that keeps the landmark in
     ///   view there with the cell ([`crate::geometry::ResolutionCell::worst_width_m`]) within
     ///   d_min, when one exists. The
-    ///   first slot's velocity can differ from the start velocity by only a_max δ, so a start
+    ///   first slot's velocity can differ from the start velocity by only a_max δ/2, so a start
     ///   velocity that cannot resolve it would leave that slot unresolved in every flyable plan.
     ///
     /// `summary.json` reports the value used (`start_velocity_mps`).
@@ -245,7 +246,9 @@ impl Mission {
             return [0.0, 0.0];
         };
         let v_min = p.min_speed_mps();
-        if p.max_accel_mps2 * t0 as f64 * p.slot_s >= v_min || v_min > p.max_speed_mps {
+        if p.max_accel_mps2 * crate::evaluate::start_to_slot_middle_s(p, t0) >= v_min
+            || v_min > p.max_speed_mps
+        {
             return [0.0, 0.0];
         }
         let model = crate::power::PowerModel::new(p);

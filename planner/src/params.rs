@@ -89,6 +89,15 @@ pub struct Params {
     /// [`crate::Mission::start_velocity_mps`] (at rest, unless the first landmark comes too soon
     /// to reach the azimuth speed from rest).
     pub start_velocity_mps: Option<[f64; 2]>,
+    /// What `start_velocity_mps` is: the velocity at the start instant (`instant`, default) or
+    /// the average velocity of the slot flown just before the start (`previous-slot`: a re-plan
+    /// that continues a flown track). It sets how far the first slot's velocity may differ from
+    /// it under the vehicle dynamics ([`crate::evaluate::start_to_slot_middle_s`]). Not a
+    /// mission-file parameter (a mission starts at an instant; [`ParamsOverride`] and the wire
+    /// forms of a mission keep their layout): set it on the validated parameters
+    /// ([`crate::Mission::with_params`]).
+    #[serde(default)]
+    pub start_velocity_kind: StartVelocityKind,
     /// `fixed` (default: the whole mission at `altitude_m`) or `free` (an altitude per slot
     /// within [`Params::min_altitude_m`, `max_altitude_m`] from `altitude_m` at the start;
     /// [`crate::altitude`]).
@@ -106,6 +115,35 @@ pub struct Params {
     /// Largest descent rate of a `free` mission, m/s. Default 1 m/s: PX4's `MPC_Z_VEL_MAX_DN`.
     #[serde(default = "crate::altitude::default_max_descent_mps")]
     pub max_descent_mps: f64,
+}
+
+/// What [`Params::start_velocity_mps`] is. The plan's velocities are slot averages, each the
+/// velocity at its slot's middle; the start velocity's instant sets how long the UAV has, at the
+/// acceleration limit, to change it into the first slot's.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    Default,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    strum::IntoStaticStr,
+    strum::VariantNames,
+)]
+#[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case")]
+pub enum StartVelocityKind {
+    /// The velocity at the start instant t = 0 (a mission's start): the first slot's average,
+    /// δ/2 later, differs from it by at most a_max δ/2 (from v₀ at constant acceleration a the
+    /// UAV is at q₀ + v₀ δ + a δ²/2 after one slot).
+    #[default]
+    Instant,
+    /// The average velocity of the slot flown just before the start (a re-plan continuing a
+    /// flown track): its middle lies δ/2 before the start, so the first slot's average differs
+    /// from it by at most a_max δ, as between any two slots.
+    PreviousSlot,
 }
 
 /// Standard gravity, m/s².
@@ -147,6 +185,7 @@ impl Default for Params {
             uav_mass_kg: 2.0,
             max_accel_mps2: default_max_accel_mps2(),
             start_velocity_mps: None,
+            start_velocity_kind: StartVelocityKind::Instant,
             altitude: AltitudeMode::Fixed,
             min_altitude_m: None,
             max_altitude_m: None,

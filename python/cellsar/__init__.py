@@ -86,8 +86,8 @@ def plan(
             stops the plan and is re-raised.
         tolerance: relative change of the objective that stops the iterations (1e-4).
         dynamics: ``"vehicle"`` (the velocity changes by at most the mission's
-            ``max_accel_mps2`` times the slot length from slot to slot, from its
-            ``start_velocity_mps``) or ``"paper"`` (the velocity may jump, as in the paper).
+            ``max_accel_mps2`` times the slot length from slot to slot, and by half that
+            from its ``start_velocity_mps`` into the first slot) or ``"paper"`` (the velocity may jump, as in the paper).
             ``None`` (the default) takes the scheme's default, as ``cellsar-planner plan
             --dynamics``; ``"vehicle"`` with ``"paper"`` or ``"baseline"`` is a ValueError.
 

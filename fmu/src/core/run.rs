@@ -60,8 +60,8 @@ pub struct Sample {
     pub azimuth_resolution_paper_m: f64,
     /// Worst cell width, m.
     pub worst_cell_width_m: f64,
-    /// Commanded acceleration of the slot, (v_t − v_{t−1})/δ with v_0 the mission's start
-    /// velocity, m/s².
+    /// Commanded acceleration of the slot, (v_t − v_{t−1})/δ, and (v_1 − v_0)/(δ/2) for the first
+    /// with v_0 the mission's start velocity, m/s².
     pub commanded_accel_mps2: [f64; 2],
     /// Its magnitude, the evaluator's `accel_mps2` of the slot, m/s².
     pub commanded_accel_abs_mps2: f64,
@@ -154,7 +154,9 @@ impl Run {
         } else {
             self.mission.start_velocity_mps()
         };
-        let accel = |i: usize| (s.velocity_mps[i] - before_mps[i]) / p.slot_s;
+        // into the first slot from the instantaneous start velocity over δ/2
+        let window_s = planner::evaluate::accel_window_s(p, k);
+        let accel = |i: usize| (s.velocity_mps[i] - before_mps[i]) / window_s;
         let before_z_m = if k >= 2 {
             self.eval.slots[k - 2].z_m
         } else {

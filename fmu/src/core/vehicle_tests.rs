@@ -55,7 +55,9 @@ fn check_commanded_accel(core: &Core) -> f64 {
         let tau = i as f64 * 0.1;
         let t = slot_at(tau, p.slot_s, r.mission.slots());
         let (a, b) = (velocity(t - 1), velocity(t));
-        let want = [(b[0] - a[0]) / p.slot_s, (b[1] - a[1]) / p.slot_s];
+        // into the first slot from the instantaneous start velocity: over half a slot
+        let window = if t == 1 { 0.5 * p.slot_s } else { p.slot_s };
+        let want = [(b[0] - a[0]) / window, (b[1] - a[1]) / window];
         let got = [
             real(core, "commanded_accel_x_mps2", 0, tau),
             real(core, "commanded_accel_y_mps2", 0, tau),
@@ -116,8 +118,10 @@ fn short_with_start_velocity(v: [f64; 2]) -> String {
 
 #[test]
 fn each_dynamics_plans_the_librarys_plan_and_reports_its_acceleration() {
-    // a start velocity 45 degrees off the mission's rule: the paper's model turns at once
-    let start = [-8.0, 8.0];
+    // a start velocity 10 degrees off the mission's rule (-8.50, 16.34) m/s: the paper's model
+    // turns at once (20 m/s² into the first slot), the vehicle within the a_max δ/2 that the
+    // first slot allows (15 degrees off, no plan is found: the turn needs more)
+    let start = [-11.2, 14.6];
     let text = short_with_start_velocity(start);
     let mission = Mission::from_file_struct(&MissionFile::from_toml_str(&text).unwrap()).unwrap();
     let limit = mission.params().max_accel_mps2;
@@ -167,7 +171,7 @@ fn start_velocity_is_the_missions_unless_set() {
     assert_eq!(got, rule);
     // the mission file's value, and the FMI value over it
     let stated = short_with_start_velocity([-6.0, 12.0]);
-    for (set, want) in [(None, [-6.0, 12.0]), (Some([-8.0, 8.0]), [-8.0, 8.0])] {
+    for (set, want) in [(None, [-6.0, 12.0]), (Some([-11.2, 14.6]), [-11.2, 14.6])] {
         let (core, _dir, r) = planned(&stated, |c| {
             c.set_string(var(PLANNER_VARS, "resolution"), "paper")
                 .unwrap();

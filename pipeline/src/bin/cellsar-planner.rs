@@ -73,8 +73,8 @@ enum Command {
         #[command(flatten)]
         best_effort: BestEffortArgs,
         /// Vehicle model: vehicle (the default for the exact-geometry schemes: the velocity
-        /// changes by at most the mission's max_accel_mps2 × δ from slot to slot, from its
-        /// start_velocity_mps) or paper (the only model of paper and baseline: the velocity may
+        /// changes by at most the mission's max_accel_mps2 × δ from slot to slot, and by half
+        /// that from its start_velocity_mps into the first slot) or paper (the only model of paper and baseline: the velocity may
         /// jump).
         #[arg(long, value_parser = pipeline::args::enum_parser::<Dynamics>())]
         dynamics: Option<Dynamics>,

@@ -101,7 +101,8 @@ pub struct RunArgs {
     #[arg(long)]
     pub strict_resolution: bool,
     /// The plan's vehicle model: `vehicle` (the default: the velocity changes by at most the
-    /// mission's `max_accel_mps2` × δ from slot to slot, from its `start_velocity_mps`) or
+    /// mission's `max_accel_mps2` × δ from slot to slot, and by half that from its
+    /// `start_velocity_mps` into the first slot) or
     /// `paper` (the velocity may jump, as in the paper); top-level docs/user-guide.md,
     /// "Vehicle limits". Sent with the plan request.
     #[arg(long, default_value_t = planner::Scheme::Exact.default_dynamics(), value_parser = crate::args::enum_parser::<planner::Dynamics>())]

@@ -120,8 +120,8 @@ pub(super) fn coarse_start_from(
         whole_slot_sensing: true,
         dynamics: options.dynamics,
         // the first coarse slot's velocity, placed at its middle, is interpolated from the start
-        // velocity placed δ/2 before the start (where the finer grid's constraint puts it)
-        first_accel_window_s: Some(0.5 * (coarse.params().slot_s + delta)),
+        // velocity at its instant (where the finer grid's constraint puts it too)
+        first_accel_window_s: Some(0.5 * coarse.params().slot_s + start_lead_s(mission)),
         resolution: if best_effort {
             ResolutionMode::Paper
         } else {
@@ -260,7 +260,12 @@ pub(super) fn coarse_start_from(
             start_m: tr.start_m,
             pos_m: (1..=n).map(|t| tr.position_at(t as f64 * delta)).collect(),
         },
-        Dynamics::Vehicle => smooth_to_fine(&tr, mission.start_velocity_mps(), delta, n),
+        Dynamics::Vehicle => smooth_to_fine(
+            &tr,
+            (-start_lead_s(mission), mission.start_velocity_mps()),
+            delta,
+            n,
+        ),
     };
     match (best, stalled) {
         (Some((_, tr)), _) => Some(LevelStart::Solved(to_fine(tr))),
@@ -269,16 +274,28 @@ pub(super) fn coarse_start_from(
     }
 }
 
+/// How long before the start the start velocity holds, s: 0 for an instantaneous one, δ/2 for the
+/// average of the slot flown before ([`crate::evaluate::start_to_slot_middle_s`]).
+fn start_lead_s(mission: &Mission) -> f64 {
+    let p = mission.params();
+    crate::evaluate::start_to_slot_middle_s(p, 1) - 0.5 * p.slot_s
+}
+
 /// A coarse track on `n` slots of `delta` with the velocity interpolated linearly between the
-/// coarse slots' middles (the start velocity `v0_mps` placed δ/2 before the start, as the fine
-/// grid's first-slot constraint places it) and the positions integrated from the start: where
-/// the coarse track changes its velocity by at most a_max Δ per slot Δ (and its first slot by
-/// a_max (Δ + δ)/2 from `v0_mps`), the fine track changes it by at most a_max δ per slot δ.
+/// coarse slots' middles (the start velocity `v0_mps` at its time `t0_s` ≤ 0, where it holds)
+/// and the positions integrated from the start: where the coarse track changes its velocity by
+/// at most a_max Δ per slot Δ (and its first slot by a_max (Δ/2 − t0) from `v0_mps`), the fine
+/// track changes it by at most a_max δ per slot δ (and its first slot by a_max (δ/2 − t0)).
 /// The positions depart from the coarse track by about Δ/8 of a slot's velocity change (phase I
 /// repairs what that costs the sensing).
-fn smooth_to_fine(coarse: &Trajectory, v0_mps: [f64; 2], delta: f64, n: usize) -> Trajectory {
+fn smooth_to_fine(
+    coarse: &Trajectory,
+    (t0_s, v0_mps): (f64, [f64; 2]),
+    delta: f64,
+    n: usize,
+) -> Trajectory {
     let big = coarse.slot_s;
-    let knots: Vec<(f64, Vector2<f64>)> = std::iter::once((-0.5 * delta, Vector2::from(v0_mps)))
+    let knots: Vec<(f64, Vector2<f64>)> = std::iter::once((t0_s, Vector2::from(v0_mps)))
         .chain((1..=coarse.slots()).map(|k| {
             (
                 (k as f64 - 0.5) * big,
@@ -314,31 +331,45 @@ mod tests {
     use super::*;
 
     /// A coarse track that changes its velocity by a_max Δ per slot (and its first slot by
-    /// a_max (Δ + δ)/2) becomes a fine track that changes it by at most a_max δ per slot.
+    /// a_max (Δ/2 + lead) from a start velocity held `lead` before the start) becomes a fine track
+    /// that changes it by at most a_max δ per slot (and its first slot by a_max (δ/2 + lead)):
+    /// for an instantaneous start velocity (lead 0) and a previous slot's average (lead δ/2).
     #[test]
     fn smooth_interpolation_keeps_the_acceleration_limit() {
         let (a, big, delta, k) = (5.0, 2.5, 0.5, 5usize);
-        let v0 = Vector2::new(10.0, 0.0);
-        let mut v = v0 + Vector2::new(0.0, a * 0.5 * (big + delta));
-        let mut q = Vector2::new(0.0, 0.0);
-        let mut pos_m = Vec::new();
-        for i in 0..8 {
-            q += v * big;
-            pos_m.push([q.x, q.y]);
-            let turn = if i % 2 == 0 { 1.0 } else { -1.0 };
-            v += Vector2::new(turn * a * big * 0.6, -a * big * 0.8);
-        }
-        let coarse = Trajectory {
-            slot_s: big,
-            start_m: [0.0, 0.0],
-            pos_m,
-        };
-        let fine = smooth_to_fine(&coarse, [v0.x, v0.y], delta, 8 * k);
-        let mut prev = v0;
-        for t in 1..=fine.slots() {
-            let vt = Vector2::from(fine.velocity_mps(t));
-            assert!((vt - prev).norm() <= a * delta * (1.0 + 1e-9), "slot {t}");
-            prev = vt;
+        for lead in [0.0, 0.5 * delta] {
+            let v0 = Vector2::new(10.0, 0.0);
+            let mut v = v0 + Vector2::new(0.0, a * (0.5 * big + lead));
+            let mut q = Vector2::new(0.0, 0.0);
+            let mut pos_m = Vec::new();
+            for i in 0..8 {
+                q += v * big;
+                pos_m.push([q.x, q.y]);
+                let turn = if i % 2 == 0 { 1.0 } else { -1.0 };
+                v += Vector2::new(turn * a * big * 0.6, -a * big * 0.8);
+            }
+            let coarse = Trajectory {
+                slot_s: big,
+                start_m: [0.0, 0.0],
+                pos_m,
+            };
+            let fine = smooth_to_fine(&coarse, (-lead, [v0.x, v0.y]), delta, 8 * k);
+            let mut prev = v0;
+            let mut first = 0.0;
+            for t in 1..=fine.slots() {
+                let vt = Vector2::from(fine.velocity_mps(t));
+                let window = if t == 1 { 0.5 * delta + lead } else { delta };
+                assert!(
+                    (vt - prev).norm() <= a * window * (1.0 + 1e-9),
+                    "lead {lead}: slot {t}"
+                );
+                if t == 1 {
+                    first = (vt - prev).norm() / window;
+                }
+                prev = vt;
+            }
+            // the first slot uses the room it has (not a trivially small change)
+            assert!(first > 0.5 * a, "lead {lead}: {first}");
         }
     }
 }

@@ -30,7 +30,10 @@ pub(super) fn total_violation(
         Dynamics::Vehicle => ev
             .slots
             .iter()
-            .map(|s| (s.accel_mps2 - p.max_accel_mps2).max(0.0) * p.slot_s)
+            .zip(1..)
+            .map(|(s, t)| {
+                (s.accel_mps2 - p.max_accel_mps2).max(0.0) * crate::evaluate::accel_window_s(p, t)
+            })
             .sum(),
     };
     let v_min = p.min_speed_mps();

@@ -96,14 +96,17 @@ pub struct ExactTuning {
     /// previous iterate, so an iterate that meets it has at most this true energy).
     pub energy_cap_j: Option<f64>,
     /// The vehicle model: under [`Dynamics::Vehicle`] every slot's velocity differs from the
-    /// previous one (the mission's start velocity for the first) by at most a_max δ, one
+    /// previous one by at most a_max δ (the first from the mission's start velocity by
+    /// a_max δ/2, [`ExactTuning::first_accel_window_s`]), one
     /// second-order cone per slot (exact, no linearisation); in elastic mode each slot gets a
     /// slack on it.
     pub dynamics: Dynamics,
-    /// The time over which the first slot's velocity may differ from the start velocity, s
-    /// (`None`: the slot length). A coarse level sets (Δ + δ)/2 so that its track, with the
-    /// velocity interpolated linearly between slot middles onto the finer slots δ, keeps the
-    /// limit there too.
+    /// The time over which the first slot's (average) velocity may differ from the start
+    /// velocity, s (`None`: [`crate::evaluate::accel_window_s`] of slot 1, δ/2 from an
+    /// instantaneous start velocity: from v₀ at constant acceleration a,
+    /// q₁ − q₀ − v₀ δ = a δ²/2, so ‖v̄₁ − v₀‖ ≤ a_max δ/2). A coarse level of slots Δ sets Δ/2
+    /// plus the start velocity's lead, so that its track, with the velocity interpolated linearly
+    /// between slot middles onto the finer slots δ, keeps the limit there too.
     pub first_accel_window_s: Option<f64>,
 }
 
@@ -549,7 +552,7 @@ fn energy_cap(
 /// The vehicle's acceleration limit into slot `t`: ‖v_t − v_{t−1}‖ ≤ a_max δ in steps,
 /// ‖s_t − s_{t−1}‖ ≤ a_max δ² (1 − [`ACCEL_MARGIN_REL`]) (+ τ_t in elastic mode), with
 /// s_0 = v_0 δ from the mission's start velocity and, for the first slot, a_max δ w
-/// (w = [`ExactTuning::first_accel_window_s`]).
+/// (w = [`ExactTuning::first_accel_window_s`], δ/2 by default: v₀ is the velocity at t = 0).
 fn accel_cone(
     b: &mut ProblemBuilder,
     mission: &Mission,
@@ -565,7 +568,9 @@ fn accel_cone(
         (
             vx.clone().plus_const(-v0[0] * delta),
             vy.clone().plus_const(-v0[1] * delta),
-            tuning.first_accel_window_s.unwrap_or(delta),
+            tuning
+                .first_accel_window_s
+                .unwrap_or_else(|| crate::evaluate::accel_window_s(mission.params(), 1)),
         )
     } else {
         let (px, py) = step_exprs(vars, t - 1, start_m);
