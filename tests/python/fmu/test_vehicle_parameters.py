@@ -56,7 +56,8 @@ def fly(f):
 def check_against_cli(f, outdir, start_velocity):
     """The FMU's plan is the CLI's (1e-6 m), its commanded acceleration is trajectory.csv's
     accel_mps2 at every slot time, and its components are (v_t - v_{t-1}) / slot_s from the CLI's
-    positions, v_0 the start velocity that summary.json reports; returns the summary."""
+    positions, and (v_1 - v_0) / (slot_s / 2) into the first slot from the start velocity v_0 at
+    t = 0 that summary.json reports; returns the summary."""
     summary = json.loads((outdir / "summary.json").read_text())
     assert get_start_velocity(f) == pytest.approx(summary["start_velocity_mps"], abs=1e-12)
     if start_velocity is not None:
@@ -70,7 +71,9 @@ def check_against_cli(f, outdir, start_velocity):
         assert abs(x - r["x_m"]) <= 1e-6 and abs(y - r["y_m"]) <= 1e-6, (k, x, y, r)
         assert a == pytest.approx(r["accel_mps2"], rel=1e-9, abs=1e-9), k
         v = [(r["x_m"] - before["x_m"]) / SLOT_S, (r["y_m"] - before["y_m"]) / SLOT_S]
-        want = [(v[0] - v_prev[0]) / SLOT_S, (v[1] - v_prev[1]) / SLOT_S]
+        # the first slot's average velocity is that of its middle, half a slot after t = 0
+        window = SLOT_S / 2 if k == 1 else SLOT_S
+        want = [(v[0] - v_prev[0]) / window, (v[1] - v_prev[1]) / window]
         assert [ax, ay] == pytest.approx(want, abs=1e-5), k
         assert math.hypot(ax, ay) == pytest.approx(a, rel=1e-9, abs=1e-9), k
         v_prev = v
@@ -128,10 +131,11 @@ def test_each_dynamics_is_the_cli_plan_with_its_acceleration(version, tmp_path, 
 @pytest.mark.parametrize("dynamics", DYNAMICS)
 def test_start_velocity_is_the_mission_files_start_velocity(version, tmp_path, dynamics):
     """`start_velocity_mps` set through FMI plans what the CLI plans with the same
-    `start_velocity_mps` in the mission file (a velocity 45 degrees off the mission's rule); the
-    first slot's acceleration counts from it. Under paper the plan ignores it and the first slot
-    exceeds the limit; under vehicle it does not."""
-    start = (-8.0, 8.0)
+    `start_velocity_mps` in the mission file (a velocity 10 degrees off the mission's rule, a turn
+    the first slot can make within a_max slot_s / 2); the first slot's acceleration counts from
+    it. Under paper the plan ignores it and the first slot exceeds the limit; under vehicle it
+    does not."""
+    start = (-11.2, 14.6)
     plain = tmp_path / "short.toml"
     plain.write_text(SHORT_MISSION, encoding="utf-8")
     stated = tmp_path / "stated.toml"

@@ -15,7 +15,9 @@ reference (s, v_s) that it builds from the FMU's outputs alone.
 
 The reference. The plan is a polyline: the FMU's position r(t) (`x_m`, `y_m`) is linear within
 each slot of length delta, with the slot's velocity v_k (`speed_mps`, `heading_rad`); its
-`commanded_accel_*` output is a_k = (v_k - v_{k-1}) / delta. No vehicle can follow the velocity
+`commanded_accel_*` output is a_k = (v_k - v_{k-1}) / delta, and a_1 = (v_1 - v_0) / (delta / 2)
+from the start velocity v_0, the velocity at t = 0, half a slot before slot 1's middle. No
+vehicle can follow the velocity
 steps at the slot ends, but one that accelerates with a_{k+1} from the middle of slot k to the
 middle of slot k+1 flies the quadratic spline s whose velocity v_s is v_k at every slot middle,
 linear in between. That spline meets r at every slot middle, and between two middles
@@ -29,9 +31,9 @@ set-points with a feed-forward acceleration give a flight controller) and buffer
 the accelerations come from the FMU now, r(t) from the buffer.
 
 The bound. Under `dynamics = vehicle` every |a_k| <= A (1 + 1e-6) (asserted, on the FMU's
-output), so the feed-forward is never clipped; the vehicle, started on s (at
-q_0 + a_1 delta^2/8 with velocity v_0 + a_1 delta/2, as a vehicle that has been flying the
-plan's start velocity v_0 before t = 0), stays on s up to rounding (the feed-forward changes only
+output), so the feed-forward is never clipped; the vehicle, started on s (with the plan's start
+velocity v_0 at q_0 + a_1 delta^2/8: s accelerates with a_1 from t = 0 to slot 1's middle and
+meets r there), stays on s up to rounding (the feed-forward changes only
 at slot middles, which lie on the step grid, so the held acceleration is exact), and
 
     max_t |p(t) - r(t)| <= A delta^2 / 8 = 0.177 m   (delta = 0.5 s),
