@@ -3,12 +3,14 @@
 use super::*;
 use crate::config::RadarConfig;
 
+/// A small OFDM radar: 64-point FFT at NR's largest subcarrier spacing, 960 kHz (the physical
+/// bounds refuse more), 40 subcarriers occupied.
 fn small_radar(motion: MotionModel) -> RadarConfig {
     RadarConfig {
         fft_size: 64,
         cp_samples: 16,
-        subcarrier_spacing_hz: 1e6,
-        bandwidth_hz: Some(40e6),
+        subcarrier_spacing_hz: 960e3,
+        bandwidth_hz: Some(40.0 * 960e3),
         motion,
         ..RadarConfig::default()
     }
