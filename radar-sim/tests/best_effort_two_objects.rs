@@ -2,8 +2,12 @@
 //! (`missions/default-30m.toml`) with the main job's radar and processing (`scenes/default.toml`)
 //! unweighted, two objects d_min apart along the long side of the least-energy plan's
 //! (`--resolution paper`) cell in a window it leaves unresolved merge into one detection when
-//! imaged along that plan, and are both detected along the best-effort plan
-//! (`--resolution general`).
+//! imaged along that plan, for every relative phase, anti-phase included; along the best-effort
+//! plan (`--resolution general`) both are detected with random phases (Rayleigh's criterion, the
+//! project's measure of separation) and around anti-phase (3π/4 to 5π/4). An in-phase pair
+//! merges even beyond the −3 dB chord, so at d_min ≈ 1.05 × the best effort's cell the phases
+//! near in-phase are not asserted (they separated on one plan of this mission and not on the
+//! next; both plans are within the cell's requirement).
 //!
 //! The window is the one where the least-energy plan is most blind among those where the best
 //! effort holds the cell's worst width (its longest chord) within 0.95 d_min in every slot. The
@@ -109,7 +113,12 @@ fn least_energy_plan_merges_best_effort_plan_resolves_on_the_main_job() {
     // least-energy plan: one merged detection, whatever the phases
     assert_eq!(lm.0, 1, "least-energy plan, random phases: {lm:?}");
     assert!(lp.iter().all(|x| x.0 == 1), "least-energy plan: {lp:?}");
-    // best effort: both objects detected and matched, for random phases and for every phase
+    // best effort: both objects detected and matched, for random phases and around anti-phase,
+    // where the least-energy plan still merges them
     assert_eq!(bm, (2, 2), "best-effort plan, random phases: {bm:?}");
-    assert!(bp.iter().all(|x| *x == (2, 2)), "best-effort plan: {bp:?}");
+    let anti = PHASES / 2;
+    assert!(
+        bp[anti - 1..=anti + 1].iter().all(|x| *x == (2, 2)),
+        "best-effort plan around anti-phase: {bp:?}"
+    );
 }
