@@ -128,6 +128,9 @@ enum Command {
         #[command(flatten)]
         args: pipeline::services::plan::ServeArgs,
     },
+    /// Plans one request for `serve` (its worker process; not for use by hand).
+    #[command(name = "plan-worker", hide = true)]
+    PlanWorker(pipeline::services::plan::worker::WorkerArgs),
     /// Expected least object distance `E[d_min]` in a disk: correct formula, as printed, Monte Carlo.
     Dmin {
         /// Disk radius R, m.
@@ -355,11 +358,15 @@ fn run(cli: Cli) -> Result<(), Failure> {
             out!("wrote {}", report.display());
             Ok(())
         }
-        Command::Serve { args } => {
+        Command::Serve { mut args } => {
+            args.worker_exe = pipeline::services::plan::worker::own_executable();
             let stop = pipeline::services::plan::stop_on_signals().map_err(Failure::runtime)?;
             let report = pipeline::services::plan::serve(&args, &stop).map_err(Failure::from)?;
             tracing::info!(?report, "plan service stopped");
             Ok(())
+        }
+        Command::PlanWorker(a) => {
+            pipeline::services::plan::worker::run_worker(&a).map_err(Failure::from)
         }
         Command::Dmin {
             radius_m,
@@ -526,7 +533,7 @@ fn shortfall_line(s: &Summary) -> Option<String> {
 /// commands.
 fn default_log_filter(command: &Command) -> &'static str {
     match command {
-        Command::Serve { .. } => cellsar_error::SERVICE_LOG_FILTER,
+        Command::Serve { .. } | Command::PlanWorker(_) => cellsar_error::SERVICE_LOG_FILTER,
         _ => cellsar_error::COMMAND_LOG_FILTER,
     }
 }

@@ -52,6 +52,9 @@ enum Command {
     /// their keys, for a deployment with mutual TLS (pipeline/deploy/tls/): DIR/ca.pem, ca.key,
     /// and ROLE.pem, ROLE.key for each role.
     Certs(pipeline::certs::CertsArgs),
+    /// Plans one request for the plan service (its worker process; not for use by hand).
+    #[command(name = "plan-worker", hide = true)]
+    PlanWorker(pipeline::services::plan::worker::WorkerArgs),
 }
 
 fn init_tracing(default: &str) {
@@ -96,6 +99,12 @@ fn main() -> ExitCode {
         Command::Run(_) => cellsar_error::COMMAND_LOG_FILTER,
         _ => cellsar_error::SERVICE_LOG_FILTER,
     });
+    if let Command::PlanWorker(a) = &cli.command {
+        return match pipeline::services::plan::worker::run_worker(a) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => Failure::from(e).report(),
+        };
+    }
     if let Err(e) = radar_sim::kernels::KernelSet::from_env() {
         return Failure::bad_input(anyhow::anyhow!(e)).report();
     }
@@ -121,12 +130,16 @@ fn main() -> ExitCode {
                 Err(e) => e.report(),
             }
         }
-        Command::Planner(a) => a
-            .zenoh
-            .to_config()
-            .map_err(Failure::bad_input)
-            .and_then(|_| pipeline::services::plan::serve(&a, &stop).map_err(Failure::from))
-            .map(|r| tracing::info!(?r, "plan service stopped")),
+        Command::Planner(mut a) => {
+            a.worker_exe = pipeline::services::plan::worker::own_executable();
+            a.zenoh
+                .to_config()
+                .map_err(Failure::bad_input)
+                .and_then(|_| pipeline::services::plan::serve(&a, &stop).map_err(Failure::from))
+                .map(|r| tracing::info!(?r, "plan service stopped"))
+        }
+        // answered above
+        Command::PlanWorker(_) => Ok(()),
         Command::Echo(a) => check_radar_service(&a.scene, &a.zenoh, &a.iox)
             .and_then(|()| pipeline::services::echo::run_echo(&a, &stop).map_err(Failure::from))
             .map(|r| tracing::info!(?r, "echo stopped")),

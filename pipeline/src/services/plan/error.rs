@@ -70,6 +70,21 @@ pub enum ServiceError {
         /// Its error, its panic's message, or that it returned.
         cause: String,
     },
+    /// Planning did not end within the service's work budget (`--plan-budget-s`); the
+    /// planning was stopped and the service went on to the next request.
+    #[error(
+        "planning {mission:?} did not end within the planner's work budget of {budget_s} s \
+         (--plan-budget-s): the request is refused and the planner serves the next one"
+    )]
+    OverBudget {
+        /// The mission's name.
+        mission: String,
+        /// The budget, s.
+        budget_s: f64,
+    },
+    /// The plan worker refused the request (its refusal, kind and message, as it is).
+    #[error("{}", .0.message)]
+    Refused(Refusal),
 }
 
 impl From<BadRequest> for ServiceError {
@@ -87,9 +102,13 @@ impl ServiceError {
 
     /// The typed refusal a plan request is answered with: a request that names a bad field
     /// (or a start trajectory that does not fit) is `bad_request`, a mission proven impossible
-    /// `infeasible`, a plan not found `not_found`, the rest (a solver or worker failure)
-    /// `internal`; the message is this error's.
+    /// `infeasible`, a plan not found `not_found`, the rest (a solver or worker failure, a plan
+    /// over the work budget) `internal`; the message is this error's (a worker's refusal is
+    /// answered as it is).
     pub fn refusal(&self) -> Refusal {
+        if let ServiceError::Refused(r) = self {
+            return r.clone();
+        }
         let kind = match self {
             ServiceError::BadRequest(_)
             | ServiceError::Plan {

@@ -22,27 +22,32 @@
 //! - `bounded.rs`: per-mission state bounded by count and bytes ([`Lru`]);
 //! - `fair.rs`: the request queue, fair across requesters ([`FairQueue`]);
 //! - `status.rs`: the status board every service publishes on ([`StatusBoard`]);
+//! - `budget.rs`: planning one request within the work budget, in a thread or a worker;
+//! - `worker.rs`: planning one request in a child process, ended at the work budget
+//!   ([`worker::run_worker`]);
 //! - `error.rs`: [`ServiceError`].
 
 mod bounded;
+mod budget;
 mod cache;
 mod error;
 mod fair;
 #[cfg(test)]
 mod publisher_tests;
 mod status;
+pub mod worker;
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use bridge::envelope::Meta;
 use bridge::net::{PublishOptions, SubscribeOptions};
 use bridge::{ZenohArgs, ZenohNode};
 use serde::{Deserialize, Serialize};
 
-use planner::driver::{plan_with_observer, IterationRecord, Observer, PlanOptions};
+use planner::driver::{plan_with_observer, plan_with_stop, Observer, PlanOptions};
 use planner::Mission;
 use planner::Summary;
 
@@ -61,8 +66,15 @@ pub use status::StatusBoard;
 
 /// The default wall-time limit of one plan request, s (`--plan-time-limit-s`): the paper's
 /// missions plan in seconds; a request that would run longer answers with its last feasible
-/// iterate.
-pub const DEFAULT_PLAN_TIME_LIMIT_S: &str = "600";
+/// iterate. A minute within [`DEFAULT_PLAN_BUDGET_S`], for the work after the planner's last
+/// check (a cone program, the exact evaluation).
+pub const DEFAULT_PLAN_TIME_LIMIT_S: &str = "240";
+
+/// The default work budget of one plan request, s (`--plan-budget-s`): the launcher waits for
+/// its plan at most `--plan-timeout-s` (900 s), behind at most the plan in progress and one
+/// queued before its own ([`fair`]); three budgets fit in it, so that the launcher hears the
+/// answer, a plan or this refusal, before it gives up.
+pub const DEFAULT_PLAN_BUDGET_S: &str = "300";
 
 /// Flags of `cellsar-planner serve`.
 #[derive(clap::Args, Debug, Clone)]
@@ -75,10 +87,21 @@ pub struct ServeArgs {
     pub state_dir: Option<PathBuf>,
     /// Wall-time limit of each plan, s: the planner stops iterating at the limit and answers
     /// with its last accepted (feasible) iterate, termination `time_limit` in the summary; a
-    /// request whose start is still being repaired then is refused (`internal`). A request
-    /// from the network cannot keep the service busy longer than this.
+    /// request whose start is still being repaired then is refused (`internal`). The planner
+    /// reads it between cone programs only; `--plan-budget-s` bounds the whole request.
     #[arg(long, value_name = "SECONDS", default_value = DEFAULT_PLAN_TIME_LIMIT_S, value_parser = bridge::flags::parse_seconds)]
     pub plan_time_limit_s: bridge::flags::Seconds,
+    /// Work budget of each plan request, s: a request still planning this long after it was
+    /// taken up is refused (`internal`, naming the budget), its planning ended, and the next
+    /// request served. A request from the network cannot keep the service busy longer.
+    #[arg(long, value_name = "SECONDS", default_value = DEFAULT_PLAN_BUDGET_S, value_parser = bridge::flags::parse_seconds)]
+    pub plan_budget_s: bridge::flags::Seconds,
+    /// The executable whose `plan-worker` subcommand plans each request in a process of its
+    /// own, killed at the budget (the binaries give their own, [`worker::own_executable`]).
+    /// `None`: each request is planned in a thread of this process, which the budget answers
+    /// and asks to stop, and which stops at the planner's next check.
+    #[arg(skip)]
+    pub worker_exe: Option<PathBuf>,
     /// Zenoh flags.
     #[command(flatten)]
     pub zenoh: ZenohArgs,
@@ -103,29 +126,6 @@ pub struct ServeReport {
     pub state_errors: u64,
 }
 
-/// Sends planner progress from the planning thread to the service loop (at most every 0.5 s).
-struct ProgressObserver {
-    tx: std::sync::mpsc::Sender<String>,
-    phase: String,
-    last: Instant,
-}
-
-impl Observer for ProgressObserver {
-    fn on_phase(&mut self, phase: &str) {
-        self.phase = phase.to_string();
-    }
-    fn on_iteration(&mut self, r: &IterationRecord) {
-        if self.last.elapsed() < Duration::from_millis(500) {
-            return;
-        }
-        self.last = Instant::now();
-        let _ = self.tx.send(format!(
-            "{} iteration {}: true energy {:.1} J",
-            self.phase, r.iteration, r.true_energy_j
-        ));
-    }
-}
-
 /// Plans `req` (validated; errors name the field).
 pub fn plan_request(
     req: &PlanRequest,
@@ -142,17 +142,31 @@ pub fn plan_request_within(
     time_limit_s: Option<f64>,
     observer: &mut dyn Observer,
 ) -> Result<Plan, ServiceError> {
+    plan_request_stoppable(req, instance, time_limit_s, observer, None)
+}
+
+/// [`plan_request_within`] that also stops once `stop` is set ([`plan_with_stop`]).
+pub fn plan_request_stoppable(
+    req: &PlanRequest,
+    instance: &str,
+    time_limit_s: Option<f64>,
+    observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
+) -> Result<Plan, ServiceError> {
     let mission = Mission::from_file_struct(&req.mission)
         .map_err(|e| ServiceError::BadRequest(format!("mission: {e}")))?;
     let options = PlanOptions {
         time_limit_s,
         ..req.options.to_plan_options()?
     };
-    let result =
-        plan_with_observer(&mission, &options, observer).map_err(|error| ServiceError::Plan {
-            mission: mission.name().to_string(),
-            error,
-        })?;
+    let result = match stop {
+        Some(stop) => plan_with_stop(&mission, &options, observer, stop),
+        None => plan_with_observer(&mission, &options, observer),
+    }
+    .map_err(|error| ServiceError::Plan {
+        mission: mission.name().to_string(),
+        error,
+    })?;
     let file = mission.to_file_struct();
     Ok(Plan {
         mission_id: mission_id(&file, &req.options),
@@ -285,8 +299,9 @@ fn answer_requests(
                 Ok(p)
             }
             None => {
-                let limit = Some(args.plan_time_limit_s.as_secs_f64());
-                plan_in_thread(node, &board, &req, &args.instance, limit, stop).map(Arc::new)
+                tracing::info!(requester = ?requester, mission = ?req.mission.name,
+                    budget_s = args.plan_budget_s.as_secs_f64(), "planning a request");
+                budget::plan_within_budget(node, args, &board, &req, stop).map(Arc::new)
             }
         };
         if stop.load(Ordering::Relaxed) {
@@ -385,57 +400,6 @@ fn publish_plan(
     Ok(())
 }
 
-/// Plans in a worker thread so that a stop signal is seen while planning (the thread is left
-/// behind then: the process is exiting), publishing progress as `planning` status.
-fn plan_in_thread(
-    node: &ZenohNode,
-    board: &StatusBoard,
-    req: &PlanRequest,
-    instance: &str,
-    time_limit_s: Option<f64>,
-    stop: &AtomicBool,
-) -> Result<Plan, ServiceError> {
-    let provisional = Mission::from_file_struct(&req.mission)
-        .map(|m| mission_id(&m.to_file_struct(), &req.options))
-        .unwrap_or_default();
-    let (progress_tx, progress_rx) = std::sync::mpsc::channel::<String>();
-    let (done_tx, done_rx) = std::sync::mpsc::channel();
-    let (req, instance) = (req.clone(), instance.to_string());
-    std::thread::Builder::new()
-        .name("plan".into())
-        .spawn(move || {
-            let mut obs = ProgressObserver {
-                tx: progress_tx,
-                phase: String::new(),
-                last: Instant::now(),
-            };
-            let _ = done_tx.send(plan_request_within(&req, &instance, time_limit_s, &mut obs));
-        })
-        .map_err(|e| ServiceError::Internal(format!("starting the planning thread: {e}")))?;
-    let mut status = board.status(provisional, ServiceState::Planning);
-    status.message = "planning".into();
-    board.publish(node, &status);
-    loop {
-        if stop.load(Ordering::Relaxed) {
-            return Err(ServiceError::Internal("stopped while planning".into()));
-        }
-        while let Ok(line) = progress_rx.try_recv() {
-            status.message = line;
-            status.uptime_s = board.uptime_s();
-            board.publish(node, &status);
-        }
-        match done_rx.recv_timeout(Duration::from_millis(50)) {
-            Ok(result) => return result,
-            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
-            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
-                return Err(ServiceError::Internal(
-                    "the planning thread panicked".into(),
-                ))
-            }
-        }
-    }
-}
-
 /// Whether `plan`'s mission id is the one its content gives (the echo's and the processor's
 /// check of a plan they are asked to take on); if not, it is counted in `inconsistent`,
 /// logged and to be skipped.
@@ -488,6 +452,8 @@ mod tests {
             instance: "waits".into(),
             state_dir: None,
             plan_time_limit_s: bridge::flags::parse_seconds(DEFAULT_PLAN_TIME_LIMIT_S).unwrap(),
+            plan_budget_s: bridge::flags::parse_seconds(DEFAULT_PLAN_BUDGET_S).unwrap(),
+            worker_exe: None,
             zenoh: client_without_router(&dir),
         };
         let stop = Arc::new(AtomicBool::new(false));
@@ -508,9 +474,11 @@ mod tests {
     }
 
     /// A plan request from the network cannot keep the service busy without bound: the
-    /// default limit is 600 s, and a limit can be given but not removed.
+    /// default time limit is 240 s and the default work budget 300 s, and either can be given
+    /// but not removed. The service plans in a thread unless given a worker executable (the
+    /// binaries give their own).
     #[test]
-    fn plan_requests_have_a_default_time_limit() {
+    fn plan_requests_have_a_default_time_limit_and_budget() {
         use clap::Parser;
         #[derive(Parser)]
         struct Cli {
@@ -518,15 +486,27 @@ mod tests {
             serve: ServeArgs,
         }
         let c = Cli::try_parse_from(["serve"]).unwrap();
-        assert_eq!(c.serve.plan_time_limit_s.as_secs_f64(), 600.0);
-        let c = Cli::try_parse_from(["serve", "--plan-time-limit-s", "2.5"]).unwrap();
+        assert_eq!(c.serve.plan_time_limit_s.as_secs_f64(), 240.0);
+        assert_eq!(c.serve.plan_budget_s.as_secs_f64(), 300.0);
+        assert_eq!(c.serve.worker_exe, None);
+        let c = Cli::try_parse_from([
+            "serve",
+            "--plan-time-limit-s",
+            "2.5",
+            "--plan-budget-s",
+            "4",
+        ])
+        .unwrap();
         assert_eq!(c.serve.plan_time_limit_s.as_secs_f64(), 2.5);
-        for bad in ["0", "-1", "inf", "none"] {
-            let flag = format!("--plan-time-limit-s={bad}");
-            let e = Cli::try_parse_from(["serve", flag.as_str()])
-                .err()
-                .expect("refused");
-            assert!(e.to_string().contains("--plan-time-limit-s"), "{bad}: {e}");
+        assert_eq!(c.serve.plan_budget_s.as_secs_f64(), 4.0);
+        for flag in ["--plan-time-limit-s", "--plan-budget-s"] {
+            for bad in ["0", "-1", "inf", "none"] {
+                let arg = format!("{flag}={bad}");
+                let e = Cli::try_parse_from(["serve", arg.as_str()])
+                    .err()
+                    .expect("refused");
+                assert!(e.to_string().contains(flag), "{bad}: {e}");
+            }
         }
     }
 
