@@ -12,14 +12,27 @@ use planner::Mission;
 use super::{plan_request_stoppable, worker, ServeArgs, ServiceError, StatusBoard};
 use crate::protocol::{mission_id, Plan, PlanRequest, ServiceState};
 
-/// Sends planner progress from the planning thread to the service loop (at most every 0.5 s).
-struct ProgressObserver {
-    tx: std::sync::mpsc::Sender<String>,
+/// Planner progress as status lines (`<phase> iteration <k>: true energy <E> J`), at most one
+/// every 0.5 s, handed to `send`: the service loop's channel ([`plan_in_thread`]) or the
+/// worker's pipe ([`worker`]).
+pub(super) struct ProgressLines<F: FnMut(String)> {
+    send: F,
     phase: String,
     last: Instant,
 }
 
-impl Observer for ProgressObserver {
+impl<F: FnMut(String)> ProgressLines<F> {
+    /// Progress lines handed to `send`.
+    pub(super) fn new(send: F) -> Self {
+        Self {
+            send,
+            phase: String::new(),
+            last: Instant::now(),
+        }
+    }
+}
+
+impl<F: FnMut(String)> Observer for ProgressLines<F> {
     fn on_phase(&mut self, phase: &str) {
         self.phase = phase.to_string();
     }
@@ -28,7 +41,7 @@ impl Observer for ProgressObserver {
             return;
         }
         self.last = Instant::now();
-        let _ = self.tx.send(format!(
+        (self.send)(format!(
             "{} iteration {}: true energy {:.1} J",
             self.phase, r.iteration, r.true_energy_j
         ));
@@ -84,11 +97,9 @@ fn plan_in_thread(
     std::thread::Builder::new()
         .name("plan".into())
         .spawn(move || {
-            let mut obs = ProgressObserver {
-                tx: progress_tx,
-                phase: String::new(),
-                last: Instant::now(),
-            };
+            let mut obs = ProgressLines::new(|line| {
+                let _ = progress_tx.send(line);
+            });
             let limit = Some(time_limit_s);
             let r = plan_request_stoppable(&req, &instance, limit, &mut obs, Some(&halted));
             let _ = done_tx.send(r);

@@ -23,7 +23,6 @@ use std::time::{Duration, Instant};
 
 use bridge::envelope::{self, DecodeLimits, Header, Message, Meta, HEADER_LEN};
 use bridge::{Refusal, ZenohNode};
-use planner::driver::{IterationRecord, Observer};
 use serde::{Deserialize, Serialize};
 
 use super::{plan_request_within, ServiceError, StatusBoard};
@@ -86,30 +85,6 @@ fn read_envelope(r: &mut impl Read, limit: usize) -> Result<Option<Vec<u8>>, Str
     Ok(Some(bytes))
 }
 
-/// Writes progress to the worker's output (at most every 0.5 s).
-struct PipeObserver<'a> {
-    out: &'a Mutex<std::io::Stdout>,
-    phase: String,
-    last: Instant,
-}
-
-impl Observer for PipeObserver<'_> {
-    fn on_phase(&mut self, phase: &str) {
-        self.phase = phase.to_string();
-    }
-    fn on_iteration(&mut self, r: &IterationRecord) {
-        if self.last.elapsed() < Duration::from_millis(500) {
-            return;
-        }
-        self.last = Instant::now();
-        let line = format!(
-            "{} iteration {}: true energy {:.1} J",
-            self.phase, r.iteration, r.true_energy_j
-        );
-        let _ = write_message(self.out, &WorkerProgress { line });
-    }
-}
-
 fn write_message<M: Message>(out: &Mutex<std::io::Stdout>, m: &M) -> Result<(), ServiceError> {
     let bytes = envelope::encode(m, Meta::default()).map_err(|error| ServiceError::Codec {
         what: M::NAME.into(),
@@ -156,11 +131,10 @@ pub fn run_worker(args: &WorkerArgs) -> Result<(), ServiceError> {
         std::process::exit(1);
     });
     let out = Mutex::new(std::io::stdout());
-    let mut obs = PipeObserver {
-        out: &out,
-        phase: String::new(),
-        last: Instant::now(),
-    };
+    // progress to the service, on the pipe
+    let mut obs = super::budget::ProgressLines::new(|line| {
+        let _ = write_message(&out, &WorkerProgress { line });
+    });
     match plan_request_within(&req, &args.instance, Some(args.time_limit_s), &mut obs) {
         Ok(plan) => write_message(&out, &plan),
         Err(e) => write_message(&out, &e.refusal()),
