@@ -106,11 +106,16 @@ impl Dynamics {
 /// before the start ([`crate::params::StartVelocityKind`]). At the acceleration limit the
 /// UAV's slot-t velocity differs from the start velocity by at most a_max times this.
 pub fn start_to_slot_middle_s(p: &crate::Params, t: usize) -> f64 {
-    let lead_s = match p.start_velocity_kind {
+    (t as f64 - 0.5) * p.slot_s + start_velocity_lead_s(p)
+}
+
+/// How long before the start the start velocity holds, s: 0 for an instantaneous one, δ/2 for
+/// the average of the slot flown before ([`crate::params::StartVelocityKind`]).
+pub fn start_velocity_lead_s(p: &crate::Params) -> f64 {
+    match p.start_velocity_kind {
         crate::params::StartVelocityKind::Instant => 0.0,
         crate::params::StartVelocityKind::PreviousSlot => 0.5 * p.slot_s,
-    };
-    (t as f64 - 0.5) * p.slot_s + lead_s
+    }
 }
 
 /// The time over which slot `t`'s (average) velocity changes from the previous one, s: δ between

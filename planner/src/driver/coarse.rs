@@ -121,7 +121,9 @@ pub(super) fn coarse_start_from(
         dynamics: options.dynamics,
         // the first coarse slot's velocity, placed at its middle, is interpolated from the start
         // velocity at its instant (where the finer grid's constraint puts it too)
-        first_accel_window_s: Some(0.5 * coarse.params().slot_s + start_lead_s(mission)),
+        first_accel_window_s: Some(
+            0.5 * coarse.params().slot_s + crate::evaluate::start_velocity_lead_s(mission.params()),
+        ),
         resolution: if best_effort {
             ResolutionMode::Paper
         } else {
@@ -262,7 +264,10 @@ pub(super) fn coarse_start_from(
         },
         Dynamics::Vehicle => smooth_to_fine(
             &tr,
-            (-start_lead_s(mission), mission.start_velocity_mps()),
+            (
+                -crate::evaluate::start_velocity_lead_s(mission.params()),
+                mission.start_velocity_mps(),
+            ),
             delta,
             n,
         ),
@@ -272,13 +277,6 @@ pub(super) fn coarse_start_from(
         (None, Some(tr)) => Some(LevelStart::Stalled(to_fine(tr))),
         (None, None) => None,
     }
-}
-
-/// How long before the start the start velocity holds, s: 0 for an instantaneous one, δ/2 for the
-/// average of the slot flown before ([`crate::evaluate::start_to_slot_middle_s`]).
-fn start_lead_s(mission: &Mission) -> f64 {
-    let p = mission.params();
-    crate::evaluate::start_to_slot_middle_s(p, 1) - 0.5 * p.slot_s
 }
 
 /// A coarse track on `n` slots of `delta` with the velocity interpolated linearly between the
