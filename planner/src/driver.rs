@@ -9,7 +9,7 @@ use crate::evaluate::{evaluate, ResolutionMode};
 use crate::geometry::{distance, Point2};
 use crate::init::{guidance_start_with, precheck_with};
 use crate::schemes::exact::{ExactObjective, ExactTuning};
-use crate::schemes::paper::{PaperObjective, PaperState};
+use crate::schemes::paper::PaperState;
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
@@ -18,27 +18,32 @@ mod altitude;
 mod best_effort;
 mod coarse;
 mod error;
+mod executor;
 mod iterate;
 mod observer;
 mod options;
 mod phase_one;
 mod progress;
 mod result;
+mod scheme;
 mod starts;
+mod table;
 
 pub use alternating::{ALTERNATION_PHASE, ALTERNATION_TOLERANCE, MAX_ALTERNATIONS};
 pub use best_effort::{best_effort_from, BestEffortBasis};
 pub use error::{NotFound, PlanError};
 pub use observer::{IterationRecord, NoObserver, Observer};
 pub use options::{
-    OptionConflict, OptionName, PlanOptions, Scheme, DEFAULT_DYNAMICS, DEFAULT_RESOLUTION,
+    OptionConflict, OptionName, PlanOptions, DEFAULT_DYNAMICS, DEFAULT_RESOLUTION,
     DEFAULT_RESOLUTION_WEIGHT_J_PER_M,
 };
 pub use result::{BestEffort, PlanResult, TerminationReason};
+pub use scheme::Scheme;
 
 use coarse::{coarse_start, coarse_start_from, LevelStart};
 use iterate::{run_exact, run_paper, Means};
 use options::Deadline;
+use scheme::{Family, FreeAltitude};
 use starts::StartSearch;
 
 /// Plans `mission` with `options`.
@@ -82,12 +87,14 @@ fn run_plan(
     // the bound, or the proof that no trajectory meets the mission (a certified refusal)
     let bound = crate::bound::energy_bound(mission, options.dynamics)?;
     let free = mission.params().altitude == AltitudeMode::Free && options.altitude_profile;
-    let mut out = if free && options.scheme == Scheme::Exact {
-        altitude::plan_free(started, mission, options, observer, stop)?
-    } else if free && options.scheme == Scheme::Paper {
-        alternating::plan_free_paper(started, mission, options, observer, stop)?
-    } else {
-        run_plan_from(started, mission, options, observer, stop)?
+    let mut out = match (free, options.scheme.spec().free_altitude) {
+        (true, Some(FreeAltitude::Joint)) => {
+            altitude::plan_free(started, mission, options, observer, stop)?
+        }
+        (true, Some(FreeAltitude::Alternating)) => {
+            alternating::plan_free_paper(started, mission, options, observer, stop)?
+        }
+        _ => run_plan_from(started, mission, options, observer, stop)?,
     };
     out.bound = Some(bound);
     out.solve_seconds = started.elapsed().as_secs_f64();
@@ -132,9 +139,8 @@ fn run_plan_capture(
 ) -> Result<PlanResult, PlanError> {
     options.validate()?;
     check_altitude(mission, options)?;
-    if options.scheme == Scheme::Exact
-        && options.resolution == ResolutionMode::General
-        && !options.strict_resolution
+    let spec = options.scheme.spec();
+    if spec.own_rules && options.resolution == ResolutionMode::General && !options.strict_resolution
     {
         return best_effort::plan_best_effort(mission, options, observer, stop);
     }
@@ -145,21 +151,19 @@ fn run_plan_capture(
         None => built_in_start(mission, options, deadline),
     };
     let mut start_energy_j = evaluate(mission, &start).energy_j;
-    let resolution = match options.scheme {
-        Scheme::Exact | Scheme::BaselineExact => options.resolution,
-        Scheme::Paper | Scheme::Baseline => ResolutionMode::Paper,
+    let resolution = if spec.exact_geometry {
+        options.resolution
+    } else {
+        ResolutionMode::Paper
     };
     let mut solver = SocpSolver::new(options.scheme_socp());
     let mut repair_solver = SocpSolver::new(options.scheme_socp());
     // Every scheme needs a start that is feasible on the exact geometry, except the paper's
     // schemes started from a given path: that path is used as it is (its first (p5) is the
     // reproduction check).
-    let phase1 = match options.scheme {
-        Scheme::Exact => Some(ExactObjective::Energy),
-        Scheme::BaselineExact => Some(ExactObjective::Distance),
-        Scheme::Paper | Scheme::Baseline => {
-            options.init.is_none().then_some(ExactObjective::Energy)
-        }
+    let phase1 = match spec.family {
+        Family::ExactGeometry => Some(spec.objective),
+        Family::PaperBcd => options.init.is_none().then_some(ExactObjective::Energy),
     };
     let base = ExactTuning {
         resolution,
@@ -173,7 +177,7 @@ fn run_plan_capture(
                 options,
                 objective,
                 base: &base,
-                exact_rules: options.scheme == Scheme::Exact,
+                exact_rules: spec.own_rules,
                 deadline,
                 stop,
                 best_effort_start,
@@ -194,11 +198,11 @@ fn run_plan_capture(
         None => (start, 0, None),
     };
     observer.on_phase("solve");
-    let mut out = match options.scheme {
-        Scheme::Exact => run_exact(
+    let mut out = match spec.family {
+        Family::ExactGeometry => run_exact(
             mission,
             start,
-            ExactObjective::Energy,
+            spec.objective,
             &base,
             options,
             Means {
@@ -207,32 +211,10 @@ fn run_plan_capture(
                 deadline,
             },
         )?,
-        Scheme::BaselineExact => run_exact(
+        Family::PaperBcd => run_paper(
             mission,
             start,
-            ExactObjective::Distance,
-            &base,
-            options,
-            Means {
-                solver: &mut solver,
-                observer: &mut *observer,
-                deadline,
-            },
-        )?,
-        Scheme::Paper => run_paper(
-            mission,
-            start,
-            PaperObjective::Energy,
-            options,
-            deadline,
-            &mut solver,
-            observer,
-            paper_state.take(),
-        )?,
-        Scheme::Baseline => run_paper(
-            mission,
-            start,
-            PaperObjective::Distance,
+            spec.paper_objective(),
             options,
             deadline,
             &mut solver,
@@ -281,11 +263,8 @@ fn given_start(
     // A given start that is infeasible (a warm start after the mission changed, say)
     // is repaired and re-optimised on the coarse grid first, like the built-in start:
     // large steps fix large violations in few iterations.
-    let objective = match options.scheme {
-        Scheme::BaselineExact => Some(ExactObjective::Distance),
-        Scheme::Exact => Some(ExactObjective::Energy),
-        Scheme::Paper | Scheme::Baseline => None,
-    };
+    let spec = options.scheme.spec();
+    let objective = (spec.family == Family::ExactGeometry).then_some(spec.objective);
     Ok(match objective {
         Some(obj)
             if options.coarse
@@ -304,10 +283,10 @@ fn given_start(
 /// exact-geometry schemes also optimised there. The paper's schemes get the plain feasible path,
 /// as Algorithm 1's step 1 asks ("a feasible initial flight path").
 fn built_in_start(mission: &Mission, options: &PlanOptions, deadline: Deadline) -> Trajectory {
-    let (objective, optimise) = match options.scheme {
-        Scheme::Exact => (ExactObjective::Energy, options.coarse),
-        Scheme::BaselineExact => (ExactObjective::Distance, options.coarse),
-        Scheme::Paper | Scheme::Baseline => (ExactObjective::Energy, false),
+    let spec = options.scheme.spec();
+    let (objective, optimise) = match spec.family {
+        Family::ExactGeometry => (spec.objective, options.coarse),
+        Family::PaperBcd => (ExactObjective::Energy, false),
     };
     coarse_start(mission, objective, optimise, options, deadline)
         .unwrap_or_else(|| guidance_start_with(mission, options.resolution, options.dynamics))

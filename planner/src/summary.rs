@@ -8,6 +8,7 @@ use crate::altitude::AltitudeMode;
 use crate::driver::{BestEffort, PlanResult, Scheme, TerminationReason};
 use crate::evaluate::SlotEval;
 use crate::power::PowerModel;
+use crate::schemes::exact::ExactObjective;
 use crate::shortfall::ResolutionShortfall;
 use crate::Mission;
 
@@ -212,7 +213,7 @@ impl Summary {
         let (_, p_star) = model.min_power_in(0.0, p.max_speed_mps);
         let floor = p.horizon_s * p_star;
         let ev = &result.evaluation;
-        let energy_scheme = matches!(result.scheme, Scheme::Exact | Scheme::Paper);
+        let energy_scheme = result.scheme.spec().objective == ExactObjective::Energy;
         let landmark_slots = || ev.slots.iter().filter(|s| s.landmark_m.is_some());
         Self {
             scheme: result.scheme,

@@ -31,15 +31,18 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use crate::evaluate::{evaluate_with_altitudes, Evaluation, FEASIBILITY_TOL};
+use crate::schemes::exact::ExactTuning;
 use crate::schemes::paper::{PaperObjective, PaperState};
 use crate::socp::SocpSolver;
-use crate::Mission;
+use crate::{Mission, Trajectory};
 
 use super::altitude::fixed_at;
+use super::executor::{execute, Candidate, Control, Failure, Review, Step, Stop};
 use super::iterate::{paper_bcd, Means};
 use super::options::Deadline;
-use super::progress::{relative_change, LoopEnd};
-use super::{Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason};
+use super::progress::LoopEnd;
+use super::table;
+use super::{NoObserver, Observer, PlanError, PlanOptions, PlanResult, Scheme};
 
 /// Largest number of alternations (altitude step, then 2-D step).
 pub const MAX_ALTERNATIONS: usize = 20;
@@ -92,7 +95,6 @@ pub(super) fn plan_free_paper(
     alternate(
         mission,
         fixed,
-        ev,
         state.with_altitudes(Some(profile)),
         options,
         observer,
@@ -117,96 +119,158 @@ pub(super) fn acceptable(cand: &Evaluation, incumbent: &Evaluation) -> bool {
     energy && feasible
 }
 
-/// The alternation from the fixed plan `fixed` (evaluated `fixed_ev` at its altitudes) and its
-/// BCD state `state`.
+/// The alternation from the fixed plan `fixed` and its BCD state `state`, run by the executor with the row [`table::alternation`]: each alternation
+/// is one step ([`AlternationStep`]), the BCD inside it a run of the executor itself.
 fn alternate(
     mission: &Mission,
     fixed: PlanResult,
-    fixed_ev: Evaluation,
-    mut state: PaperState,
+    state: PaperState,
     options: &PlanOptions,
     observer: &mut dyn Observer,
     deadline: Deadline<'_>,
 ) -> Result<PlanResult, PlanError> {
-    let mut best = (
+    let start = (
         fixed.trajectory.clone(),
         state.altitudes_m().map(<[f64]>::to_vec).unwrap_or_default(),
-        fixed_ev,
     );
-    let mut end = LoopEnd::continuing(&fixed);
-    let mut solver = SocpSolver::new(options.scheme_socp());
-    let mut altitude_solver = SocpSolver::new(options.socp);
-    for alternation in 1..=MAX_ALTERNATIONS {
-        if deadline.passed() {
-            end.termination = TerminationReason::TimeLimit;
-            break;
-        }
-        observer.on_phase(ALTERNATION_PHASE);
+    let mut step = AlternationStep {
+        mission,
+        options,
+        state,
+        solver: SocpSolver::new(options.scheme_socp()),
+        altitude_solver: SocpSolver::new(options.socp),
+        observer,
+        deadline,
+        end: LoopEnd::continuing(&fixed),
+        pending: None,
+        programs: 0,
+    };
+    let out = execute(
+        &mut step,
+        start,
+        &table::alternation(),
+        Control::of(&ExactTuning::default()),
+        LoopEnd::starting(f64::NAN),
+        &mut NoObserver,
+        deadline,
+    )?;
+    let mut end = step.end;
+    end.termination = out.stop.termination();
+    end.cone_programs += step.programs;
+    let ((trajectory, altitudes), evaluation) = (out.iterate, out.evaluation);
+    Ok(end.into_free_plan(fixed, Scheme::Paper, trajectory, altitudes, evaluation))
+}
+
+/// One alternation: (b) the altitude step with the track and its auxiliaries fixed, then (a)
+/// Algorithm 1 continued from the state at those altitudes. Its BCD records go straight into
+/// `end` (the plan's); its histories join them when the alternation is accepted.
+struct AlternationStep<'a, 'o> {
+    mission: &'a Mission,
+    options: &'a PlanOptions,
+    state: PaperState,
+    solver: SocpSolver,
+    altitude_solver: SocpSolver,
+    observer: &'o mut dyn Observer,
+    deadline: Deadline<'a>,
+    end: LoopEnd,
+    /// The last alternation's BCD run, until it is judged.
+    pending: Option<LoopEnd>,
+    programs: usize,
+}
+
+impl Step for AlternationStep<'_, '_> {
+    /// The track and the altitude of every slot, m.
+    type Iterate = (Trajectory, Vec<f64>);
+
+    fn evaluate(&self, (track, z): &Self::Iterate) -> Result<Evaluation, PlanError> {
+        evaluate_with_altitudes(self.mission, track, z)
+            .map_err(|e| PlanError::InvalidInit(format!("the altitude profile: {e}")))
+    }
+
+    fn propose(
+        &mut self,
+        (track, _): &Self::Iterate,
+        _control: Control,
+    ) -> Result<Candidate<Self::Iterate>, Failure> {
+        self.observer.on_phase(ALTERNATION_PHASE);
         // (b) the altitudes with the track and its auxiliaries fixed
-        let step = state.solve_altitudes(mission, &mut altitude_solver);
-        end.cone_programs += 1;
+        let step = self
+            .state
+            .solve_altitudes(self.mission, &mut self.altitude_solver);
+        self.programs += 1;
         if step.max_change_m <= STAYED_M {
-            tracing::debug!(alternation, "the altitude step stayed put");
-            end.termination = TerminationReason::Converged;
-            break;
+            tracing::debug!("the altitude step stayed put");
+            return Err(Failure::Settled);
         }
-        let z = state.altitudes_m().map(<[f64]>::to_vec).unwrap_or_default();
+        let z = self
+            .state
+            .altitudes_m()
+            .map(<[f64]>::to_vec)
+            .unwrap_or_default();
         // (a) the 2-D problem at those altitudes, Algorithm 1 continued from the state
-        let start = state.trajectory(&best.0);
-        let run = paper_bcd(
-            mission,
-            &mut state,
+        let start = self.state.trajectory(track);
+        let (traj, run) = paper_bcd(
+            self.mission,
+            &mut self.state,
             start,
             PaperObjective::Energy,
-            options,
+            self.options,
             Means {
-                solver: &mut solver,
-                observer: &mut *observer,
-                deadline,
+                solver: &mut self.solver,
+                observer: &mut *self.observer,
+                deadline: self.deadline,
             },
-            end.records.len(),
-        );
-        let (traj, run) = match run {
-            Ok(run) => run,
-            Err(error) => {
-                end.termination = TerminationReason::SubproblemFailed(error.to_string());
-                break;
-            }
-        };
-        end.cone_programs += run.cone_programs;
-        end.records.extend(run.records);
-        let ev = evaluate_with_altitudes(mission, &traj, &z)
-            .map_err(|e| PlanError::InvalidInit(format!("the altitude profile: {e}")))?;
-        if !acceptable(&ev, &best.2) {
+            self.end.records.len(),
+        )
+        .map_err(|error| Failure::Ended(error.to_string()))?;
+        self.programs += run.cone_programs;
+        self.end.records.extend(run.records.iter().cloned());
+        let evaluation = evaluate_with_altitudes(self.mission, &traj, &z).map_err(|e| {
+            Failure::Fatal(PlanError::InvalidInit(format!("the altitude profile: {e}")))
+        })?;
+        let objective = run.objective;
+        self.pending = Some(run);
+        Ok(Candidate {
+            iterate: (traj, z),
+            evaluation,
+            objective,
+            ipm_iterations: 0,
+        })
+    }
+
+    fn merit(&self, ev: &Evaluation) -> f64 {
+        ev.energy_j
+    }
+
+    fn admissible(&self, candidate: &Evaluation, current: &Evaluation) -> bool {
+        acceptable(candidate, current)
+    }
+
+    /// An accepted alternation adds its BCD histories; the first rejected one ends the
+    /// alternation, its last BCD record marked rejected.
+    fn review(&mut self, accepted: bool, candidate: &Evaluation, current: &Evaluation) -> Review {
+        let run = self.pending.take();
+        if !accepted {
             tracing::debug!(
-                alternation,
-                energy_j = ev.energy_j,
-                incumbent_j = best.2.energy_j,
-                out_of_view = ev.slots_out_of_view,
+                energy_j = candidate.energy_j,
+                incumbent_j = current.energy_j,
+                out_of_view = candidate.slots_out_of_view,
                 "alternation rejected"
             );
-            if let Some(last) = end.records.last_mut() {
+            if let Some(last) = self.end.records.last_mut() {
                 last.accepted = false;
             }
-            end.termination = TerminationReason::NoProgress;
-            break;
+            return Review::Stop(Stop::NoProgress);
         }
-        let rel = relative_change(best.2.energy_j, ev.energy_j);
-        end.objective = run.objective;
-        end.objective_history.extend(run.objective_history);
-        end.true_energy_history.extend(run.true_energy_history);
-        tracing::debug!(
-            alternation,
-            energy_j = ev.energy_j,
-            rel,
-            "alternation accepted"
-        );
-        best = (traj, z, ev);
-        if rel < ALTERNATION_TOLERANCE {
-            end.termination = TerminationReason::Converged;
-            break;
+        if let Some(run) = run {
+            self.end.objective = run.objective;
+            self.end.objective_history.extend(run.objective_history);
+            self.end.true_energy_history.extend(run.true_energy_history);
         }
+        Review::Continue
     }
-    let (trajectory, altitudes, evaluation) = best;
-    Ok(end.into_free_plan(fixed, Scheme::Paper, trajectory, altitudes, evaluation))
+
+    fn cone_programs(&self) -> usize {
+        self.programs
+    }
 }

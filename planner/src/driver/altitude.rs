@@ -22,12 +22,13 @@ use crate::evaluate::{evaluate_with_altitudes, Evaluation};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::shortfall::total_deficit_m;
 use crate::socp::SocpSolver;
-use crate::{Mission, Params};
+use crate::{Mission, Params, Trajectory};
 
-use super::iterate::record;
+use super::executor::{execute, Candidate, Control, Failure, Step};
 use super::options::Deadline;
-use super::progress::{relative_change, LoopEnd, TrustRegion};
-use super::{BestEffort, Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason};
+use super::progress::LoopEnd;
+use super::table;
+use super::{BestEffort, Observer, PlanError, PlanOptions, PlanResult, Scheme};
 
 /// The mission at one fixed altitude `altitude_m` (its bounds dropped), the sensing radius of
 /// the same antenna there.
@@ -108,7 +109,8 @@ fn judge_feasible(plan: &PlanResult, options: &PlanOptions, ev: &Evaluation) -> 
     constraints && ev.meets(options.dynamics) && cap.is_none_or(|c| ev.energy_j <= c * (1.0 + 1e-9))
 }
 
-/// The exact SCA with free altitudes from the plan `fixed` flown at `profile`.
+/// The exact SCA with free altitudes from the plan `fixed` flown at `profile`, run by the
+/// executor with the row [`table::free_altitude`].
 fn refine(
     mission: &Mission,
     fixed: PlanResult,
@@ -135,104 +137,31 @@ fn refine(
         }),
         ..ExactTuning::default()
     };
-    let merit = |ev: &Evaluation| match tuning.cell_slack_weight {
-        Some(w) => ev.energy_j + w * total_deficit_m(mission, ev),
-        None => ev.energy_j,
+    let mut step = FreeAltitudeStep {
+        mission,
+        fixed: &fixed,
+        options,
+        tuning,
+        solver: SocpSolver::new(options.exact_socp),
+        programs: 0,
     };
-    let mut current = fixed.trajectory.clone();
-    let mut altitudes = profile;
-    let mut ev = evaluate_with_altitudes(mission, &current, &altitudes)
-        .map_err(|e| PlanError::InvalidInit(format!("the fixed plan's altitude profile: {e}")))?;
-    let mut value = merit(&ev);
-    let mut tuning_now = tuning;
-    let mut solver = SocpSolver::new(options.exact_socp);
-    let mut end = LoopEnd::continuing(&fixed);
-    let mut trust = TrustRegion::default();
-    let first = end.records.len();
-    for it in first + 1..=first + options.max_iterations {
-        if deadline.passed() {
-            end.termination = TerminationReason::TimeLimit;
-            break;
+    let start = (fixed.trajectory.clone(), profile);
+    let out = execute(
+        &mut step,
+        start,
+        &table::free_altitude(options, fixed.records.len()),
+        Control::of(&tuning),
+        LoopEnd::continuing(&fixed),
+        observer,
+        deadline,
+    )
+    .map_err(|e| match e {
+        PlanError::InvalidInit(why) => {
+            PlanError::InvalidInit(format!("the fixed plan's altitude profile: {why}"))
         }
-        let t0 = Instant::now();
-        let sub = ExactSubproblem::build_with_altitudes(
-            mission,
-            &current,
-            &altitudes,
-            ExactObjective::Energy,
-            &tuning_now,
-        );
-        end.cone_programs += 1;
-        let step = solver.solve(&sub.builder).map(|sol| {
-            let cand = sub.trajectory(&sol.x, &current);
-            let z = sub.altitudes_m(&sol.x).unwrap_or_else(|| altitudes.clone());
-            (sol, cand, z)
-        });
-        let accepted = match step {
-            Ok((sol, cand, z)) => {
-                let cand_ev = evaluate_with_altitudes(mission, &cand, &z).ok();
-                let own = sub.physical_objective(sol.objective);
-                let ok = cand_ev.as_ref().is_some_and(|e| {
-                    judge_feasible(&fixed, options, e)
-                        && merit(e) <= value * (1.0 + 1e-9) + 1e-9
-                        && e.energy_j <= fixed.evaluation.energy_j * (1.0 + 1e-9)
-                });
-                let shown = cand_ev.as_ref().unwrap_or(&ev);
-                let rec = record(
-                    it,
-                    own,
-                    shown,
-                    sol.iterations,
-                    t0.elapsed().as_secs_f64(),
-                    ok,
-                );
-                observer.on_iteration(&rec);
-                end.records.push(rec);
-                match cand_ev {
-                    Some(cand_ev) if ok => Some((cand, z, cand_ev, own)),
-                    _ => None,
-                }
-            }
-            Err(error) => {
-                tracing::debug!(%error, iteration = it, "free-altitude subproblem failed");
-                end.records.push(record(
-                    it,
-                    f64::NAN,
-                    &ev,
-                    0,
-                    t0.elapsed().as_secs_f64(),
-                    false,
-                ));
-                None
-            }
-        };
-        let Some((cand, z, cand_ev, own)) = accepted else {
-            if trust.reject(&mut tuning_now.trust_radius_m) {
-                end.termination = TerminationReason::NoProgress;
-                break;
-            }
-            continue;
-        };
-        let cand_value = merit(&cand_ev);
-        let rel = relative_change(value, cand_value);
-        current = cand;
-        altitudes = z;
-        ev = cand_ev;
-        value = cand_value;
-        end.accept(own, ev.energy_j);
-        tracing::debug!(
-            iteration = it,
-            objective = own,
-            true_value = value,
-            rel,
-            "accepted"
-        );
-        if rel < options.tolerance {
-            end.termination = TerminationReason::Converged;
-            break;
-        }
-        trust.accept(&mut tuning_now.trust_radius_m);
-    }
+        other => other,
+    })?;
+    let ((current, altitudes), ev) = (out.iterate, out.evaluation);
     // a best effort's refusal names a slot the free plan leaves unresolved
     let best_effort = best_effort.map(|b| BestEffort {
         strict_refusal: b
@@ -243,6 +172,74 @@ fn refine(
     });
     Ok(PlanResult {
         best_effort,
-        ..end.into_free_plan(fixed, Scheme::Exact, current, altitudes, ev)
+        ..out
+            .end
+            .into_free_plan(fixed, Scheme::Exact, current, altitudes, ev)
     })
+}
+
+/// One step of the free-altitude SCA: the cone program with every slot's altitude a decision
+/// ([`ExactSubproblem::build_with_altitudes`]), judged at the candidate's altitudes against what
+/// the fixed plan `fixed` was planned for, and never above its energy.
+struct FreeAltitudeStep<'a> {
+    mission: &'a Mission,
+    fixed: &'a PlanResult,
+    options: &'a PlanOptions,
+    tuning: ExactTuning,
+    solver: SocpSolver,
+    programs: usize,
+}
+
+impl Step for FreeAltitudeStep<'_> {
+    /// The track and the altitude of every slot, m.
+    type Iterate = (Trajectory, Vec<f64>);
+
+    fn evaluate(&self, (track, altitudes): &Self::Iterate) -> Result<Evaluation, PlanError> {
+        evaluate_with_altitudes(self.mission, track, altitudes)
+            .map_err(|e| PlanError::InvalidInit(e.to_string()))
+    }
+
+    fn propose(
+        &mut self,
+        (track, altitudes): &Self::Iterate,
+        control: Control,
+    ) -> Result<Candidate<Self::Iterate>, Failure> {
+        let tuning = control.applied_to(&self.tuning);
+        let sub = ExactSubproblem::build_with_altitudes(
+            self.mission,
+            track,
+            altitudes,
+            ExactObjective::Energy,
+            &tuning,
+        );
+        self.programs += 1;
+        let sol = self.solver.solve(&sub.builder).map_err(Failure::Solver)?;
+        let cand = sub.trajectory(&sol.x, track);
+        let z = sub.altitudes_m(&sol.x).unwrap_or_else(|| altitudes.clone());
+        let evaluation = evaluate_with_altitudes(self.mission, &cand, &z)
+            .map_err(|e| Failure::Unusable(e.to_string()))?;
+        Ok(Candidate {
+            iterate: (cand, z),
+            evaluation,
+            objective: sub.physical_objective(sol.objective),
+            ipm_iterations: sol.iterations,
+        })
+    }
+
+    /// The energy with the climb power, plus the weighted resolution deficit in a best effort.
+    fn merit(&self, ev: &Evaluation) -> f64 {
+        match self.tuning.cell_slack_weight {
+            Some(w) => ev.energy_j + w * total_deficit_m(self.mission, ev),
+            None => ev.energy_j,
+        }
+    }
+
+    fn admissible(&self, ev: &Evaluation, _current: &Evaluation) -> bool {
+        judge_feasible(self.fixed, self.options, ev)
+            && ev.energy_j <= self.fixed.evaluation.energy_j * (1.0 + 1e-9)
+    }
+
+    fn cone_programs(&self) -> usize {
+        self.programs
+    }
 }

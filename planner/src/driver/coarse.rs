@@ -11,7 +11,7 @@ use crate::{Mission, Trajectory};
 use super::iterate::{run_exact, Means};
 use super::options::Deadline;
 use super::phase_one::make_feasible;
-use super::{NoObserver, PlanOptions, Scheme};
+use super::{NoObserver, PlanOptions};
 
 /// Slot lengths of the coarse levels, finest first, s: the mission is first solved on slots of
 /// about 10 s (one per landmark window of the paper's missions), that solution starts a solve on
@@ -32,7 +32,7 @@ const EXACT_COARSE_LEVELS_S: [f64; 4] = [2.5, 5.0, 10.0, 20.0];
 
 /// The coarse levels for a scheme and purpose (optimising `exact`, or anything else).
 pub(super) fn coarse_levels(options: &PlanOptions, optimise: bool) -> &'static [f64] {
-    if optimise && options.scheme == Scheme::Exact {
+    if optimise && options.scheme.spec().own_rules {
         &EXACT_COARSE_LEVELS_S
     } else {
         &COARSE_LEVELS_S
@@ -112,7 +112,7 @@ pub(super) fn coarse_start_from(
     let target = coarse_levels(options, optimise).get(level)?;
     let factor = coarse_factor(n, delta, *target)?;
     let coarse = mission.coarsened(factor)?;
-    let exact_rules = optimise && options.scheme == Scheme::Exact;
+    let exact_rules = optimise && options.scheme.spec().own_rules;
     // best effort: phase I repairs all but the cell, the solve minimises its deficit too
     let best_effort =
         exact_rules && options.resolution == ResolutionMode::General && !options.strict_resolution;

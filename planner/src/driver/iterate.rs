@@ -1,6 +1,5 @@
-//! The iteration loops of the schemes (exact-geometry SCA, Algorithm 1) and their records.
-
-use std::time::Instant;
+//! The steps of the fixed-altitude schemes (exact-geometry SCA, Algorithm 1), the judge of the
+//! exact geometry, and the records the executor keeps.
 
 use crate::evaluate::{evaluate, evaluate_with_altitudes, Dynamics, Evaluation, ResolutionMode};
 use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
@@ -9,9 +8,10 @@ use crate::shortfall::total_deficit_m;
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
+use super::executor::{execute, Candidate, Control, Failure, Step};
 use super::options::Deadline;
 pub(super) use super::progress::LoopEnd;
-use super::progress::{relative_change, TrustRegion, MAX_REJECTS};
+use super::table;
 use super::{
     IterationRecord, Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason,
 };
@@ -79,8 +79,9 @@ pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) ->
     }
 }
 
-/// The exact-geometry SCA loop (monotone: a step is accepted only if it is feasible on the exact
-/// geometry and does not increase the true objective; otherwise a trust region is tightened).
+/// The exact-geometry SCA (monotone: a step is accepted only if it is feasible on the exact
+/// geometry and does not increase the true objective; otherwise a trust region is tightened),
+/// run by the executor with the row [`table::exact`].
 pub(super) fn run_exact(
     mission: &Mission,
     start: Trajectory,
@@ -94,137 +95,124 @@ pub(super) fn run_exact(
         observer,
         deadline,
     } = means;
-    let judge = Judge {
-        mission,
-        objective,
-        tuning: base,
+    let mut step = ExactStep {
+        judge: Judge {
+            mission,
+            objective,
+            tuning: base,
+        },
+        solver,
+        over_relaxation: options.over_relaxation,
+        programs: 0,
     };
-    let true_value = |ev: &Evaluation| judge.value(ev);
-    let mut current = start;
-    let mut ev = evaluate(mission, &current);
-    let mut value = true_value(&ev);
-    let mut tuning = *base;
-    let mut end = LoopEnd::starting(value);
-    let mut merits = vec![value];
-    let mut trust = TrustRegion::default();
-    for it in 1..=options.max_iterations {
-        if deadline.passed() {
-            end.termination = TerminationReason::TimeLimit;
-            break;
-        }
-        let t0 = Instant::now();
-        let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
-        end.cone_programs += 1;
-        let sol = match solver.solve(&sub.builder) {
-            Ok(s) => s,
-            Err(e) => {
-                if it == 1 && tuning.trust_radius_m.is_none() && end.records.is_empty() {
-                    tracing::debug!(error = %e, "first subproblem failed; retrying with a trust region");
-                }
-                let stop = trust.reject(&mut tuning.trust_radius_m);
-                end.records.push(record(
-                    it,
-                    f64::NAN,
-                    &ev,
-                    0,
-                    t0.elapsed().as_secs_f64(),
-                    false,
-                ));
-                if stop {
-                    if end.objective_history.is_empty() && it <= MAX_REJECTS + 1 {
-                        return Err(PlanError::Solver {
-                            iteration: it,
-                            error: e,
-                        });
-                    }
-                    end.termination = TerminationReason::SubproblemFailed(e.to_string());
-                    break;
-                }
-                continue;
-            }
-        };
-        let cand = sub.trajectory(&sol.x, &current);
-        let cand_ev = evaluate(mission, &cand);
-        let cand_value = true_value(&cand_ev);
-        let (cand, cand_ev, cand_value) = if options.over_relaxation {
-            judge.over_relax(&current, value, (cand, cand_ev, cand_value))
-        } else {
-            (cand, cand_ev, cand_value)
-        };
-        let own = sub.physical_objective(sol.objective);
-        let ok = judge.feasible(&cand_ev) && cand_value <= value * (1.0 + 1e-9) + 1e-9;
-        let rec = record(
-            it,
-            own,
-            &cand_ev,
-            sol.iterations,
-            t0.elapsed().as_secs_f64(),
-            ok,
-        );
-        observer.on_iteration(&rec);
-        end.records.push(rec);
-        if !ok && tuning.kappa_scale < 1.0 {
-            // the optimistic model overreached: fall back to the proven bound and re-solve
-            tuning.kappa_scale = (tuning.kappa_scale * 2.0).min(1.0);
-            continue;
-        }
-        if !ok {
-            tracing::debug!(
-                iteration = it,
-                feasible = judge.feasible(&cand_ev),
-                value = cand_value,
-                previous = value,
-                "step rejected"
-            );
-            if trust.reject(&mut tuning.trust_radius_m) {
-                end.termination = TerminationReason::NoProgress;
-                break;
-            }
-            continue;
-        }
-        let rel = relative_change(value, cand_value);
-        current = cand;
-        ev = cand_ev;
-        value = cand_value;
-        end.accept(own, ev.energy_j);
-        tracing::debug!(
-            iteration = it,
-            objective = own,
-            true_value = value,
-            rel,
-            "accepted"
-        );
-        merits.push(value);
-        if rel < options.tolerance || best_effort_stalled(base, &merits) {
-            end.termination = TerminationReason::Converged;
-            break;
-        }
-        // a successful step relaxes the trust region again and makes the centre model bolder
-        trust.accept(&mut tuning.trust_radius_m);
-        tuning.kappa_scale = (tuning.kappa_scale * 0.8).max(options.min_kappa_scale);
+    let out = execute(
+        &mut step,
+        start,
+        &table::exact(options, base),
+        Control::of(base),
+        LoopEnd::starting(f64::NAN),
+        observer,
+        deadline,
+    )?;
+    let mut end = out.end;
+    if end.objective_history.is_empty() {
+        end.objective = step.judge.value(&out.evaluation);
     }
-    Ok(finish(mission, current, end))
+    Ok(finish(mission, out.iterate, end))
 }
 
-/// Best effort: the loop stops once the true merit (energy + weight × deficit) fell by less than
-/// [`BEST_EFFORT_STALL_REL`] over the last [`BEST_EFFORT_STALL_STEPS`] accepted steps: the last
-/// steps of the slack SCA move slots whose widths are already near d_min (on the default 30 m
-/// mission the merit falls by 88 % in the first 8 accepted steps, no window is unresolved from
-/// the 9th, and the merit falls by 0.8 % over the 5 steps before the rule stops it at the 18th;
-/// BENCHMARKS.md, "Best-effort resolution").
-pub(super) const BEST_EFFORT_STALL_STEPS: usize = 5;
-/// See [`BEST_EFFORT_STALL_STEPS`].
-pub(super) const BEST_EFFORT_STALL_REL: f64 = 1e-2;
-
-/// Whether a best-effort loop (cell slacks on) with the accepted merits `merits` (its start
-/// first) has stalled ([`BEST_EFFORT_STALL_STEPS`]).
-fn best_effort_stalled(tuning: &ExactTuning, merits: &[f64]) -> bool {
-    if tuning.cell_slack_weight.is_none() || merits.len() <= BEST_EFFORT_STALL_STEPS {
-        return false;
+impl Control {
+    /// The trust radius and centre scale `tuning` starts with.
+    pub(super) fn of(tuning: &ExactTuning) -> Self {
+        Self {
+            trust_radius_m: tuning.trust_radius_m,
+            kappa_scale: tuning.kappa_scale,
+        }
     }
-    let last = merits[merits.len() - 1];
-    let before = merits[merits.len() - 1 - BEST_EFFORT_STALL_STEPS];
-    (before - last) < BEST_EFFORT_STALL_REL * before.abs()
+
+    /// `tuning` with this trust radius and centre scale.
+    pub(super) fn applied_to(self, tuning: &ExactTuning) -> ExactTuning {
+        ExactTuning {
+            trust_radius_m: self.trust_radius_m,
+            kappa_scale: self.kappa_scale,
+            ..*tuning
+        }
+    }
+}
+
+/// One step of the exact-geometry SCA at a fixed altitude: the cone program
+/// ([`ExactSubproblem`]) at the current track, judged by [`Judge`].
+struct ExactStep<'a> {
+    judge: Judge<'a>,
+    solver: &'a mut SocpSolver,
+    over_relaxation: bool,
+    programs: usize,
+}
+
+impl Step for ExactStep<'_> {
+    type Iterate = Trajectory;
+
+    fn evaluate(&self, iterate: &Trajectory) -> Result<Evaluation, PlanError> {
+        Ok(evaluate(self.judge.mission, iterate))
+    }
+
+    fn propose(
+        &mut self,
+        current: &Trajectory,
+        control: Control,
+    ) -> Result<Candidate<Trajectory>, Failure> {
+        let tuning = control.applied_to(self.judge.tuning);
+        let sub =
+            ExactSubproblem::build(self.judge.mission, current, self.judge.objective, &tuning);
+        self.programs += 1;
+        let sol = self.solver.solve(&sub.builder).map_err(Failure::Solver)?;
+        let iterate = sub.trajectory(&sol.x, current);
+        Ok(Candidate {
+            evaluation: evaluate(self.judge.mission, &iterate),
+            iterate,
+            objective: sub.physical_objective(sol.objective),
+            ipm_iterations: sol.iterations,
+        })
+    }
+
+    fn merit(&self, evaluation: &Evaluation) -> f64 {
+        self.judge.value(evaluation)
+    }
+
+    fn admissible(&self, evaluation: &Evaluation, _current: &Evaluation) -> bool {
+        self.judge.feasible(evaluation)
+    }
+
+    fn lengthen(
+        &self,
+        current: &Trajectory,
+        value: f64,
+        candidate: Candidate<Trajectory>,
+    ) -> Candidate<Trajectory> {
+        if !self.over_relaxation {
+            return candidate;
+        }
+        let Candidate {
+            iterate,
+            evaluation,
+            objective,
+            ipm_iterations,
+        } = candidate;
+        let value_now = self.judge.value(&evaluation);
+        let (iterate, evaluation, _) =
+            self.judge
+                .over_relax(current, value, (iterate, evaluation, value_now));
+        Candidate {
+            iterate,
+            evaluation,
+            objective,
+            ipm_iterations,
+        }
+    }
+
+    fn cone_programs(&self) -> usize {
+        self.programs
+    }
 }
 
 /// How the exact loop judges an iterate on the exact geometry.
@@ -353,47 +341,78 @@ pub(super) fn paper_bcd(
         observer,
         deadline,
     } = means;
-    let mut p6_solver = SocpSolver::new(options.socp);
-    let mut end = LoopEnd::starting(f64::NAN);
-    let mut traj = start;
-    for it in done + 1..=done + options.max_iterations {
-        if deadline.passed() {
-            end.termination = TerminationReason::TimeLimit;
-            break;
-        }
-        let t0 = Instant::now();
-        let p5 = state.solve_p5(mission, objective, solver);
-        end.cone_programs += 1;
-        let (own, ipm) = match p5 {
-            Ok(v) => v,
-            Err(e) => {
-                if end.objective_history.is_empty() {
-                    return Err(PlanError::Solver {
-                        iteration: it,
-                        error: e,
-                    });
-                }
-                end.termination = TerminationReason::SubproblemFailed(e.to_string());
-                break;
-            }
-        };
-        let ipm6 = state.solve_p6(mission, &mut p6_solver);
-        end.cone_programs += 1;
-        traj = state.trajectory(&traj);
-        let ev = match state.altitudes_m() {
-            Some(z) => evaluate_with_altitudes(mission, &traj, z)
-                .map_err(|e| PlanError::InvalidInit(format!("the altitude profile: {e}")))?,
-            None => evaluate(mission, &traj),
-        };
-        let rec = record(it, own, &ev, ipm + ipm6, t0.elapsed().as_secs_f64(), true);
-        observer.on_iteration(&rec);
-        end.records.push(rec);
-        let prev = end.objective_history.last().copied();
-        end.accept(own, ev.energy_j);
-        if prev.is_some_and(|prev| relative_change(prev, own) < options.tolerance) {
-            end.termination = TerminationReason::Converged;
-            break;
+    let mut step = PaperStep {
+        mission,
+        state,
+        objective,
+        p5_solver: solver,
+        p6_solver: SocpSolver::new(options.socp),
+        programs: 0,
+    };
+    let out = execute(
+        &mut step,
+        start,
+        &table::paper(options, done),
+        Control::of(&ExactTuning::default()),
+        LoopEnd::starting(f64::NAN),
+        observer,
+        deadline,
+    )?;
+    Ok((out.iterate, out.end))
+}
+
+/// One iteration of Algorithm 1: (p5) for the track, then (p6) for its auxiliaries; every
+/// iterate is accepted, as printed.
+struct PaperStep<'a> {
+    mission: &'a Mission,
+    state: &'a mut PaperState,
+    objective: PaperObjective,
+    p5_solver: &'a mut SocpSolver,
+    p6_solver: SocpSolver,
+    programs: usize,
+}
+
+impl Step for PaperStep<'_> {
+    type Iterate = Trajectory;
+
+    fn evaluate(&self, iterate: &Trajectory) -> Result<Evaluation, PlanError> {
+        match self.state.altitudes_m() {
+            Some(z) => evaluate_with_altitudes(self.mission, iterate, z)
+                .map_err(|e| PlanError::InvalidInit(format!("the altitude profile: {e}"))),
+            None => Ok(evaluate(self.mission, iterate)),
         }
     }
-    Ok((traj, end))
+
+    fn propose(
+        &mut self,
+        current: &Trajectory,
+        _control: Control,
+    ) -> Result<Candidate<Trajectory>, Failure> {
+        let p5 = self
+            .state
+            .solve_p5(self.mission, self.objective, self.p5_solver);
+        self.programs += 1;
+        let (objective, ipm) = p5.map_err(Failure::Solver)?;
+        let ipm6 = self.state.solve_p6(self.mission, &mut self.p6_solver);
+        self.programs += 1;
+        let iterate = self.state.trajectory(current);
+        Ok(Candidate {
+            evaluation: self.evaluate(&iterate).map_err(Failure::Fatal)?,
+            iterate,
+            objective,
+            ipm_iterations: ipm + ipm6,
+        })
+    }
+
+    fn merit(&self, evaluation: &Evaluation) -> f64 {
+        evaluation.energy_j
+    }
+
+    fn admissible(&self, _evaluation: &Evaluation, _current: &Evaluation) -> bool {
+        true
+    }
+
+    fn cone_programs(&self) -> usize {
+        self.programs
+    }
 }

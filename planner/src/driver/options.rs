@@ -3,13 +3,11 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use serde::{Deserialize, Serialize};
-
 use crate::evaluate::{Dynamics, ResolutionMode};
 use crate::socp::SocpSettings;
 use crate::Trajectory;
 
-use super::PlanError;
+use super::{PlanError, Scheme};
 
 /// Default of [`PlanOptions::resolution_weight_j_per_m`], J/m.
 pub const DEFAULT_RESOLUTION_WEIGHT_J_PER_M: f64 = 100.0;
@@ -29,76 +27,6 @@ pub const DEFAULT_RESOLUTION: ResolutionMode = ResolutionMode::General;
 /// schemes `paper` and `baseline`, and `reproduce`, keep the paper's model
 /// ([`Scheme::default_dynamics`]).
 pub const DEFAULT_DYNAMICS: Dynamics = Dynamics::Vehicle;
-
-/// Which planner to run. Its names (`exact`, `paper`, `baseline`, `baseline-exact`) are the
-/// same in serde, [`std::str::FromStr`], [`std::fmt::Display`] and `VARIANTS` (strum).
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Hash,
-    Serialize,
-    Deserialize,
-    strum::EnumString,
-    strum::Display,
-    strum::IntoStaticStr,
-    strum::VariantNames,
-)]
-#[serde(rename_all = "kebab-case")]
-#[strum(serialize_all = "kebab-case")]
-pub enum Scheme {
-    /// SCA on the exact geometry; every iterate feasible on it (the default).
-    Exact,
-    /// The paper's Algorithm 1 as printed: SCA + BCD between (p5) and (p6).
-    Paper,
-    /// The paper's baseline: least flight distance under the paper's convexification.
-    Baseline,
-    /// Least flight distance on the exact geometry (a baseline that is truly feasible).
-    BaselineExact,
-}
-
-impl Scheme {
-    /// All schemes.
-    pub const ALL: [Scheme; 4] = [
-        Scheme::Exact,
-        Scheme::Paper,
-        Scheme::Baseline,
-        Scheme::BaselineExact,
-    ];
-
-    /// The name used on the command line and in reports.
-    pub fn name(self) -> &'static str {
-        self.into()
-    }
-
-    /// The vehicle model of this scheme unless a request names one: [`DEFAULT_DYNAMICS`] for the
-    /// exact-geometry schemes, the paper's model for `paper` and `baseline` (which can only use
-    /// it).
-    pub fn default_dynamics(self) -> Dynamics {
-        match self {
-            Scheme::Exact | Scheme::BaselineExact => DEFAULT_DYNAMICS,
-            Scheme::Paper | Scheme::Baseline => Dynamics::Paper,
-        }
-    }
-
-    /// Whether the scheme can plan under `dynamics` (`paper` and `baseline` have the paper's
-    /// model only).
-    pub fn supports(self, dynamics: Dynamics) -> bool {
-        matches!(self, Scheme::Exact | Scheme::BaselineExact) || dynamics == Dynamics::Paper
-    }
-
-    /// The resolution requirement of this scheme unless a request names one:
-    /// [`DEFAULT_RESOLUTION`] for `exact`, the paper's for the comparison schemes (which
-    /// reproduce the paper; `paper` and `baseline` can only use it).
-    pub fn default_resolution(self) -> ResolutionMode {
-        match self {
-            Scheme::Exact => DEFAULT_RESOLUTION,
-            Scheme::Paper | Scheme::Baseline | Scheme::BaselineExact => ResolutionMode::Paper,
-        }
-    }
-}
 
 /// An option of a plan, for messages: each interface names it its own way ([`OptionName::field`]
 /// in the library, the Python package and on the wire; [`OptionName::flag`] on the command
@@ -177,7 +105,7 @@ impl OptionConflict {
                 name(OptionName::Resolution),
                 self.resolution
             )
-        } else if self.scheme != Scheme::Exact {
+        } else if !self.scheme.spec().own_rules {
             format!(
                 "{given} {applies} to {} exact only, not to {}",
                 name(OptionName::Scheme),
@@ -295,7 +223,7 @@ impl PlanOptions {
         if self.max_extra_energy_pct.is_some() {
             given.push(OptionName::MaxExtraEnergyPct);
         }
-        let applies = self.resolution == ResolutionMode::General && self.scheme == Scheme::Exact;
+        let applies = self.resolution == ResolutionMode::General && self.scheme.spec().own_rules;
         if given.is_empty() || (applies && given.len() == 1) {
             return Ok(());
         }
@@ -366,9 +294,10 @@ impl PlanOptions {
 
     /// The cone-program settings of this run's scheme.
     pub fn scheme_socp(&self) -> SocpSettings {
-        match self.scheme {
-            Scheme::Exact => self.exact_socp,
-            Scheme::BaselineExact | Scheme::Paper | Scheme::Baseline => self.socp,
+        if self.scheme.spec().tuned_socp {
+            self.exact_socp
+        } else {
+            self.socp
         }
     }
 }

@@ -1,4 +1,4 @@
-//! Phase I (elastic SCA): repairing an infeasible start.
+//! Phase I (elastic SCA): repairing an infeasible start, as a step the executor runs.
 
 use crate::evaluate::{evaluate, Dynamics, Evaluation, ResolutionMode, ACCEL_TOL_REL};
 use crate::geometry::{distance, Point2, Vector2};
@@ -6,7 +6,10 @@ use crate::schemes::exact::{ExactObjective, ExactSubproblem, ExactTuning};
 use crate::{Mission, Trajectory};
 
 use super::error::NotFound;
+use super::executor::{execute, Candidate, Control, Failure, Review, Step, Stop};
 use super::iterate::{extrapolate, Means};
+use super::progress::LoopEnd;
+use super::table;
 use super::PlanError;
 
 /// Per-slot violation used by the elastic phase: the largest of the sensing excess (m), the
@@ -74,8 +77,8 @@ pub(super) fn total_violation(
 /// subproblem imposes whole-slot sensing (as its slacks do; otherwise its steps, which trade
 /// slot-start against slot-end violation, look uphill and phase I stalls: random-3 of Fig. 11),
 /// and a step rejected at the proven centre bound shortens the next one (trust region) instead
-/// of repeating the same subproblem. The comparison schemes keep the earlier rules, so that
-/// their starts, and the results compared with the paper, do not change.
+/// of repeating the same subproblem ([`table::phase_one`]). The comparison schemes keep the
+/// earlier rules, so that their starts, and the results compared with the paper, do not change.
 pub(super) fn make_feasible(
     mission: &Mission,
     start: Trajectory,
@@ -90,123 +93,180 @@ pub(super) fn make_feasible(
         deadline,
     } = means;
     let mode = base.resolution;
-    let mut current = start;
-    let mut ev = evaluate(mission, &current);
-    if ev.is_feasible_with(mode, base.dynamics) {
-        return Ok((current, 0));
+    if evaluate(mission, &start).is_feasible_with(mode, base.dynamics) {
+        return Ok((start, 0));
     }
     observer.on_phase("repair");
-    let value = |ev: &Evaluation| objective.true_value(ev);
-    let mut weight = match objective {
-        ExactObjective::Energy => 1000.0,
-        ExactObjective::Distance => 100.0,
+    let mut step = PhaseOneStep {
+        mission,
+        objective,
+        base,
+        solver,
+        slot_start: exact_rules && base.whole_slot_sensing,
+        weight: match objective {
+            ExactObjective::Energy => 1000.0,
+            ExactObjective::Distance => 100.0,
+        },
+        best_violation: f64::INFINITY,
+        stalls: 0,
+        programs: 0,
     };
-    let mut tuning = ExactTuning {
-        elastic_weight: Some(weight),
-        ..*base
+    step.best_violation = step.violation(&evaluate(mission, &start));
+    let out = execute(
+        &mut step,
+        start,
+        &table::phase_one(exact_rules),
+        Control::of(base),
+        LoopEnd::starting(f64::NAN),
+        observer,
+        deadline,
+    )
+    .map_err(|error| PhaseOneFailure {
+        error,
+        stalled: None,
+    })?;
+    let error = match out.stop {
+        Stop::Goal => return Ok((out.iterate, out.last_iteration)),
+        Stop::TimeLimit => PlanError::TimeLimit {
+            limit_s: deadline.limit_s,
+            iterations: out.last_iteration,
+            sensing_violation_m: out.evaluation.violations.sensing_m,
+        },
+        _ => stalled_error(mission, &out.evaluation, (mode, base.dynamics)),
     };
-    let slot_start = exact_rules && base.whole_slot_sensing;
-    let violation_of =
-        |ev: &Evaluation| total_violation(mission, ev, (mode, base.dynamics), slot_start);
-    let mut merit = value(&ev) + weight * violation_of(&ev);
-    let mut best_violation = violation_of(&ev);
-    let mut stalls = 0;
-    for it in 1..=100 {
-        if deadline.passed() {
-            return Err(PhaseOneFailure {
-                error: PlanError::TimeLimit {
-                    limit_s: deadline.limit_s,
-                    iterations: it - 1,
-                    sensing_violation_m: ev.violations.sensing_m,
-                },
-                stalled: Some(current),
-            });
-        }
-        tuning.elastic_weight = Some(weight);
-        let sub = ExactSubproblem::build(mission, &current, objective, &tuning);
-        let sol = match solver.solve(&sub.builder) {
-            Ok(sol) => sol,
-            Err(source) if tuning.kappa_scale >= 1.0 => {
-                return Err(PhaseOneFailure {
-                    error: PlanError::Solver {
-                        iteration: 0,
-                        error: source,
-                    },
-                    stalled: None,
-                })
-            }
-            Err(_) => {
-                tuning.kappa_scale = 1.0;
-                continue;
-            }
-        };
-        let merit_of = |ev: &Evaluation| value(ev) + weight * violation_of(ev);
-        let mut cand = sub.trajectory(&sol.x, &current);
-        let mut cand_ev = evaluate(mission, &cand);
-        let mut cand_merit = merit_of(&cand_ev);
-        if cand_merit < merit {
-            // over-relaxation along the step, as in the main loop
-            for alpha in [2.0, 4.0] {
-                let trial = extrapolate(&current, &cand, alpha);
-                let ev = evaluate(mission, &trial);
-                let m = merit_of(&ev);
-                if m < cand_merit {
-                    cand = trial;
-                    cand_ev = ev;
-                    cand_merit = m;
-                } else {
-                    break;
-                }
-            }
-        }
-        let violation = violation_of(&cand_ev);
-        tracing::debug!(
-            iteration = it,
-            violation,
-            merit = cand_merit,
-            weight,
-            kappa_scale = tuning.kappa_scale,
-            "phase I"
-        );
-        if cand_merit <= merit * (1.0 + 1e-9) + 1e-9 {
-            current = cand;
-            ev = cand_ev;
-            merit = cand_merit;
-            if ev.is_feasible_with(mode, base.dynamics) {
-                return Ok((current, it));
-            }
-            tuning.kappa_scale = (tuning.kappa_scale * 0.5).max(1.0 / 16.0);
-            // a successful step relaxes the trust region again, as in the main loop
-            tuning.trust_radius_m = tuning.trust_radius_m.map(|r| r * 4.0).filter(|r| *r < 50.0);
-        } else if tuning.kappa_scale < 1.0 {
-            // the optimistic centre model overreached: back to the proven bound
-            tuning.kappa_scale = (tuning.kappa_scale * 4.0).min(1.0);
-            continue;
-        } else if exact_rules {
-            // rejected at the proven bound: the same subproblem would give the same step, so
-            // shorten it (trust region on the velocity change, as in the main loop)
-            tuning.trust_radius_m = Some(tuning.trust_radius_m.map_or(2.0, |r| r * 0.5));
-        }
-        if violation < best_violation * 0.99 {
-            best_violation = violation;
-            stalls = 0;
-        } else {
-            stalls += 1;
-            if stalls >= 8 {
-                break;
-            }
-            if stalls % 3 == 0 && weight < 1e5 {
-                // the penalty may not be exact yet: charge violations more
-                weight *= 10.0;
-                merit = value(&ev) + weight * violation_of(&ev);
-            }
-        }
-    }
-    let error = stalled_error(mission, &ev, (mode, base.dynamics));
     Err(PhaseOneFailure {
         error,
-        stalled: Some(current),
+        stalled: Some(out.iterate),
     })
+}
+
+/// One step of phase I: the elastic cone program (the subproblem with its violations as slacks,
+/// charged `weight` each), judged by objective + `weight` × [`total_violation`].
+struct PhaseOneStep<'a> {
+    mission: &'a Mission,
+    objective: ExactObjective,
+    base: &'a ExactTuning,
+    solver: &'a mut crate::socp::SocpSolver,
+    /// Whether the violation counts the slot-start centre ([`total_violation`]'s `whole_slot`).
+    slot_start: bool,
+    /// The penalty on the violation.
+    weight: f64,
+    /// The least violation of a candidate so far, and the steps since it last fell by 1 %.
+    best_violation: f64,
+    stalls: usize,
+    programs: usize,
+}
+
+/// Steps in a row without the violation falling by 1 % after which phase I stalls; every third
+/// raises the penalty ×10 (up to 1e5) first.
+const PHASE_ONE_STALLS: usize = 8;
+
+impl PhaseOneStep<'_> {
+    fn violation(&self, ev: &Evaluation) -> f64 {
+        let rules = (self.base.resolution, self.base.dynamics);
+        total_violation(self.mission, ev, rules, self.slot_start)
+    }
+}
+
+impl Step for PhaseOneStep<'_> {
+    type Iterate = Trajectory;
+
+    fn evaluate(&self, iterate: &Trajectory) -> Result<Evaluation, PlanError> {
+        Ok(evaluate(self.mission, iterate))
+    }
+
+    fn propose(
+        &mut self,
+        current: &Trajectory,
+        control: Control,
+    ) -> Result<Candidate<Trajectory>, Failure> {
+        let tuning = ExactTuning {
+            elastic_weight: Some(self.weight),
+            ..control.applied_to(self.base)
+        };
+        let sub = ExactSubproblem::build(self.mission, current, self.objective, &tuning);
+        self.programs += 1;
+        let sol = self.solver.solve(&sub.builder).map_err(Failure::Solver)?;
+        let iterate = sub.trajectory(&sol.x, current);
+        Ok(Candidate {
+            evaluation: evaluate(self.mission, &iterate),
+            iterate,
+            objective: sub.physical_objective(sol.objective),
+            ipm_iterations: sol.iterations,
+        })
+    }
+
+    fn merit(&self, ev: &Evaluation) -> f64 {
+        self.objective.true_value(ev) + self.weight * self.violation(ev)
+    }
+
+    fn admissible(&self, _ev: &Evaluation, _current: &Evaluation) -> bool {
+        true
+    }
+
+    /// Over-relaxation along the step, as in the main loop, by the merit alone.
+    fn lengthen(
+        &self,
+        current: &Trajectory,
+        value: f64,
+        candidate: Candidate<Trajectory>,
+    ) -> Candidate<Trajectory> {
+        let Candidate {
+            mut iterate,
+            mut evaluation,
+            objective,
+            ipm_iterations,
+        } = candidate;
+        let mut merit = self.merit(&evaluation);
+        if merit < value {
+            for alpha in [2.0, 4.0] {
+                let trial = extrapolate(current, &iterate, alpha);
+                let ev = evaluate(self.mission, &trial);
+                let m = self.merit(&ev);
+                if m >= merit {
+                    break;
+                }
+                iterate = trial;
+                evaluation = ev;
+                merit = m;
+            }
+        }
+        Candidate {
+            iterate,
+            evaluation,
+            objective,
+            ipm_iterations,
+        }
+    }
+
+    /// The goal (an accepted step that is feasible), and the stall: the candidate's violation
+    /// must fall by 1 % every [`PHASE_ONE_STALLS`] steps; every third step that it does not, the
+    /// penalty may not be exact yet and is raised.
+    fn review(&mut self, accepted: bool, candidate: &Evaluation, current: &Evaluation) -> Review {
+        if accepted && current.is_feasible_with(self.base.resolution, self.base.dynamics) {
+            return Review::Stop(Stop::Goal);
+        }
+        let violation = self.violation(candidate);
+        tracing::debug!(accepted, violation, weight = self.weight, "phase I");
+        if violation < self.best_violation * 0.99 {
+            self.best_violation = violation;
+            self.stalls = 0;
+            return Review::Continue;
+        }
+        self.stalls += 1;
+        if self.stalls >= PHASE_ONE_STALLS {
+            return Review::Stop(Stop::Stalled);
+        }
+        if self.stalls.is_multiple_of(3) && self.weight < 1e5 {
+            self.weight *= 10.0;
+            return Review::Remerit;
+        }
+        Review::Continue
+    }
+
+    fn cone_programs(&self) -> usize {
+        self.programs
+    }
 }
 
 /// What a phase I that stalled at `ev` reports ([`PlanError::NotFound`], its best plan filled in

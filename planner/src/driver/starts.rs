@@ -20,7 +20,7 @@ use super::iterate::{finish, Means};
 use super::options::Deadline;
 use super::phase_one::{make_feasible, total_violation, PhaseOneFailure};
 use super::progress::LoopEnd;
-use super::{Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason};
+use super::{Observer, PlanError, PlanOptions, PlanResult, TerminationReason};
 
 /// What the search for a feasible start needs.
 pub(super) struct StartSearch<'a> {
@@ -189,7 +189,7 @@ impl<'a> StartSearch<'a> {
                 self.base.dynamics,
             )),
             OtherStart::BestEffort => {
-                let strict_general = self.options.scheme == Scheme::Exact
+                let strict_general = self.options.scheme.spec().own_rules
                     && self.options.resolution == ResolutionMode::General
                     && self.options.strict_resolution;
                 if !strict_general || !self.best_effort_start || self.deadline.passed() {
