@@ -41,7 +41,7 @@ pub use result::{BestEffort, PlanResult, TerminationReason};
 pub use scheme::Scheme;
 
 use coarse::{coarse_start, coarse_start_from, LevelStart};
-use iterate::{run_exact, run_paper, Means};
+use iterate::{finish, run_exact, run_paper, Made, Means};
 use options::Deadline;
 use scheme::{Family, FreeAltitude};
 use starts::StartSearch;
@@ -94,7 +94,14 @@ fn run_plan(
         (true, Some(FreeAltitude::Alternating)) => {
             alternating::plan_free_paper(started, mission, options, observer, stop)?
         }
-        _ => run_plan_from(started, mission, options, observer, stop)?,
+        _ => plan_fixed(
+            started,
+            mission,
+            options,
+            observer,
+            stop,
+            FixedRun::default(),
+        )?,
     };
     out.bound = Some(bound);
     out.solve_seconds = started.elapsed().as_secs_f64();
@@ -114,29 +121,32 @@ pub(crate) fn check_altitude(mission: &Mission, options: &PlanOptions) -> Result
     }
 }
 
-/// [`run_plan`] with its clock started at `started`.
-fn run_plan_from(
-    started: Instant,
-    mission: &Mission,
-    options: &PlanOptions,
-    observer: &mut dyn Observer,
-    stop: Option<&AtomicBool>,
-) -> Result<PlanResult, PlanError> {
-    run_plan_capture(started, mission, options, observer, stop, None, true)
+/// How a plan at the mission's fixed altitude ([`plan_fixed`]) is asked for, beyond its options.
+#[derive(Default)]
+pub(super) struct FixedRun<'a> {
+    /// Where the paper's schemes leave the BCD state of their last iterate.
+    pub paper_state: Option<&'a mut Option<PaperState>>,
+    /// Whether a strict general plan whose phase I stalls may not start from the best effort's
+    /// plan (set when the best effort itself asks for the strict plan).
+    pub no_best_effort_start: bool,
 }
 
-/// [`run_plan_from`]; the paper's schemes leave the BCD state of their last iterate in
-/// `paper_state`. `best_effort_start`: whether a strict general plan whose phase I stalls may
-/// start from the best effort's plan (not when the best effort itself asks for the strict plan).
-fn run_plan_capture(
+/// The plan of `mission` at its fixed altitude, its clock started at `started`: the best effort
+/// of the `exact` scheme, or the scheme's start (phase I) and iterations. [`run_plan`] gives it
+/// its bound and wall time.
+fn plan_fixed(
     started: Instant,
     mission: &Mission,
     options: &PlanOptions,
     observer: &mut dyn Observer,
     stop: Option<&AtomicBool>,
-    mut paper_state: Option<&mut Option<PaperState>>,
-    best_effort_start: bool,
+    run: FixedRun<'_>,
 ) -> Result<PlanResult, PlanError> {
+    let FixedRun {
+        mut paper_state,
+        no_best_effort_start,
+    } = run;
+    let best_effort_start = !no_best_effort_start;
     options.validate()?;
     check_altitude(mission, options)?;
     let spec = options.scheme.spec();
@@ -198,38 +208,33 @@ fn run_plan_capture(
         None => (start, 0, None),
     };
     observer.on_phase("solve");
-    let mut out = match spec.family {
-        Family::ExactGeometry => run_exact(
-            mission,
-            start,
-            spec.objective,
-            &base,
-            options,
-            Means {
-                solver: &mut solver,
-                observer: &mut *observer,
-                deadline,
-            },
-        )?,
+    let means = Means {
+        solver: &mut solver,
+        observer: &mut *observer,
+        deadline,
+    };
+    let (trajectory, end) = match spec.family {
+        Family::ExactGeometry => run_exact(mission, start, spec.objective, &base, options, means)?,
         Family::PaperBcd => run_paper(
             mission,
             start,
             spec.paper_objective(),
             options,
-            deadline,
-            &mut solver,
-            observer,
+            means,
             paper_state.take(),
         )?,
     };
-    out.scheme = options.scheme;
-    out.resolution = resolution;
-    out.dynamics = options.dynamics;
-    out.start_energy_j = start_energy_j;
-    out.repair_iterations = repair_iterations;
-    out.init_replaced = init_replaced;
-    out.cone_programs += repair_solver.builds.max(repair_iterations);
-    Ok(out)
+    let made = Made {
+        scheme: options.scheme,
+        resolution,
+        dynamics: options.dynamics,
+        start_energy_j,
+        repair_iterations,
+        init_replaced,
+        best_effort: None,
+        programs_before: repair_solver.builds.max(repair_iterations),
+    };
+    Ok(finish(mission, trajectory, end, made))
 }
 
 /// A start given in the options ([`PlanOptions::init`]), checked against the mission; an

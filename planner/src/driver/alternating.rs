@@ -70,15 +70,11 @@ pub(super) fn plan_free_paper(
     let n = mission.slots();
     let fixed_mission = fixed_at(mission, p.altitude_m)?;
     let mut state = None;
-    let fixed = super::run_plan_capture(
-        started,
-        &fixed_mission,
-        options,
-        observer,
-        stop,
-        Some(&mut state),
-        true,
-    )?;
+    let run = super::FixedRun {
+        paper_state: Some(&mut state),
+        no_best_effort_start: false,
+    };
+    let fixed = super::plan_fixed(started, &fixed_mission, options, observer, stop, run)?;
     let profile = vec![p.altitude_m; n];
     let ev = evaluate_with_altitudes(mission, &fixed.trajectory, &profile)
         .map_err(|e| PlanError::InvalidInit(format!("the fixed plan's altitude profile: {e}")))?;

@@ -64,28 +64,41 @@ pub(super) fn plan_free(
     let p = mission.params();
     let n = mission.slots();
     let fixed_mission = fixed_at(mission, p.altitude_m)?;
-    let (fixed, start_profile) =
-        match super::run_plan_from(started, &fixed_mission, options, observer, stop) {
-            Ok(plan) => (plan, vec![p.altitude_m; n]),
-            Err(error) => {
-                let lowest = bounds_m(p).0;
-                if lowest >= p.altitude_m || matches!(error, PlanError::TimeLimit { .. }) {
-                    return Err(error);
-                }
-                tracing::info!(%error, lowest, "no plan at the fixed altitude; trying the lowest");
-                let low_mission = fixed_at(mission, lowest)?;
-                let profile = descent_profile(p, lowest, n);
-                match super::run_plan_from(started, &low_mission, options, observer, stop) {
-                    Ok(plan)
-                        if evaluate_with_altitudes(mission, &plan.trajectory, &profile)
-                            .is_ok_and(|ev| judge_feasible(&plan, options, &ev)) =>
-                    {
-                        (plan, profile)
-                    }
-                    _ => return Err(error),
-                }
+    let (fixed, start_profile) = match super::plan_fixed(
+        started,
+        &fixed_mission,
+        options,
+        observer,
+        stop,
+        Default::default(),
+    ) {
+        Ok(plan) => (plan, vec![p.altitude_m; n]),
+        Err(error) => {
+            let lowest = bounds_m(p).0;
+            if lowest >= p.altitude_m || matches!(error, PlanError::TimeLimit { .. }) {
+                return Err(error);
             }
-        };
+            tracing::info!(%error, lowest, "no plan at the fixed altitude; trying the lowest");
+            let low_mission = fixed_at(mission, lowest)?;
+            let profile = descent_profile(p, lowest, n);
+            match super::plan_fixed(
+                started,
+                &low_mission,
+                options,
+                observer,
+                stop,
+                Default::default(),
+            ) {
+                Ok(plan)
+                    if evaluate_with_altitudes(mission, &plan.trajectory, &profile)
+                        .is_ok_and(|ev| judge_feasible(&plan, options, &ev)) =>
+                {
+                    (plan, profile)
+                }
+                _ => return Err(error),
+            }
+        }
+    };
     let deadline = Deadline::after(started, options.time_limit_s, stop);
     observer.on_phase("altitude");
     refine(mission, fixed, start_profile, options, observer, deadline)

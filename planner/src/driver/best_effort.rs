@@ -19,9 +19,9 @@ use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
 use super::coarse::coarse_start;
-use super::iterate::{run_exact, Means};
+use super::iterate::{finish, run_exact, Made, Means};
 use super::options::Deadline;
-use super::{BestEffort, Observer, PlanError, PlanOptions, PlanResult, Scheme};
+use super::{BestEffort, Observer, PlanError, PlanOptions, PlanResult};
 
 /// What every best-effort plan of a mission starts from (each computed once; the trade-off
 /// reuses them): the least-energy plan and the best effort solved on the coarse levels.
@@ -57,15 +57,11 @@ fn strict_plan(
     };
     // not from the best effort's plan: this is the best effort's own basis
     let started = Instant::now();
-    match super::run_plan_capture(
-        started,
-        mission,
-        &strict_options,
-        observer,
-        stop,
-        None,
-        false,
-    ) {
+    let run = super::FixedRun {
+        paper_state: None,
+        no_best_effort_start: true,
+    };
+    match super::plan_fixed(started, mission, &strict_options, observer, stop, run) {
         Ok(plan) => Some(plan.trajectory),
         Err(e) => {
             tracing::debug!(error = %e, "no strict general plan");
@@ -205,22 +201,33 @@ fn best_effort_until(
         max_extra_energy_pct: options.max_extra_energy_pct,
         strict_refusal: None,
     };
-    let finish = |mut out: PlanResult, programs: usize, info: BestEffort| {
-        out.scheme = Scheme::Exact;
-        out.resolution = general;
-        out.dynamics = options.dynamics;
-        out.start_energy_j = least_j;
-        out.cone_programs += programs;
-        out.best_effort = Some(info);
-        out.solve_seconds = started.elapsed().as_secs_f64();
-        out
+    let made = |info: BestEffort, programs_before: usize| Made {
+        scheme: options.scheme,
+        resolution: general,
+        dynamics: options.dynamics,
+        start_energy_j: least_j,
+        repair_iterations: 0,
+        init_replaced: None,
+        best_effort: Some(info),
+        programs_before,
+    };
+    let timed = |plan: PlanResult| PlanResult {
+        solve_seconds: started.elapsed().as_secs_f64(),
+        ..plan
     };
     if basis
         .least_energy
         .evaluation
         .is_feasible_with(general, options.dynamics)
     {
-        return Ok(finish(basis.least_energy.clone(), 0, info));
+        return Ok(timed(PlanResult {
+            scheme: options.scheme,
+            resolution: general,
+            dynamics: options.dynamics,
+            start_energy_j: least_j,
+            best_effort: Some(info),
+            ..basis.least_energy.clone()
+        }));
     }
     observer.on_phase("best effort");
     let weight = options.resolution_weight_j_per_m;
@@ -248,7 +255,7 @@ fn best_effort_until(
         min_kappa_scale: 1.0,
         ..options.clone()
     };
-    let out = run_exact(
+    let (track, end) = run_exact(
         mission,
         start,
         ExactObjective::Energy,
@@ -260,19 +267,19 @@ fn best_effort_until(
             deadline,
         },
     )?;
-    if let Some(refusal) = strict_refusal(mission, &out.evaluation) {
+    if let Some(refusal) = strict_refusal(mission, &evaluate(mission, &track)) {
         info.strict_refusal = Some(refusal);
-        return Ok(finish(out, 0, info));
+        return Ok(timed(finish(mission, track, end, made(info, 0))));
     }
     // every slot resolved: the least energy with the cell constraints hard, from here
     let strict = ExactTuning {
         cell_slack_weight: None,
         ..tuning
     };
-    let programs = out.cone_programs;
-    let polished = run_exact(
+    let programs = end.cone_programs;
+    let (polished, end) = run_exact(
         mission,
-        out.trajectory.clone(),
+        track,
         ExactObjective::Energy,
         &strict,
         options,
@@ -282,7 +289,7 @@ fn best_effort_until(
             deadline,
         },
     )?;
-    Ok(finish(polished, programs, info))
+    Ok(timed(finish(mission, polished, end, made(info, programs))))
 }
 
 /// Why a best effort evaluated as `ev` is not a strict general plan

@@ -232,21 +232,20 @@ pub(super) fn coarse_start_from(
                     continue;
                 }
             };
+            let (track, end) = solved;
+            let ev = crate::evaluate(&coarse, &track);
             tracing::debug!(
                 factor,
-                iterations = solved.iterations,
-                energy_j = solved.evaluation.energy_j,
+                iterations = end.records.len(),
+                energy_j = ev.energy_j,
                 "coarse solve"
             );
             let deficit_j = if best_effort {
-                options.resolution_weight_j_per_m * total_deficit_m(&coarse, &solved.evaluation)
+                options.resolution_weight_j_per_m * total_deficit_m(&coarse, &ev)
             } else {
                 0.0
             };
-            (
-                objective.true_value(&solved.evaluation) + deficit_j,
-                solved.trajectory,
-            )
+            (objective.true_value(&ev) + deficit_j, track)
         } else {
             // not optimised: the comparison schemes, which always have one start (two starts
             // come only after a stalled level, which needs the exact scheme's optimisation)

@@ -13,7 +13,8 @@ use super::options::Deadline;
 pub(super) use super::progress::LoopEnd;
 use super::table;
 use super::{
-    IterationRecord, Observer, PlanError, PlanOptions, PlanResult, Scheme, TerminationReason,
+    BestEffort, IterationRecord, Observer, PlanError, PlanOptions, PlanResult, Scheme,
+    TerminationReason,
 };
 
 pub(super) fn record(
@@ -44,8 +45,31 @@ pub(super) struct Means<'s> {
     pub deadline: Deadline<'s>,
 }
 
-/// The result of a loop that ended with `trajectory`.
-pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) -> PlanResult {
+/// What a plan was made for and from, beyond its loop: the parts of a [`PlanResult`] that
+/// [`finish`] takes from its maker.
+pub(super) struct Made {
+    pub scheme: Scheme,
+    pub resolution: ResolutionMode,
+    pub dynamics: Dynamics,
+    /// The true energy of the start the loop began from, J.
+    pub start_energy_j: f64,
+    /// Phase I's iterations.
+    pub repair_iterations: usize,
+    pub init_replaced: Option<String>,
+    pub best_effort: Option<BestEffort>,
+    /// Cone programs solved before the loop (phase I, an earlier loop).
+    pub programs_before: usize,
+}
+
+/// The plan a loop that ended with `trajectory` (at the mission's fixed altitude) makes, built
+/// once from its end and what `made` says. Its bound and wall time are the run's, set where the
+/// run ends ([`super::run_plan`]).
+pub(super) fn finish(
+    mission: &Mission,
+    trajectory: Trajectory,
+    end: LoopEnd,
+    made: Made,
+) -> PlanResult {
     let LoopEnd {
         objective,
         objective_history,
@@ -56,7 +80,7 @@ pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) ->
     } = end;
     let evaluation = evaluate(mission, &trajectory);
     PlanResult {
-        scheme: Scheme::Exact,
+        scheme: made.scheme,
         iterations: records.len(),
         converged: termination == TerminationReason::Converged,
         trajectory,
@@ -67,13 +91,13 @@ pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) ->
         records,
         termination,
         solve_seconds: 0.0,
-        start_energy_j: 0.0,
-        repair_iterations: 0,
-        cone_programs,
-        resolution: ResolutionMode::Paper,
-        init_replaced: None,
-        best_effort: None,
-        dynamics: Dynamics::Paper,
+        start_energy_j: made.start_energy_j,
+        repair_iterations: made.repair_iterations,
+        cone_programs: made.programs_before + cone_programs,
+        resolution: made.resolution,
+        init_replaced: made.init_replaced,
+        best_effort: made.best_effort,
+        dynamics: made.dynamics,
         altitudes_m: None,
         bound: None,
     }
@@ -81,7 +105,8 @@ pub(super) fn finish(mission: &Mission, trajectory: Trajectory, end: LoopEnd) ->
 
 /// The exact-geometry SCA (monotone: a step is accepted only if it is feasible on the exact
 /// geometry and does not increase the true objective; otherwise a trust region is tightened),
-/// run by the executor with the row [`table::exact`].
+/// run by the executor with the row [`table::exact`]. Returns the last accepted track and the
+/// loop's end.
 pub(super) fn run_exact(
     mission: &Mission,
     start: Trajectory,
@@ -89,7 +114,7 @@ pub(super) fn run_exact(
     base: &ExactTuning,
     options: &PlanOptions,
     means: Means<'_>,
-) -> Result<PlanResult, PlanError> {
+) -> Result<(Trajectory, LoopEnd), PlanError> {
     let Means {
         solver,
         observer,
@@ -118,7 +143,7 @@ pub(super) fn run_exact(
     if end.objective_history.is_empty() {
         end.objective = step.judge.value(&out.evaluation);
     }
-    Ok(finish(mission, out.iterate, end))
+    Ok((out.iterate, end))
 }
 
 impl Control {
@@ -292,36 +317,22 @@ pub(super) fn extrapolate(from: &Trajectory, to: &Trajectory, alpha: f64) -> Tra
 }
 
 /// Algorithm 1 (or the baseline) exactly as printed: alternate (p5) and (p6) from the start.
-/// `state_out` receives the BCD state {q, V, q_aux, w, u} of the last iterate.
-#[allow(clippy::too_many_arguments)]
+/// `state_out` receives the BCD state {q, V, q_aux, w, u} of the last iterate. Returns the last
+/// iterate's path and the loop's end.
 pub(super) fn run_paper(
     mission: &Mission,
     start: Trajectory,
     objective: PaperObjective,
     options: &PlanOptions,
-    deadline: Deadline,
-    solver: &mut SocpSolver,
-    observer: &mut dyn Observer,
+    means: Means<'_>,
     state_out: Option<&mut Option<PaperState>>,
-) -> Result<PlanResult, PlanError> {
+) -> Result<(Trajectory, LoopEnd), PlanError> {
     let mut state = PaperState::from_trajectory(mission, &start);
-    let (traj, end) = paper_bcd(
-        mission,
-        &mut state,
-        start,
-        objective,
-        options,
-        Means {
-            solver,
-            observer,
-            deadline,
-        },
-        0,
-    )?;
+    let (traj, end) = paper_bcd(mission, &mut state, start, objective, options, means, 0)?;
     if let Some(out) = state_out {
         *out = Some(state);
     }
-    Ok(finish(mission, traj, end))
+    Ok((traj, end))
 }
 
 /// The BCD loop of Algorithm 1 from `state` (whose positions are `start`'s), at the state's

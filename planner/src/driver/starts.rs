@@ -16,11 +16,11 @@ use crate::schemes::exact::{ExactObjective, ExactTuning};
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
-use super::iterate::{finish, Means};
+use super::iterate::{finish, Made, Means};
 use super::options::Deadline;
 use super::phase_one::{make_feasible, total_violation, PhaseOneFailure};
 use super::progress::LoopEnd;
-use super::{Observer, PlanError, PlanOptions, PlanResult, TerminationReason};
+use super::{Observer, PlanError, PlanOptions, TerminationReason};
 
 /// What the search for a feasible start needs.
 pub(super) struct StartSearch<'a> {
@@ -235,13 +235,18 @@ impl<'a> StartSearch<'a> {
         if let PlanError::NotFound(nf) = &mut error {
             let mut end = LoopEnd::starting(ev.energy_j);
             end.termination = TerminationReason::NoProgress;
-            let mut plan: PlanResult = finish(self.mission, trajectory, end);
-            plan.scheme = self.options.scheme;
-            plan.resolution = self.base.resolution;
-            plan.dynamics = self.base.dynamics;
-            plan.start_energy_j = plan.evaluation.energy_j;
+            let made = Made {
+                scheme: self.options.scheme,
+                resolution: self.base.resolution,
+                dynamics: self.base.dynamics,
+                start_energy_j: ev.energy_j,
+                repair_iterations: 0,
+                init_replaced: None,
+                best_effort: None,
+                programs_before: 0,
+            };
             nf.starts = tried;
-            nf.best = Some(plan);
+            nf.best = Some(finish(self.mission, trajectory, end, made));
         }
         error
     }
