@@ -15,8 +15,8 @@ fn iq(rows: u32, cols: u32) -> (FrameHeader, Vec<Complex32>) {
 }
 
 #[test]
-fn header_is_96_bytes_and_c_layout() {
-    assert_eq!(std::mem::size_of::<FrameHeader>(), 96);
+fn header_is_104_bytes_and_c_layout() {
+    assert_eq!(std::mem::size_of::<FrameHeader>(), 104);
     assert_eq!(std::mem::align_of::<FrameHeader>(), 8);
 }
 
@@ -87,14 +87,14 @@ fn tagged_frame_roundtrip() {
     assert_eq!(h.tag, k.tag(&h.meta(), payload));
     assert_ne!(h.tag, [0; FRAME_KEY_LEN]);
     let wire = encode_wire(&h, payload).unwrap();
-    assert_eq!(WIRE_PREFIX_LEN, 104);
+    assert_eq!(WIRE_PREFIX_LEN, 112);
     assert_eq!(&wire[HEADER_LEN + 2..HEADER_LEN + 4], &1u16.to_le_bytes());
     assert_eq!(&wire[HEADER_LEN + 24..HEADER_LEN + 56], &h.tag);
     let (h2, p) = decode_wire(&wire, DEFAULT_MAX_FRAME_BYTES, true).unwrap();
     assert_eq!(h2, h);
     h2.verify_tag(&k, p).unwrap();
     // the tag is the keyed BLAKE3 of the documented fields and the samples
-    let mut msg = b"cellsar frame tag 1\0".to_vec();
+    let mut msg = b"cellsar frame tag 2\0".to_vec();
     for part in [
         &IQ_FRAME_KIND.to_le_bytes()[..],
         &IQ_FRAME_SCHEMA_VERSION.to_le_bytes(),
@@ -104,6 +104,7 @@ fn tagged_frame_roundtrip() {
         &3u32.to_le_bytes(),
         &4u32.to_le_bytes(),
         &1_000i64.to_le_bytes(),
+        &0u64.to_le_bytes(),
         &96u64.to_le_bytes(),
         payload,
     ] {
@@ -201,7 +202,7 @@ proptest! {
                         seq in any::<u64>(), mt in any::<i64>(), t in any::<u64>(),
                         tag in any::<Option<[u8; 32]>>()) {
         let tag = tag.filter(|t| *t != [0; 32]);
-        let m = FrameMeta { kind, schema_version: ver, element_size: elem, mission_id: MissionId(mission), seq, mission_time_ns: mt, shape: [rows, cols], tag };
+        let m = FrameMeta { kind, schema_version: ver, element_size: elem, mission_id: MissionId(mission), seq, mission_time_ns: mt, shape: [rows, cols], scene_digest: mission ^ seq, tag };
         let mut h = m.header(crc).unwrap();
         h.time_unix_ns = t;
         let len = h.payload_len as usize;
@@ -225,4 +226,29 @@ fn sample_views() {
     assert_eq!(bytes_as_samples(b).unwrap(), &s[..]);
     assert!(bytes_as_samples(&b[..7]).is_err());
     assert!(samples_from_bytes(&b[..7]).is_err());
+}
+
+/// The scene digest travels at bytes 56..64 of the descriptor, little endian, round trips, and
+/// is covered by the tag: a frame relabelled with another scene fails its tag.
+#[test]
+fn the_scene_digest_travels_in_the_descriptor_under_the_tag() {
+    let k = FrameKey::from_bytes([9; FRAME_KEY_LEN]);
+    let s = vec![Complex32::new(1.0, -1.0); 6];
+    let payload = samples_as_bytes(&s);
+    let h = FrameMeta::iq(MissionId(5), 3, 1_000, 2, 3)
+        .with_scene(0x1234_5678_9abc_def0)
+        .tagged(&k, payload)
+        .header(Some(checksum(payload)))
+        .unwrap();
+    let wire = encode_wire(&h, payload).unwrap();
+    assert_eq!(
+        &wire[HEADER_LEN + 56..HEADER_LEN + 64],
+        &0x1234_5678_9abc_def0u64.to_le_bytes()
+    );
+    let (back, p) = decode_wire(&wire, DEFAULT_MAX_FRAME_BYTES, true).unwrap();
+    assert_eq!(back.scene_digest, 0x1234_5678_9abc_def0);
+    back.verify_tag(&k, p).unwrap();
+    let mut other = back;
+    other.scene_digest ^= 1;
+    assert!(other.verify_tag(&k, p).is_err());
 }

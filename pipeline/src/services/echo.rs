@@ -32,7 +32,7 @@ use radar_sim::synth::{Components, Synthesizer};
 use radar_sim::track::PulseMeta;
 
 use super::admission::{admit, Admission, Droppable, DEFAULT_MAX_MISSIONS};
-use super::process::MissionContext;
+use super::process::{scene_mismatch, MissionContext};
 use super::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
 use crate::protocol::{ApertureRequest, FrameInfo, FrameSlot, RequestAck, Role, ServiceState};
 
@@ -463,6 +463,9 @@ impl<'a> Echo<'a> {
                 ctx.layout.frame_pulses()
             )));
         }
+        if r.scene_digest != ctx.scene_digest {
+            return Err(bad(scene_mismatch(r.scene_digest, ctx.scene_digest)));
+        }
         let slots = ctx.layout.slots(ap, look);
         let seqs: Vec<u64> = slots.iter().map(|(s, _)| *s).collect();
         let dup = self.queue.iter().any(|j| {
@@ -551,7 +554,8 @@ impl<'a> Echo<'a> {
             (t_first_s * 1e9).round() as i64,
             slot.pulses as u32,
             spp as u32,
-        );
+        )
+        .with_scene(ctx.scene_digest);
         let bytes = bridge::frame::samples_as_bytes(&iq);
         // the tag lets a processor tell the echo's frames from a peer's that fit the layout
         let meta = meta.tagged(&m.frame_key, bytes);

@@ -133,6 +133,31 @@ fn layout_of_a_mission_fits_the_frames() {
     assert!(e.to_string().contains("--max-frame-bytes"), "{e}");
 }
 
+/// Two scenes of the same layout (the cyclic prefix 128 samples instead of 256) give the same
+/// frames, so only the scene's digest, which every aperture request and frame carries, tells
+/// them apart; the refusal names both digests.
+#[test]
+fn scenes_of_the_same_layout_differ_in_their_digest() {
+    let plan = plan(20.0);
+    let ours = MissionContext::new(&plan, &small_scene(), 1024 * 8 * 30).unwrap();
+    let other = SceneFile::from_toml_str(
+        &SMALL_SCENE.replace("cp_samples = 256", "cp_samples = 128"),
+        "other scene",
+    )
+    .unwrap();
+    let theirs = MissionContext::new(&plan, &other, 1024 * 8 * 30).unwrap();
+    assert_eq!(ours.layout, theirs.layout);
+    assert_eq!(ours.scene_digest, small_scene().digest());
+    assert_ne!(ours.scene_digest, theirs.scene_digest);
+    let msg = crate::services::process::scene_mismatch(theirs.scene_digest, ours.scene_digest);
+    assert!(
+        msg.contains(&format!("{:016x}", theirs.scene_digest))
+            && msg.contains(&format!("{:016x}", ours.scene_digest))
+            && msg.contains("--scene"),
+        "{msg}"
+    );
+}
+
 #[test]
 fn detections_survive_json_with_nan() {
     let d = ApertureDetections {

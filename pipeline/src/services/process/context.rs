@@ -36,6 +36,9 @@ pub struct MissionContext {
     pub layout: FrameLayout,
     /// The planned track, at the plan's altitudes (a free mission) or the mission's altitude.
     pub track: PlannedTrack,
+    /// The scene's digest ([`SceneFile::digest`]): in every aperture request and IQ frame of
+    /// the mission, and compared with the other side's.
+    pub scene_digest: u64,
 }
 
 impl MissionContext {
@@ -76,8 +79,19 @@ impl MissionContext {
             apertures,
             layout,
             track,
+            scene_digest: scene.digest(),
         })
     }
+}
+
+/// What a service says of a request or frame made from another scene than its own: both
+/// digests ([`SceneFile::digest`]) and what to do.
+pub fn scene_mismatch(theirs: u64, ours: u64) -> String {
+    format!(
+        "scene mismatch: scene digest {theirs:016x}, where this service's scene has \
+         {ours:016x} (every process of a mission must read the same scene: give each the same \
+         --scene file)"
+    )
 }
 
 /// One processed aperture: everything `cellsar-radar-sim process` derives from it.

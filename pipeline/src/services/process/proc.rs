@@ -311,6 +311,12 @@ impl Proc<'_> {
             return;
         };
         let run = &mut self.runs[i];
+        if f.header.scene_digest != run.ctx.base.scene_digest {
+            self.report.bad += 1;
+            tracing::warn!(mission = %f.mission, seq = f.seq, "frame skipped: {}",
+                super::context::scene_mismatch(f.header.scene_digest, run.ctx.base.scene_digest));
+            return;
+        }
         let layout = &run.ctx.base.layout;
         let Some(slot) = layout.locate(f.seq) else {
             self.report.bad += 1;
@@ -509,6 +515,7 @@ impl Proc<'_> {
         let run = &mut self.runs[i];
         let id = run.ctx.base.mission_id;
         let fp = run.ctx.base.layout.frame_pulses();
+        let scene_digest = run.ctx.base.scene_digest;
         let now = Instant::now();
         let quiet_since = run.last_frame;
         // a frame that arrived malformed will not come either: both make a request due sooner
@@ -542,6 +549,7 @@ impl Proc<'_> {
                     aperture: k,
                     look: a.look,
                     frame_pulses: fp,
+                    scene_digest,
                 });
             }
         }
