@@ -327,6 +327,19 @@ impl FrameHeader {
         }
     }
 
+    /// Checks that the frame was made from the scene whose digest is `ours` (the receiver's):
+    /// an error names the field, both digests and what to do ([`scene_mismatch`]). The digest
+    /// is authentic only once the tag verifies ([`FrameHeader::verify_tag`] covers it).
+    pub fn check_scene(&self, ours: u64) -> Result<(), CodecError> {
+        if self.scene_digest == ours {
+            return Ok(());
+        }
+        Err(CodecError::Field {
+            field: "scene_digest",
+            reason: scene_mismatch(self.scene_digest, ours),
+        })
+    }
+
     /// Checks the frame's tag against `payload` under `key`: an error names a frame without
     /// a tag or one whose tag does not match (a different key, or any tagged field or sample
     /// changed). The comparison takes the same time wherever the tags differ.
@@ -518,6 +531,16 @@ impl FrameHeader {
         fh.validate(actual, max_payload.min(MAX_FRAME_HARD_LIMIT))?;
         Ok(fh)
     }
+}
+
+/// What a receiver says of a frame or aperture request made from the scene of digest `theirs`
+/// when its own scene's is `ours`: both digests (16 hex digits) and what to do.
+pub fn scene_mismatch(theirs: u64, ours: u64) -> String {
+    format!(
+        "scene mismatch: scene digest {theirs:016x}, where this service's scene has \
+         {ours:016x} (every process of a mission must read the same scene: give each the same \
+         --scene file)"
+    )
 }
 
 /// Absolute upper bound on a frame payload (1 GiB), whatever the configured limit.

@@ -32,7 +32,7 @@ use radar_sim::synth::{Components, Synthesizer};
 use radar_sim::track::PulseMeta;
 
 use super::admission::{admit, Admission, Droppable, DEFAULT_MAX_MISSIONS};
-use super::process::{scene_mismatch, MissionContext};
+use super::process::MissionContext;
 use super::radar::{ServiceError, ServiceResult, DEFAULT_MAX_FRAME_BYTES};
 use crate::protocol::{ApertureRequest, FrameInfo, FrameSlot, RequestAck, Role, ServiceState};
 
@@ -464,7 +464,10 @@ impl<'a> Echo<'a> {
             )));
         }
         if r.scene_digest != ctx.scene_digest {
-            return Err(bad(scene_mismatch(r.scene_digest, ctx.scene_digest)));
+            return Err(bad(bridge::frame::scene_mismatch(
+                r.scene_digest,
+                ctx.scene_digest,
+            )));
         }
         let slots = ctx.layout.slots(ap, look);
         let seqs: Vec<u64> = slots.iter().map(|(s, _)| *s).collect();

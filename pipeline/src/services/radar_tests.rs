@@ -149,7 +149,16 @@ fn scenes_of_the_same_layout_differ_in_their_digest() {
     assert_eq!(ours.layout, theirs.layout);
     assert_eq!(ours.scene_digest, small_scene().digest());
     assert_ne!(ours.scene_digest, theirs.scene_digest);
-    let msg = crate::services::process::scene_mismatch(theirs.scene_digest, ours.scene_digest);
+    // a frame the other scene's echo makes is refused by the processor's check, naming both
+    let frame = bridge::frame::FrameMeta::iq(ours.mission_id, 0, 0, 1, 1)
+        .with_scene(theirs.scene_digest)
+        .header(None)
+        .unwrap();
+    frame.check_scene(theirs.scene_digest).unwrap();
+    let msg = frame
+        .check_scene(ours.scene_digest)
+        .unwrap_err()
+        .to_string();
     assert!(
         msg.contains(&format!("{:016x}", theirs.scene_digest))
             && msg.contains(&format!("{:016x}", ours.scene_digest))

@@ -84,16 +84,6 @@ impl MissionContext {
     }
 }
 
-/// What a service says of a request or frame made from another scene than its own: both
-/// digests ([`SceneFile::digest`]) and what to do.
-pub fn scene_mismatch(theirs: u64, ours: u64) -> String {
-    format!(
-        "scene mismatch: scene digest {theirs:016x}, where this service's scene has \
-         {ours:016x} (every process of a mission must read the same scene: give each the same \
-         --scene file)"
-    )
-}
-
 /// One processed aperture: everything `cellsar-radar-sim process` derives from it.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ApertureOutcome {

@@ -48,8 +48,8 @@ use receive::{
 use work::{requester, worker, Job, JobResult, RequestDone, RequestJob};
 
 pub use context::{
-    detections_message, fold_metrics, object_as_recorded, pulse_as_recorded, scene_mismatch,
-    ApertureOutcome, MissionContext, ProcContext, StoredOutcome,
+    detections_message, fold_metrics, object_as_recorded, pulse_as_recorded, ApertureOutcome,
+    MissionContext, ProcContext, StoredOutcome,
 };
 
 /// The frame receiver thread, in the processor's errors.

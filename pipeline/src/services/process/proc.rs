@@ -311,12 +311,6 @@ impl Proc<'_> {
             return;
         };
         let run = &mut self.runs[i];
-        if f.header.scene_digest != run.ctx.base.scene_digest {
-            self.report.bad += 1;
-            tracing::warn!(mission = %f.mission, seq = f.seq, "frame skipped: {}",
-                super::context::scene_mismatch(f.header.scene_digest, run.ctx.base.scene_digest));
-            return;
-        }
         let layout = &run.ctx.base.layout;
         let Some(slot) = layout.locate(f.seq) else {
             self.report.bad += 1;
@@ -354,15 +348,16 @@ impl Proc<'_> {
             }
             Admit::Forged(e) => {
                 self.report.forged += 1;
-                if std::mem::replace(&mut run.key_gate.warned, true) {
-                    tracing::debug!(%mission, seq, error = %e, "forged frame skipped");
-                } else {
-                    tracing::warn!(%mission, seq, error = %e,
-                        "forged frame skipped (not tagged with the mission's key; later ones are logged at debug)");
-                }
+                run.key_gate.log_forged(mission, seq, &e);
                 return;
             }
         };
+        // after the tag, which covers the digest: only the echo's own frames are named so
+        if let Err(e) = f.header.check_scene(run.ctx.base.scene_digest) {
+            self.report.bad += 1;
+            tracing::warn!(%mission, seq, "frame skipped: {e}");
+            return;
+        }
         run.last_frame = Instant::now();
         run.last_progress = run.last_frame;
         let target = match run.assembling.get_mut(&slot.aperture) {
