@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! envelope header (48 bytes, body_format = RawFrame, body_crc32 = checksum of the samples)
-//! frame descriptor (56 bytes):
+//! frame descriptor (64 bytes):
 //!     0  u16 element_size   bytes per element (8 for complex f32)
 //!     2  u16 frame flags    bit 0: the frame carries a tag; other bits 0
 //!     4  u32 rows           e.g. pulses (slow time)
@@ -13,18 +13,23 @@
 //!    12  u32 reserved (0)
 //!    16  i64 mission_time_ns   mission time of the first row
 //!    24  [u8; 32] tag       keyed BLAKE3 of the frame (all zero without a tag)
+//!    56  u64 scene_digest   digest of the scene the samples were made with (0: none)
 //! samples (rows * cols * element_size bytes, raw little endian; complex f32 = re, im)
 //! ```
 //!
-//! Samples start 104 bytes into the payload, a multiple of 8, so a contiguous receive buffer
+//! Samples start 112 bytes into the payload, a multiple of 8, so a contiguous receive buffer
 //! can be viewed as `[Complex32]` without copying. Decoding checks every field and never
 //! panics.
+//!
+//! The scene digest (`radar_sim::config::SceneFile::digest` for IQ frames) lets a receiver
+//! refuse, by name, samples made from another scene than its own, whatever their shape
+//! (schema version 2 of the IQ frame; version 1 had no digest).
 //!
 //! # Tags
 //!
 //! A frame may carry a tag: the keyed BLAKE3 hash ([`FrameKey::tag`]) under a secret
 //! [`FrameKey`] of its kind, schema version, element size, mission id, sequence number, shape,
-//! mission time and samples. The echo draws a key per mission and gives it to the processors
+//! mission time, scene digest and samples. The echo draws a key per mission and gives it to the processors
 //! that ask it for apertures; a processor that holds a mission's key takes only frames whose
 //! tag it verifies ([`FrameHeader::verify_tag`]), so a peer that may put frames on the
 //! mission's key (the bridge) but was never given the key cannot make one the processor
@@ -46,12 +51,12 @@ compile_error!(
 
 /// Message kind of IQ frames (complex f32 samples, rows = pulses, cols = fast-time samples).
 pub const IQ_FRAME_KIND: u16 = 0x0200;
-/// Schema version of IQ frames.
-pub const IQ_FRAME_SCHEMA_VERSION: u16 = 1;
+/// Schema version of IQ frames (2: the scene digest).
+pub const IQ_FRAME_SCHEMA_VERSION: u16 = 2;
 /// Size of one complex f32 sample in bytes.
 pub const COMPLEX32_BYTES: u16 = 8;
 /// Length of the frame descriptor that follows the envelope header on Zenoh.
-pub const DESCRIPTOR_LEN: usize = 56;
+pub const DESCRIPTOR_LEN: usize = 64;
 /// Length of a frame key and of a frame tag in bytes.
 pub const FRAME_KEY_LEN: usize = 32;
 /// Offset of the first sample in a frame's Zenoh payload.
@@ -76,7 +81,7 @@ pub const SERVICE_MAX_FRAME_BYTES: usize = 4 << 20;
 /// form).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend)]
 #[repr(C)]
-#[type_name("cellsar::FrameHeader/2")]
+#[type_name("cellsar::FrameHeader/3")]
 pub struct FrameHeader {
     /// Message kind of the frame (e.g. [`IQ_FRAME_KIND`]).
     pub kind: u16,
@@ -103,6 +108,8 @@ pub struct FrameHeader {
     pub shape: [u32; 2],
     /// Payload length in bytes (= rows * cols * element_size).
     pub payload_len: u64,
+    /// Digest of the scene the samples were made with (0: no scene named).
+    pub scene_digest: u64,
     /// Keyed BLAKE3 tag of the frame ([`FrameKey::tag`]) when [`FLAG_TAGGED`] is set, else 0.
     pub tag: [u8; FRAME_KEY_LEN],
 }
@@ -141,14 +148,14 @@ impl FrameKey {
 
     /// The tag of a frame of `meta` whose payload is `payload`: keyed BLAKE3 of a domain
     /// string, the kind, schema version, element size, mission id, sequence number, rows,
-    /// cols, mission time and payload length (little endian), then the payload.
+    /// cols, mission time, scene digest and payload length (little endian), then the payload.
     pub fn tag(&self, meta: &FrameMeta, payload: &[u8]) -> [u8; FRAME_KEY_LEN] {
         self.tag_hash(meta, payload).into()
     }
 
     fn tag_hash(&self, meta: &FrameMeta, payload: &[u8]) -> blake3::Hash {
         let mut h = blake3::Hasher::new_keyed(&self.0);
-        h.update(b"cellsar frame tag 1\0");
+        h.update(b"cellsar frame tag 2\0");
         h.update(&meta.kind.to_le_bytes());
         h.update(&meta.schema_version.to_le_bytes());
         h.update(&meta.element_size.to_le_bytes());
@@ -157,6 +164,7 @@ impl FrameKey {
         h.update(&meta.shape[0].to_le_bytes());
         h.update(&meta.shape[1].to_le_bytes());
         h.update(&meta.mission_time_ns.to_le_bytes());
+        h.update(&meta.scene_digest.to_le_bytes());
         h.update(&(payload.len() as u64).to_le_bytes());
         h.update(payload);
         h.finalize()
@@ -180,6 +188,8 @@ pub struct FrameMeta {
     pub mission_time_ns: i64,
     /// `[rows, cols]`.
     pub shape: [u32; 2],
+    /// Digest of the scene the samples were made with (0: none).
+    pub scene_digest: u64,
     /// The frame's tag ([`FrameKey::tag`]), if it carries one.
     pub tag: Option<[u8; FRAME_KEY_LEN]>,
 }
@@ -195,8 +205,15 @@ impl FrameMeta {
             seq,
             mission_time_ns,
             shape: [rows, cols],
+            scene_digest: 0,
             tag: None,
         }
+    }
+
+    /// This metadata naming the scene its samples were made with (set before the tag).
+    pub fn with_scene(mut self, scene_digest: u64) -> Self {
+        self.scene_digest = scene_digest;
+        self
     }
 
     /// This metadata with the tag of `payload` under `key` ([`FrameKey::tag`]).
@@ -225,6 +242,7 @@ impl FrameMeta {
             seq,
             mission_time_ns: 0,
             shape: [1, cols],
+            scene_digest: 0,
             tag: None,
         })
     }
@@ -252,6 +270,7 @@ impl FrameMeta {
             mission_time_ns: self.mission_time_ns,
             shape: self.shape,
             payload_len: payload_len as u64,
+            scene_digest: self.scene_digest,
             tag: self.tag.unwrap_or_default(),
         })
     }
@@ -303,8 +322,22 @@ impl FrameHeader {
             seq: self.seq,
             mission_time_ns: self.mission_time_ns,
             shape: self.shape,
+            scene_digest: self.scene_digest,
             tag: self.has_tag().then_some(self.tag),
         }
+    }
+
+    /// Checks that the frame was made from the scene whose digest is `ours` (the receiver's):
+    /// an error names the field, both digests and what to do ([`scene_mismatch`]). The digest
+    /// is authentic only once the tag verifies ([`FrameHeader::verify_tag`] covers it).
+    pub fn check_scene(&self, ours: u64) -> Result<(), CodecError> {
+        if self.scene_digest == ours {
+            return Ok(());
+        }
+        Err(CodecError::Field {
+            field: "scene_digest",
+            reason: scene_mismatch(self.scene_digest, ours),
+        })
     }
 
     /// Checks the frame's tag against `payload` under `key`: an error names a frame without
@@ -395,7 +428,7 @@ impl FrameHeader {
         Ok(())
     }
 
-    /// The 104-byte Zenoh prefix (envelope header + frame descriptor) of this frame.
+    /// The 112-byte Zenoh prefix (envelope header + frame descriptor) of this frame.
     pub fn to_wire_prefix(&self) -> [u8; WIRE_PREFIX_LEN] {
         let header = Header {
             body_format: BodyFormat::RawFrame,
@@ -419,10 +452,11 @@ impl FrameHeader {
         d[8..12].copy_from_slice(&self.shape[1].to_le_bytes());
         d[16..24].copy_from_slice(&self.mission_time_ns.to_le_bytes());
         d[24..56].copy_from_slice(&self.tag);
+        d[56..64].copy_from_slice(&self.scene_digest.to_le_bytes());
         out
     }
 
-    /// Parses and checks the 104-byte Zenoh prefix of a frame whose whole payload (prefix +
+    /// Parses and checks the 112-byte Zenoh prefix of a frame whose whole payload (prefix +
     /// samples) is `total_len` bytes long.
     pub fn from_wire_prefix(
         prefix: &[u8],
@@ -487,6 +521,7 @@ impl FrameHeader {
             mission_time_ns: le_u64(&d[16..24]) as i64,
             shape: [le_u32(&d[4..8]), le_u32(&d[8..12])],
             payload_len,
+            scene_digest: le_u64(&d[56..64]),
             tag,
         };
         let actual = total_len.saturating_sub(WIRE_PREFIX_LEN);
@@ -498,12 +533,22 @@ impl FrameHeader {
     }
 }
 
+/// What a receiver says of a frame or aperture request made from the scene of digest `theirs`
+/// when its own scene's is `ours`: both digests (16 hex digits) and what to do.
+pub fn scene_mismatch(theirs: u64, ours: u64) -> String {
+    format!(
+        "scene mismatch: scene digest {theirs:016x}, where this service's scene has \
+         {ours:016x} (every process of a mission must read the same scene: give each the same \
+         --scene file)"
+    )
+}
+
 /// Absolute upper bound on a frame payload (1 GiB), whatever the configured limit.
 pub const MAX_FRAME_HARD_LIMIT: usize = 1 << 30;
 
 // The frame descriptor keeps samples 8-byte aligned after the envelope header.
 const _: () = assert!(WIRE_PREFIX_LEN.is_multiple_of(8));
-const _: () = assert!(std::mem::size_of::<FrameHeader>() == 96);
+const _: () = assert!(std::mem::size_of::<FrameHeader>() == 104);
 const _: () = assert!(MAX_BODY_BYTES <= MAX_FRAME_HARD_LIMIT);
 
 /// Encodes a frame for Zenoh: prefix + payload in one buffer.

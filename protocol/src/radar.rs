@@ -45,6 +45,9 @@ pub struct ApertureRequest {
     pub look: Option<u32>,
     /// Pulses per frame the requester expects (must match the echo's layout).
     pub frame_pulses: u32,
+    /// Digest of the requester's scene (`radar_sim::config::SceneFile::digest`): the echo
+    /// refuses a request whose scene is not its own, naming both digests.
+    pub scene_digest: u64,
     /// Who asks (for logs).
     pub requester: String,
 }
@@ -52,7 +55,8 @@ pub struct ApertureRequest {
 impl Message for ApertureRequest {
     const KIND: u16 = 0x0301;
     const NAME: &'static str = "radar.aperture_request";
-    const SCHEMA_VERSION: u16 = 1;
+    /// 2: `scene_digest`.
+    const SCHEMA_VERSION: u16 = 2;
 }
 
 /// The echo's answer to an [`ApertureRequest`]: which frames will be sent.

@@ -136,6 +136,26 @@ impl SceneFile {
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
+    /// The scene's digest: FNV-1a (64 bits) of its canonical JSON form, every value in a fixed
+    /// order with the defaults filled in, so that two files describing the same scene
+    /// (comments, key order, defaults written out or left out) have the same digest and any
+    /// changed value gives another. Every process of a mission must read the same scene: the
+    /// digest travels with the aperture requests and the IQ frames, and a mismatch is refused
+    /// by name. Never 0 ([`SceneFile::NO_DIGEST`] marks a frame of no scene).
+    pub fn digest(&self) -> u64 {
+        // serialising plain data to a string cannot fail; the name keeps a failure distinct
+        let text = serde_json::to_string(self).unwrap_or_else(|e| format!("unserialisable: {e}"));
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in b"cellsar scene 1\0".iter().chain(text.as_bytes()) {
+            h ^= u64::from(*b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        h.max(1)
+    }
+
+    /// The digest of no scene (a frame of a tool that names none).
+    pub const NO_DIGEST: u64 = 0;
+
     /// Checks every table, and the values that depend on several (the upsampled range
     /// profile, `fft_size × upsample`, is at most [`MAX_PROFILE_SAMPLES`]).
     pub fn validate(&self) -> Result<()> {

@@ -1,8 +1,9 @@
 //! Every process of a mission must read the same scene and use the same `--max-frame-bytes`
-//! (docs/deployment.md, "Single host"): the frame layout is a function of both, and a mismatch
-//! is refused by name. The run's echo is started by hand (`--external echo`) with another
-//! `--max-frame-bytes`, or on a scene with another FFT size, and the message naming the
-//! mismatch is waited for in the logs; the run, which cannot complete, is then interrupted.
+//! (docs/deployment.md, "Single host"): the frame layout is a function of both, the scene's
+//! digest travels with every aperture request and frame, and a mismatch is refused by name.
+//! The run's echo is started by hand (`--external echo`) with another `--max-frame-bytes`, or
+//! on another scene (of the same layout, or of another), and the message naming the mismatch
+//! is waited for in the logs; the run, which cannot complete, is then interrupted.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -84,27 +85,67 @@ fn another_max_frame_bytes_at_the_echo_is_refused_by_name() {
     );
 }
 
-/// An echo on another scene (the small scene with a 2048-point FFT instead of 1024: twice the
-/// samples per pulse, the same pulses per frame) sends frames that the processor skips, saying
-/// they do not fit the mission's layout and naming the scene and `--max-frame-bytes`.
-#[test]
-fn another_scene_at_the_echo_is_refused_by_name() {
-    let dir = tempfile::tempdir().unwrap();
+/// The small scene with `from` replaced by `to`, written into `dir`; the log names both
+/// scenes' digests when an echo on it is refused.
+fn other_scene(dir: &std::path::Path, from: &str, to: &str) -> (std::path::PathBuf, [String; 2]) {
     let text = std::fs::read_to_string(scene()).unwrap();
-    assert!(text.contains("fft_size = 1024"), "{text}");
-    let other = dir.path().join("other-scene.toml");
-    std::fs::write(&other, text.replace("fft_size = 1024", "fft_size = 2048")).unwrap();
-    let log = mismatched_run(
-        dir.path(),
+    assert!(text.contains(from), "{text}");
+    let other = dir.join("other-scene.toml");
+    std::fs::write(&other, text.replace(from, to)).unwrap();
+    let digest = |p: &std::path::Path| {
+        format!(
+            "{:016x}",
+            radar_sim::config::SceneFile::from_path(p).unwrap().digest()
+        )
+    };
+    let digests = [digest(&scene()), digest(&other)];
+    assert_ne!(digests[0], digests[1]);
+    (other, digests)
+}
+
+/// Runs the mission with its echo on `other`, and gives the echo's log once it refuses the
+/// processor's first aperture request for its scene.
+fn echo_on_scene(dir: &std::path::Path, other: &std::path::Path) -> String {
+    mismatched_run(
+        dir,
         |a| {
             let i = a.iter().position(|x| x == "--scene").unwrap();
             a[i + 1] = other.display().to_string();
         },
-        "processor",
-        "frame does not fit the mission's layout",
-    );
+        "echo",
+        "scene mismatch",
+    )
+}
+
+/// An echo on another scene of the same layout (the small scene's cyclic prefix of 128 samples
+/// instead of 256: the same samples per pulse and frame numbers, other samples) made a run
+/// that ended with no detection and exit 0. The processor's first aperture request carries its
+/// scene's digest, and the echo refuses it naming both digests and `--scene`.
+#[test]
+fn another_scene_of_the_same_layout_at_the_echo_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let (other, [ours, theirs]) = other_scene(dir.path(), "cp_samples = 256", "cp_samples = 128");
+    let log = echo_on_scene(dir.path(), &other);
     assert!(
-        log.contains("same scene and --max-frame-bytes everywhere?"),
+        log.contains(&format!(
+            "scene digest {ours}, where this service's scene has {theirs}"
+        )) && log.contains("the same --scene file"),
+        "{log}"
+    );
+}
+
+/// An echo on a scene of another layout (the small scene with a 2048-point FFT instead of
+/// 1024: twice the samples per pulse, the same pulses per frame) is refused the same way, at
+/// the first request, before any frame is made.
+#[test]
+fn another_scene_at_the_echo_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let (other, [ours, theirs]) = other_scene(dir.path(), "fft_size = 1024", "fft_size = 2048");
+    let log = echo_on_scene(dir.path(), &other);
+    assert!(
+        log.contains(&format!(
+            "scene digest {ours}, where this service's scene has {theirs}"
+        )),
         "{log}"
     );
 }

@@ -165,6 +165,10 @@ fn frozen_processor_does_not_stall_the_echo() {
     let planned = l.event("planned", Duration::from_secs(120));
     let m = MissionId::parse_hex(planned["mission_id"].as_str().unwrap()).unwrap();
     let fp = planned["frame_pulses"].as_u64().unwrap() as u32;
+    // the run's scene, whose digest the echo checks in every request
+    let scene_digest = radar_sim::config::SceneFile::from_path(&scene())
+        .unwrap()
+        .digest();
     // the processor is subscribed once it has finished an aperture; freeze it at once (the
     // mission cannot finish while it is frozen; a 60 s mission is otherwise over in about a
     // second, before this session could reach the echo)
@@ -183,6 +187,7 @@ fn frozen_processor_does_not_stall_the_echo() {
             aperture: ap,
             look: None,
             frame_pulses: fp,
+            scene_digest,
             requester: "test".into(),
         };
         let ack = node

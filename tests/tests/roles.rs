@@ -344,6 +344,7 @@ fn a_plan_looked_up_whose_id_is_not_its_contents_is_skipped() {
         aperture: 0,
         look: None,
         frame_pulses: 1,
+        scene_digest: 0,
         requester: "roles-test".into(),
     };
     let opts = QueryOptions {

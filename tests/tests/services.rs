@@ -482,6 +482,7 @@ fn plan_and_request_floods_are_bounded() {
                 aperture: 1_000_000,
                 look: None,
                 frame_pulses: 1,
+                scene_digest: 0,
                 requester: "test".into(),
             },
             &QueryOptions {

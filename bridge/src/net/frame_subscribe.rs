@@ -17,7 +17,7 @@ use crate::frame::{self, FrameHeader, WIRE_PREFIX_LEN};
 
 impl ZenohNode {
     /// Declares a subscriber of raw frames on `key`. The Zenoh callback only checks the frame
-    /// header (104 bytes) and queues the sample; the payload is read (copied or verified) in the
+    /// header (112 bytes) and queues the sample; the payload is read (copied or verified) in the
     /// consumer's thread, so a slow consumer never holds up Zenoh's receive path.
     pub fn frame_subscriber(
         &self,

@@ -463,6 +463,12 @@ impl<'a> Echo<'a> {
                 ctx.layout.frame_pulses()
             )));
         }
+        if r.scene_digest != ctx.scene_digest {
+            return Err(bad(bridge::frame::scene_mismatch(
+                r.scene_digest,
+                ctx.scene_digest,
+            )));
+        }
         let slots = ctx.layout.slots(ap, look);
         let seqs: Vec<u64> = slots.iter().map(|(s, _)| *s).collect();
         let dup = self.queue.iter().any(|j| {
@@ -551,7 +557,8 @@ impl<'a> Echo<'a> {
             (t_first_s * 1e9).round() as i64,
             slot.pulses as u32,
             spp as u32,
-        );
+        )
+        .with_scene(ctx.scene_digest);
         let bytes = bridge::frame::samples_as_bytes(&iq);
         // the tag lets a processor tell the echo's frames from a peer's that fit the layout
         let meta = meta.tagged(&m.frame_key, bytes);

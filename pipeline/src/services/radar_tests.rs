@@ -133,6 +133,40 @@ fn layout_of_a_mission_fits_the_frames() {
     assert!(e.to_string().contains("--max-frame-bytes"), "{e}");
 }
 
+/// Two scenes of the same layout (the cyclic prefix 128 samples instead of 256) give the same
+/// frames, so only the scene's digest, which every aperture request and frame carries, tells
+/// them apart; the refusal names both digests.
+#[test]
+fn scenes_of_the_same_layout_differ_in_their_digest() {
+    let plan = plan(20.0);
+    let ours = MissionContext::new(&plan, &small_scene(), 1024 * 8 * 30).unwrap();
+    let other = SceneFile::from_toml_str(
+        &SMALL_SCENE.replace("cp_samples = 256", "cp_samples = 128"),
+        "other scene",
+    )
+    .unwrap();
+    let theirs = MissionContext::new(&plan, &other, 1024 * 8 * 30).unwrap();
+    assert_eq!(ours.layout, theirs.layout);
+    assert_eq!(ours.scene_digest, small_scene().digest());
+    assert_ne!(ours.scene_digest, theirs.scene_digest);
+    // a frame the other scene's echo makes is refused by the processor's check, naming both
+    let frame = bridge::frame::FrameMeta::iq(ours.mission_id, 0, 0, 1, 1)
+        .with_scene(theirs.scene_digest)
+        .header(None)
+        .unwrap();
+    frame.check_scene(theirs.scene_digest).unwrap();
+    let msg = frame
+        .check_scene(ours.scene_digest)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains(&format!("{:016x}", theirs.scene_digest))
+            && msg.contains(&format!("{:016x}", ours.scene_digest))
+            && msg.contains("--scene"),
+        "{msg}"
+    );
+}
+
 #[test]
 fn detections_survive_json_with_nan() {
     let d = ApertureDetections {

@@ -190,3 +190,21 @@ fn scenes_beyond_a_real_cell_name_field_value_and_bound() {
     }
     assert!(n >= 6, "{n} scenes");
 }
+
+/// The digest names the scene, not its file: comments, key order and defaults written out
+/// leave it; any changed value (the cyclic prefix of the same layout) changes it.
+#[test]
+fn the_digest_is_the_scenes_not_the_files() {
+    let a = SceneFile::from_toml_str("[radar]\nfft_size = 1024\ncp_samples = 256\n", "a").unwrap();
+    let b = SceneFile::from_toml_str(
+        "# the same\n[radar]\ncp_samples = 256 # as a\nfft_size = 1024\nprf_hz = 100.0\n",
+        "b",
+    )
+    .unwrap();
+    let c = SceneFile::from_toml_str("[radar]\nfft_size = 1024\ncp_samples = 128\n", "c").unwrap();
+    assert_eq!(a.digest(), b.digest());
+    assert_ne!(a.digest(), c.digest());
+    assert_eq!(a.radar.samples_per_pulse(), c.radar.samples_per_pulse());
+    assert_ne!(a.digest(), SceneFile::NO_DIGEST);
+    assert_eq!(SceneFile::default().digest(), SceneFile::default().digest());
+}

@@ -36,6 +36,9 @@ pub struct MissionContext {
     pub layout: FrameLayout,
     /// The planned track, at the plan's altitudes (a free mission) or the mission's altitude.
     pub track: PlannedTrack,
+    /// The scene's digest ([`SceneFile::digest`]): in every aperture request and IQ frame of
+    /// the mission, and compared with the other side's.
+    pub scene_digest: u64,
 }
 
 impl MissionContext {
@@ -76,6 +79,7 @@ impl MissionContext {
             apertures,
             layout,
             track,
+            scene_digest: scene.digest(),
         })
     }
 }

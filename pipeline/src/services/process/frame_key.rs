@@ -11,7 +11,7 @@
 //! through unchecked.
 
 use bridge::frame::{samples_as_bytes, FrameKey};
-use bridge::CodecError;
+use bridge::{CodecError, MissionId};
 
 use super::receive::RawFrame;
 
@@ -40,7 +40,7 @@ pub(super) struct KeyGate {
     parked: Vec<RawFrame>,
     parked_bytes: usize,
     /// A forged frame was logged at warn level (later ones at debug).
-    pub(super) warned: bool,
+    warned: bool,
 }
 
 impl KeyGate {
@@ -63,6 +63,16 @@ impl KeyGate {
                 self.parked.push(f);
                 Admit::Parked
             }
+        }
+    }
+
+    /// Logs forged frame `seq` of `mission`: the first at warn level, later ones at debug.
+    pub(super) fn log_forged(&mut self, mission: MissionId, seq: u64, e: &CodecError) {
+        if std::mem::replace(&mut self.warned, true) {
+            tracing::debug!(%mission, seq, error = %e, "forged frame skipped");
+        } else {
+            tracing::warn!(%mission, seq, error = %e,
+                "forged frame skipped (not tagged with the mission's key; later ones are logged at debug)");
         }
     }
 

@@ -348,15 +348,16 @@ impl Proc<'_> {
             }
             Admit::Forged(e) => {
                 self.report.forged += 1;
-                if std::mem::replace(&mut run.key_gate.warned, true) {
-                    tracing::debug!(%mission, seq, error = %e, "forged frame skipped");
-                } else {
-                    tracing::warn!(%mission, seq, error = %e,
-                        "forged frame skipped (not tagged with the mission's key; later ones are logged at debug)");
-                }
+                run.key_gate.log_forged(mission, seq, &e);
                 return;
             }
         };
+        // after the tag, which covers the digest: only the echo's own frames are named so
+        if let Err(e) = f.header.check_scene(run.ctx.base.scene_digest) {
+            self.report.bad += 1;
+            tracing::warn!(%mission, seq, "frame skipped: {e}");
+            return;
+        }
         run.last_frame = Instant::now();
         run.last_progress = run.last_frame;
         let target = match run.assembling.get_mut(&slot.aperture) {
@@ -509,6 +510,7 @@ impl Proc<'_> {
         let run = &mut self.runs[i];
         let id = run.ctx.base.mission_id;
         let fp = run.ctx.base.layout.frame_pulses();
+        let scene_digest = run.ctx.base.scene_digest;
         let now = Instant::now();
         let quiet_since = run.last_frame;
         // a frame that arrived malformed will not come either: both make a request due sooner
@@ -542,6 +544,7 @@ impl Proc<'_> {
                     aperture: k,
                     look: a.look,
                     frame_pulses: fp,
+                    scene_digest,
                 });
             }
         }

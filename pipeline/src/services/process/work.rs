@@ -89,6 +89,8 @@ pub(super) struct RequestJob {
     pub(super) look: Option<usize>,
     /// Pulses per frame.
     pub(super) frame_pulses: usize,
+    /// The processor's scene digest.
+    pub(super) scene_digest: u64,
 }
 
 /// The echo's answer to a [`RequestJob`].
@@ -156,6 +158,7 @@ pub(super) fn requester(
                     aperture: j.aperture as u32,
                     look: j.look.map(|l| l as u32),
                     frame_pulses: j.frame_pulses as u32,
+                    scene_digest: j.scene_digest,
                     requester: instance.to_string(),
                 };
                 node.query_one::<ApertureRequest, RequestAck>(

@@ -199,6 +199,14 @@ fn frame_pulses(iq: &IqArgs) -> u32 {
     }
 }
 
+/// The scene digest the echo expects, when the mission's scene is known (else none).
+fn scene_digest(iq: &IqArgs) -> u64 {
+    match iq::fit(iq) {
+        Some(Ok(fit)) => fit.scene_digest,
+        _ => 0,
+    }
+}
+
 /// Asks the echo for aperture 0, look 0 of mission `id`, as a processor does; counts the
 /// answer.
 fn ask(node: &ZenohNode, id: MissionId, instance: &str, iq: &IqArgs, r: &mut EchoTried) {
@@ -211,6 +219,7 @@ fn ask(node: &ZenohNode, id: MissionId, instance: &str, iq: &IqArgs, r: &mut Ech
         aperture: 0,
         look: Some(0),
         frame_pulses: frame_pulses(iq),
+        scene_digest: scene_digest(iq),
         requester: instance.to_string(),
     };
     let opts = QueryOptions {

@@ -129,6 +129,7 @@ pub(super) fn flood_queries(node: &ZenohNode, id: MissionId, a: &FloodArgs, r: &
         aperture: FLOOD_APERTURES,
         look: Some(u32::MAX),
         frame_pulses: 1,
+        scene_digest: 0,
         requester: "intruder".into(),
     };
     let answered = [

@@ -127,6 +127,8 @@ pub(super) struct Fit {
     pub layout: FrameLayout,
     /// Mission time of every aperture's pulses, as the processor holds them, ns.
     pulse_times_ns: Vec<Vec<i64>>,
+    /// The scene's digest, as the echo's frames and requests carry it.
+    pub scene_digest: u64,
 }
 
 /// The layout of the mission of `plan_dir` and `scene`, by the library calls the processor's
@@ -158,6 +160,7 @@ fn fit_of(plan_dir: &std::path::Path, scene: &std::path::Path) -> Result<Fit, St
     Ok(Fit {
         layout,
         pulse_times_ns,
+        scene_digest: scene.digest(),
     })
 }
 
@@ -199,7 +202,7 @@ fn fitting_frames(id: MissionId, fit: &Fit, start: u64, count: u32) -> Vec<Vec<u
                 slot.pulses * fit.layout.samples_per_pulse()
             ];
             let payload = frame::samples_as_bytes(&samples);
-            let mut meta = FrameMeta::iq(id, seq, t_ns, rows, cols);
+            let mut meta = FrameMeta::iq(id, seq, t_ns, rows, cols).with_scene(fit.scene_digest);
             if seq % 2 == 1 {
                 meta = meta.tagged(own_key()?, payload);
             }
