@@ -217,22 +217,10 @@ impl Step for ExactStep<'_> {
         if !self.over_relaxation {
             return candidate;
         }
-        let Candidate {
-            iterate,
-            evaluation,
-            objective,
-            ipm_iterations,
-        } = candidate;
-        let value_now = self.judge.value(&evaluation);
-        let (iterate, evaluation, _) =
-            self.judge
-                .over_relax(current, value, (iterate, evaluation, value_now));
-        Candidate {
-            iterate,
-            evaluation,
-            objective,
-            ipm_iterations,
-        }
+        let judge = &self.judge;
+        over_relax(judge.mission, current, value, candidate, |ev| {
+            judge.feasible(ev).then(|| judge.value(ev))
+        })
     }
 
     fn cone_programs(&self) -> usize {
@@ -258,34 +246,6 @@ impl Judge<'_> {
         }
     }
 
-    /// Over-relaxation: SCA steps limited by the conservative centre bound tend to repeat in
-    /// the same direction; try longer steps (2× and 4×) from `current` (of true value `value`)
-    /// along the step to the candidate and keep the best that stays feasible.
-    fn over_relax(
-        &self,
-        current: &Trajectory,
-        value: f64,
-        cand: (Trajectory, Evaluation, f64),
-    ) -> (Trajectory, Evaluation, f64) {
-        let (mut cand, mut cand_ev, mut cand_value) = cand;
-        if !(self.feasible(&cand_ev) && cand_value < value) {
-            return (cand, cand_ev, cand_value);
-        }
-        for alpha in [2.0, 4.0] {
-            let trial = extrapolate(current, &cand, alpha);
-            let ev = evaluate(self.mission, &trial);
-            let v = self.value(&ev);
-            if self.feasible(&ev) && v < cand_value {
-                cand = trial;
-                cand_ev = ev;
-                cand_value = v;
-            } else {
-                break;
-            }
-        }
-        (cand, cand_ev, cand_value)
-    }
-
     /// Feasible for the loop's requirements: every constraint, the cell ones only when they
     /// are hard, and the energy cap.
     fn feasible(&self, ev: &Evaluation) -> bool {
@@ -302,8 +262,47 @@ impl Judge<'_> {
     }
 }
 
+/// Over-relaxation: SCA steps limited by the conservative centre bound tend to repeat in the
+/// same direction; from `current` (of merit `value`), try the step to `candidate` 2× and 4× as
+/// long and keep the longest whose merit still falls. `merit` is `None` for an iterate the loop
+/// would not accept (the exact scheme's feasibility; phase I accepts any).
+pub(super) fn over_relax(
+    mission: &Mission,
+    current: &Trajectory,
+    value: f64,
+    candidate: Candidate<Trajectory>,
+    merit: impl Fn(&Evaluation) -> Option<f64>,
+) -> Candidate<Trajectory> {
+    let Candidate {
+        mut iterate,
+        mut evaluation,
+        objective,
+        ipm_iterations,
+    } = candidate;
+    if let Some(mut best) = merit(&evaluation).filter(|m| *m < value) {
+        for alpha in [2.0, 4.0] {
+            let trial = extrapolate(current, &iterate, alpha);
+            let ev = evaluate(mission, &trial);
+            match merit(&ev) {
+                Some(m) if m < best => {
+                    iterate = trial;
+                    evaluation = ev;
+                    best = m;
+                }
+                _ => break,
+            }
+        }
+    }
+    Candidate {
+        iterate,
+        evaluation,
+        objective,
+        ipm_iterations,
+    }
+}
+
 /// `from + alpha (to − from)`, slot by slot.
-pub(super) fn extrapolate(from: &Trajectory, to: &Trajectory, alpha: f64) -> Trajectory {
+fn extrapolate(from: &Trajectory, to: &Trajectory, alpha: f64) -> Trajectory {
     Trajectory {
         slot_s: to.slot_s,
         start_m: to.start_m,

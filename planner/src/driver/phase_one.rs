@@ -7,7 +7,7 @@ use crate::{Mission, Trajectory};
 
 use super::error::NotFound;
 use super::executor::{execute, Candidate, Control, Failure, Review, Step, Stop};
-use super::iterate::{extrapolate, Means};
+use super::iterate::{over_relax, Means};
 use super::progress::LoopEnd;
 use super::table;
 use super::PlanError;
@@ -211,32 +211,9 @@ impl Step for PhaseOneStep<'_> {
         value: f64,
         candidate: Candidate<Trajectory>,
     ) -> Candidate<Trajectory> {
-        let Candidate {
-            mut iterate,
-            mut evaluation,
-            objective,
-            ipm_iterations,
-        } = candidate;
-        let mut merit = self.merit(&evaluation);
-        if merit < value {
-            for alpha in [2.0, 4.0] {
-                let trial = extrapolate(current, &iterate, alpha);
-                let ev = evaluate(self.mission, &trial);
-                let m = self.merit(&ev);
-                if m >= merit {
-                    break;
-                }
-                iterate = trial;
-                evaluation = ev;
-                merit = m;
-            }
-        }
-        Candidate {
-            iterate,
-            evaluation,
-            objective,
-            ipm_iterations,
-        }
+        over_relax(self.mission, current, value, candidate, |ev| {
+            Some(self.merit(ev))
+        })
     }
 
     /// The goal (an accepted step that is feasible), and the stall: the candidate's violation
