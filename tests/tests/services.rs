@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use bridge::net::{QueryOptions, SubscribeOptions, WireFormat};
 use bridge::zenoh::bytes::Encoding;
 use bridge::zenoh::Wait;
-use bridge::{DecodeLimits, ZenohArgs, ZenohNode};
+use bridge::{DecodeLimits, NetError, ZenohArgs, ZenohNode};
 use harness::memory::{Baseline, MIB};
 use harness::pipeline::*;
 use pipeline::collect::Collector;
@@ -149,21 +149,30 @@ impl Client {
                 ..Default::default()
             },
         };
-        self.node
-            .query_one::<PlanRequest, Plan>(
-                PLAN_KEY,
-                &req,
-                &QueryOptions {
-                    timeout: Duration::from_secs(120),
-                    limits: DecodeLimits {
-                        max_body_bytes: MAX_PLAN_BYTES,
-                        verify_crc: true,
-                    },
-                    ..QueryOptions::default()
-                },
-            )
-            .unwrap()
-            .message
+        let opts = QueryOptions {
+            timeout: Duration::from_secs(120),
+            limits: DecodeLimits {
+                max_body_bytes: MAX_PLAN_BYTES,
+                verify_crc: true,
+            },
+            ..QueryOptions::default()
+        };
+        // a planner's liveliness token is declared when its session opens, before its
+        // queryable: until that is declared a query finds nobody (NoReply at once), so ask
+        // again, as the launcher does
+        let deadline = Instant::now() + Duration::from_secs(120);
+        loop {
+            match self
+                .node
+                .query_one::<PlanRequest, Plan>(PLAN_KEY, &req, &opts)
+            {
+                Ok(reply) => return reply.message,
+                Err(NetError::NoReply { .. }) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(50));
+                }
+                Err(e) => panic!("asking for the plan: {e}"),
+            }
+        }
     }
 }
 
