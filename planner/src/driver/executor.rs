@@ -258,10 +258,16 @@ struct Run<I> {
     value: f64,
     control: Control,
     trust: TrustRegion,
+    /// The merits of the accepted iterates, the start's first.
     merits: Vec<f64>,
-    /// Steps accepted in this run.
-    accepted: usize,
     end: LoopEnd,
+}
+
+impl<I> Run<I> {
+    /// Whether no step has been accepted in this run.
+    fn before_progress(&self) -> bool {
+        self.merits.len() == 1
+    }
 }
 
 /// Runs `step` from `start` by `rules`, the trust radius and centre scale starting at
@@ -286,7 +292,6 @@ pub(super) fn execute<S: Step>(
         control,
         trust: TrustRegion::default(),
         merits: vec![value],
-        accepted: 0,
         end,
     };
     let first = rules.numbered_before + 1;
@@ -353,7 +358,7 @@ fn fail<I>(
     it: usize,
     t0: Instant,
 ) -> Result<Option<Stop>, PlanError> {
-    let before_progress = run.accepted == 0;
+    let before_progress = run.before_progress();
     match rules.failure {
         FailureRule::ProvenCentre if run.control.kappa_scale < 1.0 => {
             run.control.kappa_scale = 1.0;
@@ -431,7 +436,6 @@ fn judge<S: Step>(
     run.current = candidate.iterate;
     run.evaluation = candidate.evaluation;
     run.value = value;
-    run.accepted += 1;
     run.end.accept(candidate.objective, run.evaluation.energy_j);
     run.merits.push(value);
     tracing::debug!(
