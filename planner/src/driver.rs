@@ -74,9 +74,22 @@ pub fn plan_with_stop(
     run_plan(mission, options, observer, Some(stop))
 }
 
-/// The body of [`plan_with_observer`] and [`plan_with_stop`]. `solve_seconds` is read here,
-/// after the run's workspaces are freed (about 0.4 ms of the default mission's plan).
+/// The body of [`plan_with_observer`] and [`plan_with_stop`]: [`run_planned`] on the mission
+/// less its margins, judged on the mission ([`crate::margins::within`]).
 fn run_plan(
+    mission: &Mission,
+    options: &PlanOptions,
+    observer: &mut dyn Observer,
+    stop: Option<&AtomicBool>,
+) -> Result<PlanResult, PlanError> {
+    crate::margins::within(mission, |planned| {
+        run_planned(planned, options, observer, stop)
+    })
+}
+
+/// [`run_plan`] on `mission` as given. `solve_seconds` is read here,
+/// after the run's workspaces are freed (about 0.4 ms of the default mission's plan).
+fn run_planned(
     mission: &Mission,
     options: &PlanOptions,
     observer: &mut dyn Observer,

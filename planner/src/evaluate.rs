@@ -12,6 +12,13 @@ use crate::geometry::{
 use crate::power::PowerModel;
 use crate::{Mission, Trajectory};
 
+mod vehicle;
+pub use vehicle::{
+    accel_time_s, accel_window_s, jerk_excess_mps2, jerk_window_s, over_jerk_limit,
+    start_accel_time_s, start_to_slot_middle_s, start_velocity_lead_s, ACCEL_MARGIN_REL,
+    ACCEL_TOL_REL, JERK_MARGIN_REL, JERK_TOL_REL,
+};
+
 /// Default tolerance for calling a trajectory feasible: metres for distances, m/s for speeds.
 pub const FEASIBILITY_TOL: f64 = 1e-4;
 
@@ -87,7 +94,9 @@ pub enum Dynamics {
     Paper,
     /// A multirotor: the velocity changes by at most `max_accel_mps2` × δ from slot to slot, and
     /// by `max_accel_mps2` × δ/2 from the (instantaneous) start velocity into the first slot
-    /// ([`accel_window_s`]; `Params::max_accel_mps2`, `Params::start_velocity_mps`).
+    /// ([`accel_window_s`]; `Params::max_accel_mps2`, `Params::start_velocity_mps`); with a
+    /// jerk limit (`Params::max_jerk_mps3`) the acceleration changes by at most
+    /// `max_jerk_mps3` × [`jerk_window_s`] from slot to slot.
     Vehicle,
 }
 
@@ -100,44 +109,6 @@ impl Dynamics {
         self.into()
     }
 }
-
-/// The time from the start velocity's instant to the middle of slot `t` (≥ 1), s: (t − ½) δ from
-/// an instantaneous start velocity at t = 0, (t − ½) δ + δ/2 from the average of the slot flown
-/// before the start ([`crate::params::StartVelocityKind`]). At the acceleration limit the
-/// UAV's slot-t velocity differs from the start velocity by at most a_max times this.
-pub fn start_to_slot_middle_s(p: &crate::Params, t: usize) -> f64 {
-    (t as f64 - 0.5) * p.slot_s + start_velocity_lead_s(p)
-}
-
-/// How long before the start the start velocity holds, s: 0 for an instantaneous one, δ/2 for
-/// the average of the slot flown before ([`crate::params::StartVelocityKind`]).
-pub fn start_velocity_lead_s(p: &crate::Params) -> f64 {
-    match p.start_velocity_kind {
-        crate::params::StartVelocityKind::Instant => 0.0,
-        crate::params::StartVelocityKind::PreviousSlot => 0.5 * p.slot_s,
-    }
-}
-
-/// The time over which slot `t`'s (average) velocity changes from the previous one, s: δ between
-/// slot averages, and into the first slot [`start_to_slot_middle_s`] (δ/2 from an instantaneous
-/// start velocity: from v₀ at constant acceleration a the UAV is at q₀ + v₀ δ + a δ²/2 after one
-/// slot, so its average velocity there is v₀ + a δ/2).
-pub fn accel_window_s(p: &crate::Params, t: usize) -> f64 {
-    if t == 1 {
-        start_to_slot_middle_s(p, 1)
-    } else {
-        p.slot_s
-    }
-}
-
-/// Relative tolerance on the acceleration limit: a slot is within it when its acceleration is at
-/// most `max_accel_mps2` × (1 + this). The planner's constraint keeps
-/// [`ACCEL_MARGIN_REL`] inside the limit.
-pub const ACCEL_TOL_REL: f64 = 1e-7;
-
-/// Relative margin inside the acceleration limit that the planner's constraint keeps (solver
-/// tolerances stay inside it).
-pub const ACCEL_MARGIN_REL: f64 = 1e-6;
 
 /// A landmark slot is called blind when the angle ψ between the range gradient and the track is
 /// below this (the cell's cross-track extent is then more than 1/sin 5° ≈ 11 times its range width).
@@ -195,6 +166,12 @@ pub struct SlotEval {
     /// with v_0 the start velocity ([`accel_window_s`]), m/s².
     #[serde(default)]
     pub accel_mps2: f64,
+    /// Jerk into this slot, ‖a_t − a_{t−1}‖ / [`jerk_window_s`] with a_t the acceleration into
+    /// slot t ([`SlotEval::accel_mps2`] as a vector), m/s³; in the first slot from the mission's
+    /// `start_accel_mps2`, and 0 where it states none (no acceleration before the start is
+    /// assumed).
+    #[serde(default)]
+    pub jerk_mps3: f64,
     /// Altitude H_t at the end of the slot, m: the mission's `altitude_m` unless a profile is
     /// evaluated ([`evaluate_with_altitudes`]); 0 in results stored before the field.
     #[serde(default)]
@@ -222,6 +199,10 @@ pub struct Violations {
     /// counted in feasibility only under [`Dynamics::Vehicle`]), m/s².
     #[serde(default)]
     pub accel_mps2: f64,
+    /// max over all slots of ([`SlotEval::jerk_mps3`] − j_max)⁺ (the vehicle's jerk limit, 0
+    /// without one; counted in feasibility only under [`Dynamics::Vehicle`]), m/s³.
+    #[serde(default)]
+    pub jerk_mps3: f64,
     /// max over all slots of the altitude outside [`min_altitude_m`, `max_altitude_m`] (the
     /// mission's `altitude_m` for both at a fixed altitude), m.
     #[serde(default)]
@@ -274,6 +255,13 @@ pub struct Evaluation {
     /// The acceleration limit the violation is measured against, m/s².
     #[serde(default)]
     pub accel_limit_mps2: f64,
+    /// Largest jerk between consecutive slot accelerations ([`SlotEval::jerk_mps3`]), m/s³.
+    #[serde(default)]
+    pub max_jerk_mps3: f64,
+    /// The jerk limit the violation is measured against (the mission's `max_jerk_mps3`), m/s³;
+    /// `None`: the mission sets none.
+    #[serde(default)]
+    pub jerk_limit_mps3: Option<f64>,
     /// Altitude at the start H_0 (the mission's `altitude_m`), m; 0 in results stored before
     /// the field.
     #[serde(default)]
@@ -297,13 +285,17 @@ impl Evaluation {
             }
     }
 
-    /// Within the acceleration limit in every slot, to [`ACCEL_TOL_REL`].
+    /// Within the acceleration limit in every slot, to [`ACCEL_TOL_REL`], and within the jerk
+    /// limit, where the mission sets one, to [`JERK_TOL_REL`].
     pub fn is_flyable(&self) -> bool {
         self.violations.accel_mps2 <= ACCEL_TOL_REL * self.accel_limit_mps2
+            && self
+                .jerk_limit_mps3
+                .is_none_or(|limit| self.violations.jerk_mps3 <= JERK_TOL_REL * limit)
     }
 
     /// [`Evaluation::is_feasible_for`], plus, under [`Dynamics::Vehicle`], the acceleration
-    /// limit in every slot ([`Evaluation::is_flyable`]).
+    /// and jerk limits in every slot ([`Evaluation::is_flyable`]).
     pub fn is_feasible_with(&self, mode: ResolutionMode, dynamics: Dynamics) -> bool {
         self.is_feasible_for(mode) && self.meets(dynamics)
     }
@@ -374,13 +366,23 @@ fn evaluate_profile(
     let mut unresolved = 0;
     let mut blind = 0;
     let mut max_accel: f64 = 0.0;
+    let mut max_jerk: f64 = 0.0;
     let mut prev_vel = mission.start_velocity_mps();
+    let mut prev_accel: Option<Vector2<f64>> = p.start_accel_mps2.map(Vector2::from);
     for t in 1..=traj.slots() {
         let pos = traj.q(t);
         let vel = traj.velocity_mps(t);
-        let accel = (Vector2::from(vel) - Vector2::from(prev_vel)).length() / accel_window_s(p, t);
+        let change = Vector2::from(vel) - Vector2::from(prev_vel);
+        let accel = change.length() / accel_window_s(p, t);
+        let accel_vec = change / accel_window_s(p, t);
+        let jerk = match (prev_accel, jerk_window_s(p, t)) {
+            (Some(a), Some(w)) => (accel_vec - a).length() / w,
+            _ => 0.0,
+        };
         prev_vel = vel;
+        prev_accel = Some(accel_vec);
         max_accel = max_accel.max(accel);
+        max_jerk = max_jerk.max(jerk);
         let speed = Vector2::from(vel).length();
         let heading = headings[t - 1];
         let z = altitudes_m
@@ -462,11 +464,13 @@ fn evaluate_profile(
             cross_track_width_m: cell.cross_track_width_m,
             worst_width_m: cell.worst_width_m,
             accel_mps2: accel,
+            jerk_mps3: jerk,
             z_m: z,
             climb_mps: climb,
         });
     }
     viol.accel_mps2 = (max_accel - p.max_accel_mps2).max(0.0);
+    viol.jerk_mps3 = p.max_jerk_mps3.map_or(0.0, |j| (max_jerk - j).max(0.0));
     // clamp negatives (the max started at 0 so they are ≥ 0 already, except NaN)
     for v in [
         &mut viol.sensing_m,
@@ -475,6 +479,7 @@ fn evaluate_profile(
         &mut viol.range_paper_m,
         &mut viol.worst_width_m,
         &mut viol.accel_mps2,
+        &mut viol.jerk_mps3,
         &mut viol.altitude_m,
         &mut viol.climb_mps,
     ] {
@@ -498,6 +503,8 @@ fn evaluate_profile(
         slots_blind: blind,
         max_accel_mps2: max_accel,
         accel_limit_mps2: p.max_accel_mps2,
+        max_jerk_mps3: max_jerk,
+        jerk_limit_mps3: p.max_jerk_mps3,
         start_altitude_m: p.altitude_m,
     }
 }

@@ -24,6 +24,7 @@ pub mod files;
 pub mod geometry;
 pub mod init;
 pub mod landmarks;
+pub mod margins;
 pub mod mission;
 pub mod params;
 pub mod power;

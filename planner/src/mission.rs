@@ -9,6 +9,7 @@
 //! spacing_m = 30
 //! ```
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -182,8 +183,10 @@ impl Mission {
     }
 
     /// The same mission on a grid of slots `factor` times longer (for a coarse first solve):
-    /// coarse slot k senses the landmark of the fine slot that ends at the same time. `None`
-    /// when `factor` is 0 or does not divide the number of slots.
+    /// coarse slot k senses the landmark of the fine slot that ends at the same time, the start
+    /// velocity is the mission's, and a jerk limit is divided by `factor` (so that the coarse
+    /// track, interpolated to the fine slots, keeps the fine limit). `None` when `factor` is 0
+    /// or does not divide the number of slots.
     pub fn coarsened(&self, factor: usize) -> Option<Self> {
         let n = self.slots();
         if factor == 0 || !n.is_multiple_of(factor) {
@@ -193,6 +196,11 @@ impl Mission {
         // the start velocity of the mission itself, whatever the coarse grid's first slot senses
         params.start_velocity_mps = Some(self.start_velocity_mps());
         params.slot_s *= factor as f64;
+        // the jerk limit over the fine slot: a coarse track whose slot accelerations change by at
+        // most j δ (its jerk within j δ/Δ over its slots Δ) gives, with the velocity
+        // interpolated linearly between its slot middles, fine slot accelerations that change by
+        // at most j δ from one fine slot to the next (constant between the coarse middles)
+        params.max_jerk_mps3 = params.max_jerk_mps3.map(|j| j / factor as f64);
         let slot_landmark = (1..=n / factor)
             .map(|k| self.schedule.slot_landmark[k * factor - 1])
             .collect();
@@ -241,6 +249,11 @@ impl Mission {
         if let Some(v) = p.start_velocity_mps {
             return v;
         }
+        if p.has_margins() {
+            // the rule of the limits the plan is made against, so that the mission and the
+            // mission planned ([`Mission::planned`]) start alike
+            return self.planned().start_velocity_mps();
+        }
         let Some((t0, g)) = (1..=self.slots()).find_map(|t| self.target_m(t).map(|g| (t, g)))
         else {
             return [0.0, 0.0];
@@ -270,6 +283,22 @@ impl Mission {
         };
         let v = search.nearest_resolving().unwrap_or(preferred);
         [v.x, v.y]
+    }
+
+    /// The mission a plan is made for: this one with each limit less its margin
+    /// ([`Params::planning_limits`]: `d_min_m`, `max_accel_mps2`, `max_jerk_mps3`), or this one
+    /// itself when it sets no margin. Same name, schedule and start velocity
+    /// ([`Mission::start_velocity_mps`] follows the rule on the tightened limits for both).
+    pub fn planned(&self) -> Cow<'_, Mission> {
+        if !self.params.has_margins() {
+            return Cow::Borrowed(self);
+        }
+        Cow::Owned(Self {
+            name: self.name.clone(),
+            params: self.params.planning_limits(),
+            schedule: self.schedule.clone(),
+            start_velocity: start::Cache::default(),
+        })
     }
 
     /// The mission's name.
@@ -328,8 +357,13 @@ impl Mission {
             air_density_kgpm3,
             fuselage_drag_ratio,
             uav_mass_kg,
-            max_accel_mps2
+            max_accel_mps2,
+            resolution_margin_pct,
+            accel_margin_pct,
+            jerk_margin_pct
         );
+        o.max_jerk_mps3 = p.max_jerk_mps3;
+        o.start_accel_mps2 = p.start_accel_mps2;
         o.start_velocity_mps = p.start_velocity_mps;
         if p.altitude != d.altitude {
             o.altitude = Some(p.altitude);
@@ -408,6 +442,34 @@ mod tests {
             }
         }
         assert!(n >= 9, "{n} missions in {}", dir.display());
+    }
+
+    /// A mission with margins is planned against its tightened limits from the start velocity
+    /// of the rule on those limits, which the mission itself reports too; its file form keeps
+    /// the margins and the jerk limit.
+    #[test]
+    fn margins_plan_the_tightened_limits_from_one_start() {
+        let text = "[params]\nresolution_margin_pct = 10\naccel_margin_pct = 20\n\
+                    max_jerk_mps3 = 10\njerk_margin_pct = 50\n\
+                    [landmarks]\npreset = \"default\"\nspacing_m = 30\n";
+        let m = Mission::from_file_struct(&MissionFile::from_toml_str(text).unwrap()).unwrap();
+        let planned = m.planned();
+        let (p, t) = (m.params(), planned.params());
+        assert_eq!((p.d_min_m, p.max_jerk_mps3), (20.0, Some(10.0)));
+        assert!((t.d_min_m - 18.0).abs() < 1e-12);
+        assert!((t.max_accel_mps2 - 0.8 * p.max_accel_mps2).abs() < 1e-12);
+        assert_eq!(t.max_jerk_mps3, Some(5.0));
+        assert_eq!(planned.schedule(), m.schedule());
+        assert_eq!(m.start_velocity_mps(), planned.start_velocity_mps());
+        // the rule of a mission that states the tightened limits itself
+        let mut tight = t.clone();
+        tight.d_min_m = 18.0;
+        let stated = m.with_params(tight).unwrap();
+        assert_eq!(m.start_velocity_mps(), stated.start_velocity_mps());
+        assert!(matches!(stated.planned(), Cow::Borrowed(_)));
+        // the file form round-trips the margins and the limit
+        let back = Mission::from_file_struct(&m.to_file_struct()).unwrap();
+        assert_eq!(back.params(), m.params());
     }
 
     #[test]

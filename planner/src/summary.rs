@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::altitude::AltitudeMode;
 use crate::driver::{BestEffort, PlanResult, Scheme, TerminationReason};
 use crate::evaluate::SlotEval;
+use crate::margins::LimitRoom;
 use crate::power::PowerModel;
 use crate::schemes::exact::ExactObjective;
 use crate::shortfall::ResolutionShortfall;
@@ -135,6 +136,47 @@ pub struct Summary {
     /// mission's one altitude `altitude_m`, whose summary it leaves unchanged.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub altitude: Option<AltitudeSummary>,
+    /// The jerk of a plan of a mission with a jerk limit (`max_jerk_mps3`); absent without one,
+    /// which leaves the summary unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jerk: Option<JerkSummary>,
+    /// The least room the plan keeps inside each of the mission's limits, for a mission with
+    /// margins (`resolution_margin_pct`, `accel_margin_pct`, `jerk_margin_pct`); absent without
+    /// them, which leaves the summary unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub margins: Option<LimitRoom>,
+}
+
+/// The jerk of a plan (`jerk` in `summary.json`), on the exact geometry: the change of the
+/// acceleration between consecutive slots over its window
+/// ([`crate::evaluate::jerk_window_s`]), from the second slot on.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct JerkSummary {
+    /// Largest jerk over the slots, m/s³.
+    pub max_jerk_mps3: f64,
+    /// The mission's jerk limit (`max_jerk_mps3`), m/s³.
+    pub jerk_limit_mps3: f64,
+    /// Largest (jerk − limit)⁺ over the slots, m/s³ (reported whatever the dynamics).
+    pub max_jerk_violation_mps3: f64,
+    /// Slots whose jerk exceeds the limit (to its relative tolerance 1e-7).
+    pub slots_over_jerk_limit: usize,
+}
+
+impl JerkSummary {
+    /// The jerk of the plan evaluated as `ev` against `mission`'s limit; `None` without one.
+    fn new(mission: &Mission, ev: &crate::Evaluation) -> Option<Self> {
+        let p = mission.params();
+        Some(Self {
+            max_jerk_mps3: ev.max_jerk_mps3,
+            jerk_limit_mps3: p.max_jerk_mps3?,
+            max_jerk_violation_mps3: ev.violations.jerk_mps3,
+            slots_over_jerk_limit: ev
+                .slots
+                .iter()
+                .filter(|s| crate::evaluate::over_jerk_limit(p, s.jerk_mps3))
+                .count(),
+        })
+    }
 }
 
 /// The altitudes of a free-altitude plan (`altitude` in `summary.json`), on the exact geometry
@@ -278,12 +320,16 @@ impl Summary {
                 .altitudes_m
                 .as_deref()
                 .and_then(|z| AltitudeSummary::new(mission, ev, z)),
+            jerk: JerkSummary::new(mission, ev),
+            margins: p
+                .has_margins()
+                .then(|| crate::margins::LimitRoom::new(mission, ev)),
         }
     }
 }
 
 /// The columns of `trajectory.csv`.
-pub const TRAJECTORY_COLUMNS: &str = "t_s,x_m,y_m,speed_mps,heading_rad,xc_m,yc_m,landmark_x_m,landmark_y_m,in_view,centre_error_m,power_w,energy_j,range_resolution_paper_m,range_resolution_general_m,azimuth_resolution_m,bistatic_angle_deg,grad_norm,psi_rad,along_track_width_m,cross_track_width_m,worst_width_m,accel_mps2,z_m,climb_mps";
+pub const TRAJECTORY_COLUMNS: &str = "t_s,x_m,y_m,speed_mps,heading_rad,xc_m,yc_m,landmark_x_m,landmark_y_m,in_view,centre_error_m,power_w,energy_j,range_resolution_paper_m,range_resolution_general_m,azimuth_resolution_m,bistatic_angle_deg,grad_norm,psi_rad,along_track_width_m,cross_track_width_m,worst_width_m,accel_mps2,z_m,climb_mps,jerk_mps3";
 
 /// A number of a CSV table as Rust's `{}` prints it (shortest round trip, `1` for 1.0), NaN as
 /// `nan`: the csv crate's own float format (ryu: `1.0`, `1e20`) would change the published
@@ -335,6 +381,7 @@ struct TrajectoryRow {
     accel_mps2: CsvNum,
     z_m: CsvNum,
     climb_mps: CsvNum,
+    jerk_mps3: CsvNum,
 }
 
 impl TrajectoryRow {
@@ -367,6 +414,7 @@ impl TrajectoryRow {
             accel_mps2: nan,
             z_m: CsvNum(start_altitude_m),
             climb_mps: nan,
+            jerk_mps3: nan,
         }
     }
 
@@ -399,6 +447,7 @@ impl TrajectoryRow {
             accel_mps2: CsvNum(e.accel_mps2),
             z_m: CsvNum(e.z_m),
             climb_mps: CsvNum(e.climb_mps),
+            jerk_mps3: CsvNum(e.jerk_mps3),
         }
     }
 }
@@ -451,9 +500,9 @@ mod tests {
         w.serialize(TrajectoryRow::start([-12.5, 3.0], 1000.0))
             .unwrap();
         let text = String::from_utf8(w.into_inner().unwrap()).unwrap();
-        // the columns before z_m as they were; the start altitude, and no climb rate
+        // the columns before z_m as they were; the start altitude, no climb rate and no jerk
         let start = "-12.5,3,nan,nan,nan,nan,nan,nan,nan,nan,nan,0,nan,nan,nan,nan,nan,nan,nan,\
-                     nan,nan,nan,1000,nan";
+                     nan,nan,nan,1000,nan,nan";
         assert_eq!(text, format!("{TRAJECTORY_COLUMNS}\n0,{start}\n"));
     }
 

@@ -133,13 +133,28 @@ fn label(k: usize, total: usize, cap: Option<f64>) -> String {
 }
 
 /// [`tradeoff`], telling `observer` each iteration of each point's plan and each phase as
-/// `"point K/N (cap C %): PHASE"` (the least-energy plan first).
+/// `"point K/N (cap C %): PHASE"` (the least-energy plan first). A mission with margins is
+/// planned with them and every point judged on its own limits, as [`crate::plan`] does
+/// ([`crate::margins`]).
 pub fn tradeoff_with_observer(
     mission: &Mission,
     options: &PlanOptions,
     caps_pct: &[f64],
     observer: &mut dyn Observer,
 ) -> Result<Vec<TradeoffPoint>, PlanError> {
+    if mission.params().has_margins() {
+        // every point planned with the margins, judged on the mission's own limits
+        let points = tradeoff_with_observer(&mission.planned(), options, caps_pct, observer)
+            .map_err(|e| crate::margins::judge_error(mission, e))?;
+        return Ok(points
+            .into_iter()
+            .map(|mut point| {
+                crate::margins::judge(mission, &mut point.plan);
+                point.shortfall = ResolutionShortfall::new(mission, &point.plan.evaluation);
+                point
+            })
+            .collect());
+    }
     let total = caps_pct.len() + 2;
     let options = PlanOptions {
         resolution: ResolutionMode::General,

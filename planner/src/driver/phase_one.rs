@@ -20,7 +20,8 @@ use super::PlanError;
 ///
 /// Under [`Dynamics::Vehicle`] it adds, over all slots, the velocity change beyond the limit,
 /// ([`crate::evaluate::SlotEval::accel_mps2`] − a_max)⁺ δ in m/s (what the acceleration slack
-/// τ_t/δ bounds, twice that in the first slot).
+/// τ_t/δ bounds, twice that in the first slot), and the acceleration change beyond a jerk limit
+/// ([`crate::evaluate::jerk_excess_mps2`]).
 pub(super) fn total_violation(
     mission: &Mission,
     ev: &Evaluation,
@@ -66,6 +67,7 @@ pub(super) fn total_violation(
         })
         .sum::<f64>()
         + accel_excess
+        + crate::evaluate::jerk_excess_mps2(p, ev, dynamics)
 }
 
 /// Phase I (elastic SCA): while `start` violates the exact constraints, minimise the objective
@@ -264,6 +266,7 @@ pub(super) fn stalled_error(
         .find(|s| {
             !s.in_view
                 || too_fast(s.accel_mps2)
+                || (vehicle && crate::evaluate::over_jerk_limit(p, s.jerk_mps3))
                 || (s.landmark_m.is_some()
                     && (s.speed_mps < p.min_speed_mps() - 1e-4
                         || (mode == ResolutionMode::General && s.worst_width_m > p.d_min_m + 1e-4)))

@@ -51,6 +51,13 @@ pub const MAX_AIR_DENSITY_KGPM3: f64 = 1.6;
 /// Heaviest vehicle, kg: 3000 kg, above the largest rotary-wing UAV in service (Northrop
 /// Grumman MQ-8C Fire Scout, 2 722 kg maximum take-off weight).
 pub const MAX_UAV_MASS_KG: f64 = 3000.0;
+/// Largest horizontal jerk, m/s³: 500 m/s³, the largest value of PX4's jerk limit
+/// `MPC_JERK_MAX` (range 0.5–500, default 8), which PX4 documents as essentially no limit.
+pub const MAX_JERK_MPS3: f64 = 500.0;
+/// Largest margin on a limit, %: 50 %. A margin is room for a flight controller's tracking
+/// error; one of half the limit or more describes another vehicle, whose limit the mission
+/// should state instead.
+pub const MAX_MARGIN_PCT: f64 = 50.0;
 /// Most landmarks of a mission: 10 000 (a work bound, not physics: the paper's layouts have 30
 /// and 60; each landmark needs a slot of its own).
 pub const MAX_LANDMARKS: usize = 10_000;
@@ -119,5 +126,9 @@ pub(super) fn check_others(p: &Params) -> Result<(), ParamError> {
 
 /// Where [`MAX_ALTITUDE_M`] comes from, in refusals.
 pub(super) const ALTITUDE_WHY: &str = "the service ceiling of a production multirotor";
+/// Where [`MAX_JERK_MPS3`] comes from, in refusals.
+pub(super) const JERK_WHY: &str = "the largest jerk limit PX4 allows, MPC_JERK_MAX = 500";
+/// Where [`MAX_MARGIN_PCT`] comes from, in refusals.
+pub(super) const MARGIN_WHY: &str = "half the limit: state the vehicle's own limit instead";
 /// Where [`MAX_SPEED_MPS`] comes from, in refusals.
 pub(super) const SPEED_WHY: &str = "above the fastest rotary-wing flight on record, 131 m/s";

@@ -14,7 +14,7 @@
 //! problem that is tight at the previous iterate: each iterate is exactly feasible and its true
 //! energy is no larger than the previous one (a majorisation–minimisation sequence).
 
-use crate::evaluate::{Dynamics, ResolutionMode, ACCEL_MARGIN_REL};
+use crate::evaluate::{Dynamics, ResolutionMode};
 use crate::geometry::{heading_unit, Length, Point2, Vector2, RIGHT_TURN};
 use crate::power::PowerModel;
 use crate::socp::{Lin, ProblemBuilder};
@@ -23,6 +23,7 @@ use crate::{Mission, Trajectory};
 mod altitude;
 mod cell;
 mod landmark;
+mod vehicle;
 pub use altitude::cell_altitude_margin;
 use altitude::{altitude_rows, AltitudeVars};
 pub use cell::{cell_margin, BEST_EFFORT_CELL_TARGET_FRACTION};
@@ -98,8 +99,9 @@ pub struct ExactTuning {
     /// The vehicle model: under [`Dynamics::Vehicle`] every slot's velocity differs from the
     /// previous one by at most a_max δ (the first from the mission's start velocity by
     /// a_max δ/2, [`ExactTuning::first_accel_window_s`]), one
-    /// second-order cone per slot (exact, no linearisation); in elastic mode each slot gets a
-    /// slack on it.
+    /// second-order cone per slot (exact, no linearisation), and with the mission's jerk limit
+    /// the acceleration from slot to slot by at most j_max × [`crate::evaluate::jerk_window_s`],
+    /// one more cone per slot from the second on; in elastic mode each gets a slack.
     pub dynamics: Dynamics,
     /// The time over which the first slot's (average) velocity may differ from the start
     /// velocity, s (`None`: [`crate::evaluate::accel_window_s`] of slot 1, δ/2 from an
@@ -148,6 +150,9 @@ struct SlotVars {
     rho: Option<usize>,
     /// Elastic mode under the vehicle dynamics: the acceleration slack τ_t, m of step change.
     accel_slack: Option<usize>,
+    /// Elastic mode under the vehicle dynamics with a jerk limit, in every slot with a jerk
+    /// cone: the jerk slack, m of change of the step's change (δ² × the acceleration change).
+    jerk_slack: Option<usize>,
     /// Free altitude: the slot's altitude variables.
     alt: Option<AltitudeVars>,
 }
@@ -245,7 +250,7 @@ impl ExactSubproblem {
             );
             b.nonneg(Lin::var(sv.v, -SPEED_UNIT_MPS).plus_const(v_max));
             if tuning.dynamics == Dynamics::Vehicle {
-                accel_cone(
+                vehicle::accel_cone(
                     &mut b,
                     mission,
                     tuning,
@@ -253,6 +258,7 @@ impl ExactSubproblem {
                     t,
                     (&vx, &vy),
                 );
+                vehicle::jerk_cone(&mut b, mission, tuning, (&vars, prev.start_m), t);
             }
 
             if let Some(av) = sv.alt {
@@ -398,6 +404,11 @@ fn objective_terms(
             b.add_linear_cost(tau, w * objective_scale / delta);
             b.nonneg(Lin::var(tau, 1.0));
         }
+        if let (Some(tau), Some(w)) = (sv.jerk_slack, tuning.elastic_weight) {
+            // τ/δ² is the acceleration change beyond the limit, m/s² (phase I's measure)
+            b.add_linear_cost(tau, w * objective_scale / (delta * delta));
+            b.nonneg(Lin::var(tau, 1.0));
+        }
         if let (Some(rho), Some(w)) = (sv.rho, tuning.cell_slack_weight) {
             b.add_linear_cost(rho, w * objective_scale);
             b.nonneg(Lin::var(rho, 1.0));
@@ -433,8 +444,13 @@ fn layout(
         let best_effort = general && tuning.cell_slack_weight.is_some();
         let shift = (general && !best_effort).then(&mut take);
         let rho = best_effort.then(&mut take);
-        let accel_slack = (tuning.elastic_weight.is_some() && tuning.dynamics == Dynamics::Vehicle)
-            .then(&mut take);
+        let elastic_vehicle =
+            tuning.elastic_weight.is_some() && tuning.dynamics == Dynamics::Vehicle;
+        let accel_slack = elastic_vehicle.then(&mut take);
+        let p = mission.params();
+        let jerk_limited =
+            p.max_jerk_mps3.is_some() && crate::evaluate::jerk_window_s(p, t).is_some();
+        let jerk_slack = (elastic_vehicle && jerk_limited).then(&mut take);
         let alt = free_altitude.then(|| AltitudeVars {
             h: take(),
             climb: take(),
@@ -450,6 +466,7 @@ fn layout(
             shift,
             rho,
             accel_slack,
+            jerk_slack,
             alt,
         });
     }
@@ -547,40 +564,6 @@ fn energy_cap(
         }
     }
     b.nonneg(e);
-}
-
-/// The vehicle's acceleration limit into slot `t`: ‖v_t − v_{t−1}‖ ≤ a_max δ in steps,
-/// ‖s_t − s_{t−1}‖ ≤ a_max δ² (1 − [`ACCEL_MARGIN_REL`]) (+ τ_t in elastic mode), with
-/// s_0 = v_0 δ from the mission's start velocity and, for the first slot, a_max δ w
-/// (w = [`ExactTuning::first_accel_window_s`], δ/2 by default: v₀ is the velocity at t = 0).
-fn accel_cone(
-    b: &mut ProblemBuilder,
-    mission: &Mission,
-    tuning: &ExactTuning,
-    (vars, start_m): (&[SlotVars], [f64; 2]),
-    t: usize,
-    (vx, vy): (&Lin, &Lin),
-) {
-    let p = mission.params();
-    let delta = p.slot_s;
-    let (dx, dy, window) = if t == 1 {
-        let v0 = mission.start_velocity_mps();
-        (
-            vx.clone().plus_const(-v0[0] * delta),
-            vy.clone().plus_const(-v0[1] * delta),
-            tuning
-                .first_accel_window_s
-                .unwrap_or_else(|| crate::evaluate::accel_window_s(mission.params(), 1)),
-        )
-    } else {
-        let (px, py) = step_exprs(vars, t - 1, start_m);
-        (vx.clone().minus_lin(&px), vy.clone().minus_lin(&py), delta)
-    };
-    let mut head = Lin::constant_only(p.max_accel_mps2 * delta * window * (1.0 - ACCEL_MARGIN_REL));
-    if let Some(tau) = vars[t - 1].accel_slack {
-        head = head.plus(tau, 1.0);
-    }
-    b.soc(head, &[dx, dy]);
 }
 
 /// (x_t − x_{t−1}, y_t − y_{t−1}) as affine expressions (q_0 is a constant).

@@ -58,6 +58,8 @@ fn judged(x: f64) -> Evaluation {
         slots_blind: 0,
         max_accel_mps2: 0.0,
         accel_limit_mps2: 0.0,
+        max_jerk_mps3: 0.0,
+        jerk_limit_mps3: None,
         start_altitude_m: 0.0,
     }
 }
