@@ -12,7 +12,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::driver::{PlanError, PlanResult};
-use crate::evaluate::{evaluate, evaluate_with_altitudes, Evaluation};
+use crate::evaluate::{evaluate, evaluate_with_altitudes, Evaluation, FEASIBILITY_TOL};
 use crate::Mission;
 
 /// Runs `plan` on the mission planned with `mission`'s margins ([`Mission::planned`]; the
@@ -109,6 +109,11 @@ pub struct LimitRoom {
     /// 100 (1 − largest worst cell width / d_min) over the landmark slots the general cell
     /// resolves (worst width ≤ d_min); `None` when it resolves none.
     pub cell_room_pct: Option<f64>,
+    /// Landmark slots the general cell resolves (worst width ≤ d_min) with less room than the
+    /// resolution margin asks (wider than d_min (1 − `resolution_margin_pct`/100), to
+    /// [`crate::evaluate::FEASIBILITY_TOL`]): where a best effort could not keep the margin, a
+    /// tracking error may widen the cell beyond d_min. 0 without a resolution margin.
+    pub slots_short_of_margin: usize,
     /// 100 (1 − largest paper azimuth resolution δ_a / d_min) over the landmark slots (the
     /// azimuth requirement, V ≥ V_min); `None` without landmark slots.
     pub azimuth_room_pct: Option<f64>,
@@ -128,6 +133,7 @@ impl LimitRoom {
             .map(|s| s.worst_width_m)
             .filter(|w| *w <= p.d_min_m)
             .reduce(f64::max);
+        let planned_d_min_m = p.planning_limits().d_min_m;
         let widest_azimuth = landmark()
             .map(|s| s.azimuth_resolution_paper_m)
             .reduce(f64::max);
@@ -138,6 +144,10 @@ impl LimitRoom {
                 p.jerk_margin_pct,
             ],
             cell_room_pct: widest_resolved.map(|w| room(w, p.d_min_m)),
+            slots_short_of_margin: landmark()
+                .map(|s| s.worst_width_m)
+                .filter(|w| *w <= p.d_min_m && *w > planned_d_min_m + FEASIBILITY_TOL)
+                .count(),
             azimuth_room_pct: widest_azimuth.map(|w| room(w, p.d_min_m)),
             accel_room_pct: room(ev.max_accel_mps2, p.max_accel_mps2),
             jerk_room_pct: p.max_jerk_mps3.map(|j| room(ev.max_jerk_mps3, j)),

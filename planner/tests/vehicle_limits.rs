@@ -226,6 +226,16 @@ fn a_resolution_margin_keeps_its_room_in_every_resolved_slot() {
     assert!(plan.is_feasible());
     let room = Summary::new(&m, &plan).margins.unwrap();
     assert!(room.cell_room_pct.unwrap() >= 5.0 - 100.0 * FEASIBILITY_TOL / d_min);
+    assert_eq!(room.slots_short_of_margin, 0);
+    // the plan without the margin, judged with it, has slots resolved without that room
+    let judged = Summary::new(
+        &m,
+        &planner::PlanResult {
+            evaluation: planner::evaluate(&m, &free.trajectory),
+            ..free.clone()
+        },
+    );
+    assert!(judged.margins.unwrap().slots_short_of_margin > 0);
 }
 
 /// The margins together with a jerk limit and its margin: every limit keeps its room.
