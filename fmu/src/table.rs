@@ -158,6 +158,7 @@ pub const UNITS: &[Unit] = &[
     unit("rad", 0, 0, 0, 1),
     unit("m/s", 0, 1, -1, 0),
     unit("m/s2", 0, 1, -2, 0),
+    unit("m/s3", 0, 1, -3, 0),
     unit("W", 1, 2, -3, 0),
     unit("J", 1, 2, -2, 0),
     unit("kg", 1, 0, 0, 0),
@@ -218,91 +219,7 @@ impl Category {
 }
 
 /// Value references of the planner model.
-pub mod planner_vr {
-    /// `time` (FMI 3 only).
-    pub const TIME: u32 = 0;
-    /// First scalar/array mission parameter.
-    pub const FIRST_PARAM: u32 = 1;
-    /// `start_m` (array of 2).
-    pub const START_M: u32 = 10;
-    /// `bs_m` (array of 2).
-    pub const BS_M: u32 = 12;
-    /// `start_velocity_mps` (array of 2).
-    pub const START_VELOCITY: u32 = 26;
-    /// `mission_file`.
-    pub const MISSION_FILE: u32 = 100;
-    /// `resolution` (String): the initial plan's resolution requirement.
-    pub const RESOLUTION: u32 = 101;
-    /// `strict_resolution` (Boolean).
-    pub const STRICT_RESOLUTION: u32 = 102;
-    /// `max_extra_energy_pct`.
-    pub const MAX_EXTRA_ENERGY_PCT: u32 = 103;
-    /// `dynamics` (String): the vehicle model of every plan.
-    pub const DYNAMICS: u32 = 104;
-    /// `landmark_x_in_m`.
-    pub const LANDMARK_X_IN: u32 = 200;
-    /// `landmark_y_in_m`.
-    pub const LANDMARK_Y_IN: u32 = 201;
-    /// `x_m`.
-    pub const X: u32 = 300;
-    /// `y_m`.
-    pub const Y: u32 = 301;
-    /// `speed_mps`.
-    pub const SPEED: u32 = 302;
-    /// `heading_rad`.
-    pub const HEADING: u32 = 303;
-    /// `power_w`.
-    pub const POWER: u32 = 304;
-    /// `energy_j`.
-    pub const ENERGY: u32 = 305;
-    /// `xc_m`.
-    pub const XC: u32 = 306;
-    /// `yc_m`.
-    pub const YC: u32 = 307;
-    /// `landmark_x_m`.
-    pub const LANDMARK_X: u32 = 308;
-    /// `landmark_y_m`.
-    pub const LANDMARK_Y: u32 = 309;
-    /// `in_view`.
-    pub const IN_VIEW: u32 = 310;
-    /// `range_resolution_m`.
-    pub const RANGE_RES: u32 = 311;
-    /// `azimuth_resolution_m`.
-    pub const AZIMUTH_RES: u32 = 312;
-    /// `range_resolution_paper_m`.
-    pub const RANGE_RES_PAPER: u32 = 313;
-    /// `azimuth_resolution_paper_m`.
-    pub const AZIMUTH_RES_PAPER: u32 = 314;
-    /// `worst_cell_width_m`.
-    pub const WORST_WIDTH: u32 = 315;
-    /// `replan_count`.
-    pub const REPLAN_COUNT: u32 = 316;
-    /// `slots_out_of_view`.
-    pub const SLOTS_OUT_OF_VIEW: u32 = 317;
-    /// `plan_resolution`.
-    pub const PLAN_RESOLUTION: u32 = 318;
-    /// `commanded_accel_mps2`.
-    pub const COMMANDED_ACCEL: u32 = 319;
-    /// `commanded_accel_x_mps2`.
-    pub const COMMANDED_ACCEL_X: u32 = 320;
-    /// `commanded_accel_y_mps2`.
-    pub const COMMANDED_ACCEL_Y: u32 = 321;
-    /// `z_m`.
-    pub const Z: u32 = 322;
-    /// `climb_mps`.
-    pub const CLIMB: u32 = 323;
-    /// `plan_solve_time_s` (local).
-    pub const SOLVE_TIME: u32 = 400;
-    /// `plan_lower_bound_j` (local).
-    pub const LOWER_BOUND: u32 = 401;
-    /// `plan_bound_gap_pct` (local).
-    pub const BOUND_GAP: u32 = 402;
-    /// Hidden (not in modelDescription.xml) Integer/Int32 variable for tests, settable only in
-    /// a build with the `test-hooks` feature (elsewhere an unknown value reference): setting it
-    /// to [`crate::core::PANIC_IN_DO_STEP`] makes the next doStep panic inside the model core,
-    /// to prove that no panic crosses the C boundary.
-    pub const DEBUG_INJECT_PANIC: u32 = 0x7FFF_0001;
-}
+pub mod planner_vr;
 
 const fn param(
     name: &'static str,
@@ -414,6 +331,10 @@ pub const PLANNER_VARS: &[Var] = &[
         unit: Some("m/s"),
         description: "UAV velocity at the start q_0 (v_x, v_y), from which the first slot's acceleration is counted. Both NaN (the start value): the mission file's start_velocity_mps, else the mission's rule (at rest, unless the first landmark comes too soon to reach the azimuth speed from rest). Both finite: this velocity (its speed at most max_speed_mps); one NaN and one finite is refused at ExitInitializationMode. After initialisation it reads the value in effect.",
     },
+    param("max_jerk_mps3", pv::MAX_JERK, Some("m/s3"), "Largest horizontal jerk j_max: the acceleration between slots changes by at most j_max times slot_s from slot to slot (2/3 of that into the second slot), under dynamics = vehicle only. NaN (the start value): the mission file's max_jerk_mps3, else no jerk limit; a finite value must be > 0 and at most 500 (refused at ExitInitializationMode otherwise). After initialisation it reads the value in effect (NaN: none)"),
+    param("resolution_margin_pct", 29, None, "Margin on the resolution requirement, percent of d_min_m (0 to 50, default 0): every plan, the re-plans included, is made for d_min (1 - margin/100) and the azimuth speed with it, and judged against d_min"),
+    param("accel_margin_pct", 30, None, "Margin on max_accel_mps2, percent (0 to 50, default 0): the plans are made for a_max (1 - margin/100) under dynamics = vehicle, so the commanded acceleration keeps that room"),
+    param("jerk_margin_pct", 31, None, "Margin on max_jerk_mps3, percent (0 to 50, default 0): the plans are made for j_max (1 - margin/100) under dynamics = vehicle; no effect without a jerk limit"),
     Var {
         name: "mission_file",
         vr: pv::MISSION_FILE,
@@ -462,7 +383,7 @@ pub const PLANNER_VARS: &[Var] = &[
         variability: Variability::Fixed,
         len: 1,
         unit: None,
-        description: "Vehicle model of every plan, the initial plan and the re-plans inside a step (cellsar-planner plan --dynamics): vehicle (the velocity changes by at most max_accel_mps2 times slot_s from slot to slot, and by half that from start_velocity_mps into the first slot; a re-plan continues from the velocity flown, a slot average, with the whole max_accel_mps2 times slot_s) or paper (the paper's model: the velocity may jump). The start value is the library's default (planner::DEFAULT_DYNAMICS).",
+        description: "Vehicle model of every plan, the initial plan and the re-plans inside a step (cellsar-planner plan --dynamics): vehicle (the velocity changes by at most max_accel_mps2 times slot_s from slot to slot, and by half that from start_velocity_mps into the first slot; a re-plan continues from the velocity flown, a slot average, with the whole max_accel_mps2 times slot_s; with max_jerk_mps3 the acceleration changes by at most max_jerk_mps3 times slot_s from slot to slot, a re-plan counting from the acceleration flown; each limit less its margin, *_margin_pct) or paper (the paper's model: the velocity may jump). The start value is the library's default (planner::DEFAULT_DYNAMICS).",
     },
     Var {
         name: "landmark_x_in_m",
@@ -706,6 +627,10 @@ mod tests {
         for name in ["start_m", "bs_m", "start_velocity_mps"] {
             assert!(PLANNER_VARS.iter().any(|v| v.name == name && v.len == 2));
         }
+        // the optional jerk limit (NaN: none)
+        assert!(PLANNER_VARS
+            .iter()
+            .any(|v| v.name == "max_jerk_mps3" && v.vr == planner_vr::MAX_JERK));
     }
 
     #[test]

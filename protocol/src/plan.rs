@@ -46,7 +46,8 @@ pub struct PlanRequestOptions {
     #[serde(default)]
     pub max_extra_energy_pct: Option<f64>,
     /// `vehicle` (the acceleration limit of the mission's `max_accel_mps2` between slots, from
-    /// its start velocity) or `paper` (the velocity may jump); default: the scheme's
+    /// its start velocity, and its `max_jerk_mps3` when it sets one, each less the mission's
+    /// margin) or `paper` (the velocity may jump); default: the scheme's
     /// ([`Scheme::default_dynamics`]); `vehicle` is refused with `paper` and `baseline`.
     #[serde(default)]
     pub dynamics: Option<Dynamics>,
@@ -120,7 +121,10 @@ pub struct PlanRequest {
 impl Message for PlanRequest {
     const KIND: u16 = 0x0101;
     const NAME: &'static str = "planner.plan_request";
-    const SCHEMA_VERSION: u16 = 1;
+    /// 2: the mission's `[params]` gain `max_jerk_mps3`, `resolution_margin_pct`,
+    /// `accel_margin_pct` and `jerk_margin_pct` (the binary layout of [`MissionFile`]; a JSON
+    /// request may leave them out).
+    const SCHEMA_VERSION: u16 = 2;
 }
 
 /// Fields whose types need a self-describing format (the planner's adjacently tagged enums, NaN
@@ -191,7 +195,9 @@ pub struct Plan {
 impl Message for Plan {
     const KIND: u16 = 0x0102;
     const NAME: &'static str = "planner.plan";
-    const SCHEMA_VERSION: u16 = 1;
+    /// 2: its mission's `[params]` gain `max_jerk_mps3` and the margins, as
+    /// [`PlanRequest`]'s (plans stored by a planner before are not read back).
+    const SCHEMA_VERSION: u16 = 2;
 }
 
 impl Plan {

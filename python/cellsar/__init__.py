@@ -87,7 +87,12 @@ def plan(
         tolerance: relative change of the objective that stops the iterations (1e-4).
         dynamics: ``"vehicle"`` (the velocity changes by at most the mission's
             ``max_accel_mps2`` times the slot length from slot to slot, and by half that
-            from its ``start_velocity_mps`` into the first slot) or ``"paper"`` (the velocity may jump, as in the paper).
+            from its ``start_velocity_mps`` into the first slot; with the mission's
+            ``max_jerk_mps3`` the acceleration changes by at most that times the slot length
+            from slot to slot; the mission's ``resolution_margin_pct``, ``accel_margin_pct`` and
+            ``jerk_margin_pct`` tighten the limits the plan is made for, and
+            ``plan.summary["margins"]`` gives the room kept) or ``"paper"`` (the velocity may
+            jump, as in the paper).
             ``None`` (the default) takes the scheme's default, as ``cellsar-planner plan
             --dynamics``; ``"vehicle"`` with ``"paper"`` or ``"baseline"`` is a ValueError.
 

@@ -34,6 +34,7 @@ fn slot_value(name: &str, e: &SlotEval) -> Option<f64> {
         "accel_mps2" => e.accel_mps2,
         "z_m" => e.z_m,
         "climb_mps" => e.climb_mps,
+        "jerk_mps3" => e.jerk_mps3,
         _ => return None,
     })
 }

@@ -85,7 +85,7 @@ impl PyMission {
     }
 
     /// The same mission with some parameters changed (re-validated), e.g.
-    /// `mission.with_params(d_min_m=2.0)`.
+    /// `mission.with_params(d_min_m=2.0)`; `max_jerk_mps3=None` drops a jerk limit.
     #[pyo3(signature = (**params))]
     fn with_params(&self, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let mut p = self.inner.params().clone();
@@ -95,6 +95,14 @@ impl PyMission {
                 match name.as_str() {
                     "start_m" => p.start_m = point(&name, &v)?,
                     "bs_m" => p.bs_m = point(&name, &v)?,
+                    // optional: None (no jerk limit) or a number
+                    "max_jerk_mps3" => {
+                        p.max_jerk_mps3 = v.extract::<Option<f64>>().map_err(|_| {
+                            MissionError::new_err(format!(
+                                "parameter `{name}`: expected a number or None (no jerk limit)"
+                            ))
+                        })?
+                    }
                     _ => {
                         let value: f64 = v.extract().map_err(|_| {
                             MissionError::new_err(format!("parameter `{name}`: expected a number"))

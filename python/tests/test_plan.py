@@ -126,3 +126,21 @@ def test_mission_attributes():
     with pytest.raises(AttributeError):
         mission.horizon_s = 1.0
     assert "horizon_s" in mission.to_toml()
+
+
+def test_jerk_limit_and_margins_are_mission_parameters():
+    """The vehicle limits travel as the mission's parameters: the plan keeps the jerk limit and
+    the acceleration margin (measured on its columns), and its summary reports them."""
+    mission = cellsar.Mission.default(30.0, horizon_s=60.0).with_params(
+        max_jerk_mps3=10.0, accel_margin_pct=10.0)
+    assert mission.params["max_jerk_mps3"] == 10.0 and mission.params["accel_margin_pct"] == 10.0
+    plan = cellsar.plan(mission, resolution="paper")
+    assert plan.summary["jerk"]["jerk_limit_mps3"] == 10.0
+    assert np.nanmax(plan.jerk_mps3) <= 10.0 * (1 + 1e-9)
+    assert np.nanmax(plan.accel_mps2) <= 0.9 * mission.params["max_accel_mps2"] * (1 + 1e-9)
+    assert plan.summary["margins"]["accel_room_pct"] >= 10.0 - 1e-6
+    assert mission.with_params(max_jerk_mps3=None).params["max_jerk_mps3"] is None
+    with pytest.raises(cellsar.MissionError, match="max_jerk_mps3"):
+        mission.with_params(max_jerk_mps3=-1.0)
+    with pytest.raises(cellsar.MissionError, match="accel_margin_pct"):
+        mission.with_params(accel_margin_pct=60.0)

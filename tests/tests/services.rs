@@ -298,7 +298,7 @@ fn late_echo_and_a_json_client() {
     // the options of the Rust client's request below, so that both ask for the same plan
     let body = serde_json::json!({"mission": m.to_file_struct(),
         "options": {"resolution": planner::DEFAULT_RESOLUTION}});
-    let req = serde_json::json!({"kind": 0x0101, "schema_version": 1, "mission_id": "0000000000000000",
+    let req = serde_json::json!({"kind": 0x0101, "schema_version": 2, "mission_id": "0000000000000000",
         "seq": 0, "time_unix_ns": 0, "body": body});
     let replies = c
         .node
@@ -320,7 +320,7 @@ fn late_echo_and_a_json_client() {
     let id = v["body"]["mission_id"].as_str().unwrap().to_string();
     // best-effort options that the plan would ignore are refused, with the library's message
     // (planner::PlanOptions::check_best_effort) naming the request's field
-    let bad = serde_json::json!({"kind": 0x0101, "schema_version": 1,
+    let bad = serde_json::json!({"kind": 0x0101, "schema_version": 2,
         "mission_id": "0000000000000000", "seq": 1, "time_unix_ns": 0,
         "body": {"mission": m.to_file_struct(),
                  "options": {"resolution": "paper", "strict_resolution": true}}});

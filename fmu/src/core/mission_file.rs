@@ -128,6 +128,10 @@ impl PlannerCore {
                             v[i] = value;
                             obj.insert(array.to_string(), serde_json::json!(v));
                         }
+                        // the jerk limit is optional: set through FMI, it is a number
+                        None if name == "max_jerk_mps3" => {
+                            obj.insert(name.clone(), serde_json::json!(self.params.max_jerk_mps3));
+                        }
                         None => {
                             obj.insert(
                                 name.clone(),

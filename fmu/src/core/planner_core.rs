@@ -50,6 +50,8 @@ impl PlannerCore {
             pv::BS_M => return Ok(self.params.bs_m[elem.min(1)]),
             pv::LANDMARK_X_IN => return Ok(self.landmark_in_m[0]),
             pv::LANDMARK_Y_IN => return Ok(self.landmark_in_m[1]),
+            // NaN: no jerk limit
+            pv::MAX_JERK => return Ok(self.params.max_jerk_mps3.unwrap_or(f64::NAN)),
             // NaN: no cap
             pv::MAX_EXTRA_ENERGY_PCT => {
                 return Ok(self.initial.max_extra_energy_pct.unwrap_or(f64::NAN))
@@ -128,6 +130,18 @@ impl PlannerCore {
         if var.vr == pv::MAX_EXTRA_ENERGY_PCT {
             return check_max_extra_energy_pct(value);
         }
+        if var.vr == pv::MAX_JERK {
+            // NaN: the mission file's limit, else none (the range is checked at initialisation)
+            return if value.is_infinite() {
+                Err(FmuError::error(format!(
+                    "parameter `{}` = {}: must be a finite number (a jerk limit, m/s3) or NaN (the mission file's, else no jerk limit)",
+                    var.name,
+                    Num(value)
+                )))
+            } else {
+                Ok(())
+            };
+        }
         if var.vr == pv::START_VELOCITY {
             // NaN: the mission's own start velocity (checked as a pair at initialisation)
             return if elem >= 2 {
@@ -180,6 +194,10 @@ impl PlannerCore {
                 self.start_velocity_in_mps[elem] = value;
                 self.run = None;
                 return Ok(());
+            }
+            pv::MAX_JERK => {
+                self.params.max_jerk_mps3 = (!value.is_nan()).then_some(value);
+                value.is_nan()
             }
             pv::START_M => {
                 self.params.start_m[elem] = value;

@@ -41,6 +41,12 @@ fn start_values_are_spec_defaults() {
                 assert!(got.is_nan(), "{got}");
                 continue;
             }
+            if v.name == "max_jerk_mps3" {
+                // NaN: no jerk limit, the library's default
+                assert!(d.max_jerk_mps3.is_none());
+                assert!(got.is_nan(), "{got}");
+                continue;
+            }
             if v.name == "max_extra_energy_pct" {
                 // NaN: no cap, the library's default
                 assert!(planner::PlanOptions::default()

@@ -269,3 +269,81 @@ fn a_replan_under_the_vehicle_dynamics_continues_within_the_limit() {
         }
     }
 }
+
+/// The accelerations (from the start velocity `v0`, over half a slot into the first slot) and
+/// the jerks (from the second slot on: over 2δ/3 into the second, δ after) of `traj`, from its
+/// positions.
+fn accels_and_jerks(traj: &Trajectory, v0: [f64; 2], delta: f64) -> (Vec<f64>, Vec<f64>) {
+    let velocity = |t: usize| {
+        if t == 0 {
+            return v0;
+        }
+        let (a, b) = (traj.q(t - 1), traj.q(t));
+        [(b[0] - a[0]) / delta, (b[1] - a[1]) / delta]
+    };
+    let accel: Vec<[f64; 2]> = (1..=traj.slots())
+        .map(|t| {
+            let w = if t == 1 { 0.5 * delta } else { delta };
+            let (a, b) = (velocity(t - 1), velocity(t));
+            [(b[0] - a[0]) / w, (b[1] - a[1]) / w]
+        })
+        .collect();
+    let jerks = accel
+        .windows(2)
+        .enumerate()
+        .map(|(i, w)| {
+            let window = if i == 0 { 2.0 * delta / 3.0 } else { delta };
+            (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) / window
+        })
+        .collect();
+    (accel.iter().map(|a| a[0].hypot(a[1])).collect(), jerks)
+}
+
+/// A jerk limit and margins set through FMI: the initial plan and a re-plan after a landmark
+/// move keep the acceleration within a_max less its margin and the jerk within j_max less its
+/// margin over the whole track flown, the splice included (the re-plan counts its first jerk
+/// from the acceleration flown), measured on the positions; the parameters read back.
+#[test]
+fn a_jerk_limit_and_margins_set_through_fmi_hold_across_a_replan() {
+    let (mut core, _dir, r) = planned_with(Dynamics::Vehicle, |c| {
+        for (name, value) in [
+            ("max_jerk_mps3", 10.0),
+            ("jerk_margin_pct", 20.0),
+            ("accel_margin_pct", 10.0),
+        ] {
+            c.set_real(var(PLANNER_VARS, name), 0, value).unwrap();
+        }
+    });
+    r.unwrap();
+    assert_eq!(real(&core, "max_jerk_mps3", 0, 0.0), 10.0);
+    assert_eq!(real(&core, "accel_margin_pct", 0, 0.0), 10.0);
+    let check = |core: &Core| -> Vec<f64> {
+        let r = run(core);
+        let p = r.mission.params();
+        let (accels, jerks) = accels_and_jerks(&r.traj, r.mission.start_velocity_mps(), p.slot_s);
+        let (a_top, j_top) = (0.9 * p.max_accel_mps2, 8.0);
+        for (t, a) in (1..).zip(&accels) {
+            assert!(*a <= a_top * (1.0 + 1e-9), "slot {t}: {a} > {a_top}");
+        }
+        for (t, j) in (2..).zip(&jerks) {
+            assert!(*j <= j_top * (1.0 + 1e-9), "slot {t}: {j} > {j_top}");
+        }
+        assert!(r.eval.meets(Dynamics::Vehicle));
+        jerks
+    };
+    check(&core);
+    // a move that makes the re-plan from slot 5 turn at once: its first slot, 6, is at the
+    // limit from the acceleration flown into slot 5 (counted from none, it went to 9.3 m/s³)
+    set_input(&mut core, 150.0, -50.0);
+    core.step(2.5, 0.5, &Collect::default()).unwrap();
+    assert_eq!(core.get_int(var(PLANNER_VARS, "replan_count")).unwrap(), 1);
+    let jerks = check(&core);
+    assert!(jerks[6 - 2] >= 0.99 * 8.0, "{}", jerks[6 - 2]);
+    // NaN is the start value (no limit); an infinite limit is refused at the set
+    let mut fresh = Core::new(ModelKind::Planner);
+    assert!(real(&fresh, "max_jerk_mps3", 0, 0.0).is_nan());
+    let e = fresh
+        .set_real(var(PLANNER_VARS, "max_jerk_mps3"), 0, f64::INFINITY)
+        .unwrap_err();
+    assert!(e.message.contains("max_jerk_mps3"), "{}", e.message);
+}

@@ -87,6 +87,11 @@ pub(super) fn remainder(
         // a slot average, not the velocity at the splice instant: the next slot's average may
         // differ from it by a_max δ
         sub_params.start_velocity_kind = planner::StartVelocityKind::PreviousSlot;
+        // under a jerk limit the re-plan's first acceleration counts from the one flown into
+        // that slot, so the commanded acceleration does not jump at the splice
+        if p.max_jerk_mps3.is_some() {
+            sub_params.start_accel_mps2 = Some(splice_accel_mps2(moved, current, from_slot));
+        }
     }
     // the altitude flown at q_{from_slot}, within the bounds (a plan meets them to rounding)
     if let Some(h) = from_slot
@@ -132,5 +137,30 @@ fn splice_velocity_mps(current: &Trajectory, from_slot: usize, p: &planner::Para
         [v[0] * k, v[1] * k]
     } else {
         v
+    }
+}
+
+/// The acceleration flown into slot `from_slot` (≥ 1) of `current`, (v_k − v_{k−1}) over its
+/// window ([`planner::evaluate::accel_window_s`]; v₀ the mission's start velocity), at most
+/// `max_accel_mps2` (a plan may pass it by rounding): the sub-mission's start acceleration,
+/// from which a re-plan's first slot counts its jerk.
+fn splice_accel_mps2(mission: &Mission, current: &Trajectory, from_slot: usize) -> [f64; 2] {
+    let p = mission.params();
+    let velocity = |k: usize| {
+        if k == 0 {
+            return mission.start_velocity_mps();
+        }
+        let (a, b) = (current.q(k - 1), current.q(k));
+        [(b[0] - a[0]) / p.slot_s, (b[1] - a[1]) / p.slot_s]
+    };
+    let (a, b) = (velocity(from_slot - 1), velocity(from_slot));
+    let w = planner::evaluate::accel_window_s(p, from_slot);
+    let acc = [(b[0] - a[0]) / w, (b[1] - a[1]) / w];
+    let magnitude = acc[0].hypot(acc[1]);
+    if magnitude > p.max_accel_mps2 {
+        let k = p.max_accel_mps2 / magnitude;
+        [acc[0] * k, acc[1] * k]
+    } else {
+        acc
     }
 }

@@ -74,8 +74,10 @@ enum Command {
         best_effort: BestEffortArgs,
         /// Vehicle model: vehicle (the default for the exact-geometry schemes: the velocity
         /// changes by at most the mission's max_accel_mps2 × δ from slot to slot, and by half
-        /// that from its start_velocity_mps into the first slot) or paper (the only model of paper and baseline: the velocity may
-        /// jump).
+        /// that from its start_velocity_mps into the first slot; with the mission's
+        /// max_jerk_mps3 the acceleration changes by at most that × δ from slot to slot; the
+        /// mission's margins tighten the limits the plan is made for) or paper (the only model
+        /// of paper and baseline: the velocity may jump).
         #[arg(long, value_parser = pipeline::args::enum_parser::<Dynamics>())]
         dynamics: Option<Dynamics>,
         /// Wall-time limit of the whole run, s: the iterations stop at the first check after it
@@ -409,6 +411,9 @@ fn print_plan(m: &Mission, result: &PlanResult, files: &[PathBuf]) {
     );
     if let Some(line) = shortfall_line(&s) {
         out!("{line}");
+    }
+    if let Some(line) = report::vehicle_limits_line(&s) {
+        out!("vehicle limits: {line}");
     }
     if let Some(reason) = &result.init_replaced {
         out!(

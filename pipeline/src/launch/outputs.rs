@@ -287,6 +287,9 @@ fn write_report_md(
          {:.2} m/s² limit (max_accel_mps2)",
         sm.dynamics, sm.max_accel_mps2, sm.slots_over_accel_limit, sm.accel_limit_mps2
     );
+    if let Some(line) = crate::report::vehicle_limits_line(sm) {
+        let _ = writeln!(s, "- vehicle limits: {line}");
+    }
     let best_effort = plan.result.best_effort.as_ref();
     if let (Some(b), Some(r)) = (best_effort, plan.summary.resolution_shortfall.as_ref()) {
         let _ = writeln!(

@@ -53,6 +53,35 @@ pub enum ReportError {
     Trajectory(#[from] TrajectoryError),
 }
 
+/// The plan's jerk against the mission's jerk limit and the room it keeps inside each limit
+/// under the mission's margins, as one line for the command line and `report.md`; `None` for
+/// a mission with neither (whose output stays as it was).
+pub fn vehicle_limits_line(s: &Summary) -> Option<String> {
+    let mut parts = Vec::new();
+    if let Some(j) = &s.jerk {
+        parts.push(format!(
+            "peak jerk {:.2} m/s³ between slot accelerations, {} slots above the {:.2} m/s³ \
+             limit (max_jerk_mps3)",
+            j.max_jerk_mps3, j.slots_over_jerk_limit, j.jerk_limit_mps3
+        ));
+    }
+    if let Some(m) = &s.margins {
+        let pct = |v: Option<f64>| v.map_or("none".to_string(), |v| format!("{v:.1} %"));
+        let [r, a, j] = m.requested_pct;
+        parts.push(format!(
+            "planned with margins of {r} % (resolution), {a} % (acceleration), {j} % (jerk); \
+             least room kept inside the limits: cell {} (resolved slots; {} of them short of \
+             the margin), azimuth {}, acceleration {:.1} %, jerk {}",
+            pct(m.cell_room_pct),
+            m.slots_short_of_margin,
+            pct(m.azimuth_room_pct),
+            m.accel_room_pct,
+            pct(m.jerk_room_pct)
+        ));
+    }
+    (!parts.is_empty()).then(|| parts.join("; "))
+}
+
 /// Writes `text` to `path` atomically ([`write_file_atomic`]: a reader never sees a part of
 /// it), naming the path on error.
 pub fn write_file(path: &Path, text: &str) -> Result<(), ReportError> {
@@ -264,6 +293,33 @@ mod tests {
         // a plot is written the same way
         let e = plot::line_plot(&missing, "t", "x", "y", &[]).unwrap_err();
         assert!(e.to_string().contains("plot.svg"), "{e}");
+    }
+
+    /// The `vehicle limits:` line: absent for a mission without a jerk limit or margins (its
+    /// output as before), the peak jerk against the limit and the room kept with them.
+    #[test]
+    fn the_vehicle_limits_line_names_the_jerk_limit_and_the_margins_kept() {
+        let mission = |extra: &str| {
+            let text = format!(
+                "[params]\nhorizon_s = 30\nstart_m = [-600.0, 0.0]\n\
+                 start_velocity_mps = [0.0, 0.0]\n{extra}\n[landmarks]\n\
+                 points = [{{ x_m = 0.0, y_m = 300.0, from_s = 25.0, to_s = 30.0 }}]\n"
+            );
+            Mission::from_file_struct(&planner::MissionFile::from_toml_str(&text).unwrap()).unwrap()
+        };
+        let line = |m: &Mission| {
+            let plan = planner::plan(m, &planner::PlanOptions::least_energy()).unwrap();
+            vehicle_limits_line(&Summary::new(m, &plan))
+        };
+        assert_eq!(line(&mission("")), None);
+        let text = line(&mission("max_jerk_mps3 = 4\naccel_margin_pct = 10")).unwrap();
+        assert!(
+            text.starts_with("peak jerk 4.00 m/s³")
+                && text.contains("0 slots above the 4.00 m/s³ limit (max_jerk_mps3)")
+                && text.contains("margins of 0 % (resolution), 10 % (acceleration)")
+                && text.contains("acceleration 10.0 %"),
+            "{text}"
+        );
     }
 
     /// A free-altitude plan's directory has `altitude.svg` (listed among the files written)

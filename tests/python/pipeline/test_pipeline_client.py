@@ -70,9 +70,14 @@ def wait_for(cond, what, timeout_s=TIMEOUT_S):
     raise AssertionError("timed out waiting for " + what)
 
 
+# each message kind's schema version (protocol's SCHEMA_VERSION): a plan request is at 2
+SCHEMA_VERSIONS = {0x0101: 2}
+
+
 def envelope(kind, body):
-    return json.dumps({"kind": kind, "schema_version": 1, "mission_id": "0000000000000000",
-                       "seq": 0, "time_unix_ns": 0, "body": body})
+    return json.dumps({"kind": kind, "schema_version": SCHEMA_VERSIONS.get(kind, 1),
+                       "mission_id": "0000000000000000", "seq": 0, "time_unix_ns": 0,
+                       "body": body})
 
 
 class PipelineClientTest(unittest.TestCase):
@@ -156,7 +161,7 @@ class PipelineClientTest(unittest.TestCase):
                    {"x_m": 50000.0, "y_m": 0.0, "from_s": 10.0, "to_s": 20.0}]}}
         for mission, kind, needle in ((bad, "bad_request", "altitude_m"), (far, "infeasible", "slot")):
             replies = list(self.session.get("cellsar/plan", payload=envelope(0x0101, {"mission": mission}),
-                                            encoding="application/json;cellsar/planner.plan_request/v1",
+                                            encoding="application/json;cellsar/planner.plan_request/v2",
                                             timeout=60.0))
             self.assertEqual(len(replies), 1)
             self.assertIsNone(replies[0].ok)
@@ -171,7 +176,7 @@ class PipelineClientTest(unittest.TestCase):
 
         # the plan, as JSON
         replies = list(self.session.get("cellsar/plan", payload=envelope(0x0101, {"mission": MISSION}),
-                                        encoding="application/json;cellsar/planner.plan_request/v1",
+                                        encoding="application/json;cellsar/planner.plan_request/v2",
                                         timeout=TIMEOUT_S))
         self.assertEqual(len(replies), 1)
         sample = replies[0].ok
