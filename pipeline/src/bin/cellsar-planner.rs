@@ -515,7 +515,7 @@ fn shortfall_line(s: &Summary) -> Option<String> {
         .map(|w| format!("{} ({:.0} m)", w.landmark, w.median_worst_width_m))
         .collect();
     Some(format!(
-        "resolution (best effort): {} of {} windows and {} landmark slots with a cell wider than d_min = {} m{}; the least-energy plan: {} windows, {} slots at {:.1} J (this plan {:+.2}%)",
+        "resolution (best effort): {} of {} windows and {} landmark slots with a cell wider than d_min = {} m{}; the least-energy plan{}: {} windows, {} slots at {:.1} J (this plan {:+.2}%)",
         r.unresolved_windows,
         r.windows.len(),
         r.unresolved_slots,
@@ -525,6 +525,7 @@ fn shortfall_line(s: &Summary) -> Option<String> {
         } else {
             format!(" (landmark, median cell: {})", unresolved.join(", "))
         },
+        report::least_energy_basis_note(s),
         b.least_energy_shortfall.unresolved_windows,
         b.least_energy_shortfall.unresolved_slots,
         b.least_energy_j,

@@ -295,8 +295,9 @@ fn write_report_md(
         let _ = writeln!(
             s,
             "- resolution: general, best effort: {} of {} windows with a cell wider than d_min \
-             (the least-energy plan: {}), {} unresolved slots (the least-energy plan: {}; the \
-             first: {}), for {:.0} J more energy than the least-energy plan's {:.0} J ({:+.1} %)",
+             (the least-energy plan{note}: {}), {} unresolved slots (the least-energy plan: {}; \
+             the first: {}), for {:.0} J more energy than the least-energy plan's {:.0} J \
+             ({:+.1} %)",
             r.unresolved_windows,
             r.windows.len(),
             b.least_energy_shortfall.unresolved_windows,
@@ -306,7 +307,8 @@ fn write_report_md(
                 .map_or_else(|| "none".to_string(), |k| format!("slot {k}")),
             plan.summary.energy_j - b.least_energy_j,
             b.least_energy_j,
-            plan.summary.extra_energy_pct.unwrap_or(f64::NAN)
+            plan.summary.extra_energy_pct.unwrap_or(f64::NAN),
+            note = crate::report::least_energy_basis_note(&plan.summary)
         );
     }
     let _ = writeln!(

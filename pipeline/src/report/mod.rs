@@ -82,6 +82,19 @@ pub fn vehicle_limits_line(s: &Summary) -> Option<String> {
     (!parts.is_empty()).then(|| parts.join("; "))
 }
 
+/// A best effort's least-energy plan is measured against the d_min the plans were made for:
+/// with a resolution margin, d_min less the margin. This note says so (" (against the planned
+/// d_min = 19 m)"), empty without a margin.
+pub fn least_energy_basis_note(s: &Summary) -> String {
+    match (&s.best_effort, &s.resolution_shortfall) {
+        (Some(b), Some(r)) if b.least_energy_shortfall.d_min_m != r.d_min_m => format!(
+            " (against the planned d_min = {} m)",
+            b.least_energy_shortfall.d_min_m
+        ),
+        _ => String::new(),
+    }
+}
+
 /// Writes `text` to `path` atomically ([`write_file_atomic`]: a reader never sees a part of
 /// it), naming the path on error.
 pub fn write_file(path: &Path, text: &str) -> Result<(), ReportError> {
@@ -312,6 +325,14 @@ mod tests {
             vehicle_limits_line(&Summary::new(m, &plan))
         };
         assert_eq!(line(&mission("")), None);
+        // a best effort with a resolution margin says what its least-energy plan is measured
+        // against
+        let m = mission("resolution_margin_pct = 5");
+        let plan = planner::plan(&m, &planner::PlanOptions::default()).unwrap();
+        assert_eq!(
+            least_energy_basis_note(&Summary::new(&m, &plan)),
+            " (against the planned d_min = 19 m)"
+        );
         let text = line(&mission("max_jerk_mps3 = 4\naccel_margin_pct = 10")).unwrap();
         assert!(
             text.starts_with("peak jerk 4.00 m/s³")
