@@ -258,6 +258,29 @@ fn given_start(
     deadline: Deadline,
     tr: &Trajectory,
 ) -> Result<Trajectory, PlanError> {
+    check_given(mission, tr)?;
+    // A given start that is infeasible (a warm start after the mission changed, say)
+    // is repaired and re-optimised on the coarse grid first, like the built-in start:
+    // large steps fix large violations in few iterations.
+    let spec = options.scheme.spec();
+    let objective = (spec.family == Family::ExactGeometry).then_some(spec.objective);
+    Ok(match objective {
+        Some(obj)
+            if options.coarse
+                && !evaluate(mission, tr)
+                    .is_feasible_with(options.resolution, options.dynamics) =>
+        {
+            coarse_start_from(mission, obj, true, options, deadline, Some(tr), 0)
+                .and_then(LevelStart::solved)
+                .unwrap_or_else(|| tr.clone())
+        }
+        _ => tr.clone(),
+    })
+}
+
+/// Whether a given start `tr` ([`PlanOptions::init`]) fits `mission`: its slots, finite
+/// positions, and the mission's start point.
+pub(super) fn check_given(mission: &Mission, tr: &Trajectory) -> Result<(), PlanError> {
     let p = mission.params();
     if tr.slots() != mission.slots() || (tr.slot_s - p.slot_s).abs() > 1e-12 {
         return Err(PlanError::InvalidInit(format!(
@@ -278,23 +301,7 @@ fn given_start(
             tr.start_m[0], tr.start_m[1], p.start_m[0], p.start_m[1]
         )));
     }
-    // A given start that is infeasible (a warm start after the mission changed, say)
-    // is repaired and re-optimised on the coarse grid first, like the built-in start:
-    // large steps fix large violations in few iterations.
-    let spec = options.scheme.spec();
-    let objective = (spec.family == Family::ExactGeometry).then_some(spec.objective);
-    Ok(match objective {
-        Some(obj)
-            if options.coarse
-                && !evaluate(mission, tr)
-                    .is_feasible_with(options.resolution, options.dynamics) =>
-        {
-            coarse_start_from(mission, obj, true, options, deadline, Some(tr), 0)
-                .and_then(LevelStart::solved)
-                .unwrap_or_else(|| tr.clone())
-        }
-        _ => tr.clone(),
-    })
+    Ok(())
 }
 
 /// The built-in start: the guidance law on a coarse grid made feasible there (phase I); for the

@@ -12,9 +12,10 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use crate::evaluate::{evaluate, ResolutionMode};
+use crate::evaluate::{evaluate, Dynamics, Evaluation, ResolutionMode};
+use crate::init::guidance_start_with;
 use crate::schemes::exact::{ExactObjective, ExactTuning};
-use crate::shortfall::ResolutionShortfall;
+use crate::shortfall::{total_deficit_m, ResolutionShortfall};
 use crate::socp::SocpSolver;
 use crate::{Mission, Trajectory};
 
@@ -53,6 +54,7 @@ fn strict_plan(
         resolution: ResolutionMode::General,
         strict_resolution: true,
         max_extra_energy_pct: None,
+        init: None,
         ..options.clone()
     };
     // not from the best effort's plan: this is the best effort's own basis
@@ -95,6 +97,8 @@ impl BestEffortBasis {
                 resolution: ResolutionMode::Paper,
                 strict_resolution: false,
                 max_extra_energy_pct: None,
+                // a given start is the best effort's, not the basis's
+                init: None,
                 ..options.clone()
             },
             observer,
@@ -150,21 +154,29 @@ pub(super) fn plan_best_effort(
     stop: Option<&AtomicBool>,
 ) -> Result<PlanResult, PlanError> {
     let started = Instant::now();
+    if let Some(given) = &options.init {
+        super::check_given(mission, given)?;
+    }
     let basis = BestEffortBasis::new_until(mission, options, observer, stop)?;
-    let mut out = best_effort_until(mission, options, &basis, None, observer, stop)?;
+    let given = options.init.as_ref();
+    let mut out = best_effort_until(mission, options, &basis, given, observer, stop)?;
     out.solve_seconds = started.elapsed().as_secs_f64();
     Ok(out)
 }
 
 /// The best-effort plan of `mission` from an already planned `basis`, under
 /// `options.max_extra_energy_pct`, its iterations started from `start` (default: the basis's
-/// coarse track where it has one within the cap, else the least-energy plan; a given
-/// start must meet every constraint but the resolution, and the energy cap). Its
+/// coarse track where it has one within the cap, else the least-energy plan). A given start
+/// must meet every constraint but the resolution, and the energy cap; one that does not is
+/// replaced by the default start (noted in `init_replaced`) under
+/// [`PlanOptions::replace_unrepairable_init`], else refused ([`PlanError::InvalidInit`]). Its
 /// `solve_seconds` counts only this step.
 ///
 /// When the least-energy plan resolves every slot it is the answer. Otherwise the best effort
 /// runs; when it resolves every slot, the strict general SCA continues from it with the cell
-/// constraints hard, lowering the energy.
+/// constraints hard, lowering the energy. The plan is never worse on the merit than any of the
+/// starts it could have taken (the least-energy plan, the basis's coarse or strict track, the
+/// given start, the guidance law's track; [`Starts`]): where one is, that start is the plan.
 pub fn best_effort_from(
     mission: &Mission,
     options: &PlanOptions,
@@ -201,13 +213,29 @@ fn best_effort_until(
         max_extra_energy_pct: options.max_extra_energy_pct,
         strict_refusal: None,
     };
+    let weight = options.resolution_weight_j_per_m;
+    let starts = Starts {
+        mission,
+        weight_j_per_m: weight,
+        cap_j,
+        dynamics: options.dynamics,
+    };
+    let (given, init_replaced) = match start.map(|t| (t, starts.inadmissible(t))) {
+        None => (None, None),
+        Some((t, None)) => (Some(t), None),
+        Some((_, Some(why))) if options.replace_unrepairable_init => {
+            tracing::info!(%why, "the given start cannot start a best effort; the default does");
+            (None, Some(why))
+        }
+        Some((_, Some(why))) => return Err(PlanError::InvalidInit(why)),
+    };
     let made = |info: BestEffort, programs_before: usize| Made {
         scheme: options.scheme,
         resolution: general,
         dynamics: options.dynamics,
         start_energy_j: least_j,
         repair_iterations: 0,
-        init_replaced: None,
+        init_replaced: init_replaced.clone(),
         best_effort: Some(info),
         programs_before,
     };
@@ -230,8 +258,7 @@ fn best_effort_until(
         }));
     }
     observer.on_phase("best effort");
-    let weight = options.resolution_weight_j_per_m;
-    let start = match start {
+    let start = match given {
         Some(t) => t.clone(),
         None => basis
             .coarse
@@ -267,6 +294,14 @@ fn best_effort_until(
             deadline,
         },
     )?;
+    let guidance = guidance_start_with(mission, general, options.dynamics);
+    let candidates = [
+        Some(&basis.least_energy.trajectory),
+        basis.coarse.as_ref(),
+        given,
+        Some(&guidance),
+    ];
+    let track = starts.never_worse(track, candidates.into_iter().flatten());
     if let Some(refusal) = strict_refusal(mission, &evaluate(mission, &track)) {
         info.strict_refusal = Some(refusal);
         return Ok(timed(finish(mission, track, end, made(info, 0))));
@@ -290,6 +325,69 @@ fn best_effort_until(
         },
     )?;
     Ok(timed(finish(mission, polished, end, made(info, programs))))
+}
+
+/// The starts a best effort is measured against, and how: its merit (energy + weight ×
+/// resolution deficit, [`crate::shortfall::total_deficit_m`]) on the exact geometry, where a
+/// start is admissible when it meets every constraint but the resolution, and the energy cap.
+struct Starts<'a> {
+    mission: &'a Mission,
+    weight_j_per_m: f64,
+    cap_j: Option<f64>,
+    dynamics: Dynamics,
+}
+
+impl Starts<'_> {
+    /// The merit of `ev`.
+    fn merit(&self, ev: &Evaluation) -> f64 {
+        ev.energy_j + self.weight_j_per_m * total_deficit_m(self.mission, ev)
+    }
+
+    /// Why `track` cannot start a best effort; `None` when it can.
+    fn inadmissible(&self, track: &Trajectory) -> Option<String> {
+        let ev = evaluate(self.mission, track);
+        if !ev.is_feasible_with(ResolutionMode::Paper, self.dynamics) {
+            return Some(format!(
+                "the given start does not meet every constraint but the resolution under the \
+                 {} vehicle model: {:?}",
+                self.dynamics.name(),
+                ev.violations
+            ));
+        }
+        match self.cap_j {
+            Some(cap) if ev.energy_j > cap * (1.0 + 1e-9) => Some(format!(
+                "the given start uses {:.1} J, over the energy cap of {cap:.1} J",
+                ev.energy_j
+            )),
+            _ => None,
+        }
+    }
+
+    /// `end` (a best effort's last iterate), or the admissible track of `starts` with the least
+    /// merit where that is lower than the end's. The loop is monotone from the start it took, so
+    /// only a start it did not take can be better; this makes the plan never worse than any.
+    fn never_worse<'t>(
+        &self,
+        end: Trajectory,
+        starts: impl Iterator<Item = &'t Trajectory>,
+    ) -> Trajectory {
+        let end_merit = self.merit(&evaluate(self.mission, &end));
+        let best = starts
+            .filter(|t| self.inadmissible(t).is_none())
+            .map(|t| (self.merit(&evaluate(self.mission, t)), t))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        match best {
+            Some((merit, t)) if merit < end_merit * (1.0 - 1e-9) => {
+                tracing::info!(
+                    start_merit = merit,
+                    end_merit,
+                    "a start the best effort did not take is better than its end: it is the plan"
+                );
+                t.clone()
+            }
+            _ => end,
+        }
+    }
 }
 
 /// Why a best effort evaluated as `ev` is not a strict general plan
