@@ -219,9 +219,10 @@ pub fn tradeoff_with_observer(
 }
 
 /// The curve of the free-altitude mission `mission` (`options` as [`tradeoff_with_observer`]
-/// set them, with the altitude profile; see the module documentation). A free plan starts from
-/// the fixed-altitude plan it refines, not from the previous point, so each cap's candidates
-/// are its own free best effort and the fixed curve's point (when the mission can be flown at
+/// set them, with the altitude profile; see the module documentation). Each cap's candidates
+/// are its own free best effort (its fixed stage started from the previous point's track,
+/// [`PlanOptions::init`], where that track fits the fixed altitude and the cap; the free stage
+/// refines the fixed plan) and the fixed curve's point (when the mission can be flown at
 /// `altitude_m`); of those that leave no larger resolution deficit than the previous point
 /// the one of least merit is taken, and the previous point's plan (which meets the larger cap
 /// too) when neither does: the deficit never rises along the curve, and no point is worse than
@@ -281,8 +282,12 @@ fn free_tradeoff(
             // the previous cap was not reached: its plan is the free best effort under this one
             with_cap(previous.clone(), cap)
         } else {
+            // chained: the fixed stage's best effort starts from the previous point's track,
+            // which meets this cap too (the default start where it does not fit the fixed
+            // altitude)
             let capped = PlanOptions {
                 max_extra_energy_pct: cap,
+                init: Some(previous.trajectory.clone()),
                 ..options.clone()
             };
             let mut named = PointObserver {
