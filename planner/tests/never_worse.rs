@@ -50,6 +50,30 @@ fn constructed(
     (mission_of(&p, &flight, every, hold), flight)
 }
 
+/// A case the property found: the least-energy plan resolves every slot, and the given flight
+/// does too on less energy (the least-energy plan is a local optimum), so the best effort must
+/// not stop at the least-energy plan.
+#[test]
+fn a_given_flight_better_than_a_resolving_least_energy_plan_is_not_passed_over() {
+    let (mission, flight) = constructed(481_493, 40, 22, 2);
+    let options = PlanOptions::default();
+    let flown = evaluate(&mission, &flight);
+    assert!(admissible(&flown) && flown.is_feasible_for(ResolutionMode::General));
+    let least = plan(&mission, &PlanOptions::least_energy()).unwrap();
+    assert!(least.evaluation.is_feasible_for(ResolutionMode::General));
+    assert!(
+        flown.energy_j < least.evaluation.energy_j,
+        "the case this test keeps"
+    );
+    let given = PlanOptions {
+        init: Some(flight),
+        ..options.clone()
+    };
+    let best = plan(&mission, &given).unwrap();
+    assert!(best.evaluation.energy_j <= flown.energy_j * (1.0 + 1e-9));
+    assert!(best.evaluation.is_feasible_for(ResolutionMode::General));
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 6, ..ProptestConfig::default() })]
 

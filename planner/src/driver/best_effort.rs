@@ -172,7 +172,8 @@ pub(super) fn plan_best_effort(
 /// [`PlanOptions::replace_unrepairable_init`], else refused ([`PlanError::InvalidInit`]). Its
 /// `solve_seconds` counts only this step.
 ///
-/// When the least-energy plan resolves every slot it is the answer. Otherwise the best effort
+/// When the least-energy plan resolves every slot it is the answer (unless the given start or the
+/// guidance law's track is better on the merit). Otherwise the best effort
 /// runs; when it resolves every slot, the strict general SCA continues from it with the cell
 /// constraints hard, lowering the energy. The plan is never worse on the merit than any of the
 /// starts it could have taken (the least-energy plan, the basis's coarse or strict track, the
@@ -243,10 +244,20 @@ fn best_effort_until(
         solve_seconds: started.elapsed().as_secs_f64(),
         ..plan
     };
-    if basis
-        .least_energy
-        .evaluation
-        .is_feasible_with(general, options.dynamics)
+    let guidance = guidance_start_with(mission, general, options.dynamics);
+    // the least-energy plan is the answer when it resolves every slot, unless a start it did
+    // not come from is better on the merit (a local optimum can be beaten by a given flight)
+    let least_merit = starts.merit(&basis.least_energy.evaluation);
+    let beats_least = |t: &Trajectory| {
+        starts.inadmissible(t).is_none()
+            && starts.merit(&evaluate(mission, t)) < least_merit * (1.0 - 1e-9)
+    };
+    let other_better = given.is_some_and(beats_least) || beats_least(&guidance);
+    if !other_better
+        && basis
+            .least_energy
+            .evaluation
+            .is_feasible_with(general, options.dynamics)
     {
         return Ok(timed(PlanResult {
             scheme: options.scheme,
@@ -294,7 +305,6 @@ fn best_effort_until(
             deadline,
         },
     )?;
-    let guidance = guidance_start_with(mission, general, options.dynamics);
     let candidates = [
         Some(&basis.least_energy.trajectory),
         basis.coarse.as_ref(),
