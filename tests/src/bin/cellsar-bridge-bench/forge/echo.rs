@@ -60,8 +60,11 @@ pub(super) struct EchoTried {
     pub answered: u64,
     /// Of those, acknowledgements that carried the mission's frame key.
     pub keys: u64,
-    /// Of them, answered with a refusal or another error.
+    /// Of them, refused by a queryable (a typed refusal, as the echo refuses).
     pub refused: u64,
+    /// Of them, answered with an untyped error text: no cellsar queryable sends one (they
+    /// refuse with typed refusals), so it is Zenoh's own (printed to stderr).
+    pub untyped_errors: u64,
     /// Queryables declared on echo request keys.
     pub queryables: u64,
     /// Aperture requests its queryables got (from other sessions).
@@ -236,7 +239,11 @@ fn ask(node: &ZenohNode, id: MissionId, instance: &str, iq: &IqArgs, r: &mut Ech
             }
         }
         Err(NetError::NoReply { .. }) => {}
-        Err(NetError::Refused { .. } | NetError::Remote { .. }) => r.refused += 1,
+        Err(NetError::Refused { .. }) => r.refused += 1,
+        Err(NetError::Remote { message, .. }) => {
+            r.untyped_errors += 1;
+            eprintln!("asking the echo of mission {id}: an untyped error reply: {message}");
+        }
         Err(e) => {
             r.errors += 1;
             eprintln!("asking the echo of mission {id}: {e}");
