@@ -206,7 +206,7 @@ impl NrGrid {
         }
         let duration = self.downlink_symbols(slot);
         let prbs = self.loaded_prbs(slot);
-        let dmrs_symbols = self.dmrs.symbols(duration);
+        let dmrs_symbols = self.dmrs.symbols(duration).unwrap_or_default();
         let dmrs = if dmrs_symbols.is_empty() {
             Vec::new()
         } else {

@@ -428,8 +428,52 @@ pub struct PdschDmrsConfig {
     pub n_scid: u8,
     /// dmrs-TypeA-Position l0: 2 or 3.
     pub type_a_position: usize,
-    /// dmrs-AdditionalPosition: 0..=3.
+    /// dmrs-AdditionalPosition: 0..=3 (3 only with l0 = 2).
     pub additional_positions: usize,
+}
+
+/// TS 38.211 Table 7.4.1.1.2-3, PDSCH mapping type A, single-symbol DMRS: the DMRS symbols
+/// after l0 by l_d = 3..=14 (row l_d − 3) and dmrs-AdditionalPosition 0..=3 (column), with
+/// l1 = 11 (the table's l1 is 12 only with lte-CRS-ToMatchAround, which this cell has not).
+/// l_d < 3 has no entry. Checked against OpenAirInterface (`nr_mac_common.c`,
+/// `table_7_4_1_1_2_3_pdsch_dmrs_positions_l`) and srsRAN Project
+/// (`pdsch_dmrs_symbol_mask.cpp`), which agree on every type A entry.
+const TYPE_A_SINGLE_SYMBOL: [[&[usize]; 4]; 12] = [
+    [&[], &[], &[], &[]],                // l_d = 3
+    [&[], &[], &[], &[]],                // 4
+    [&[], &[], &[], &[]],                // 5
+    [&[], &[], &[], &[]],                // 6
+    [&[], &[], &[], &[]],                // 7
+    [&[], &[7], &[7], &[7]],             // 8
+    [&[], &[7], &[7], &[7]],             // 9
+    [&[], &[9], &[6, 9], &[6, 9]],       // 10
+    [&[], &[9], &[6, 9], &[6, 9]],       // 11
+    [&[], &[9], &[6, 9], &[5, 8, 11]],   // 12
+    [&[], &[11], &[7, 11], &[5, 8, 11]], // 13
+    [&[], &[11], &[7, 11], &[5, 8, 11]], // 14
+];
+
+/// The DMRS symbols l̄ of a PDSCH of mapping type A whose last symbol is l_d − 1
+/// (`duration` = l_d, counted from symbol 0 of the slot), l0 = `type_a_position` and
+/// dmrs-AdditionalPosition `additional` (TS 38.211 §7.4.1.1.2, Table 7.4.1.1.2-3, single-symbol
+/// DMRS). `None` where the clause defines none: l_d outside 3..=14, l0 outside {2, 3},
+/// `additional` above 3, l0 = 3 with `additional` = 3, or l0 = 3 with l_d = 3 (applicable only
+/// with dmrs-TypeA-Position 2).
+pub fn pdsch_dmrs_symbols_type_a(
+    duration: usize,
+    type_a_position: usize,
+    additional: usize,
+) -> Option<Vec<usize>> {
+    let l0 = type_a_position;
+    if !(3..=14).contains(&duration)
+        || !(2..=3).contains(&l0)
+        || additional > 3
+        || (l0 == 3 && (additional == 3 || duration == 3))
+    {
+        return None;
+    }
+    let extra = TYPE_A_SINGLE_SYMBOL[duration - 3][additional];
+    Some(std::iter::once(l0).chain(extra.iter().copied()).collect())
 }
 
 impl PdschDmrsConfig {
@@ -453,28 +497,21 @@ impl PdschDmrsConfig {
                 format!("{} must lie in 0..=3", self.additional_positions),
             ));
         }
+        if self.type_a_position == 3 && self.additional_positions == 3 {
+            return Err(NrError::new(
+                format!("{prefix}.dmrs_additional_positions"),
+                "3 with dmrs_type_a_position = 3: TS 38.211 §7.4.1.1.2 supports \
+                 dmrs-AdditionalPosition 3 only with dmrs-TypeA-Position 2",
+            ));
+        }
         Ok(())
     }
 
-    /// The DMRS symbols of a PDSCH that spans symbols 0..`duration` of the slot (Table
-    /// 7.4.1.1.2-3, mapping type A, single-symbol DMRS, l1 = 11); none below 3 symbols.
-    pub fn symbols(&self, duration: usize) -> Vec<usize> {
-        let l0 = self.type_a_position;
-        if duration < 3 || duration <= l0 {
-            return Vec::new();
-        }
-        let extra: &[usize] = match (duration, self.additional_positions) {
-            (_, 0) | (3..=4, _) => &[],
-            (5..=7, _) => &[4],
-            (8..=9, _) => &[7],
-            (10..=11, 1) | (12, 1) => &[9],
-            (10..=12, 2) | (10..=11, 3) => &[6, 9],
-            (12, _) => &[5, 8, 11],
-            (_, 1) => &[11],
-            (_, 2) => &[7, 11],
-            _ => &[5, 8, 11],
-        };
-        std::iter::once(l0).chain(extra.iter().copied()).collect()
+    /// The DMRS symbols of a PDSCH that spans symbols 0..`duration` of the slot
+    /// ([`pdsch_dmrs_symbols_type_a`]); `None` where Table 7.4.1.1.2-3 has no entry (no PDSCH is
+    /// scheduled then).
+    pub fn symbols(&self, duration: usize) -> Option<Vec<usize>> {
+        pdsch_dmrs_symbols_type_a(duration, self.type_a_position, self.additional_positions)
     }
 
     /// The REs of a PDSCH on symbols 0..`duration` of slot `slot` over PRBs `prbs` (indices from
@@ -494,7 +531,7 @@ impl PdschDmrsConfig {
             return Vec::new();
         };
         let mut out = Vec::new();
-        for l in self.symbols(duration) {
+        for l in self.symbols(duration).unwrap_or_default() {
             let c = pdsch_dmrs_c_init(self.scrambling_id, self.n_scid, 0, n_s, l, sps);
             // six values per PRB from CRB 0: r(6n .. 6n + 6) on k = 12n + 0, 2, …, 10
             let r = qpsk_sequence(c, 6 * (top + 1));

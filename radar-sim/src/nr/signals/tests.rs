@@ -210,20 +210,21 @@ fn pdsch_dmrs_positions() {
         additional_positions: 2,
     };
     cfg.validate("radar.nr").unwrap();
-    assert_eq!(cfg.symbols(14), vec![2, 7, 11]);
-    assert_eq!(cfg.symbols(10), vec![2, 6, 9]);
-    assert_eq!(cfg.symbols(2), Vec::<usize>::new());
+    assert_eq!(cfg.symbols(14), Some(vec![2, 7, 11]));
+    assert_eq!(cfg.symbols(10), Some(vec![2, 6, 9]));
+    assert_eq!(cfg.symbols(6), Some(vec![2]));
+    assert_eq!(cfg.symbols(2), None);
     let a3 = PdschDmrsConfig {
         additional_positions: 3,
         ..cfg
     };
-    assert_eq!(a3.symbols(14), vec![2, 5, 8, 11]);
-    assert_eq!(a3.symbols(12), vec![2, 5, 8, 11]);
+    assert_eq!(a3.symbols(14), Some(vec![2, 5, 8, 11]));
+    assert_eq!(a3.symbols(12), Some(vec![2, 5, 8, 11]));
     let a1 = PdschDmrsConfig {
         additional_positions: 1,
         ..cfg
     };
-    assert_eq!(a1.symbols(14), vec![2, 11]);
+    assert_eq!(a1.symbols(14), Some(vec![2, 11]));
     let res = cfg.res_in_slot(&f, 3, 14, &[1, 4]);
     assert_eq!(res.len(), 3 * 2 * 6);
     for r in &res {
@@ -238,4 +239,85 @@ fn pdsch_dmrs_positions() {
         .map(|x| x.value)
         .collect();
     assert_eq!(got, r[24..30].to_vec());
+}
+
+/// TS 38.211 Table 7.4.1.1.2-3 (single-symbol DMRS), PDSCH mapping type A, as the clause prints
+/// it: one row per l_d, the columns dmrs-AdditionalPosition 0, 1, 2, 3; `-` where it defines
+/// none.
+const TABLE_7_4_1_1_2_3_TYPE_A: [&str; 13] = [
+    " 2 | -  | -     | -       | -        ",
+    " 3 | l0 | l0    | l0      | l0       ",
+    " 4 | l0 | l0    | l0      | l0       ",
+    " 5 | l0 | l0    | l0      | l0       ",
+    " 6 | l0 | l0    | l0      | l0       ",
+    " 7 | l0 | l0    | l0      | l0       ",
+    " 8 | l0 | l0,7  | l0,7    | l0,7     ",
+    " 9 | l0 | l0,7  | l0,7    | l0,7     ",
+    "10 | l0 | l0,9  | l0,6,9  | l0,6,9   ",
+    "11 | l0 | l0,9  | l0,6,9  | l0,6,9   ",
+    "12 | l0 | l0,9  | l0,6,9  | l0,5,8,11",
+    "13 | l0 | l0,l1 | l0,7,11 | l0,5,8,11",
+    "14 | l0 | l0,l1 | l0,7,11 | l0,5,8,11",
+];
+
+#[test]
+fn pdsch_dmrs_positions_are_table_7_4_1_1_2_3_cell_by_cell() {
+    let mut cells = 0;
+    for row in TABLE_7_4_1_1_2_3_TYPE_A {
+        let cols: Vec<&str> = row.split('|').map(str::trim).collect();
+        let l_d: usize = cols[0].parse().unwrap();
+        for l0 in [2usize, 3] {
+            for (pos, cell) in cols[1..].iter().enumerate() {
+                let mut want: Option<Vec<usize>> = (*cell != "-").then(|| {
+                    cell.split(',')
+                        .map(|t| match t {
+                            "l0" => l0,
+                            "l1" => 11, // no lte-CRS-ToMatchAround
+                            n => n.parse().unwrap(),
+                        })
+                        .collect()
+                });
+                // §7.4.1.1.2: dmrs-AdditionalPosition 3 and l_d = 3 only with l0 = 2
+                if l0 == 3 && (pos == 3 || l_d == 3) {
+                    want = None;
+                }
+                let got = pdsch_dmrs_symbols_type_a(l_d, l0, pos);
+                assert_eq!(got, want, "l_d = {l_d}, l0 = {l0}, pos{pos}");
+                cells += 1;
+            }
+        }
+    }
+    assert_eq!(cells, 13 * 4 * 2);
+    for l0 in [2, 3] {
+        for pos in 0..4 {
+            for l_d in [0, 1, 15, 16] {
+                assert_eq!(pdsch_dmrs_symbols_type_a(l_d, l0, pos), None);
+            }
+        }
+        assert_eq!(pdsch_dmrs_symbols_type_a(14, l0, 4), None);
+    }
+    assert_eq!(pdsch_dmrs_symbols_type_a(14, 1, 1), None);
+    assert_eq!(pdsch_dmrs_symbols_type_a(14, 4, 1), None);
+}
+
+#[test]
+fn pdsch_dmrs_refuses_type_a_position_3_with_additional_position_3() {
+    let cfg = PdschDmrsConfig {
+        scrambling_id: 1,
+        n_scid: 0,
+        type_a_position: 3,
+        additional_positions: 3,
+    };
+    let e = cfg.validate("radar.nr").unwrap_err();
+    assert_eq!(e.field, "radar.nr.dmrs_additional_positions");
+    assert!(e.reason.contains("TS 38.211 §7.4.1.1.2"), "{e}");
+    for (l0, pos) in [(2, 3), (3, 2), (3, 0)] {
+        PdschDmrsConfig {
+            type_a_position: l0,
+            additional_positions: pos,
+            ..cfg
+        }
+        .validate("radar.nr")
+        .unwrap();
+    }
 }
