@@ -6,7 +6,7 @@
 
 use rustfft::num_complex::Complex64;
 
-use super::frame::FrameStructure;
+use super::frame::{FrameStructure, SymbolUse};
 use super::sequences::{
     check_cell_id, csi_rs_c_init, pbch_dmrs_c_init, pdsch_dmrs_c_init, prs_c_init, pss,
     qpsk_sequence, sss, SYNC_LENGTH,
@@ -226,6 +226,40 @@ impl Periodicity {
         (slot % p + p - self.offset_slot % p) % p < self.length
     }
 
+    /// Refuses a burst that puts one of `symbols` on a symbol the TDD pattern does not make
+    /// downlink: TS 38.213 §11.1, no PDSCH, CSI-RS or DL PRS in symbols that
+    /// tdd-UL-DL-ConfigurationCommon makes uplink (the guard symbols are silent in this model).
+    /// The TDD period's worth of bursts covers every case. Errors name `field`.
+    fn check_downlink(
+        &self,
+        frame: &FrameStructure,
+        symbols: &[usize],
+        what: &str,
+        field: &str,
+    ) -> NrResult<()> {
+        let tdd = frame.tdd();
+        for q in 0..tdd.slots().len() as u64 {
+            for j in 0..self.length {
+                let slot = self.offset_slot + q * self.period_slots + j;
+                if let Some(&l) = symbols
+                    .iter()
+                    .find(|&&l| tdd.symbol_use(slot, l) != SymbolUse::Downlink)
+                {
+                    return Err(NrError::new(
+                        field,
+                        format!(
+                            "the {what} falls on symbol {l} of slot {slot}, which the TDD \
+                             pattern does not make downlink: TS 38.213 §11.1 sends no {what} \
+                             in uplink symbols (choose its period, offset and symbols so that \
+                             it stays in downlink symbols)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn validate(&self, field: &str) -> NrResult<()> {
         if self.period_slots == 0 || self.offset_slot >= self.period_slots {
             return Err(NrError::new(
@@ -261,9 +295,13 @@ pub struct TrsConfig {
     pub period: Periodicity,
 }
 
+/// The TRS periods of a 15 kHz carrier, slots (TS 38.214 §5.1.6.1.1: 2^μ X_p slots, X_p = 10,
+/// 20, 40 or 80).
+pub const TRS_PERIODS_AT_15KHZ: [u64; 4] = [10, 20, 40, 80];
+
 impl TrsConfig {
-    /// Checks the values; errors name the field under `prefix`.
-    pub fn validate(&self, prefix: &str) -> NrResult<()> {
+    /// Checks the values against `frame`; errors name the field under `prefix`.
+    pub fn validate(&self, frame: &FrameStructure, prefix: &str) -> NrResult<()> {
         if self.scrambling_id > 1023 {
             return Err(NrError::new(
                 format!("{prefix}.trs_scrambling_id"),
@@ -282,7 +320,30 @@ impl TrsConfig {
                 format!("{} must be 4, 5 or 6 (TS 38.214 §5.1.6.1.1)", self.l0),
             ));
         }
-        self.period.validate(&format!("{prefix}.trs_period_slots"))
+        let field = format!("{prefix}.trs_period_slots");
+        self.period.validate(&field)?;
+        let scale = 1u64 << frame.numerology();
+        if !TRS_PERIODS_AT_15KHZ
+            .iter()
+            .any(|x| x * scale == self.period.period_slots)
+        {
+            return Err(NrError::new(
+                field,
+                format!(
+                    "a TRS every {} slots: TS 38.214 §5.1.6.1.1 allows 2^μ × {{10, 20, 40, 80}} \
+                     = {:?} slots at μ = {}",
+                    self.period.period_slots,
+                    TRS_PERIODS_AT_15KHZ.map(|x| x * scale),
+                    frame.numerology()
+                ),
+            ));
+        }
+        self.period.check_downlink(
+            frame,
+            &[self.l0, self.l0 + 4],
+            "TRS (CSI-RS)",
+            &format!("{prefix}.trs_offset_slot"),
+        )
     }
 
     /// The REs in slot `slot`: for each symbol l, PRB n and i = 0..3, k = 12n + k0 + 4i carries
@@ -324,7 +385,14 @@ pub fn prs_offsets(comb: usize) -> &'static [usize] {
     }
 }
 
-/// A PRS resource over the whole carrier (§7.4.1.7).
+/// Least PRS bandwidth, PRBs (dl-PRS-ResourceBandwidth, TS 38.331).
+pub const PRS_MIN_PRBS: usize = 24;
+
+/// Largest PRS bandwidth, PRBs (dl-PRS-ResourceBandwidth, TS 38.331; steps of 4 from 24).
+pub const PRS_MAX_PRBS: usize = 272;
+
+/// A PRS resource over the whole carrier (§7.4.1.7): the carrier's PRBs are its bandwidth,
+/// 24..=272 in steps of 4; it is sent in downlink symbols only.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PrsConfig {
     /// Sequence id n_ID^PRS, 0..=4095.
@@ -390,7 +458,21 @@ impl PrsConfig {
                 format!("{} must lie in 0..{}", self.re_offset, self.comb),
             ));
         }
-        self.period.validate(&format!("{prefix}.prs_period_slots"))
+        let n = frame.prbs();
+        if !(PRS_MIN_PRBS..=PRS_MAX_PRBS).contains(&n) || !n.is_multiple_of(4) {
+            return Err(NrError::new(
+                format!("{prefix}.prbs"),
+                format!(
+                    "the PRS spans the carrier's {n} PRBs: TS 38.211 §7.4.1.7 \
+                     (dl-PRS-ResourceBandwidth, TS 38.331) allows 24..=272 PRBs in steps of 4 \
+                     (set radar.nr.prbs, or prs = false)"
+                ),
+            ));
+        }
+        let field = format!("{prefix}.prs_period_slots");
+        self.period.validate(&field)?;
+        let symbols: Vec<usize> = (self.start_symbol..self.start_symbol + self.symbols).collect();
+        self.period.check_downlink(frame, &symbols, "PRS", &field)
     }
 
     /// The REs in slot `slot`: symbol l carries r_l(m) at k = m K_comb + ((k_offset + k′) mod

@@ -103,7 +103,7 @@ fn trs_positions_and_sequence() {
             length: 2,
         },
     };
-    cfg.validate("radar.nr").unwrap();
+    cfg.validate(&f, "radar.nr").unwrap();
     assert!(cfg.res_in_slot(&f, 2).is_empty() && cfg.res_in_slot(&f, 5).is_empty());
     for slot in [3u64, 4, 23, 24] {
         let res = cfg.res_in_slot(&f, slot);
@@ -119,14 +119,14 @@ fn trs_positions_and_sequence() {
     }
     let bad = TrsConfig { l0: 7, ..cfg };
     assert_eq!(
-        bad.validate("radar.nr").unwrap_err().field,
+        bad.validate(&f, "radar.nr").unwrap_err().field,
         "radar.nr.trs_first_symbol"
     );
 }
 
 #[test]
 fn prs_combs_cover_every_subcarrier_once() {
-    let f = frame(2, 25);
+    let f = frame(2, 24);
     for comb in [2usize, 4, 6, 12] {
         for offset in 0..comb {
             let cfg = PrsConfig {
@@ -319,5 +319,103 @@ fn pdsch_dmrs_refuses_type_a_position_3_with_additional_position_3() {
         }
         .validate("radar.nr")
         .unwrap();
+    }
+}
+
+fn tdd_frame(mu: u8, prbs: usize) -> FrameStructure {
+    let tdd = TddPattern::parse("DDDSU", "10:2:2", mu, 14, "p", "s").unwrap();
+    FrameStructure::new(mu, CyclicPrefix::Normal, prbs, None, tdd, "radar.nr").unwrap()
+}
+
+fn trs(period_slots: u64, offset_slot: u64) -> TrsConfig {
+    TrsConfig {
+        scrambling_id: 1,
+        k0: 0,
+        l0: 4,
+        period: Periodicity {
+            period_slots,
+            offset_slot,
+            length: 2,
+        },
+    }
+}
+
+#[test]
+fn trs_periods_are_those_of_ts_38_214() {
+    for mu in 0..=3u8 {
+        let f = frame(mu, 24);
+        for p in 2..=700u64 {
+            let ok = p % (1 << mu) == 0 && [10, 20, 40, 80].contains(&(p >> mu));
+            let r = trs(p, 0).validate(&f, "radar.nr");
+            assert_eq!(r.is_ok(), ok, "μ = {mu}, {p} slots: {r:?}");
+            if let Err(e) = r {
+                assert_eq!(e.field, "radar.nr.trs_period_slots");
+                assert!(e.reason.contains("TS 38.214 §5.1.6.1.1"), "{e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn trs_and_prs_stay_in_downlink_symbols() {
+    let f = tdd_frame(2, 24);
+    // DDDSU: a TRS burst from slot 0, 1 or 2 ends in a D or the special slot's DL symbols
+    for offset in 0..3 {
+        trs(80, offset).validate(&f, "radar.nr").unwrap();
+    }
+    for offset in [3, 4] {
+        let e = trs(80, offset).validate(&f, "radar.nr").unwrap_err();
+        assert_eq!(e.field, "radar.nr.trs_offset_slot");
+        assert!(e.reason.contains("TS 38.213 §11.1"), "{e}");
+    }
+    let prs = |start_symbol, offset_slot| PrsConfig {
+        sequence_id: 1,
+        comb: 4,
+        symbols: 4,
+        start_symbol,
+        re_offset: 0,
+        period: Periodicity {
+            period_slots: 40,
+            offset_slot,
+            length: 1,
+        },
+    };
+    prs(10, 2).validate(&f, "radar.nr").unwrap();
+    prs(6, 3).validate(&f, "radar.nr").unwrap(); // symbols 6..=9 of the special slot
+    for (start, slot) in [(10, 3), (7, 3), (0, 4), (10, 9)] {
+        let e = prs(start, slot).validate(&f, "radar.nr").unwrap_err();
+        assert_eq!(e.field, "radar.nr.prs_period_slots", "{start} {slot}");
+        assert!(e.reason.contains("TS 38.213 §11.1"), "{e}");
+    }
+    // a period that is no multiple of the TDD period walks the PRS into the U slot
+    let walking = PrsConfig {
+        period: Periodicity {
+            period_slots: 16,
+            offset_slot: 0,
+            length: 1,
+        },
+        ..prs(0, 0)
+    };
+    assert!(walking.validate(&f, "radar.nr").is_err());
+}
+
+#[test]
+fn prs_bandwidth_is_24_to_272_prbs_in_steps_of_4() {
+    let cfg = PrsConfig {
+        sequence_id: 1,
+        comb: 2,
+        symbols: 2,
+        start_symbol: 0,
+        re_offset: 0,
+        period: every_slot(),
+    };
+    for n in 1..=275usize {
+        let r = cfg.validate(&frame(1, n), "radar.nr");
+        let ok = (24..=272).contains(&n) && n % 4 == 0;
+        assert_eq!(r.is_ok(), ok, "{n} PRBs: {r:?}");
+        if let Err(e) = r {
+            assert_eq!(e.field, "radar.nr.prbs");
+            assert!(e.reason.contains("TS 38.211 §7.4.1.7"), "{e}");
+        }
     }
 }
