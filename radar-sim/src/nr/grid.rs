@@ -306,6 +306,7 @@ pub(crate) mod tests {
                 first_prb: 15,
                 count: 4,
                 period_ms: 20,
+                l_max: 8,
             }),
             trs: Some(TrsConfig {
                 scrambling_id: 7,

@@ -133,8 +133,22 @@ pub struct SsbConfig {
     pub first_prb: usize,
     /// Blocks per burst: the first `count` candidates of [`ssb_candidate_symbols`].
     pub count: usize,
-    /// Burst period, ms: 5, 10, 20, 40, 80 or 160 (the burst is in the first half frame).
+    /// Burst period, ms: 5, 10, 20, 40, 80 or 160 (the burst is in the first half frame of
+    /// its period: with 5 ms, every half frame has one).
     pub period_ms: u32,
+    /// L_max, the most SSBs per half frame of the band (TS 38.213 §4.1): 4 or 8 at μ ≤ 2
+    /// (Cases A and C), 64 at μ = 3 (Case D). It sets ī_SSB (TS 38.211 §7.4.1.4.1).
+    pub l_max: usize,
+}
+
+/// ī_SSB of block `i_ssb` in half frame `n_hf` (0 or 1) for `l_max` (TS 38.211 §7.4.1.4.1):
+/// i_SSB + 4 n_hf for L_max = 4, else the three least significant bits of i_SSB.
+pub fn i_ssb_bar(i_ssb: usize, n_hf: usize, l_max: usize) -> u8 {
+    if l_max == 4 {
+        (i_ssb % 4 + 4 * (n_hf % 2)) as u8
+    } else {
+        (i_ssb % 8) as u8
+    }
 }
 
 impl SsbConfig {
@@ -151,7 +165,23 @@ impl SsbConfig {
                 ),
             ));
         }
-        let max = ssb_candidate_symbols(frame.numerology()).len();
+        let mu = frame.numerology();
+        let l_max_ok = if mu == 3 {
+            self.l_max == 64
+        } else {
+            self.l_max == 4 || self.l_max == 8
+        };
+        if !l_max_ok {
+            return Err(NrError::new(
+                format!("{prefix}.ssb_l_max"),
+                format!(
+                    "{} at μ = {mu}: TS 38.213 §4.1 gives L_max = 4 or 8 for Cases A and C \
+                     (μ ≤ 2), 64 for Case D (μ = 3)",
+                    self.l_max
+                ),
+            ));
+        }
+        let max = ssb_candidate_symbols(mu).len().min(self.l_max);
         if self.count == 0 || self.count > max {
             return Err(NrError::new(
                 format!("{prefix}.ssb_count"),
@@ -177,6 +207,8 @@ impl SsbConfig {
         let slots_per_period = u64::from(self.period_ms) * frame.slots_per_subframe() as u64;
         let in_period = slot % slots_per_period;
         let first = in_period * sps; // symbol of the half frame the burst occupies
+        let slots_per_frame = frame.slots_per_frame() as u64;
+        let n_hf = ((slot % slots_per_frame) * 2 / slots_per_frame) as usize;
         let k0 = self.first_prb * SUBCARRIERS_PER_PRB;
         let mut out = Vec::new();
         for (i, &s) in ssb_candidate_symbols(frame.numerology())
@@ -188,8 +220,7 @@ impl SsbConfig {
             if s + 4 <= first || s >= first + sps {
                 continue;
             }
-            // ī_SSB = i_SSB mod 8 (L_max ≥ 8), or i_SSB + 4 n_hf with n_hf = 0 (L_max = 4)
-            let Ok(block) = ssb(self.cell_id, (i % 8) as u8) else {
+            let Ok(block) = ssb(self.cell_id, i_ssb_bar(i, n_hf, self.l_max)) else {
                 continue;
             };
             for re in block {

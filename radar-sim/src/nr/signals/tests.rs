@@ -53,6 +53,7 @@ fn ssb_burst_lands_on_its_symbols() {
         first_prb: 10,
         count: 4,
         period_ms: 20,
+        l_max: 8,
     };
     cfg.validate(&f, "radar.nr").unwrap();
     // Case C: blocks at symbols 2, 8, 16, 22 of the half frame → slot 0: 2..6, 8..12;
@@ -418,4 +419,63 @@ fn prs_bandwidth_is_24_to_272_prbs_in_steps_of_4() {
             assert!(e.reason.contains("TS 38.211 §7.4.1.7"), "{e}");
         }
     }
+}
+
+#[test]
+fn i_ssb_bar_carries_the_half_frame_bit_for_l_max_4() {
+    // TS 38.211 §7.4.1.4.1
+    for i in 0..4 {
+        assert_eq!(i_ssb_bar(i, 0, 4), i as u8);
+        assert_eq!(i_ssb_bar(i, 1, 4), i as u8 + 4);
+    }
+    for i in 0..64 {
+        for n_hf in 0..2 {
+            assert_eq!(i_ssb_bar(i, n_hf, 8), (i % 8) as u8);
+            assert_eq!(i_ssb_bar(i, n_hf, 64), (i % 8) as u8);
+        }
+    }
+    // a 5 ms burst at μ = 1: half frame 0 in slots 0..10, half frame 1 in slots 10..20
+    let f = frame(1, 52);
+    let cfg = SsbConfig {
+        cell_id: 5,
+        first_prb: 0,
+        count: 4,
+        period_ms: 5,
+        l_max: 4,
+    };
+    cfg.validate(&f, "radar.nr").unwrap();
+    let dmrs = |cfg: &SsbConfig, slot| -> Vec<Complex64> {
+        cfg.res_in_slot(&f, slot)
+            .into_iter()
+            .filter(|r| r.kind == ReKind::PbchDmrs)
+            .map(|r| r.value)
+            .collect()
+    };
+    let block = |i_bar| -> Vec<Complex64> {
+        ssb(5, i_bar)
+            .unwrap()
+            .into_iter()
+            .filter(|r| r.kind == ReKind::PbchDmrs)
+            .map(|r| r.value)
+            .collect()
+    };
+    // slot 0 holds blocks 0 and 1; slot 10 (second half frame) the same blocks with ī + 4
+    assert_eq!(dmrs(&cfg, 0), [block(0), block(1)].concat());
+    assert_eq!(dmrs(&cfg, 10), [block(4), block(5)].concat());
+    assert_eq!(dmrs(&cfg, 20), dmrs(&cfg, 0));
+    let l8 = SsbConfig { l_max: 8, ..cfg };
+    assert_eq!(dmrs(&l8, 10), dmrs(&l8, 0));
+    for (l_max, mu) in [(4, 3), (64, 1), (6, 0)] {
+        let bad = SsbConfig {
+            l_max,
+            ..l8.clone()
+        };
+        let e = bad.validate(&frame(mu, 52), "radar.nr").unwrap_err();
+        assert_eq!(e.field, "radar.nr.ssb_l_max");
+        assert!(e.reason.contains("TS 38.213 §4.1"), "{e}");
+    }
+    let e = SsbConfig { count: 5, ..cfg }
+        .validate(&f, "radar.nr")
+        .unwrap_err();
+    assert_eq!(e.field, "radar.nr.ssb_count");
 }
