@@ -621,9 +621,9 @@ mod tests {
                 let pattern = format!("{}U", "D".repeat(n - 1));
                 let legal = eighths.iter().any(|&e| {
                     let p8 = e << mu; // 8 × slots in P
-                    p8 % 8 == 0 && (p8 / 8) as usize % n == 0
+                    p8.is_multiple_of(8) && ((p8 / 8) as usize).is_multiple_of(n)
                 });
-                let divides_20 = (20usize << mu) % n == 0;
+                let divides_20 = (20usize << mu).is_multiple_of(n);
                 let r = TddPattern::parse(&pattern, "10:2:2", mu, 14, "p", "s");
                 assert_eq!(r.is_ok(), legal && divides_20, "μ = {mu}, {n} slots: {r:?}");
                 if let Err(e) = r {
