@@ -46,6 +46,9 @@ pub struct NrConfig {
     pub ssb_count: usize,
     /// SSB burst period, ms. Default 20.
     pub ssb_period_ms: u32,
+    /// L_max of the band (TS 38.213 §4.1): 4 or 8 at μ ≤ 2, 64 at μ = 3; with 4, ī_SSB
+    /// carries the half-frame bit (TS 38.211 §7.4.1.4.1). Default 8 (μ ≤ 2), 64 (μ = 3).
+    pub ssb_l_max: Option<usize>,
     /// Send the TRS. Default true.
     pub trs: bool,
     /// TRS first subcarrier in each PRB, 0..=3. Default 0.
@@ -105,6 +108,7 @@ impl Default for NrConfig {
             ssb_first_prb: 0,
             ssb_count: 4,
             ssb_period_ms: 20,
+            ssb_l_max: None,
             trs: true,
             trs_k0: 0,
             trs_first_symbol: 4,
@@ -189,6 +193,9 @@ impl NrConfig {
                 first_prb: self.ssb_first_prb,
                 count: self.ssb_count,
                 period_ms: self.ssb_period_ms,
+                l_max: self
+                    .ssb_l_max
+                    .unwrap_or(if self.numerology >= 3 { 64 } else { 8 }),
             }),
             trs: self.trs.then_some(TrsConfig {
                 scrambling_id: id,

@@ -343,8 +343,8 @@ impl RadarConfig {
 
     /// The reference and the NR cell: `pilots` and `reconstructed` need `[radar.nr]`,
     /// `reconstructed` the direct path; the cell's own values are checked with the PRBs that
-    /// `radar.nr.prbs` or `radar.bandwidth_hz` give (else the most, 275: the mission's band is
-    /// checked in [`RadarConfig::resolve`]).
+    /// `radar.nr.prbs` or `radar.bandwidth_hz` give (else the most a PRS allows, 272: the
+    /// mission's band is checked in [`RadarConfig::resolve`]).
     fn validate_reference(&self) -> Result<()> {
         match (&self.nr, self.reference) {
             (None, Reference::Pilots | Reference::Reconstructed) => {
@@ -374,7 +374,7 @@ impl RadarConfig {
             let prbs = match (nr.prbs, self.bandwidth_hz) {
                 (Some(n), _) => n,
                 (None, Some(b)) => nr.resolved_prbs(b, "radar.bandwidth_hz")?,
-                (None, None) => crate::nr::frame::MAX_PRBS,
+                (None, None) => crate::nr::signals::PRS_MAX_PRBS,
             };
             nr.illumination(prbs, self.seed)?;
         }

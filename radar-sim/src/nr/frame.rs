@@ -102,6 +102,7 @@ impl TddPattern {
                 ),
             ));
         }
+        check_tdd_period(&slots, pattern, numerology, pattern_field)?;
         if !slots.contains(&SlotKind::Downlink) && !slots.contains(&SlotKind::Special) {
             return Err(NrError::new(
                 pattern_field,
@@ -185,6 +186,45 @@ impl TddPattern {
             .sum();
         dl as f64 / (self.slots.len() * symbols_per_slot) as f64
     }
+}
+
+/// The TDD periods P of TS 38.331 `dl-UL-TransmissionPeriodicity` (and its `-v1530` extension,
+/// 3 and 4 ms), in units of 0.125 ms (TS 38.213 §11.1): 0.5, 0.625, 1, 1.25, 2, 2.5, 3, 4, 5,
+/// 10 ms.
+pub const TDD_PERIODS_EIGHTHS_MS: [u32; 10] = [4, 5, 8, 10, 16, 20, 24, 32, 40, 80];
+
+/// Refuses a pattern whose slot sequence no TDD period of TS 38.213 §11.1 gives: the pattern
+/// repeats every `m` slots (its shortest period), and some period P of
+/// [`TDD_PERIODS_EIGHTHS_MS`] must hold a whole number P · 2^μ of slots that `m` divides (an
+/// all-`D` pattern is thus the same at every length).
+fn check_tdd_period(
+    slots: &[SlotKind],
+    pattern: &str,
+    numerology: u8,
+    field: &str,
+) -> NrResult<()> {
+    let n = slots.len();
+    let m = (1..=n)
+        .find(|&m| n.is_multiple_of(m) && (m..n).all(|i| slots[i] == slots[i - m]))
+        .unwrap_or(n);
+    let per_8ms = 1u32 << numerology; // slots in 0.125 ms × 8
+    let allowed: Vec<usize> = TDD_PERIODS_EIGHTHS_MS
+        .iter()
+        .filter(|&&e| (e * per_8ms).is_multiple_of(8))
+        .map(|&e| (e * per_8ms / 8) as usize)
+        .collect();
+    if allowed.iter().any(|p| p.is_multiple_of(m)) {
+        return Ok(());
+    }
+    Err(NrError::new(
+        field,
+        format!(
+            "{pattern:?} repeats every {m} slots ({} ms): TS 38.213 §11.1 \
+             (dl-UL-TransmissionPeriodicity, TS 38.331) allows a TDD period of 0.5, 0.625, 1, \
+             1.25, 2, 2.5, 3, 4, 5 or 10 ms, i.e. {allowed:?} slots at μ = {numerology}",
+            m as f64 / f64::from(1u32 << numerology)
+        ),
+    ))
 }
 
 /// Where a symbol lies: frame, slot within the frame, symbol within the slot.
@@ -568,5 +608,39 @@ mod tests {
         let e = TddPattern::parse("UUUU", "10:2:2", 1, 14, "p", "s").unwrap_err();
         assert!(e.reason.contains("no downlink"), "{e}");
         assert!(TddPattern::parse("", "10:2:2", 1, 14, "p", "s").is_err());
+    }
+
+    #[test]
+    fn tdd_periods_are_those_of_ts_38_213() {
+        // D…DU of n slots repeats every n slots; at μ it is a TDD pattern of TS 38.213 §11.1 iff
+        // some period P of 0.5, 0.625, 1, 1.25, 2, 2.5, 3, 4, 5, 10 ms holds a whole number of
+        // slots that n divides (P = n slots, or the pattern repeated), and n divides 20 ms
+        let eighths = [4u32, 5, 8, 10, 16, 20, 24, 32, 40, 80];
+        for mu in 0..=3u8 {
+            for n in 2..=200usize {
+                let pattern = format!("{}U", "D".repeat(n - 1));
+                let legal = eighths.iter().any(|&e| {
+                    let p8 = e << mu; // 8 × slots in P
+                    p8.is_multiple_of(8) && ((p8 / 8) as usize).is_multiple_of(n)
+                });
+                let divides_20 = (20usize << mu).is_multiple_of(n);
+                let r = TddPattern::parse(&pattern, "10:2:2", mu, 14, "p", "s");
+                assert_eq!(r.is_ok(), legal && divides_20, "μ = {mu}, {n} slots: {r:?}");
+                if let Err(e) = r {
+                    assert_eq!(e.field, "p");
+                    assert!(!divides_20 || e.reason.contains("TS 38.213 §11.1"), "{e}");
+                }
+            }
+        }
+        // DDDSU is 5, 2.5, 1.25, 0.625 ms at μ = 0..3; "D" repeats every slot at any length
+        for mu in 0..=3 {
+            TddPattern::parse("DDDSU", "10:2:2", mu, 14, "p", "s").unwrap();
+            TddPattern::parse("D", "10:2:2", mu, 14, "p", "s").unwrap();
+            TddPattern::parse(&"D".repeat(20 << mu), "10:2:2", mu, 14, "p", "s").unwrap();
+        }
+        // 20 ms divides 20 ms but is no TDD period
+        let twenty = format!("{}U", "D".repeat(19));
+        let e = TddPattern::parse(&twenty, "10:2:2", 0, 14, "p", "s").unwrap_err();
+        assert!(e.reason.contains("TS 38.213 §11.1"), "{e}");
     }
 }

@@ -124,7 +124,7 @@ impl NrGrid {
             s.validate(&self.frame, prefix)?;
         }
         if let Some(t) = &self.trs {
-            t.validate(prefix)?;
+            t.validate(&self.frame, prefix)?;
         }
         if let Some(p) = &self.prs {
             p.validate(&self.frame, prefix)?;
@@ -206,7 +206,7 @@ impl NrGrid {
         }
         let duration = self.downlink_symbols(slot);
         let prbs = self.loaded_prbs(slot);
-        let dmrs_symbols = self.dmrs.symbols(duration);
+        let dmrs_symbols = self.dmrs.symbols(duration).unwrap_or_default();
         let dmrs = if dmrs_symbols.is_empty() {
             Vec::new()
         } else {
@@ -298,7 +298,7 @@ pub(crate) mod tests {
     pub(crate) fn grid(load: f64) -> NrGrid {
         let tdd = TddPattern::parse("DDDSU", "10:2:2", 1, 14, "p", "s").unwrap();
         let frame =
-            FrameStructure::new(1, CyclicPrefix::Normal, 51, None, tdd, "radar.nr").unwrap();
+            FrameStructure::new(1, CyclicPrefix::Normal, 52, None, tdd, "radar.nr").unwrap();
         let g = NrGrid {
             frame,
             ssb: Some(SsbConfig {
@@ -306,6 +306,7 @@ pub(crate) mod tests {
                 first_prb: 15,
                 count: 4,
                 period_ms: 20,
+                l_max: 8,
             }),
             trs: Some(TrsConfig {
                 scrambling_id: 7,
@@ -375,7 +376,7 @@ pub(crate) mod tests {
     fn load_and_modulation_per_prb() {
         let g = grid(0.3);
         let prbs = g.loaded_prbs(2);
-        assert_eq!(prbs.len(), 15); // round(0.3 × 51)
+        assert_eq!(prbs.len(), 16); // round(0.3 × 52)
         assert_ne!(prbs, g.loaded_prbs(7), "scheduling changes per slot");
         let s = g.symbol(14 * 2 + 5);
         for (k, role) in s.roles.iter().enumerate() {
@@ -418,12 +419,12 @@ pub(crate) mod tests {
         let trs = g.symbol(2 * 14 + 8);
         assert_eq!(
             trs.roles.iter().filter(|r| **r == Role::Pilot).count(),
-            3 * 51
+            3 * 52
         );
         let prs = g.symbol(2 * 14 + 11);
         assert_eq!(
             prs.roles.iter().filter(|r| **r == Role::Pilot).count(),
-            612 / 4
+            624 / 4
         );
         assert!(g.symbol(13).roles.iter().all(|r| *r == Role::Empty));
         assert!(g

@@ -33,7 +33,6 @@ impl NrIllumination {
     /// Checks the grid and that every pulse's symbols are downlink (over one TDD period);
     /// errors name the field under `prefix`.
     pub fn new(grid: NrGrid, pulse: PulseSlots, prefix: &str) -> NrResult<Self> {
-        grid.validate(prefix)?;
         let frame = &grid.frame;
         if pulse.period_slots == 0 {
             return Err(NrError::new(
@@ -77,6 +76,7 @@ impl NrIllumination {
                 }
             }
         }
+        grid.validate(prefix)?; // after the pulse: a PRS that follows the pulse names it
         Ok(Self { grid, pulse })
     }
 

@@ -6,7 +6,7 @@
 
 use rustfft::num_complex::Complex64;
 
-use super::frame::FrameStructure;
+use super::frame::{FrameStructure, SymbolUse};
 use super::sequences::{
     check_cell_id, csi_rs_c_init, pbch_dmrs_c_init, pdsch_dmrs_c_init, prs_c_init, pss,
     qpsk_sequence, sss, SYNC_LENGTH,
@@ -133,8 +133,22 @@ pub struct SsbConfig {
     pub first_prb: usize,
     /// Blocks per burst: the first `count` candidates of [`ssb_candidate_symbols`].
     pub count: usize,
-    /// Burst period, ms: 5, 10, 20, 40, 80 or 160 (the burst is in the first half frame).
+    /// Burst period, ms: 5, 10, 20, 40, 80 or 160 (the burst is in the first half frame of
+    /// its period: with 5 ms, every half frame has one).
     pub period_ms: u32,
+    /// L_max, the most SSBs per half frame of the band (TS 38.213 §4.1): 4 or 8 at μ ≤ 2
+    /// (Cases A and C), 64 at μ = 3 (Case D). It sets ī_SSB (TS 38.211 §7.4.1.4.1).
+    pub l_max: usize,
+}
+
+/// ī_SSB of block `i_ssb` in half frame `n_hf` (0 or 1) for `l_max` (TS 38.211 §7.4.1.4.1):
+/// i_SSB + 4 n_hf for L_max = 4, else the three least significant bits of i_SSB.
+pub fn i_ssb_bar(i_ssb: usize, n_hf: usize, l_max: usize) -> u8 {
+    if l_max == 4 {
+        (i_ssb % 4 + 4 * (n_hf % 2)) as u8
+    } else {
+        (i_ssb % 8) as u8
+    }
 }
 
 impl SsbConfig {
@@ -151,7 +165,23 @@ impl SsbConfig {
                 ),
             ));
         }
-        let max = ssb_candidate_symbols(frame.numerology()).len();
+        let mu = frame.numerology();
+        let l_max_ok = if mu == 3 {
+            self.l_max == 64
+        } else {
+            self.l_max == 4 || self.l_max == 8
+        };
+        if !l_max_ok {
+            return Err(NrError::new(
+                format!("{prefix}.ssb_l_max"),
+                format!(
+                    "{} at μ = {mu}: TS 38.213 §4.1 gives L_max = 4 or 8 for Cases A and C \
+                     (μ ≤ 2), 64 for Case D (μ = 3)",
+                    self.l_max
+                ),
+            ));
+        }
+        let max = ssb_candidate_symbols(mu).len().min(self.l_max);
         if self.count == 0 || self.count > max {
             return Err(NrError::new(
                 format!("{prefix}.ssb_count"),
@@ -177,6 +207,8 @@ impl SsbConfig {
         let slots_per_period = u64::from(self.period_ms) * frame.slots_per_subframe() as u64;
         let in_period = slot % slots_per_period;
         let first = in_period * sps; // symbol of the half frame the burst occupies
+        let slots_per_frame = frame.slots_per_frame() as u64;
+        let n_hf = ((slot % slots_per_frame) * 2 / slots_per_frame) as usize;
         let k0 = self.first_prb * SUBCARRIERS_PER_PRB;
         let mut out = Vec::new();
         for (i, &s) in ssb_candidate_symbols(frame.numerology())
@@ -188,8 +220,7 @@ impl SsbConfig {
             if s + 4 <= first || s >= first + sps {
                 continue;
             }
-            // ī_SSB = i_SSB mod 8 (L_max ≥ 8), or i_SSB + 4 n_hf with n_hf = 0 (L_max = 4)
-            let Ok(block) = ssb(self.cell_id, (i % 8) as u8) else {
+            let Ok(block) = ssb(self.cell_id, i_ssb_bar(i, n_hf, self.l_max)) else {
                 continue;
             };
             for re in block {
@@ -224,6 +255,40 @@ impl Periodicity {
     pub fn contains(&self, slot: u64) -> bool {
         let p = self.period_slots.max(1);
         (slot % p + p - self.offset_slot % p) % p < self.length
+    }
+
+    /// Refuses a burst that puts one of `symbols` on a symbol the TDD pattern does not make
+    /// downlink: TS 38.213 §11.1, no PDSCH, CSI-RS or DL PRS in symbols that
+    /// tdd-UL-DL-ConfigurationCommon makes uplink (the guard symbols are silent in this model).
+    /// The TDD period's worth of bursts covers every case. Errors name `field`.
+    fn check_downlink(
+        &self,
+        frame: &FrameStructure,
+        symbols: &[usize],
+        what: &str,
+        field: &str,
+    ) -> NrResult<()> {
+        let tdd = frame.tdd();
+        for q in 0..tdd.slots().len() as u64 {
+            for j in 0..self.length {
+                let slot = self.offset_slot + q * self.period_slots + j;
+                if let Some(&l) = symbols
+                    .iter()
+                    .find(|&&l| tdd.symbol_use(slot, l) != SymbolUse::Downlink)
+                {
+                    return Err(NrError::new(
+                        field,
+                        format!(
+                            "the {what} falls on symbol {l} of slot {slot}, which the TDD \
+                             pattern does not make downlink: TS 38.213 §11.1 sends no {what} \
+                             in uplink symbols (choose its period, offset and symbols so that \
+                             it stays in downlink symbols)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     fn validate(&self, field: &str) -> NrResult<()> {
@@ -261,9 +326,13 @@ pub struct TrsConfig {
     pub period: Periodicity,
 }
 
+/// The TRS periods of a 15 kHz carrier, slots (TS 38.214 §5.1.6.1.1: 2^μ X_p slots, X_p = 10,
+/// 20, 40 or 80).
+pub const TRS_PERIODS_AT_15KHZ: [u64; 4] = [10, 20, 40, 80];
+
 impl TrsConfig {
-    /// Checks the values; errors name the field under `prefix`.
-    pub fn validate(&self, prefix: &str) -> NrResult<()> {
+    /// Checks the values against `frame`; errors name the field under `prefix`.
+    pub fn validate(&self, frame: &FrameStructure, prefix: &str) -> NrResult<()> {
         if self.scrambling_id > 1023 {
             return Err(NrError::new(
                 format!("{prefix}.trs_scrambling_id"),
@@ -282,7 +351,30 @@ impl TrsConfig {
                 format!("{} must be 4, 5 or 6 (TS 38.214 §5.1.6.1.1)", self.l0),
             ));
         }
-        self.period.validate(&format!("{prefix}.trs_period_slots"))
+        let field = format!("{prefix}.trs_period_slots");
+        self.period.validate(&field)?;
+        let scale = 1u64 << frame.numerology();
+        if !TRS_PERIODS_AT_15KHZ
+            .iter()
+            .any(|x| x * scale == self.period.period_slots)
+        {
+            return Err(NrError::new(
+                field,
+                format!(
+                    "a TRS every {} slots: TS 38.214 §5.1.6.1.1 allows 2^μ × {{10, 20, 40, 80}} \
+                     = {:?} slots at μ = {}",
+                    self.period.period_slots,
+                    TRS_PERIODS_AT_15KHZ.map(|x| x * scale),
+                    frame.numerology()
+                ),
+            ));
+        }
+        self.period.check_downlink(
+            frame,
+            &[self.l0, self.l0 + 4],
+            "TRS (CSI-RS)",
+            &format!("{prefix}.trs_offset_slot"),
+        )
     }
 
     /// The REs in slot `slot`: for each symbol l, PRB n and i = 0..3, k = 12n + k0 + 4i carries
@@ -324,7 +416,14 @@ pub fn prs_offsets(comb: usize) -> &'static [usize] {
     }
 }
 
-/// A PRS resource over the whole carrier (§7.4.1.7).
+/// Least PRS bandwidth, PRBs (dl-PRS-ResourceBandwidth, TS 38.331).
+pub const PRS_MIN_PRBS: usize = 24;
+
+/// Largest PRS bandwidth, PRBs (dl-PRS-ResourceBandwidth, TS 38.331; steps of 4 from 24).
+pub const PRS_MAX_PRBS: usize = 272;
+
+/// A PRS resource over the whole carrier (§7.4.1.7): the carrier's PRBs are its bandwidth,
+/// 24..=272 in steps of 4; it is sent in downlink symbols only.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PrsConfig {
     /// Sequence id n_ID^PRS, 0..=4095.
@@ -390,7 +489,21 @@ impl PrsConfig {
                 format!("{} must lie in 0..{}", self.re_offset, self.comb),
             ));
         }
-        self.period.validate(&format!("{prefix}.prs_period_slots"))
+        let n = frame.prbs();
+        if !(PRS_MIN_PRBS..=PRS_MAX_PRBS).contains(&n) || !n.is_multiple_of(4) {
+            return Err(NrError::new(
+                format!("{prefix}.prbs"),
+                format!(
+                    "the PRS spans the carrier's {n} PRBs: TS 38.211 §7.4.1.7 \
+                     (dl-PRS-ResourceBandwidth, TS 38.331) allows 24..=272 PRBs in steps of 4 \
+                     (set radar.nr.prbs, or prs = false)"
+                ),
+            ));
+        }
+        let field = format!("{prefix}.prs_period_slots");
+        self.period.validate(&field)?;
+        let symbols: Vec<usize> = (self.start_symbol..self.start_symbol + self.symbols).collect();
+        self.period.check_downlink(frame, &symbols, "PRS", &field)
     }
 
     /// The REs in slot `slot`: symbol l carries r_l(m) at k = m K_comb + ((k_offset + k′) mod
@@ -428,8 +541,52 @@ pub struct PdschDmrsConfig {
     pub n_scid: u8,
     /// dmrs-TypeA-Position l0: 2 or 3.
     pub type_a_position: usize,
-    /// dmrs-AdditionalPosition: 0..=3.
+    /// dmrs-AdditionalPosition: 0..=3 (3 only with l0 = 2).
     pub additional_positions: usize,
+}
+
+/// TS 38.211 Table 7.4.1.1.2-3, PDSCH mapping type A, single-symbol DMRS: the DMRS symbols
+/// after l0 by l_d = 3..=14 (row l_d − 3) and dmrs-AdditionalPosition 0..=3 (column), with
+/// l1 = 11 (the table's l1 is 12 only with lte-CRS-ToMatchAround, which this cell has not).
+/// l_d < 3 has no entry. Checked against OpenAirInterface (`nr_mac_common.c`,
+/// `table_7_4_1_1_2_3_pdsch_dmrs_positions_l`) and srsRAN Project
+/// (`pdsch_dmrs_symbol_mask.cpp`), which agree on every type A entry.
+const TYPE_A_SINGLE_SYMBOL: [[&[usize]; 4]; 12] = [
+    [&[], &[], &[], &[]],                // l_d = 3
+    [&[], &[], &[], &[]],                // 4
+    [&[], &[], &[], &[]],                // 5
+    [&[], &[], &[], &[]],                // 6
+    [&[], &[], &[], &[]],                // 7
+    [&[], &[7], &[7], &[7]],             // 8
+    [&[], &[7], &[7], &[7]],             // 9
+    [&[], &[9], &[6, 9], &[6, 9]],       // 10
+    [&[], &[9], &[6, 9], &[6, 9]],       // 11
+    [&[], &[9], &[6, 9], &[5, 8, 11]],   // 12
+    [&[], &[11], &[7, 11], &[5, 8, 11]], // 13
+    [&[], &[11], &[7, 11], &[5, 8, 11]], // 14
+];
+
+/// The DMRS symbols l̄ of a PDSCH of mapping type A whose last symbol is l_d − 1
+/// (`duration` = l_d, counted from symbol 0 of the slot), l0 = `type_a_position` and
+/// dmrs-AdditionalPosition `additional` (TS 38.211 §7.4.1.1.2, Table 7.4.1.1.2-3, single-symbol
+/// DMRS). `None` where the clause defines none: l_d outside 3..=14, l0 outside {2, 3},
+/// `additional` above 3, l0 = 3 with `additional` = 3, or l0 = 3 with l_d = 3 (applicable only
+/// with dmrs-TypeA-Position 2).
+pub fn pdsch_dmrs_symbols_type_a(
+    duration: usize,
+    type_a_position: usize,
+    additional: usize,
+) -> Option<Vec<usize>> {
+    let l0 = type_a_position;
+    if !(3..=14).contains(&duration)
+        || !(2..=3).contains(&l0)
+        || additional > 3
+        || (l0 == 3 && (additional == 3 || duration == 3))
+    {
+        return None;
+    }
+    let extra = TYPE_A_SINGLE_SYMBOL[duration - 3][additional];
+    Some(std::iter::once(l0).chain(extra.iter().copied()).collect())
 }
 
 impl PdschDmrsConfig {
@@ -453,28 +610,21 @@ impl PdschDmrsConfig {
                 format!("{} must lie in 0..=3", self.additional_positions),
             ));
         }
+        if self.type_a_position == 3 && self.additional_positions == 3 {
+            return Err(NrError::new(
+                format!("{prefix}.dmrs_additional_positions"),
+                "3 with dmrs_type_a_position = 3: TS 38.211 §7.4.1.1.2 supports \
+                 dmrs-AdditionalPosition 3 only with dmrs-TypeA-Position 2",
+            ));
+        }
         Ok(())
     }
 
-    /// The DMRS symbols of a PDSCH that spans symbols 0..`duration` of the slot (Table
-    /// 7.4.1.1.2-3, mapping type A, single-symbol DMRS, l1 = 11); none below 3 symbols.
-    pub fn symbols(&self, duration: usize) -> Vec<usize> {
-        let l0 = self.type_a_position;
-        if duration < 3 || duration <= l0 {
-            return Vec::new();
-        }
-        let extra: &[usize] = match (duration, self.additional_positions) {
-            (_, 0) | (3..=4, _) => &[],
-            (5..=7, _) => &[4],
-            (8..=9, _) => &[7],
-            (10..=11, 1) | (12, 1) => &[9],
-            (10..=12, 2) | (10..=11, 3) => &[6, 9],
-            (12, _) => &[5, 8, 11],
-            (_, 1) => &[11],
-            (_, 2) => &[7, 11],
-            _ => &[5, 8, 11],
-        };
-        std::iter::once(l0).chain(extra.iter().copied()).collect()
+    /// The DMRS symbols of a PDSCH that spans symbols 0..`duration` of the slot
+    /// ([`pdsch_dmrs_symbols_type_a`]); `None` where Table 7.4.1.1.2-3 has no entry (no PDSCH is
+    /// scheduled then).
+    pub fn symbols(&self, duration: usize) -> Option<Vec<usize>> {
+        pdsch_dmrs_symbols_type_a(duration, self.type_a_position, self.additional_positions)
     }
 
     /// The REs of a PDSCH on symbols 0..`duration` of slot `slot` over PRBs `prbs` (indices from
@@ -494,7 +644,7 @@ impl PdschDmrsConfig {
             return Vec::new();
         };
         let mut out = Vec::new();
-        for l in self.symbols(duration) {
+        for l in self.symbols(duration).unwrap_or_default() {
             let c = pdsch_dmrs_c_init(self.scrambling_id, self.n_scid, 0, n_s, l, sps);
             // six values per PRB from CRB 0: r(6n .. 6n + 6) on k = 12n + 0, 2, …, 10
             let r = qpsk_sequence(c, 6 * (top + 1));

@@ -187,6 +187,7 @@ fn nr_synth() -> Synthesizer {
         numerology: 1,
         prbs: Some(8),
         ssb: false,
+        prs: false, // a PRS spans 24 PRBs or more
         load: 1.0,
         // a PRS period of TS 38.214 at μ = 1 (2^μ × 5) that keeps the pulses on DDDSU's D slots
         pulse_period_slots: 10,
