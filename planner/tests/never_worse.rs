@@ -75,7 +75,13 @@ fn a_given_flight_better_than_a_resolving_least_energy_plan_is_not_passed_over()
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 6, ..ProptestConfig::default() })]
+    // a fixed seed, so that every run checks the same cases; search wider with
+    // `PROPTEST_CASES=40 PROPTEST_RNG_SEED=N` (a random search found the case above)
+    #![proptest_config(ProptestConfig {
+        cases: 6,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x6e65_7665_725f_776f),
+        ..ProptestConfig::default()
+    })]
 
     /// From its default start and from the flight given as its start, the best effort ends no
     /// worse than the flight, the least-energy plan and the guidance law's track, and uses the
