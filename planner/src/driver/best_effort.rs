@@ -245,14 +245,16 @@ fn best_effort_until(
         ..plan
     };
     let guidance = guidance_start_with(mission, general, options.dynamics);
-    // the least-energy plan is the answer when it resolves every slot, unless a start it did
-    // not come from is better on the merit (a local optimum can be beaten by a given flight)
+    // the starts the loop does not come from, scored once (the admissible ones); the
+    // least-energy plan is the answer when it resolves every slot, unless one of them is better
+    // on the merit (a local optimum can be beaten by a given flight)
     let least_merit = starts.merit(&basis.least_energy.evaluation);
-    let beats_least = |t: &Trajectory| {
-        starts.inadmissible(t).is_none()
-            && starts.merit(&evaluate(mission, t)) < least_merit * (1.0 - 1e-9)
-    };
-    let other_better = given.is_some_and(beats_least) || beats_least(&guidance);
+    let others: Vec<(f64, &Trajectory)> = [given, Some(&guidance)]
+        .into_iter()
+        .flatten()
+        .filter_map(|t| starts.scored(t).map(|m| (m, t)))
+        .collect();
+    let other_better = others.iter().any(|(m, _)| *m < least_merit * (1.0 - 1e-9));
     if !other_better
         && basis
             .least_energy
@@ -305,13 +307,15 @@ fn best_effort_until(
             deadline,
         },
     )?;
-    let candidates = [
-        Some(&basis.least_energy.trajectory),
-        basis.coarse.as_ref(),
-        given,
-        Some(&guidance),
-    ];
-    let track = starts.never_worse(track, candidates.into_iter().flatten());
+    let coarse = basis
+        .coarse
+        .as_ref()
+        .and_then(|t| starts.scored(t).map(|m| (m, t)));
+    let least = starts
+        .admits(&basis.least_energy.evaluation)
+        .then_some((least_merit, &basis.least_energy.trajectory));
+    let candidates = least.into_iter().chain(coarse).chain(others);
+    let track = starts.never_worse(track, candidates);
     if let Some(refusal) = strict_refusal(mission, &evaluate(mission, &track)) {
         info.strict_refusal = Some(refusal);
         return Ok(timed(finish(mission, track, end, made(info, 0))));
@@ -353,9 +357,26 @@ impl Starts<'_> {
         ev.energy_j + self.weight_j_per_m * total_deficit_m(self.mission, ev)
     }
 
-    /// Why `track` cannot start a best effort; `None` when it can.
+    /// Whether `ev` could start a best effort: every constraint but the resolution, and the cap.
+    fn admits(&self, ev: &Evaluation) -> bool {
+        ev.is_feasible_with(ResolutionMode::Paper, self.dynamics)
+            && self
+                .cap_j
+                .is_none_or(|cap| ev.energy_j <= cap * (1.0 + 1e-9))
+    }
+
+    /// The merit of `track` when it could start a best effort; `None` when it could not.
+    fn scored(&self, track: &Trajectory) -> Option<f64> {
+        let ev = evaluate(self.mission, track);
+        self.admits(&ev).then(|| self.merit(&ev))
+    }
+
+    /// Why the given start `track` cannot start a best effort; `None` when it can.
     fn inadmissible(&self, track: &Trajectory) -> Option<String> {
         let ev = evaluate(self.mission, track);
+        if self.admits(&ev) {
+            return None;
+        }
         if !ev.is_feasible_with(ResolutionMode::Paper, self.dynamics) {
             return Some(format!(
                 "the given start does not meet every constraint but the resolution under the \
@@ -364,29 +385,24 @@ impl Starts<'_> {
                 ev.violations
             ));
         }
-        match self.cap_j {
-            Some(cap) if ev.energy_j > cap * (1.0 + 1e-9) => Some(format!(
-                "the given start uses {:.1} J, over the energy cap of {cap:.1} J",
-                ev.energy_j
-            )),
-            _ => None,
-        }
+        Some(format!(
+            "the given start uses {:.1} J, over the energy cap of {:.1} J",
+            ev.energy_j,
+            self.cap_j.unwrap_or(f64::NAN)
+        ))
     }
 
-    /// `end` (a best effort's last iterate), or the admissible track of `starts` with the least
-    /// merit where that is lower than the end's. The loop is monotone from the start it took, so
-    /// only a start it did not take can be better; this makes the plan never worse than any.
+    /// `end` (a best effort's last iterate), or the track of the scored admissible `starts`
+    /// (merit, track) with the least merit where that is lower than the end's. The loop is
+    /// monotone from the start it took, so only a start it did not take can be better; this
+    /// makes the plan never worse than any.
     fn never_worse<'t>(
         &self,
         end: Trajectory,
-        starts: impl Iterator<Item = &'t Trajectory>,
+        starts: impl Iterator<Item = (f64, &'t Trajectory)>,
     ) -> Trajectory {
         let end_merit = self.merit(&evaluate(self.mission, &end));
-        let best = starts
-            .filter(|t| self.inadmissible(t).is_none())
-            .map(|t| (self.merit(&evaluate(self.mission, t)), t))
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        match best {
+        match starts.min_by(|a, b| a.0.total_cmp(&b.0)) {
             Some((merit, t)) if merit < end_merit * (1.0 - 1e-9) => {
                 tracing::info!(
                     start_merit = merit,
